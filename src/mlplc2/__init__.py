@@ -1,0 +1,14 @@
+"""mlplc2: the attention-driven LPLC2 neural ensemble model (mLPLC2) and its baselines.
+
+>>> import mlplc2
+>>> model = mlplc2.MLPLC2(fps=30.0)
+"""
+
+from ._validation import InputError
+from .attention import Field
+from .models import LPLC2, MLPLC2, SLPLC2, Output, available_models, get_model
+from .params import Params
+
+__all__ = ["Params", "MLPLC2", "SLPLC2", "LPLC2", "Output", "Field", "InputError",
+           "available_models", "get_model"]
+__version__ = "0.1.0"

@@ -1,0 +1,184 @@
+"""Bottom-up attention fields: creation (Eq. 13), four-quadrant integration
+(Eq. 14-15) and removal (Eq. 16), as in Algorithm 1 of the paper.
+
+An attention field (AF) is an LPLC2 cell placed where the local motion is
+most salient. Its four dendritic arbours each integrate the motion of one
+quadrant in the two outward directions of that quadrant:
+
+    Q1 (upper right) = sum LM_r + LM_u     Q2 (upper left)  = sum LM_l + LM_u
+    Q3 (lower left)  = sum LM_l + LM_d     Q4 (lower right) = sum LM_r + LM_d
+
+and the cell fires only when all four arbours are excited (Eq. 15).
+Coordinates: x = column, y = row (origin top-left), "up" = decreasing row.
+The centre row and column of a field belong to no quadrant, so the four
+quadrants are mirror images of one another.
+"""
+
+from __future__ import annotations
+
+import itertools
+from collections import deque
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .lobula_plate import LocalMotion
+from .params import Params
+
+__all__ = ["AttentionField", "Field", "quadrant_sums", "lplc2_response", "field_mask",
+           "argmax_outside"]
+
+
+@dataclass(frozen=True)
+class Field:
+    """Snapshot of one attention field in one frame (what models return).
+
+    ``x`` is the column and ``y`` the row of the centre in the pixels of the
+    frames given to the model; ``born`` is the frame index at creation.
+    """
+
+    id: int
+    x: float
+    y: float
+    radius: float
+    response: float
+    collision: bool
+    born: int
+    quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+
+
+@dataclass
+class AttentionField:
+    """Mutable state of one attention field (an LPLC2 cell)."""
+
+    id: int
+    x: int
+    y: int
+    born: int
+    radius: int
+    history: deque = field(default_factory=deque)
+    response: float = 0.0
+    quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    collision: bool = False
+
+    def snapshot(self) -> Field:
+        return Field(self.id, float(self.x), float(self.y), float(self.radius), self.response,
+                     self.collision, self.born, self.quadrants)
+
+
+def _window(cx: int, cy: int, r: int, shape: tuple[int, int]):
+    """Slices of the four quadrants (Q1..Q4) of a field, clipped to the frame."""
+    h, w = shape
+    up = slice(max(cy - r, 0), max(min(cy, h), 0))
+    down = slice(min(max(cy + 1, 0), h), min(cy + r + 1, h))
+    left = slice(max(cx - r, 0), max(min(cx, w), 0))
+    right = slice(min(max(cx + 1, 0), w), min(cx + r + 1, w))
+    return (up, right), (up, left), (down, left), (down, right)
+
+
+_DISC_CACHE: dict[int, np.ndarray] = {}
+
+
+def field_mask(r: int) -> np.ndarray:
+    """Boolean (2r+1, 2r+1) disc of radius r (used for ``field_shape='disc'``)."""
+    if r not in _DISC_CACHE:
+        yy, xx = np.mgrid[-r:r + 1, -r:r + 1]
+        _DISC_CACHE[r] = (xx * xx + yy * yy) <= r * r
+    return _DISC_CACHE[r]
+
+
+def quadrant_sums(lm: LocalMotion, cx: int, cy: int, r: int, shape: str = "square"
+                  ) -> tuple[float, float, float, float]:
+    """Eq. 14: the four quadrant integrals Q1..Q4 of a field centred at (cx, cy)."""
+    pairs = ((lm.r, lm.u), (lm.l, lm.u), (lm.l, lm.d), (lm.r, lm.d))
+    out = []
+    for (rows, cols), (a, b) in zip(_window(cx, cy, r, lm.magnitude.shape), pairs):
+        if shape == "disc":
+            m = field_mask(r)[rows.start - cy + r:rows.stop - cy + r,
+                              cols.start - cx + r:cols.stop - cx + r]
+            out.append(float(np.sum(a[rows, cols][m], dtype=np.float64)
+                             + np.sum(b[rows, cols][m], dtype=np.float64)))
+        else:
+            out.append(float(np.sum(a[rows, cols], dtype=np.float64)
+                             + np.sum(b[rows, cols], dtype=np.float64)))
+    return tuple(out)
+
+
+def lplc2_response(q: tuple[float, float, float, float], q_min: float = 0.0) -> float:
+    """Eq. 15: LPLC2 = bool(all Q_i > q_min) * (Q1 + Q2 + Q3 + Q4)."""
+    if min(q) > q_min:
+        return float(sum(q))
+    return 0.0
+
+
+def argmax_outside(lm_map: np.ndarray, fields, r: int, shape: str = "square"):
+    """Eq. 13: (x, y, value) of the largest LM outside every field (None if no pixel left)."""
+    if not fields:
+        idx = int(np.argmax(lm_map))
+        y, x = divmod(idx, lm_map.shape[1])
+        return x, y, float(lm_map[y, x])
+    masked = lm_map.copy()
+    h, w = masked.shape
+    for f in fields:
+        rows = slice(max(f.y - r, 0), min(f.y + r + 1, h))
+        cols = slice(max(f.x - r, 0), min(f.x + r + 1, w))
+        if shape == "disc":
+            m = field_mask(r)[rows.start - f.y + r:rows.stop - f.y + r,
+                              cols.start - f.x + r:cols.stop - f.x + r]
+            masked[rows, cols][m] = -np.inf
+        else:
+            masked[rows, cols] = -np.inf
+    idx = int(np.argmax(masked))
+    y, x = divmod(idx, w)
+    value = float(masked[y, x])
+    if value == -np.inf:
+        return None
+    return x, y, value
+
+
+class IdCounter:
+    """Stable, increasing integer ids for fields (1, 2, 3, ...)."""
+
+    def __init__(self) -> None:
+        self._it = itertools.count(1)
+
+    def __call__(self) -> int:
+        return next(self._it)
+
+
+def _box(s: np.ndarray, r0, r1, c0, c1) -> np.ndarray:
+    return s[r1, c1] - s[r0, c1] - s[r1, c0] + s[r0, c0]
+
+
+def population_response(lm: LocalMotion, r: int, stride: int = 2, q_min: float = 0.0):
+    """LPLC2 response (Eq. 14-15) of a cell centred at every grid point.
+
+    The LPLC2 population tiles the whole visual field (paper Fig. 1c); this
+    evaluates Eq. 14-15 for square cells of half-side ``r`` centred on a grid
+    of step ``stride`` pixels, with summed-area tables so the cost does not
+    depend on ``r``. Returns ``(R, xs, ys)`` with ``R[j, i]`` the response of
+    the cell at column ``xs[i]``, row ``ys[j]``.
+    """
+    import cv2
+
+    h, w = lm.magnitude.shape
+    ys = np.arange(0, h, stride)
+    xs = np.arange(0, w, stride)
+    up0 = np.clip(ys - r, 0, h)[:, None]
+    up1 = np.clip(ys, 0, h)[:, None]
+    dn0 = np.clip(ys + 1, 0, h)[:, None]
+    dn1 = np.clip(ys + r + 1, 0, h)[:, None]
+    lf0 = np.clip(xs - r, 0, w)[None, :]
+    lf1 = np.clip(xs, 0, w)[None, :]
+    rt0 = np.clip(xs + 1, 0, w)[None, :]
+    rt1 = np.clip(xs + r + 1, 0, w)[None, :]
+    s1 = cv2.integral(lm.r + lm.u, sdepth=cv2.CV_64F)
+    s2 = cv2.integral(lm.l + lm.u, sdepth=cv2.CV_64F)
+    s3 = cv2.integral(lm.l + lm.d, sdepth=cv2.CV_64F)
+    s4 = cv2.integral(lm.r + lm.d, sdepth=cv2.CV_64F)
+    q1 = _box(s1, up0, up1, rt0, rt1)
+    q2 = _box(s2, up0, up1, lf0, lf1)
+    q3 = _box(s3, dn0, dn1, lf0, lf1)
+    q4 = _box(s4, dn0, dn1, rt0, rt1)
+    gate = (q1 > q_min) & (q2 > q_min) & (q3 > q_min) & (q4 > q_min)
+    return np.where(gate, q1 + q2 + q3 + q4, 0.0), xs, ys

@@ -1,0 +1,83 @@
+"""The presynaptic front end of the LPLC2 family: Eq. 1-12, frame by frame.
+
+``FrontEnd.step(gray)`` runs retina -> lamina -> medulla -> lobula plate on
+one grey frame (float32, 0-255) and returns the :class:`LocalMotion` maps.
+All state between frames is held explicitly in :class:`FrontEndState`.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from .lamina import gaussian_kernel_1d, on_off, vdog
+from .lobula_plate import LocalMotion, local_motion
+from .medulla import DIRECTIONS, contrast_normalise, motion_detectors
+from .params import Params
+from .retina import photoreceptors
+
+__all__ = ["FrontEnd", "FrontEndState"]
+
+
+@dataclass
+class FrontEndState:
+    """Everything the front end remembers from the previous frame."""
+
+    p_prev: np.ndarray | None = None
+    """P(t-1), the previous grey frame (Eq. 1)."""
+    onoff_prev: tuple[np.ndarray, np.ndarray] | None = None
+    """ON/OFF of the previous frame (only used with an after-image, Eq. 5)."""
+    n_prev: dict[str, np.ndarray] = field(default_factory=dict)
+    """Contrast-normalised N(t-1) per channel ('on', 'off'), for the delays of Eq. 8."""
+    m_prev: dict[str, dict[str, np.ndarray]] = field(default_factory=dict)
+    """M-hat(t-1) per channel and direction, for Eq. 10."""
+
+
+class FrontEnd:
+    """Reference implementation of Eq. 1-12 in plain NumPy/OpenCV.
+
+    Parameters
+    ----------
+    params : Params
+        Model parameters (Table I).
+    fps : float
+        Frame rate; the frame interval tau_i = 1000 / fps ms sets the delay
+        coefficients alpha = tau_i / (tau_i + tau) of Eq. 8 and 10.
+    """
+
+    def __init__(self, params: Params, fps: float):
+        self.params = params
+        self.fps = float(fps)
+        tau_i = 1000.0 / self.fps
+        self.alphas = tuple(tau_i / (tau_i + tau) for tau in params.delays_ms())
+        self.alpha_out = tau_i / (tau_i + params.tau_nc)
+        p = params
+        self.k_e = gaussian_kernel_1d(p.r_e, p.sigma_e, normalise=p.normalise_kernels)
+        self.k_i = gaussian_kernel_1d(p.r_i, p.sigma_i, normalise=p.normalise_kernels)
+        self.k_c = gaussian_kernel_1d(p.r_c, p.sigma_c, normalise=p.normalise_kernels)
+        self.state = FrontEndState()
+
+    def reset(self) -> None:
+        self.state = FrontEndState()
+
+    def step(self, gray: np.ndarray) -> LocalMotion:
+        p, st = self.params, self.state
+        l = photoreceptors(gray, st.p_prev)                       # Eq. 1
+        st.p_prev = gray
+        lv = vdog(l, self.k_e, self.k_i, p.w_i)                  # Eq. 2-4
+        on, off = on_off(lv, st.onoff_prev, p.after_image)       # Eq. 5
+        if p.after_image:
+            st.onoff_prev = (on, off)
+        t = {}
+        for channel, signal in (("on", on), ("off", off)):
+            n = contrast_normalise(signal, self.k_c, p.epsilon)  # Eq. 6-7
+            n_prev = st.n_prev.get(channel)
+            if n_prev is None:
+                n_prev = np.zeros_like(n)
+                st.m_prev[channel] = {k: np.zeros_like(n) for k in DIRECTIONS}
+            t[channel], st.m_prev[channel] = motion_detectors(   # Eq. 8-10
+                n, n_prev, st.m_prev[channel], self.alphas, self.alpha_out, p.beta)
+            st.n_prev[channel] = n
+        return local_motion(t["on"], t["off"], gamma_on=p.gamma_on,   # Eq. 11-12
+                            gamma_off=p.gamma_off, leaky_slope=p.leaky_slope, gain=p.lm_gain)

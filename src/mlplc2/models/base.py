@@ -1,0 +1,137 @@
+"""The per-frame contract every model honours, and the model registry.
+
+Every model is built as ``Model(fps=..., params=...)`` and offers
+``step(frame) -> Output``, ``reset()`` and ``run(frames)``. The CLI's
+``--model`` names come from :data:`REGISTRY` (filled by :func:`register`).
+"""
+
+from __future__ import annotations
+
+import abc
+from collections.abc import Iterable, Iterator
+from dataclasses import dataclass
+from typing import Any, ClassVar
+
+import numpy as np
+
+from .._validation import InputValueError, as_gray, check_fps
+from ..attention import Field
+
+__all__ = ["Output", "Model", "REGISTRY", "register", "get_model", "available_models"]
+
+
+@dataclass(frozen=True)
+class Output:
+    """What a model returns for one frame.
+
+    Attributes
+    ----------
+    frame : int
+        0-based index of the frame since construction or the last ``reset()``.
+    response : float
+        The model's output this frame: the membrane potential for the LGMD
+        models; for the LPLC2 family the largest attention-field response.
+    fields : tuple of Field
+        Active attention fields (empty for models that do not localise).
+    collision : bool
+        Collision alarm this frame (LPLC2 family: any field in alarm).
+    spike : bool
+        A spike this frame (LGMD models; the LPLC2 family spikes when it alarms).
+    """
+
+    frame: int
+    response: float
+    fields: tuple[Field, ...] = ()
+    collision: bool = False
+    spike: bool = False
+
+    @property
+    def most_urgent(self) -> Field | None:
+        """The field with the largest response (None without fields)."""
+        if not self.fields:
+            return None
+        return max(self.fields, key=lambda f: f.response)
+
+
+REGISTRY: dict[str, type["Model"]] = {}
+
+
+def register(name: str):
+    """Class decorator: make a model available under ``name`` (CLI ``--model``)."""
+
+    def deco(cls):
+        cls.name = name
+        REGISTRY[name] = cls
+        return cls
+
+    return deco
+
+
+def available_models() -> list[str]:
+    return sorted(REGISTRY)
+
+
+def get_model(name: str) -> type["Model"]:
+    """The model class registered as ``name`` (case-insensitive)."""
+    try:
+        return REGISTRY[name.lower()]
+    except KeyError:
+        raise InputValueError(
+            f"unknown model {name!r}; choose from {', '.join(available_models())}") from None
+
+
+class Model(abc.ABC):
+    """Base class: input checks, frame counting and the ``run`` loop.
+
+    Subclasses implement :meth:`_step` on a validated float32 grey frame
+    (0-255) and :meth:`_reset`.
+    """
+
+    name: ClassVar[str] = "model"
+    #: Smallest frame side the model accepts.
+    min_size: ClassVar[int] = 3
+
+    def __init__(self, fps: float = 30.0, params: Any = None):
+        self.fps = check_fps(fps)
+        self.params = params
+        self._shape: tuple[int, int] | None = None
+        self._frame = 0
+
+    @property
+    def frame_index(self) -> int:
+        """Index the next frame will get."""
+        return self._frame
+
+    def step(self, frame: np.ndarray) -> Output:
+        """Process one frame: (H, W) grey, (H, W, 3) RGB or (H, W, 4) RGBA, 0-255."""
+        gray = as_gray(frame, min_size=self.min_size)
+        if self._shape is None:
+            self._shape = gray.shape
+        elif gray.shape != self._shape:
+            h0, w0 = self._shape
+            h, w = gray.shape
+            raise InputValueError(
+                f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
+        out = self._step(gray, self._frame)
+        self._frame += 1
+        return out
+
+    def reset(self) -> None:
+        """Forget all state: the next frame is frame 0 and may have a new size."""
+        self._shape = None
+        self._frame = 0
+        self._reset()
+
+    def run(self, frames: Iterable[np.ndarray]) -> Iterator[Output]:
+        """Step through ``frames`` lazily, yielding one Output per frame."""
+        for frame in frames:
+            yield self.step(frame)
+
+    @abc.abstractmethod
+    def _step(self, gray: np.ndarray, index: int) -> Output: ...
+
+    @abc.abstractmethod
+    def _reset(self) -> None: ...
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}(fps={self.fps:g})"

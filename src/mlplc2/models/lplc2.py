@@ -1,0 +1,144 @@
+"""The LPLC2 family: MLPLC2 (multiple attention fields), SLPLC2 (one roaming
+field) and LPLC2 (one fixed cell spanning the frame), sharing one front end."""
+
+from __future__ import annotations
+
+from collections import deque
+
+import numpy as np
+
+from ..attention import AttentionField, Field, IdCounter, argmax_outside, lplc2_response, quadrant_sums
+from ..frontend import FrontEnd
+from ..lobula_plate import LocalMotion
+from ..params import Params
+from .base import Model, Output, register
+
+__all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
+
+
+class _LPLC2Family(Model):
+    """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping."""
+
+    def __init__(self, fps: float = 30.0, params: Params | None = None):
+        params = Params() if params is None else params
+        if not isinstance(params, Params):
+            raise TypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
+        super().__init__(fps=fps, params=params)
+        self.frontend = FrontEnd(params, self.fps)
+        self._fields: list[AttentionField] = []
+        self._ids = IdCounter()
+        self.maps: LocalMotion | None = None
+        """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
+
+    def _reset(self) -> None:
+        self.frontend.reset()
+        self._fields = []
+        self._ids = IdCounter()
+        self.maps = None
+
+    # -- field bookkeeping ---------------------------------------------------
+    def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
+        p = self.params
+        f = AttentionField(id=self._ids(), x=int(x), y=int(y), born=index, radius=radius,
+                           history=deque(maxlen=max(p.d, p.alarm_window)))
+        self._fields.append(f)
+        return f
+
+    def _integrate(self, f: AttentionField, lm: LocalMotion) -> None:
+        """Eq. 14-15 for one field, plus its alarm state."""
+        p = self.params
+        f.quadrants = quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
+        f.response = lplc2_response(f.quadrants, p.q_min)
+        f.history.append(f.response)
+        recent = list(f.history)[-p.alarm_window:]
+        f.collision = sum(recent) >= p.alarm_threshold
+
+    def _output(self, index: int) -> Output:
+        fields = tuple(f.snapshot() for f in self._fields)
+        response = max((f.response for f in fields), default=0.0)
+        collision = any(f.collision for f in fields)
+        return Output(frame=index, response=response, fields=fields, collision=collision,
+                      spike=collision)
+
+
+@register("mlplc2")
+class MLPLC2(_LPLC2Family):
+    """mLPLC2: LPLC2 ensemble with bottom-up multiple attention (Algorithm 1).
+
+    Parameters
+    ----------
+    fps : float
+        Frame rate of the input (sets the frame interval tau_i of Eq. 8 and 10).
+    params : Params, optional
+        Model parameters; Table I defaults.
+
+    Examples
+    --------
+    >>> import numpy as np, mlplc2
+    >>> model = mlplc2.MLPLC2(fps=30.0)
+    >>> out = model.step(np.zeros((120, 160), np.uint8))
+    >>> out.response, out.fields
+    (0.0, ())
+    """
+
+    def _step(self, gray: np.ndarray, index: int) -> Output:
+        p = self.params
+        lm = self.frontend.step(gray)
+        self.maps = lm
+        # Eq. 13: at most one new field per frame, at the largest LM outside all fields.
+        if len(self._fields) < p.max_fields:
+            cand = argmax_outside(lm.magnitude, self._fields, p.r_af, p.field_shape)
+            if cand is not None and cand[2] > p.t_a:
+                self._new_field(cand[0], cand[1], index, p.r_af)
+        # Eq. 14-15 for every field, then Eq. 16 removal (never the last field).
+        for f in self._fields:
+            self._integrate(f, lm)
+        keep = []
+        for f in self._fields:
+            old_enough = index - f.born >= p.grace
+            window = list(f.history)[-p.d:]
+            if old_enough and sum(window) < p.t_d:
+                continue
+            keep.append(f)
+        if not keep and self._fields:
+            keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
+        self._fields = keep
+        return self._output(index)
+
+
+@register("slplc2")
+class SLPLC2(_LPLC2Family):
+    """sLPLC2: at most one attention field, centred every frame on the
+    LM-weighted centroid of the whole frame (paper Sec. IV-A)."""
+
+    def _step(self, gray: np.ndarray, index: int) -> Output:
+        p = self.params
+        lm = self.frontend.step(gray)
+        self.maps = lm
+        mag = lm.magnitude
+        if not self._fields and float(mag.max()) > p.t_a:
+            self._new_field(0, 0, index, p.r_af)
+        if self._fields:
+            f = self._fields[0]
+            total = float(mag.sum(dtype=np.float64))
+            if total > 0:
+                h, w = mag.shape
+                f.x = int(round(float(mag.sum(axis=0, dtype=np.float64) @ np.arange(w)) / total))
+                f.y = int(round(float(mag.sum(axis=1, dtype=np.float64) @ np.arange(h)) / total))
+            self._integrate(f, lm)
+        return self._output(index)
+
+
+@register("lplc2")
+class LPLC2(_LPLC2Family):
+    """LPLC2 (Hua et al. 2022 as used in the paper): one cell at the frame centre
+    whose four quadrants span the whole frame; same front end and output rule."""
+
+    def _step(self, gray: np.ndarray, index: int) -> Output:
+        lm = self.frontend.step(gray)
+        self.maps = lm
+        if not self._fields:
+            h, w = gray.shape
+            self._new_field(w // 2, h // 2, 0, max(h, w))
+        self._integrate(self._fields[0], lm)
+        return self._output(index)

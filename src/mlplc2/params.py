@@ -1,0 +1,149 @@
+"""Model parameters: Table I of the paper plus the documented extras.
+
+Every field maps to a Table I symbol (its docstring names it) or is an extra
+parameter that the paper leaves implicit; ``docs/model.md`` explains each extra
+and why it has its value. One parameter set serves every input: nothing here
+is tuned per video.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from typing import Literal
+
+__all__ = ["Params"]
+
+
+@dataclass(frozen=True)
+class Params:
+    """Parameters of the LPLC2 model family (LPLC2, sLPLC2, mLPLC2).
+
+    Defaults are Table I of Liu & Fu (the mLPLC2 paper) where Table I gives a
+    value; the remaining fields are the extras ``docs/model.md`` documents.
+    Time constants are in milliseconds and turned into filter coefficients
+    from the frame rate the model is built with (``tau_i = 1000 / fps``).
+
+    Examples
+    --------
+    >>> p = Params(t_a=12.0)
+    >>> p.r_af
+    40
+    >>> Params(beta=-1)
+    Traceback (most recent call last):
+    ...
+    ValueError: Params.beta must be >= 0, got -1
+    """
+
+    # --- Lamina, Eq. 2-4 ---------------------------------------------------
+    r_e: int = 5
+    """r_De (px): radius of the excitatory window of K_e, Eq. 2 (Table I)."""
+    r_i: int = 11
+    """r_Di (px): radius of the inhibitory window of K_i (Table I)."""
+    sigma_e: float = 10.0
+    """sigma_e (px): standard deviation of the excitatory Gaussian K_e, Eq. 3 (Table I)."""
+    sigma_i: float = 20.0
+    """sigma_i (px): standard deviation of the inhibitory Gaussian K_i (Table I)."""
+    w_i: float = 1.2
+    """Extra. Weight of the inhibition in the vDoG, L_vDoG = E - w_i I (authors' code: 1.2)."""
+    normalise_kernels: bool = True
+    """Extra. Scale K_e, K_i, K_c to unit sum on their truncated windows (authors' code).
+    Eq. 3 taken literally sums to ~0.18 on these windows (NOTES 3)."""
+    after_image: float = 0.0
+    """Extra. Fraction of the previous ON/OFF value added to the current one (Eq. 5).
+    The paper has none (0); the authors' code uses 0.1."""
+
+    # --- Medulla, Eq. 6-10 -------------------------------------------------
+    r_c: int = 5
+    """r_Dc (px): radius of the contrast-normalisation window of K_c, Eq. 7 (Table I)."""
+    sigma_c: float = 20.0
+    """sigma_c (px): standard deviation of K_c (Table I)."""
+    epsilon: float = 0.2
+    """epsilon: constant of the contrast normalisation, Eq. 6 (Table I)."""
+    n_c: int = 5
+    """N_c: number of sampling distances (connected neurons) per T4/T5 cell, Eq. 10 (Table I)."""
+    tau_1: float = 80.0
+    """tau_1 (ms): delay of the correlator at sampling distance 1, Eq. 8 (Table I)."""
+    tau_nc: float = 40.0
+    """tau_Nc (ms): delay at sampling distance N_c; the dynamic delays run linearly from
+    tau_1 to tau_Nc ("80~40" in Table I). Also the delay of the T4/T5 output filter, Eq. 10."""
+    beta: float = 1.5
+    """beta: bias coefficient of the null-direction term of the correlator, Eq. 9 (Table I)."""
+
+    # --- Lobula plate, Eq. 11-12 -------------------------------------------
+    gamma_on: float = 0.9
+    """gamma_1: exponent on the ON (T4) signal, Eq. 11 (Table I)."""
+    gamma_off: float = 0.5
+    """gamma_2: exponent on the OFF (T5) signal, Eq. 11 (Table I)."""
+    leaky_slope: float = 0.01
+    """Extra. Slope of the Leaky-ReLU f of Eq. 11 for negative input (authors' code: 0.01)."""
+    lm_gain: float = 10.0
+    """Extra. Gain applied to the local-motion maps LM_v after Eq. 11, which puts LM on the
+    scale of the Table I thresholds (authors' code multiplies the fused signal by 10)."""
+
+    # --- Attention fields, Eq. 13-16 ---------------------------------------
+    r_af: int = 40
+    """R_AF (px): radius (half-side for square fields) of an attention field (Table I)."""
+    field_shape: Literal["square", "disc"] = "square"
+    """Extra. Shape of an attention field: a 2 R_AF square or a disc of radius R_AF."""
+    t_a: float = 10.0
+    """T_a: LM must exceed this to create an attention field, Eq. 13 (Table I)."""
+    t_d: float = 5000.0
+    """T_d: a field whose responses summed over the last d frames fall below this is
+    removed, Eq. 16 (Table I)."""
+    d: int = 10
+    """d (frames): window of the removal rule, Eq. 16 ("10 tau_i" in Table I)."""
+    grace: int = 10
+    """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5)."""
+    q_min: float = 0.0
+    """Extra. The all-four-arbours gate of Eq. 15 opens when every quadrant sum Q_i
+    exceeds this (the paper's bool(prod Q_i), which with a leaky f is read as Q_i > q_min)."""
+    alarm_threshold: float = 20000.0
+    """Extra. A field is in collision alarm when its responses summed over the last
+    ``alarm_window`` frames reach this (the paper's "fatal" fields; NOTES 17)."""
+    alarm_window: int = 5
+    """Extra. Frames summed for the collision alarm."""
+    max_fields: int = 16
+    """Extra. Upper bound on simultaneous attention fields (keeps work and memory bounded);
+    no new field is created while this many exist."""
+
+    def __post_init__(self) -> None:
+        positive = ("sigma_e", "sigma_i", "sigma_c", "tau_1", "tau_nc", "epsilon",
+                    "gamma_on", "gamma_off")
+        for name in positive:
+            if not getattr(self, name) > 0:
+                raise ValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
+        non_negative = ("w_i", "after_image", "beta", "leaky_slope", "lm_gain", "t_a",
+                        "t_d", "q_min", "alarm_threshold")
+        for name in non_negative:
+            if not getattr(self, name) >= 0:
+                raise ValueError(f"Params.{name} must be >= 0, got {getattr(self, name)!r}")
+        at_least_one = ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields")
+        for name in at_least_one:
+            value = getattr(self, name)
+            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
+                raise ValueError(f"Params.{name} must be an integer >= 1, got {value!r}")
+        if not isinstance(self.grace, int) or self.grace < 0:
+            raise ValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
+        if self.after_image >= 1:
+            raise ValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
+        if self.field_shape not in ("square", "disc"):
+            raise ValueError(f"Params.field_shape must be 'square' or 'disc', got {self.field_shape!r}")
+
+    def replace(self, **changes) -> "Params":
+        """Return a copy with ``changes`` applied (validated like the constructor)."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+        return dataclasses.replace(self, **changes)
+
+    def delays_ms(self) -> tuple[float, ...]:
+        """Dynamic delays tau_s (ms) for sampling distances s = 1..N_c (Eq. 8, Table I)."""
+        if self.n_c == 1:
+            return (self.tau_1,)
+        step = (self.tau_nc - self.tau_1) / (self.n_c - 1)
+        return tuple(self.tau_1 + k * step for k in range(self.n_c))
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
