@@ -111,20 +111,24 @@ def lplc2_response(q: tuple[float, float, float, float], q_min: float = 0.0) -> 
     return 0.0
 
 
-def argmax_outside(lm_map: np.ndarray, fields, r: int, shape: str = "square"):
-    """Eq. 13: (x, y, value) of the largest LM outside every field (None if no pixel left)."""
-    if not fields:
+def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
+    """Eq. 13: (x, y, value) of the largest LM outside every zone (None if no pixel left).
+
+    ``zones`` is a sequence of (x, y, r): excluded squares (or discs) of
+    half-side r centred on (x, y).
+    """
+    if not zones:
         idx = int(np.argmax(lm_map))
         y, x = divmod(idx, lm_map.shape[1])
         return x, y, float(lm_map[y, x])
     masked = lm_map.copy()
     h, w = masked.shape
-    for f in fields:
-        rows = slice(max(f.y - r, 0), min(f.y + r + 1, h))
-        cols = slice(max(f.x - r, 0), min(f.x + r + 1, w))
+    for fx, fy, r in zones:
+        rows = slice(max(fy - r, 0), min(fy + r + 1, h))
+        cols = slice(max(fx - r, 0), min(fx + r + 1, w))
         if shape == "disc":
-            m = field_mask(r)[rows.start - f.y + r:rows.stop - f.y + r,
-                              cols.start - f.x + r:cols.stop - f.x + r]
+            m = field_mask(r)[rows.start - fy + r:rows.stop - fy + r,
+                              cols.start - fx + r:cols.stop - fx + r]
             masked[rows, cols][m] = -np.inf
         else:
             masked[rows, cols] = -np.inf

@@ -77,7 +77,8 @@ class FrontEnd:
                 n_prev = np.zeros_like(n)
                 st.m_prev[channel] = {k: np.zeros_like(n) for k in DIRECTIONS}
             t[channel], st.m_prev[channel] = motion_detectors(   # Eq. 8-10
-                n, n_prev, st.m_prev[channel], self.alphas, self.alpha_out, p.beta)
+                n, n_prev, st.m_prev[channel], self.alphas, self.alpha_out, p.beta,
+                p.average_distances)
             st.n_prev[channel] = n
         return local_motion(t["on"], t["off"], gamma_on=p.gamma_on,   # Eq. 11-12
                             gamma_off=p.gamma_off, leaky_slope=p.leaky_slope, gain=p.lm_gain)

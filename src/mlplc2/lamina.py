@@ -2,9 +2,9 @@
 
 The large monocular cells (LMCs) filter the photoreceptor change L with a
 narrow excitatory Gaussian K_e and a broad inhibitory Gaussian K_i (Eq. 2-3).
-The vDoG keeps the sign of the excitation (the "polarity selectivity" of the
-authors' code, ``docs/model.md``): where E >= 0 the output is
-max(E - w_i I, 0), where E < 0 it is min(E - w_i I, 0). Half-wave
+The vDoG is polarity selective (``docs/model.md``): the inhibition can only
+shrink the excitation, never flip or enlarge it, and the output keeps the sign
+of E: L_vDoG = sign(E) * max(|E| - w_i |I|, 0). Half-wave
 rectification then splits it into ON (brightening) and OFF (darkening)
 channels (Eq. 5).
 """
@@ -34,16 +34,16 @@ def gaussian_kernel_1d(radius: int, sigma: float, *, normalise: bool = True) -> 
 
 
 def gaussian_filter(image: np.ndarray, kernel_1d: np.ndarray) -> np.ndarray:
-    """Eq. 2 (and 7): correlate ``image`` with the separable kernel (reflecting borders)."""
-    return cv2.sepFilter2D(image, cv2.CV_32F, kernel_1d, kernel_1d, borderType=cv2.BORDER_REFLECT)
+    """Eq. 2 (and 7): correlate ``image`` with the separable kernel (zero outside the frame: no photoreceptor, no signal)."""
+    return cv2.sepFilter2D(image, cv2.CV_32F, kernel_1d, kernel_1d, borderType=cv2.BORDER_CONSTANT)
 
 
 def vdog(l: np.ndarray, k_e: np.ndarray, k_i: np.ndarray, w_i: float) -> np.ndarray:
-    """Eq. 2-4: vDoG of the photoreceptor change with polarity selectivity."""
+    """Eq. 2-4: vDoG with polarity selectivity, sign(E) * max(|E| - w_i |I|, 0)."""
     e = gaussian_filter(l, k_e)
     i = gaussian_filter(l, k_i)
-    dog = e - np.float32(w_i) * i
-    return np.where(e >= 0, np.maximum(dog, 0), np.minimum(dog, 0)).astype(np.float32, copy=False)
+    magnitude = np.maximum(np.abs(e) - np.float32(w_i) * np.abs(i), 0)
+    return np.copysign(magnitude, e).astype(np.float32, copy=False)
 
 
 def on_off(l_vdog: np.ndarray, prev: tuple[np.ndarray, np.ndarray] | None = None,

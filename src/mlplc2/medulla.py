@@ -61,11 +61,12 @@ def correlator(n: np.ndarray, d: np.ndarray, dx: int, dy: int, beta: float) -> n
 
 
 def motion_detectors(n: np.ndarray, n_prev: np.ndarray, m_prev: dict[str, np.ndarray],
-                     alphas: tuple[float, ...], alpha_out: float, beta: float
-                     ) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
+                     alphas: tuple[float, ...], alpha_out: float, beta: float,
+                     average: bool = True) -> tuple[dict[str, np.ndarray], dict[str, np.ndarray]]:
     """Eq. 8-10 for one channel: the four directional T4 (or T5) maps.
 
-    ``alphas[s - 1]`` is the Eq. 8 coefficient of sampling distance s. Returns
+    ``alphas[s - 1]`` is the Eq. 8 coefficient of sampling distance s. With
+    ``average`` the sum of Eq. 10 is divided by N_c (``docs/model.md``). Returns
     (T maps, M-hat maps); the latter are the state for the next frame.
     """
     m_hat = {}
@@ -75,6 +76,8 @@ def motion_detectors(n: np.ndarray, n_prev: np.ndarray, m_prev: dict[str, np.nda
         total = np.zeros_like(n)
         for s, d in enumerate(delayed_s, start=1):
             total += correlator(n, d, ux * s, uy * s, beta)
+        if average:
+            total /= np.float32(len(alphas))
         m_hat[name] = total
         t[name] = delayed(total, m_prev[name], alpha_out)
     return t, m_hat

@@ -58,8 +58,11 @@ class Params:
     """r_Dc (px): radius of the contrast-normalisation window of K_c, Eq. 7 (Table I)."""
     sigma_c: float = 20.0
     """sigma_c (px): standard deviation of K_c (Table I)."""
-    epsilon: float = 0.2
-    """epsilon: constant of the contrast normalisation, Eq. 6 (Table I)."""
+    epsilon: float = 25.0
+    """epsilon: constant of the contrast normalisation, Eq. 6, on the 0-255 scale of the input.
+    Table I gives 0.2; that value makes every change, however faint, saturate the tanh
+    (background texture as strong as a looming object). 25 keeps weak changes weak
+    (see docs/model.md)."""
     n_c: int = 5
     """N_c: number of sampling distances (connected neurons) per T4/T5 cell, Eq. 10 (Table I)."""
     tau_1: float = 80.0
@@ -69,15 +72,20 @@ class Params:
     tau_1 to tau_Nc ("80~40" in Table I). Also the delay of the T4/T5 output filter, Eq. 10."""
     beta: float = 1.5
     """beta: bias coefficient of the null-direction term of the correlator, Eq. 9 (Table I)."""
+    average_distances: bool = True
+    """Extra. Divide the sum over the N_c sampling distances of Eq. 10 by N_c, which keeps
+    T4/T5 in [0, 1] where the exponents gamma_1 = 0.9 > gamma_2 = 0.5 favour OFF (dark) edges."""
 
     # --- Lobula plate, Eq. 11-12 -------------------------------------------
     gamma_on: float = 0.9
     """gamma_1: exponent on the ON (T4) signal, Eq. 11 (Table I)."""
     gamma_off: float = 0.5
     """gamma_2: exponent on the OFF (T5) signal, Eq. 11 (Table I)."""
-    leaky_slope: float = 0.01
-    """Extra. Slope of the Leaky-ReLU f of Eq. 11 for negative input (authors' code: 0.01)."""
-    lm_gain: float = 10.0
+    leaky_slope: float = 0.5
+    """Extra. Slope of the Leaky-ReLU f of Eq. 11 for negative input. The paper gives none
+    (authors' code: 0.01); 0.5 lets inward (null-direction) motion inhibit a quadrant, as the
+    LPLC2 literature describes, so a translating background does not open the gate."""
+    lm_gain: float = 100.0
     """Extra. Gain applied to the local-motion maps LM_v after Eq. 11, which puts LM on the
     scale of the Table I thresholds (authors' code multiplies the fused signal by 10)."""
 
@@ -86,6 +94,10 @@ class Params:
     """R_AF (px): radius (half-side for square fields) of an attention field (Table I)."""
     field_shape: Literal["square", "disc"] = "square"
     """Extra. Shape of an attention field: a 2 R_AF square or a disc of radius R_AF."""
+    exclusion: float = 1.25
+    """Extra. Eq. 13 searches for a new field outside every existing field; the excluded zone
+    around a field that responds this frame is this many times R_AF, so that the blurred edges of an object that has
+    outgrown its field do not seed a second field beside it (1.0 = the paper's literal rule)."""
     t_a: float = 10.0
     """T_a: LM must exceed this to create an attention field, Eq. 13 (Table I)."""
     t_d: float = 5000.0
@@ -95,10 +107,10 @@ class Params:
     """d (frames): window of the removal rule, Eq. 16 ("10 tau_i" in Table I)."""
     grace: int = 10
     """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5)."""
-    q_min: float = 0.0
+    q_min: float = 100.0
     """Extra. The all-four-arbours gate of Eq. 15 opens when every quadrant sum Q_i
     exceeds this (the paper's bool(prod Q_i), which with a leaky f is read as Q_i > q_min)."""
-    alarm_threshold: float = 20000.0
+    alarm_threshold: float = 6000.0
     """Extra. A field is in collision alarm when its responses summed over the last
     ``alarm_window`` frames reach this (the paper's "fatal" fields; NOTES 17)."""
     alarm_window: int = 5
@@ -113,7 +125,7 @@ class Params:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise ValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
-        non_negative = ("w_i", "after_image", "beta", "leaky_slope", "lm_gain", "t_a",
+        non_negative = ("exclusion", "w_i", "after_image", "beta", "leaky_slope", "lm_gain", "t_a",
                         "t_d", "q_min", "alarm_threshold")
         for name in non_negative:
             if not getattr(self, name) >= 0:

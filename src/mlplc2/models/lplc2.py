@@ -87,7 +87,10 @@ class MLPLC2(_LPLC2Family):
         self.maps = lm
         # Eq. 13: at most one new field per frame, at the largest LM outside all fields.
         if len(self._fields) < p.max_fields:
-            cand = argmax_outside(lm.magnitude, self._fields, p.r_af, p.field_shape)
+            # A responding field also claims the blurred edges just beyond it (``exclusion``).
+            zones = [(f.x, f.y, round(p.exclusion * f.radius) if f.response > 0 else f.radius)
+                     for f in self._fields]
+            cand = argmax_outside(lm.magnitude, zones, p.field_shape)
             if cand is not None and cand[2] > p.t_a:
                 self._new_field(cand[0], cand[1], index, p.r_af)
         # Eq. 14-15 for every field, then Eq. 16 removal (never the last field).

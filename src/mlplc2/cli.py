@@ -1,0 +1,329 @@
+"""Command line: ``mlplc2 run | stimulus | demo`` (see docs/cli.md).
+
+Thin by design: each subcommand parses its arguments and calls one public
+function (:func:`mlplc2.run`, :func:`mlplc2.runner.write_stimulus`,
+:func:`mlplc2.runner.demo`). Subcommands live in the :data:`SUBCOMMANDS`
+table; adding one (``reproduce``, ``bench``, ``evaluate``, ``batch``) is one
+:class:`Subcommand` entry, or a call to :func:`add_subcommand` from the
+module that implements it.
+
+Exit codes: 0 success; 2 bad input (one line ``mlplc2: error: ...`` on
+stderr, no traceback) and also a truncated or damaged video (after writing
+the outputs for the frames that decoded); 130 after Ctrl-C (the outputs for
+the frames done are written).
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import warnings
+from collections.abc import Callable
+from dataclasses import dataclass
+from pathlib import Path
+
+from ._validation import InputError, InputValueError
+
+__all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "add_subcommand",
+           "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
+
+EXIT_OK = 0
+EXIT_INPUT = 2
+#: A truncated/damaged input still gives outputs but exits non-zero (same code as bad input).
+EXIT_TRUNCATED = 2
+EXIT_INTERRUPTED = 130
+
+PROG = "mlplc2"
+
+
+class _UsageError(Exception):
+    """argparse error turned into an exception (one line, exit 2)."""
+
+
+class _Parser(argparse.ArgumentParser):
+    def error(self, message):  # noqa: D102 - one line instead of usage + message
+        raise _UsageError(f"{message} (see '{self.prog} --help')")
+
+
+@dataclass(frozen=True)
+class Subcommand:
+    """One ``mlplc2 NAME`` subcommand.
+
+    ``add_arguments(parser)`` declares its options; ``handler(args) -> int``
+    runs it and returns the exit code (raise :class:`InputError` for bad
+    input: :func:`main` turns it into one line and exit 2).
+    """
+
+    name: str
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    handler: Callable[[argparse.Namespace], int]
+
+
+def _say(args, *lines: str) -> None:
+    if not getattr(args, "quiet", False):
+        for line in lines:
+            print(line)
+
+
+def _warn(message: str) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+# ---------------------------------------------------------------------------
+# run
+# ---------------------------------------------------------------------------
+def _model_names(values) -> list[str]:
+    """--model may be repeated and comma-separated; checked against the registry."""
+    from .models.base import available_models
+
+    names: list[str] = []
+    for v in values or ["mlplc2"]:
+        for name in v.split(","):
+            name = name.strip().lower()
+            if not name:
+                continue
+            if name not in available_models():
+                raise InputValueError(f"unknown model {name!r}; choose from {', '.join(available_models())}")
+            if name not in names:
+                names.append(name)
+    if not names:
+        raise InputValueError("--model needs at least one model name")
+    return names
+
+
+def _nonneg_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
+    if value < 0:
+        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
+    return value
+
+
+def _pos_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
+    if not math.isfinite(value) or value <= 0:
+        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
+    return value
+
+
+def _add_run(p: argparse.ArgumentParser) -> None:
+    from .models.base import available_models
+
+    p.add_argument("source", help="video file (AVI, MP4, ...), folder of images, glob pattern "
+                                  "('frames/*.png', quoted) or camera index (0, 1, ...)")
+    p.add_argument("--model", "-m", action="append", metavar="NAME",
+                   help=f"model(s) to run, repeatable or comma-separated; one of "
+                        f"{', '.join(available_models())} (default: mlplc2)")
+    p.add_argument("--out", "-o", metavar="DIR",
+                   help="output folder (default: <stem>_mlplc2/ next to the input)")
+    p.add_argument("--fps", type=_pos_float, metavar="F",
+                   help="frame rate to assume (default: the video's; images: 30)")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--resize", metavar="WxH",
+                      help="resize frames before the models (e.g. 320x240); coordinates in the "
+                           "outputs stay in input pixels")
+    size.add_argument("--scale", type=_pos_float, metavar="S", help="resize by a factor (e.g. 0.5)")
+    p.add_argument("--start", type=_nonneg_int, default=0, metavar="N", help="first frame (0-based)")
+    p.add_argument("--end", type=_nonneg_int, metavar="N", help="stop before this frame")
+    p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the fields drawn")
+    p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
+                   help="video decoder (default: opencv; pyav needs mlplc2[video])")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+
+def _cmd_run(args) -> int:
+    from .io import parse_resize
+    from .runner import RunInterrupted, TruncatedInputWarning, run
+
+    models = _model_names(args.model)
+    resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
+    if args.end is not None and args.end <= args.start:
+        raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
+        try:
+            result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
+                         start=args.start, end=args.end, video=args.video, quiet=args.quiet)
+        except RunInterrupted as exc:
+            res = exc.result
+            print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
+                  file=sys.stderr)
+            return EXIT_INTERRUPTED
+    _print_run_summary(args, result)
+    if result.truncated:
+        _warn(result.message)
+        return EXIT_TRUNCATED
+    return EXIT_OK
+
+
+def _print_run_summary(args, result) -> None:
+    w, h = result.size
+    mw, mh = result.model_size
+    size = f"{w}x{h}" + (f" -> {mw}x{mh}" if (mw, mh) != (w, h) else "")
+    lines = [f"{result.n_frames} frames of {result.source} ({size}, {result.fps:g} fps)"]
+    for name in result.models:
+        fields = result.fields.get(name, [])
+        if fields:
+            alarms = [f for f in fields if f["first_alarm_frame"] is not None]
+            lines.append(f"  {name}: {len(fields)} field(s), {len(alarms)} in alarm")
+            for f in sorted(fields, key=lambda f: -f["peak_response"])[:6]:
+                alarm = f", alarm at frame {f['first_alarm_frame']}" if f["first_alarm_frame"] is not None else ""
+                lines.append(f"    #{f['id']} at ({f['x']:.0f}, {f['y']:.0f}), frames {f['born']}-"
+                             f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
+                             f"at frame {f['peak_frame']}{alarm}")
+        else:
+            alarm_frames = [r["frame"] for r in result.rows if r["model"] == name and r["collision"]]
+            first = f", first alarm at frame {alarm_frames[0]}" if alarm_frames else ", no alarm"
+            lines.append(f"  {name}: no fields{first}")
+    if result.out is not None:
+        lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
+    _say(args, *lines)
+
+
+# ---------------------------------------------------------------------------
+# stimulus
+# ---------------------------------------------------------------------------
+def _add_stimulus(p: argparse.ArgumentParser) -> None:
+    p.add_argument("name", help="stimulus name (mlplc2.stimuli.NAMES, e.g. four_phase, six_objects)")
+    p.add_argument("--out", "-o", required=True, metavar="FILE.mp4", help="video to write (.mp4 or .avi)")
+    p.add_argument("--gt", metavar="FILE.json", help="ground truth JSON (default: <stem>_gt.json beside it)")
+    p.add_argument("--seed", type=int, help="seed of the procedural background")
+    p.add_argument("--background", metavar="procedural|PATH",
+                   help="background: 'procedural', 'plain' or an image file")
+    p.add_argument("--quiet", "-q", action="store_true", help="print nothing on success")
+
+
+def _cmd_stimulus(args) -> int:
+    from .runner import write_stimulus
+
+    try:
+        from . import stimuli
+    except ImportError:  # pragma: no cover - the module ships with the package
+        raise InputError("mlplc2.stimuli is not available in this installation") from None
+    if args.name not in stimuli.NAMES:
+        raise InputValueError(f"unknown stimulus {args.name!r}; choose from {', '.join(stimuli.NAMES)}")
+    options = {}
+    if args.seed is not None:
+        options["seed"] = args.seed
+    if args.background is not None:
+        bg = args.background
+        if bg not in ("procedural", "plain") and not Path(bg).is_file():
+            raise InputValueError(f"--background {bg!r}: not 'procedural', 'plain' or an existing image file")
+        options["background"] = bg
+    video, gt = write_stimulus(args.name, args.out, gt=args.gt, **options)
+    _say(args, f"wrote {video} and {gt}")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
+# demo
+# ---------------------------------------------------------------------------
+def _add_demo(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", "-o", default="mlplc2_demo", metavar="DIR",
+                   help="folder for demo.mp4, its ground truth and the outputs (default: ./mlplc2_demo)")
+    p.add_argument("--scene", choices=("four_phase", "six_objects"), default="four_phase",
+                   help="which multi-object scene (default: four_phase, 400 frames)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+
+def _cmd_demo(args) -> int:
+    from .runner import demo
+
+    d = demo(args.out, scene=args.scene, quiet=args.quiet)
+    lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)}",
+             "  object  centre        frames    mlplc2 field  centre        error   first alarm"]
+    for m in d.matches:
+        cx, cy = m["center"]
+        t0, t1 = m["frames"]
+        if m["field"] is None:
+            lines.append(f"  {m['object']:>6}  ({cx:>3.0f}, {cy:>3.0f})  {t0:>3}-{t1:<4}  none")
+            continue
+        fx, fy = m["field_center"]
+        alarm = "-" if m["first_alarm_frame"] is None else str(m["first_alarm_frame"])
+        lines.append(f"  {m['object']:>6}  ({cx:>3.0f}, {cy:>3.0f})  {t0:>3}-{t1:<4}  #{m['field']:<11} "
+                     f"({fx:>3.0f}, {fy:>3.0f})  {m['distance']:>5.1f}px  {alarm}")
+    n_fields = len(d.result.fields.get("mlplc2", []))
+    matched = {m["field"] for m in d.matches if m["field"] is not None}
+    lines.append(f"  mlplc2 made {n_fields} field(s); {len(matched)} matched an object")
+    lines.append(f"outputs in {d.result.out}: {', '.join(sorted(d.result.files))}")
+    _say(args, *lines)
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
+# the table and main
+# ---------------------------------------------------------------------------
+#: Subcommands in help order. Add one entry per new subcommand.
+SUBCOMMANDS: list[Subcommand] = [
+    Subcommand("run", "run models on a video, image folder or camera; write CSV, JSON, PNG (and MP4)",
+               _add_run, _cmd_run),
+    Subcommand("stimulus", "write a synthetic stimulus video and its ground truth", _add_stimulus,
+               _cmd_stimulus),
+    Subcommand("demo", "generate a multi-object scene, run the models on it, compare with the truth",
+               _add_demo, _cmd_demo),
+]
+
+
+def add_subcommand(name: str, help: str, add_arguments, handler) -> Subcommand:
+    """Register a subcommand (replacing one of the same name)."""
+    cmd = Subcommand(name, help, add_arguments, handler)
+    SUBCOMMANDS[:] = [c for c in SUBCOMMANDS if c.name != name] + [cmd]
+    return cmd
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from . import __version__
+
+    parser = _Parser(prog=PROG, description="mLPLC2 looming detection: run models on videos, "
+                                            "make stimuli, see a demo.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=_Parser)
+    for cmd in SUBCOMMANDS:
+        p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
+        cmd.add_arguments(p)
+        p.set_defaults(_handler=cmd.handler)
+    return parser
+
+
+def _oserror_line(exc: OSError) -> str:
+    if exc.strerror and exc.filename:
+        return f"{exc.filename}: {exc.strerror}"
+    return str(exc) or type(exc).__name__
+
+
+def _one_line(text: str) -> str:
+    return " ".join(text.split()) or "unknown error"
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Entry point of the ``mlplc2`` console script; returns the exit code."""
+    parser = build_parser()
+    try:
+        args = parser.parse_args(argv)
+    except _UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except SystemExit as exc:  # --help / --version
+        return int(exc.code or 0)
+    try:
+        return int(args._handler(args))
+    except InputError as exc:
+        print(f"{PROG}: error: {_one_line(str(exc))}", file=sys.stderr)
+        return EXIT_INPUT
+    except OSError as exc:
+        print(f"{PROG}: error: {_one_line(_oserror_line(exc))}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

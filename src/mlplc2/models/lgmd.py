@@ -1,0 +1,393 @@
+"""LGMD baselines: LGMD2 (Fu et al.) and LGMD1 (Yue & Rind 2006).
+
+Both are whole-field looming detectors: one neuron integrates every pixel, so
+they neither localise nor separate objects (``Output.fields`` is empty).
+``docs/lgmd.md`` gives the equations, the parameter sources and every choice
+made where the sources differ.
+
+* :class:`LGMD2` - Fu & Yue (2015) and Fu, Hu, Peng, Rind & Yue, "A robust
+  collision perception visual neural network with specific selectivity to
+  darker objects" (IEEE TCYB 2020): biased ON/OFF pathways with delayed lateral
+  inhibition, adaptive inhibition, grouping, spike-frequency adaptation.
+* :class:`LGMD1` - Yue & Rind, "Collision detection in complex dynamic scenes
+  using an LGMD-based visual neural network with feature enhancement" (IEEE
+  TNN 2006): P/E/I/S layers, grouping (feature enhancement) and feed-forward
+  inhibition.
+
+Everything is vectorised (OpenCV ``filter2D`` / ``blur`` with replicated
+borders, NumPy elementwise); per-pixel state is float32, whole-field sums are
+float64.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
+
+from ..retina import photoreceptors
+from .base import Model, Output, register
+
+__all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "lowpass_alpha", "highpass_coeff",
+           "stable_sigmoid", "RESTING_POTENTIAL"]
+
+#: Sigmoid membrane potential with no input (sigmoid(0)); both models rest here.
+RESTING_POTENTIAL = 0.5
+
+_BORDER = cv2.BORDER_REPLICATE
+
+
+def lowpass_alpha(tau_ms: float, fps: float) -> float:
+    """Coefficient of a first-order low-pass with time constant ``tau_ms``:
+    alpha = tau_i / (tau_i + tau), tau_i = 1000 / fps (frame interval, ms)."""
+    tau_i = 1000.0 / fps
+    return tau_i / (tau_i + tau_ms)
+
+
+def highpass_coeff(tau_ms: float, fps: float) -> float:
+    """Coefficient of the first-order high-pass of the SFA: tau / (tau + tau_i)."""
+    tau_i = 1000.0 / fps
+    return tau_ms / (tau_ms + tau_i)
+
+
+def stable_sigmoid(x: float) -> float:
+    """1 / (1 + exp(-x)) without overflow for any finite (or infinite) x."""
+    if x >= 0:
+        return 1.0 / (1.0 + math.exp(-x))
+    z = math.exp(x)
+    return z / (1.0 + z)
+
+
+def _ring_kernels(centre: float, nearest: float, diagonal: float) -> tuple[np.ndarray, ...]:
+    """Split a 3x3 kernel into its centre, 4-nearest and diagonal parts."""
+    kc = np.zeros((3, 3), np.float32)
+    kc[1, 1] = centre
+    kn = np.zeros((3, 3), np.float32)
+    kn[0, 1] = kn[1, 0] = kn[1, 2] = kn[2, 1] = nearest
+    kd = np.zeros((3, 3), np.float32)
+    kd[0, 0] = kd[0, 2] = kd[2, 0] = kd[2, 2] = diagonal
+    return kc, kn, kd
+
+
+def _check(cls_name: str, obj, positive=(), non_negative=(), ints=()) -> None:
+    for name in positive:
+        v = getattr(obj, name)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
+            raise ValueError(f"{cls_name}.{name} must be a finite number > 0, got {v!r}")
+    for name in non_negative:
+        v = getattr(obj, name)
+        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
+            raise ValueError(f"{cls_name}.{name} must be a finite number >= 0, got {v!r}")
+    for name in ints:
+        v = getattr(obj, name)
+        if not isinstance(v, int) or isinstance(v, bool) or v < 1:
+            raise ValueError(f"{cls_name}.{name} must be an integer >= 1, got {v!r}")
+
+
+class _ParamsMixin:
+    def replace(self, **changes):
+        """Return a copy with ``changes`` applied (validated like the constructor)."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise ValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+        return dataclasses.replace(self, **changes)
+
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
+
+
+# ---------------------------------------------------------------------------
+# Grouping layer, shared (Yue & Rind 2006 feature enhancement; Fu et al.)
+# ---------------------------------------------------------------------------
+def _grouping(s: np.ndarray, c_w: float, delta_c: float, c_de: float, t_de: float) -> np.ndarray:
+    """Passing-coefficient grouping: Ce = 3x3 box mean of S, w = max|Ce| / C_w + Delta_C,
+    G = S Ce / w, G <- 0 where G C_de < T_de."""
+    ce = cv2.blur(s, (3, 3), borderType=_BORDER)
+    w = float(np.abs(ce).max()) / c_w + delta_c
+    g = s * ce
+    g *= np.float32(1.0 / w)
+    g[g * np.float32(c_de) < np.float32(t_de)] = 0.0
+    return g
+
+
+# ---------------------------------------------------------------------------
+# LGMD2
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LGMD2Params(_ParamsMixin):
+    """Parameters of the LGMD2 network (Fu et al., IEEE TCYB 2020; Fu & Yue 2015).
+
+    Defaults follow Fu's open-source LGMD2 ("lgmd2OpenSource", the code of the
+    TCYB paper) except where ``docs/lgmd.md`` says otherwise (``a_on``, the
+    biased-ON weight from the mLPLC2 authors' Python LGMD2). Time constants are
+    in ms and become filter coefficients from the frame rate.
+    """
+
+    dc: float = 0.1
+    """d_c: fraction of the previous ON/OFF value added to the current one (after-image)."""
+    on_kernel: tuple[float, float, float] = (2.0, 0.5, 0.25)
+    """W_on (centre, 4-nearest, diagonal): 3x3 lateral-inhibition weights, ON pathway."""
+    off_kernel: tuple[float, float, float] = (1.0, 0.25, 0.125)
+    """W_off (centre, 4-nearest, diagonal): 3x3 lateral-inhibition weights, OFF pathway."""
+    tau_on: tuple[float, float, float] = (15.0, 30.0, 45.0)
+    """tau_on (ms; centre, nearest, diagonal): delays of the ON inhibition."""
+    tau_off: tuple[float, float, float] = (60.0, 120.0, 180.0)
+    """tau_off (ms; centre, nearest, diagonal): delays of the OFF inhibition."""
+    recursive_delay: bool = False
+    """If False (published code) the delayed signal is alpha X(t) + (1 - alpha) X(t-1), a
+    fractional one-frame delay; if True a recursive low-pass alpha X(t) + (1 - alpha) Y(t-1)."""
+    tau_pm: float = 90.0
+    """tau_PM (ms): low-pass time constant of the mean luminance change PM (adaptive inhibition)."""
+    t_pm: float = 8.0
+    """T_PM (grey levels): w_on = max(w_on_base, PM / T_PM), likewise w_off."""
+    w_on_base: float = 1.0
+    """Baseline (floor) of the adaptive ON inhibition weight w_on."""
+    w_off_base: float = 0.5
+    """Baseline (floor) of the adaptive OFF inhibition weight w_off."""
+    a_on: float = 0.5
+    """theta_1: weight of S_on in the summation S = theta_1 S_on + theta_2 S_off + theta_3 S_on S_off."""
+    a_off: float = 1.0
+    """theta_2: weight of S_off in the summation."""
+    a_onoff: float = 1.0
+    """theta_3: weight of the supra-linear S_on S_off term."""
+    c_w: float = 4.0
+    """C_w: grouping scale w = max|Ce| / C_w + Delta_C."""
+    delta_c: float = 0.01
+    """Delta_C: small constant of the grouping scale."""
+    c_de: float = 0.5
+    """C_de: decay coefficient of the grouping threshold (G kept where G C_de >= T_de)."""
+    t_de: float = 15.0
+    """T_de: grouping (decay) threshold."""
+    c_sig: float = 1.0
+    """C_sig: sigmoid coefficient, K = 1 / (1 + exp(-sum(G) / (N_cells C_sig)))."""
+    tau_sfa: float = 800.0
+    """tau_SFA (ms): time constant of the spike-frequency-adaptation high-pass."""
+    t_sfa: float = 0.003
+    """T_SFA: K increases larger than this reset the SFA to the high-passed K."""
+    c_spi: float = 4.0
+    """C_spi: spike scale, spikes = floor(exp(C_spi (K_sfa - T_sp)))."""
+    t_sp: float = 0.78
+    """T_sp: spiking threshold on the adapted membrane potential."""
+    n_ts: int = 8
+    """N_ts (spikes): collision when the spikes counted over consecutive spiking frames reach this."""
+
+    def __post_init__(self) -> None:
+        for name in ("on_kernel", "off_kernel", "tau_on", "tau_off"):
+            v = getattr(self, name)
+            if len(tuple(v)) != 3:
+                raise ValueError(f"LGMD2Params.{name} must have 3 values (centre, nearest, diagonal), got {v!r}")
+            object.__setattr__(self, name, tuple(float(x) for x in v))
+            for x in getattr(self, name):
+                if not (math.isfinite(x) and (x > 0 if name.startswith("tau") else x >= 0)):
+                    raise ValueError(f"LGMD2Params.{name} has an invalid value {x!r}")
+        _check("LGMD2Params", self,
+               positive=("tau_pm", "t_pm", "c_w", "delta_c", "c_sig", "tau_sfa", "c_spi"),
+               non_negative=("dc", "w_on_base", "w_off_base", "a_on", "a_off", "a_onoff", "c_de",
+                             "t_de", "t_sfa", "t_sp"),
+               ints=("n_ts",))
+        if self.dc >= 1:
+            raise ValueError(f"LGMD2Params.dc must be < 1, got {self.dc!r}")
+
+
+@register("lgmd2")
+class LGMD2(Model):
+    """LGMD2 looming detector with specific selectivity to darker objects.
+
+    ``Output.response`` is the membrane potential after spike-frequency
+    adaptation (resting value 0.5, below 1), the trace Fu et al. plot;
+    ``collision`` is raised after ``n_ts`` spikes in consecutive spiking frames.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> m = LGMD2(fps=30)
+    >>> m.step(np.full((20, 20), 255, np.uint8)).response
+    0.5
+    """
+
+    def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None):
+        params = LGMD2Params() if params is None else params
+        if not isinstance(params, LGMD2Params):
+            raise TypeError(f"params must be LGMD2Params, got {type(params).__name__}")
+        super().__init__(fps=fps, params=params)
+        p = params
+        self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
+        self.alpha_off = tuple(lowpass_alpha(t, self.fps) for t in p.tau_off)
+        self.alpha_pm = lowpass_alpha(p.tau_pm, self.fps)
+        self.hp_sfa = highpass_coeff(p.tau_sfa, self.fps)
+        self._k_on = _ring_kernels(*p.on_kernel)
+        self._k_off = _ring_kernels(*p.off_kernel)
+        self._reset()
+
+    def _reset(self) -> None:
+        self._gray_prev: np.ndarray | None = None
+        self._on_prev: np.ndarray | None = None
+        self._off_prev: np.ndarray | None = None
+        self._on_delay: list[np.ndarray] | None = None
+        self._off_delay: list[np.ndarray] | None = None
+        self._pm = 0.0
+        self._k_prev = RESTING_POTENTIAL
+        self._sfa_prev = RESTING_POTENTIAL
+        self._n_spikes = 0
+        self.state: dict = {}
+        """Scalars of the last frame (pm, w_on, w_off, sum_g, k, k_sfa, spikes), for inspection."""
+
+    def _inhibition(self, x, x_prev, delayed_prev, alphas, kernels):
+        total = None
+        delayed = []
+        for a, k, y_prev in zip(alphas, kernels, delayed_prev):
+            a = np.float32(a)
+            d = a * x + (np.float32(1) - a) * (y_prev if self.params.recursive_delay else x_prev)
+            delayed.append(d)
+            conv = cv2.filter2D(d, cv2.CV_32F, k, borderType=_BORDER)
+            total = conv if total is None else total + conv
+        return total, delayed
+
+    def _step(self, gray: np.ndarray, index: int) -> Output:
+        p = self.params
+        pr = photoreceptors(gray, self._gray_prev)
+        self._gray_prev = gray
+        if self._on_prev is None:
+            zeros = np.zeros_like(gray)
+            self._on_prev, self._off_prev = zeros, zeros
+            self._on_delay, self._off_delay = [zeros] * 3, [zeros] * 3
+
+        # adaptive inhibition from the low-passed mean luminance change
+        pm_now = float(np.abs(pr).mean(dtype=np.float64))
+        self._pm = self.alpha_pm * pm_now + (1.0 - self.alpha_pm) * self._pm
+        w_on = max(p.w_on_base, self._pm / p.t_pm)
+        w_off = max(p.w_off_base, self._pm / p.t_pm)
+
+        # ON/OFF half-wave rectification with after-image
+        dc = np.float32(p.dc)
+        on = np.maximum(pr, 0) + dc * self._on_prev
+        off = np.maximum(-pr, 0) + dc * self._off_prev
+
+        inh_on, self._on_delay = self._inhibition(on, self._on_prev, self._on_delay, self.alpha_on, self._k_on)
+        inh_off, self._off_delay = self._inhibition(off, self._off_prev, self._off_delay, self.alpha_off,
+                                                    self._k_off)
+        self._on_prev, self._off_prev = on, off
+
+        s_on = np.maximum(on - np.float32(w_on) * inh_on, 0)
+        s_off = np.maximum(off - np.float32(w_off) * inh_off, 0)
+        s = np.float32(p.a_on) * s_on + np.float32(p.a_off) * s_off + np.float32(p.a_onoff) * s_on * s_off
+
+        g = _grouping(s, p.c_w, p.delta_c, p.c_de, p.t_de)
+        sum_g = float(g.sum(dtype=np.float64))
+        k = stable_sigmoid(sum_g / (g.size * p.c_sig))
+
+        # spike-frequency adaptation (high-pass of K, floored at rest)
+        diff = k - self._k_prev
+        k_sfa = self.hp_sfa * (self._sfa_prev + diff) if diff <= p.t_sfa else self.hp_sfa * k
+        k_sfa = max(k_sfa, RESTING_POTENTIAL)
+        self._k_prev, self._sfa_prev = k, k_sfa
+
+        spikes = int(math.floor(math.exp(min(p.c_spi * (k_sfa - p.t_sp), 50.0))))
+        self._n_spikes = self._n_spikes + spikes if spikes > 0 else 0
+        collision = self._n_spikes >= p.n_ts
+        self.state = dict(pm=self._pm, w_on=w_on, w_off=w_off, sum_g=sum_g, k=k, k_sfa=k_sfa, spikes=spikes)
+        return Output(frame=index, response=float(k_sfa), fields=(), collision=bool(collision),
+                      spike=spikes > 0)
+
+
+# ---------------------------------------------------------------------------
+# LGMD1
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class LGMD1Params(_ParamsMixin):
+    """Parameters of the LGMD1 network (Yue & Rind, IEEE TNN 2006).
+
+    Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
+    of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
+    the shared grouping layer; ``docs/lgmd.md`` lists the sources.
+    """
+
+    w_i_kernel: tuple[float, float] = (0.25, 0.125)
+    """w_I (4-nearest, diagonal): 3x3 lateral-inhibition kernel (centre 0), one-frame delay."""
+    w_i: float = 0.6
+    """W_I: weight of the inhibition in S = E - W_I I."""
+    c_w: float = 4.0
+    """C_w: grouping scale w = max|Ce| / C_w + Delta_C."""
+    delta_c: float = 0.01
+    """Delta_C: small constant of the grouping scale."""
+    c_de: float = 0.5
+    """C_de: decay coefficient of the grouping threshold."""
+    t_de: float = 15.0
+    """T_de: grouping (decay) threshold (G kept where G C_de >= T_de)."""
+    c_sig: float = 1.0
+    """C_sig: sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig)))."""
+    t_sp: float = 0.78
+    """T_sp: spiking threshold on kappa."""
+    n_ts: int = 5
+    """n_ts (frames): collision after this many consecutive spiking frames."""
+    t_ffi: float = 10.0
+    """T_FFI (grey levels): LGMD output suppressed when the FFI, the mean |P| of the previous
+    frame, reaches this."""
+
+    def __post_init__(self) -> None:
+        v = tuple(float(x) for x in self.w_i_kernel)
+        if len(v) != 2 or not all(math.isfinite(x) and x >= 0 for x in v):
+            raise ValueError(f"LGMD1Params.w_i_kernel must be 2 finite values >= 0, got {self.w_i_kernel!r}")
+        object.__setattr__(self, "w_i_kernel", v)
+        _check("LGMD1Params", self, positive=("c_w", "delta_c", "c_sig", "t_ffi"),
+               non_negative=("w_i", "c_de", "t_de", "t_sp"), ints=("n_ts",))
+
+
+@register("lgmd1")
+class LGMD1(Model):
+    """LGMD1 looming detector with feature enhancement and feed-forward inhibition.
+
+    ``Output.response`` is the sigmoid membrane potential kappa (resting value
+    0.5); it is held at rest while the FFI is at or above ``t_ffi``.
+
+    Examples
+    --------
+    >>> import numpy as np
+    >>> LGMD1().step(np.zeros((10, 10))).response
+    0.5
+    """
+
+    def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None):
+        params = LGMD1Params() if params is None else params
+        if not isinstance(params, LGMD1Params):
+            raise TypeError(f"params must be LGMD1Params, got {type(params).__name__}")
+        super().__init__(fps=fps, params=params)
+        kn, kd = params.w_i_kernel
+        self._kernel = np.array([[kd, kn, kd], [kn, 0.0, kn], [kd, kn, kd]], np.float32)
+        self._reset()
+
+    def _reset(self) -> None:
+        self._gray_prev: np.ndarray | None = None
+        self._e_prev: np.ndarray | None = None
+        self._n_spikes = 0
+        self.state: dict = {}
+        """Scalars of the last frame (ffi, suppressed, sum_g, kappa), for inspection."""
+
+    def _step(self, gray: np.ndarray, index: int) -> Output:
+        p = self.params
+        pr = photoreceptors(gray, self._gray_prev)
+        self._gray_prev = gray
+        e = np.abs(pr)
+        e_prev = np.zeros_like(e) if self._e_prev is None else self._e_prev
+        self._e_prev = e
+
+        ffi = float(e_prev.mean(dtype=np.float64))
+        suppressed = ffi >= p.t_ffi
+        if suppressed:
+            sum_g = 0.0
+        else:
+            inh = cv2.filter2D(e_prev, cv2.CV_32F, self._kernel, borderType=_BORDER)
+            s = np.maximum(e - np.float32(p.w_i) * inh, 0)
+            g = _grouping(s, p.c_w, p.delta_c, p.c_de, p.t_de)
+            sum_g = float(g.sum(dtype=np.float64))
+        kappa = stable_sigmoid(sum_g / (e.size * p.c_sig))
+        spike = kappa >= p.t_sp
+        self._n_spikes = self._n_spikes + 1 if spike else 0
+        collision = self._n_spikes >= p.n_ts
+        self.state = dict(ffi=ffi, suppressed=suppressed, sum_g=sum_g, kappa=kappa)
+        return Output(frame=index, response=float(kappa), fields=(), collision=bool(collision),
+                      spike=bool(spike))

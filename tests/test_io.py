@@ -1,0 +1,246 @@
+"""Tests of mlplc2.io: reading, streaming and writing videos and image sequences."""
+
+from __future__ import annotations
+
+import threading
+
+import cv2
+import numpy as np
+import pytest
+
+from mlplc2._validation import InputError, InputValueError
+from mlplc2.io import FrameSource, VideoWriter, open_source, parse_resize, read_video, write_video
+
+W, H, T = 160, 120, 24
+
+
+def _frames(n=T, w=W, h=H):
+    """RGB frames: frame i has a red block whose width encodes i, on grey."""
+    out = []
+    for i in range(n):
+        f = np.full((h, w, 3), 90, np.uint8)
+        f[10:40, 10:10 + 4 * (i % 30) + 4] = (220, 20, 20)
+        out.append(f)
+    return out
+
+
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory):
+    d = tmp_path_factory.mktemp("io")
+    frames = _frames()
+    paths = {"avi": d / "v.avi", "mp4": d / "v.mp4"}
+    write_video(paths["avi"], frames, 25.0)
+    write_video(paths["mp4"], frames, 25.0)
+    return paths, frames
+
+
+# -- read_video ----------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["avi", "mp4"])
+def test_read_video_shape_fps_rgb(videos, kind):
+    paths, frames = videos
+    arr, fps = read_video(paths[kind])
+    assert arr.shape == (T, H, W, 3) and arr.dtype == np.uint8
+    assert fps == pytest.approx(25.0)
+    # RGB order: the block is red, not blue
+    block = arr[5, 15:35, 15:25].reshape(-1, 3).mean(axis=0)
+    assert block[0] > 150 and block[2] < 80
+    assert np.abs(arr.astype(int) - np.stack(frames)).mean() < 6
+
+
+def test_read_video_pyav_backend_matches_opencv(videos):
+    paths, _ = videos
+    a, fa = read_video(paths["avi"])
+    b, fb = read_video(paths["avi"], backend="pyav")
+    assert a.shape == b.shape and fa == fb
+    assert np.abs(a.astype(int) - b).mean() < 3
+
+
+# -- open_source ----------------------------------------------------------------
+def test_stream_indices_start_end(videos):
+    paths, _ = videos
+    src = open_source(paths["avi"], start=5, end=12)
+    assert isinstance(src, FrameSource)
+    assert src.frame_count == T and src.total == 7 and src.size == (W, H)
+    items = list(src)
+    assert [i for i, _ in items] == list(range(5, 12))
+    assert all(f.shape == (H, W, 3) and f.dtype == np.uint8 for _, f in items)
+    assert not src.truncated
+
+
+def test_stream_resize_mapping_and_original(videos):
+    paths, _ = videos
+    src = open_source(paths["mp4"], resize="80x40", keep_original=True)
+    assert src.out_size == (80, 40) and src.size == (W, H)
+    assert src.scale_x == pytest.approx(2.0) and src.scale_y == pytest.approx(3.0)
+    assert src.to_input(10, 10) == pytest.approx((20.0, 30.0))
+    idx, small, orig = next(iter(src))
+    assert small.shape == (40, 80, 3) and orig.shape == (H, W, 3) and idx == 0
+    src.close()
+
+
+def test_stream_scale(videos):
+    paths, _ = videos
+    with open_source(paths["avi"], scale=0.5) as src:
+        assert src.out_size == (W // 2, H // 2)
+
+
+def test_stream_early_close_stops_thread(videos):
+    paths, _ = videos
+    before = {t.ident for t in threading.enumerate()}
+    src = open_source(paths["avi"])
+    for i, _ in src:
+        if i == 2:
+            break
+    src.close()
+    left = [t for t in threading.enumerate() if t.ident not in before and t.name == "mlplc2-decode"]
+    assert not left
+    assert src._queue.maxsize <= 8  # bounded: memory independent of length
+
+
+def test_fps_override(videos):
+    paths, _ = videos
+    with open_source(paths["avi"], fps=12.5) as src:
+        assert src.fps == 12.5
+
+
+def test_image_folder_natural_order_and_glob(tmp_path):
+    d = tmp_path / "imgs"
+    d.mkdir()
+    for i in (1, 2, 10, 3):
+        f = np.full((H, W, 3), i * 20, np.uint8)
+        cv2.imwrite(str(d / f"f{i}.png"), f)
+    (d / "notes.txt").write_text("not an image")
+    src = open_source(d)
+    assert src.fps == 30.0 and src.frame_count == 4 and src.kind == "images"
+    levels = [int(f[0, 0, 0]) for _, f in src]
+    assert levels == [20, 40, 60, 200]
+    levels = [int(f[0, 0, 0]) for _, f in open_source(str(d / "f*.png"))]
+    assert levels == [20, 40, 60, 200]
+
+
+def test_image_size_mismatch_raises(tmp_path):
+    cv2.imwrite(str(tmp_path / "a1.png"), np.zeros((20, 30, 3), np.uint8))
+    cv2.imwrite(str(tmp_path / "a2.png"), np.zeros((22, 30, 3), np.uint8))
+    with pytest.raises(InputValueError, match="first image is 30x20"):
+        list(open_source(tmp_path))
+
+
+# -- errors ---------------------------------------------------------------------
+def test_missing_file(tmp_path):
+    with pytest.raises(InputValueError, match="no such file"):
+        open_source(tmp_path / "nope.mp4")
+
+
+def test_empty_directory(tmp_path):
+    with pytest.raises(InputValueError, match="no images"):
+        open_source(tmp_path)
+
+
+def test_glob_without_match(tmp_path):
+    with pytest.raises(InputValueError, match="no files match"):
+        open_source(str(tmp_path / "*.png"))
+
+
+def test_text_file_named_mp4(tmp_path):
+    p = tmp_path / "fake.mp4"
+    p.write_text("this is not a video\n" * 10)
+    with pytest.raises(InputValueError, match="not a video"):
+        open_source(p)
+
+
+def test_zero_frame_video(tmp_path):
+    p = tmp_path / "zero.avi"
+    w = cv2.VideoWriter(str(p), cv2.VideoWriter_fourcc(*"MJPG"), 30, (W, H))
+    w.release()
+    with pytest.raises(InputValueError, match="no frames"):
+        open_source(p)
+
+
+def test_missing_camera():
+    with pytest.raises(InputError, match="cannot open camera 97"):
+        open_source(97)
+
+
+@pytest.mark.parametrize("bad", ["abc", "320", "0x240", "320x-2", "x", (0, 3), "3x4x5"])
+def test_bad_resize(videos, bad):
+    with pytest.raises(InputValueError, match="bad resize"):
+        open_source(videos[0]["avi"], resize=bad)
+
+
+def test_parse_resize_ok():
+    assert parse_resize("320x240") == (320, 240)
+    assert parse_resize(" 64X48 ") == (64, 48)
+    assert parse_resize((10, 20)) == (10, 20)
+
+
+@pytest.mark.parametrize("kwargs, match", [
+    ({"resize": "10x10", "scale": 0.5}, "not both"),
+    ({"scale": -1}, "bad scale"),
+    ({"start": 3, "end": 3}, "larger than start"),
+    ({"start": -1}, "start must be"),
+    ({"start": 500}, "past the end"),
+    ({"fps": 0}, "fps"),
+])
+def test_bad_options(videos, kwargs, match):
+    with pytest.raises(InputError, match=match):
+        open_source(videos[0]["avi"], **kwargs)
+
+
+def test_truncated_avi(tmp_path):
+    p = tmp_path / "cut.avi"
+    write_video(p, _frames(40), 30.0)
+    data = p.read_bytes()
+    p.write_bytes(data[: int(len(data) * 0.6)])
+    src = open_source(p)
+    got = [i for i, _ in src]
+    assert 0 < len(got) < 40 and got == list(range(len(got)))
+    assert src.truncated and src.truncated_at == len(got)
+    assert f"frame {len(got)}" in src.message
+
+
+def test_truncated_mp4_we_wrote_still_decodes(tmp_path):
+    """Our MP4s put the index first (faststart), so a cut file keeps its first frames."""
+    pytest.importorskip("av")
+    p = tmp_path / "cut.mp4"
+    write_video(p, _frames(60), 30.0)
+    data = p.read_bytes()
+    p.write_bytes(data[: int(len(data) * 0.6)])
+    src = open_source(p)
+    got = [i for i, _ in src]
+    assert 0 < len(got) < 60
+    assert src.truncated and f"frame {len(got)}" in src.message
+
+
+# -- writing --------------------------------------------------------------------
+def test_write_odd_size_mp4_is_padded(tmp_path):
+    pytest.importorskip("av")
+    frames = _frames(5, w=81, h=61)
+    p = write_video(tmp_path / "odd.mp4", frames, 30.0)
+    arr, _ = read_video(p)
+    assert arr.shape == (5, 62, 82, 3)
+
+
+def test_write_avi_and_opencv_mp4_and_grey(tmp_path):
+    grey = [np.full((H, W), 128, np.uint8)] * 6
+    for name, backend in (("g.avi", None), ("g.mp4", "opencv")):
+        p = write_video(tmp_path / name, grey, 30.0, (W, H), backend=backend)
+        arr, fps = read_video(p)
+        assert arr.shape == (6, H, W, 3) and fps == pytest.approx(30.0)
+        assert abs(float(arr.mean()) - 128) < 4
+    assert sorted(f.name for f in tmp_path.iterdir()) == ["g.avi", "g.mp4"]  # no temp files left
+
+
+def test_writer_is_atomic(tmp_path):
+    p = tmp_path / "a.mp4"
+    w = VideoWriter(p, 30.0, (W, H))
+    w.write(_frames(1)[0])
+    assert not p.exists()
+    w.abort()
+    assert not p.exists() and list(tmp_path.iterdir()) == []
+    with pytest.raises(InputValueError, match="no frames"):
+        write_video(p, [], 30.0, (W, H))
+    assert list(tmp_path.iterdir()) == []
+    with pytest.raises(InputValueError, match="80x60"):
+        with VideoWriter(p, 30.0, (W, H)) as w:
+            w.write(np.zeros((60, 80, 3), np.uint8))
+    assert list(tmp_path.iterdir()) == []
