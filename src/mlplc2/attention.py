@@ -104,9 +104,19 @@ def quadrant_sums(lm: LocalMotion, cx: int, cy: int, r: int, shape: str = "squar
     return tuple(out)
 
 
-def lplc2_response(q: tuple[float, float, float, float], q_min: float = 0.0) -> float:
-    """Eq. 15: LPLC2 = bool(all Q_i > q_min) * (Q1 + Q2 + Q3 + Q4)."""
-    if min(q) > q_min:
+def quadrant_areas(cx: int, cy: int, r: int, frame_shape: tuple[int, int]) -> tuple[int, ...]:
+    """Number of pixels of each quadrant Q1..Q4 inside the frame."""
+    return tuple((rows.stop - rows.start) * (cols.stop - cols.start)
+                 for rows, cols in _window(cx, cy, r, frame_shape))
+
+
+def lplc2_response(q, thresholds=0.0) -> float:
+    """Eq. 15: LPLC2 = bool(all Q_i > threshold_i) * (Q1 + Q2 + Q3 + Q4).
+
+    ``thresholds`` is one number or one per quadrant (the arbour thresholds).
+    """
+    t = np.broadcast_to(np.asarray(thresholds, dtype=np.float64), (4,))
+    if all(qi > ti for qi, ti in zip(q, t)):
         return float(sum(q))
     return 0.0
 
@@ -149,40 +159,3 @@ class IdCounter:
     def __call__(self) -> int:
         return next(self._it)
 
-
-def _box(s: np.ndarray, r0, r1, c0, c1) -> np.ndarray:
-    return s[r1, c1] - s[r0, c1] - s[r1, c0] + s[r0, c0]
-
-
-def population_response(lm: LocalMotion, r: int, stride: int = 2, q_min: float = 0.0):
-    """LPLC2 response (Eq. 14-15) of a cell centred at every grid point.
-
-    The LPLC2 population tiles the whole visual field (paper Fig. 1c); this
-    evaluates Eq. 14-15 for square cells of half-side ``r`` centred on a grid
-    of step ``stride`` pixels, with summed-area tables so the cost does not
-    depend on ``r``. Returns ``(R, xs, ys)`` with ``R[j, i]`` the response of
-    the cell at column ``xs[i]``, row ``ys[j]``.
-    """
-    import cv2
-
-    h, w = lm.magnitude.shape
-    ys = np.arange(0, h, stride)
-    xs = np.arange(0, w, stride)
-    up0 = np.clip(ys - r, 0, h)[:, None]
-    up1 = np.clip(ys, 0, h)[:, None]
-    dn0 = np.clip(ys + 1, 0, h)[:, None]
-    dn1 = np.clip(ys + r + 1, 0, h)[:, None]
-    lf0 = np.clip(xs - r, 0, w)[None, :]
-    lf1 = np.clip(xs, 0, w)[None, :]
-    rt0 = np.clip(xs + 1, 0, w)[None, :]
-    rt1 = np.clip(xs + r + 1, 0, w)[None, :]
-    s1 = cv2.integral(lm.r + lm.u, sdepth=cv2.CV_64F)
-    s2 = cv2.integral(lm.l + lm.u, sdepth=cv2.CV_64F)
-    s3 = cv2.integral(lm.l + lm.d, sdepth=cv2.CV_64F)
-    s4 = cv2.integral(lm.r + lm.d, sdepth=cv2.CV_64F)
-    q1 = _box(s1, up0, up1, rt0, rt1)
-    q2 = _box(s2, up0, up1, lf0, lf1)
-    q3 = _box(s3, dn0, dn1, lf0, lf1)
-    q4 = _box(s4, dn0, dn1, rt0, rt1)
-    gate = (q1 > q_min) & (q2 > q_min) & (q3 > q_min) & (q4 > q_min)
-    return np.where(gate, q1 + q2 + q3 + q4, 0.0), xs, ys

@@ -107,9 +107,11 @@ class Params:
     """d (frames): window of the removal rule, Eq. 16 ("10 tau_i" in Table I)."""
     grace: int = 10
     """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5)."""
-    q_min: float = 100.0
-    """Extra. The all-four-arbours gate of Eq. 15 opens when every quadrant sum Q_i
-    exceeds this (the paper's bool(prod Q_i), which with a leaky f is read as Q_i > q_min)."""
+    q_min: float = 0.03
+    """Extra. Arbour threshold: the all-four-arbours gate of Eq. 15 opens when every quadrant
+    sum Q_i exceeds q_min times the quadrant's area in pixels (the paper's bool(prod Q_i),
+    which with a leaky f would open on any faint net outward motion). 0.0625 = 100 over a
+    40 x 40 quadrant."""
     alarm_threshold: float = 6000.0
     """Extra. A field is in collision alarm when its responses summed over the last
     ``alarm_window`` frames reach this (the paper's "fatal" fields; NOTES 17)."""

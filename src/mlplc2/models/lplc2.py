@@ -7,7 +7,8 @@ from collections import deque
 
 import numpy as np
 
-from ..attention import AttentionField, Field, IdCounter, argmax_outside, lplc2_response, quadrant_sums
+from ..attention import (AttentionField, IdCounter, argmax_outside, lplc2_response, quadrant_areas,
+                         quadrant_sums)
 from ..frontend import FrontEnd
 from ..lobula_plate import LocalMotion
 from ..params import Params
@@ -48,7 +49,8 @@ class _LPLC2Family(Model):
         """Eq. 14-15 for one field, plus its alarm state."""
         p = self.params
         f.quadrants = quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
-        f.response = lplc2_response(f.quadrants, p.q_min)
+        areas = quadrant_areas(f.x, f.y, f.radius, lm.magnitude.shape)
+        f.response = lplc2_response(f.quadrants, [p.q_min * a for a in areas])
         f.history.append(f.response)
         recent = list(f.history)[-p.alarm_window:]
         f.collision = sum(recent) >= p.alarm_threshold

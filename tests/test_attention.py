@@ -1,0 +1,104 @@
+"""Attention fields, Eq. 13-16 and Algorithm 1, on hand-made local-motion maps."""
+
+from __future__ import annotations
+
+import numpy as np
+
+import mlplc2
+from mlplc2.attention import argmax_outside, lplc2_response, quadrant_sums
+from mlplc2.lobula_plate import LocalMotion
+
+
+def radial_maps(h=100, w=100, cx=50, cy=50, inward=False):
+    """LM maps of ideal outward (or inward) motion around (cx, cy)."""
+    yy, xx = np.mgrid[0:h, 0:w].astype(np.float32)
+    dx, dy = xx - cx, yy - cy
+    if inward:
+        dx, dy = -dx, -dy
+    slope = mlplc2.Params().leaky_slope  # opponent maps as Eq. 11 makes them
+
+    def f(v):
+        return np.where(v >= 0, v, slope * v) / 10
+
+    r, l, d, u = f(dx), f(-dx), f(dy), f(-dy)
+    mag = np.sqrt(np.maximum(r, l) ** 2 + np.maximum(d, u) ** 2)
+    return LocalMotion(r, l, d, u, mag)
+
+
+def test_quadrants_collect_outward_directions():
+    q = quadrant_sums(radial_maps(), 50, 50, 40)
+    assert all(v > 0 for v in q)
+    assert np.allclose(q, q[0])  # mirror-symmetric quadrants
+    assert lplc2_response(q, 0.0) == sum(q)
+
+
+def test_gate_needs_all_four_arbours():
+    lm = radial_maps()
+    # Outward motion only on the right half: Q2 and Q3 see nothing.
+    half = LocalMotion(lm.r, np.zeros_like(lm.l), lm.d * (np.arange(100) > 50),
+                       lm.u * (np.arange(100) > 50), lm.magnitude)
+    q = quadrant_sums(half, 50, 50, 40)
+    assert q[1] == 0 and q[0] > 0
+    assert lplc2_response(q) == 0.0
+
+
+def test_inward_motion_is_silent():
+    assert lplc2_response(quadrant_sums(radial_maps(inward=True), 50, 50, 40)) == 0.0
+
+
+def test_off_centre_cell_is_silent():
+    """A cell placed away from the expansion centre does not see all four outward arms."""
+    assert lplc2_response(quadrant_sums(radial_maps(), 20, 50, 15)) == 0.0
+
+
+def test_argmax_outside_excludes_zones():
+    lm = np.zeros((50, 60), np.float32)
+    lm[10, 10] = 5
+    lm[40, 50] = 3
+    assert argmax_outside(lm, [])[:2] == (10, 10)
+    assert argmax_outside(lm, [(12, 12, 5)])[:2] == (50, 40)
+    assert argmax_outside(np.ones((5, 5), np.float32), [(2, 2, 10)]) is None
+
+
+def test_field_removal_keeps_last_field_and_respects_grace():
+    """Eq. 16: a silent field dies after the grace period, but never the last one."""
+    p = mlplc2.Params()
+    model = mlplc2.MLPLC2(fps=30.0, params=p)
+    rng = np.random.default_rng(1)
+    # A burst of noise creates fields, then a static scene lets them fall silent.
+    frames = [rng.integers(0, 255, (120, 160), dtype=np.uint8) for _ in range(3)]
+    frames += [frames[-1]] * 40
+    counts = [len(model.step(f).fields) for f in frames]
+    assert max(counts) >= 1
+    assert counts[-1] == 1  # the last field is kept (Eq. 16, "at least one AF")
+    ids_at_end = [f.id for f in model.step(frames[-1]).fields]
+    assert len(ids_at_end) == 1
+
+
+def test_field_ids_are_stable_and_increasing():
+    from mlplc2 import stimuli
+
+    model = mlplc2.MLPLC2(fps=30.0)
+    seen = {}
+    for frame in stimuli.four_phase(seed=0).frames[:150]:
+        for f in model.step(frame).fields:
+            assert seen.setdefault(f.id, (f.x, f.y, f.born)) == (f.x, f.y, f.born)
+    ids = sorted(seen)
+    assert ids == sorted(set(ids)) and ids[0] == 1
+    assert [seen[i][2] for i in ids] == sorted(seen[i][2] for i in ids)
+
+
+def test_params_validation_and_defaults():
+    p = mlplc2.Params()
+    assert (p.r_e, p.r_i, p.r_c) == (5, 11, 5)
+    assert (p.sigma_e, p.sigma_i, p.sigma_c) == (10, 20, 20)
+    assert (p.n_c, p.beta, p.gamma_on, p.gamma_off) == (5, 1.5, 0.9, 0.5)
+    assert (p.r_af, p.t_a, p.t_d, p.d) == (40, 10, 5000, 10)
+    import pytest
+
+    with pytest.raises(ValueError, match="Params.r_af"):
+        mlplc2.Params(r_af=0)
+    with pytest.raises(ValueError, match="unknown parameter"):
+        p.replace(nope=1)
+    with pytest.raises(ValueError, match="field_shape"):
+        mlplc2.Params(field_shape="hexagon")
