@@ -9,7 +9,8 @@ import numpy as np
 import pytest
 
 from mlplc2._validation import InputError, InputValueError
-from mlplc2.io import FrameSource, VideoWriter, open_source, parse_resize, read_video, write_video
+from mlplc2.io import (FrameSource, TruncatedInputWarning, VideoWriter, open_source, parse_resize, read_video,
+                       write_video)
 
 W, H, T = 160, 120, 24
 
@@ -196,6 +197,9 @@ def test_truncated_avi(tmp_path):
     assert 0 < len(got) < 40 and got == list(range(len(got)))
     assert src.truncated and src.truncated_at == len(got)
     assert f"frame {len(got)}" in src.message
+    with pytest.warns(TruncatedInputWarning, match=f"stopped at frame {len(got)} of 40"):
+        arr, _ = read_video(p)
+    assert len(arr) == len(got)
 
 
 def test_truncated_mp4_we_wrote_still_decodes(tmp_path):

@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import argparse
 import math
+import os
 import sys
 import warnings
 from collections.abc import Callable
@@ -302,8 +303,23 @@ def _one_line(text: str) -> str:
     return " ".join(text.split()) or "unknown error"
 
 
+def _quiet_decoders() -> None:
+    """Keep FFmpeg's and OpenCV's own log lines off stderr: errors are reported
+    as one ``mlplc2: error:`` line instead. Set ``OPENCV_FFMPEG_LOGLEVEL`` /
+    ``OPENCV_LOG_LEVEL`` to see them (FFmpeg reads its level once per process)."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+    if "OPENCV_LOG_LEVEL" not in os.environ:
+        try:
+            import cv2
+
+            cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+        except (ImportError, AttributeError):  # pragma: no cover - old or absent OpenCV
+            pass
+
+
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``mlplc2`` console script; returns the exit code."""
+    _quiet_decoders()
     parser = build_parser()
     try:
         args = parser.parse_args(argv)

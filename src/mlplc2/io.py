@@ -24,6 +24,7 @@ import os
 import queue
 import re
 import threading
+import warnings
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 
@@ -32,6 +33,7 @@ import numpy as np
 from ._validation import InputError, InputValueError, check_fps
 
 __all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter", "atomic_path",
+           "TruncatedInputWarning",
            "parse_resize", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]
 
 log = logging.getLogger(__name__)
@@ -44,6 +46,10 @@ VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv")
 DEFAULT_FPS = 30.0
 
 _QUEUE_SIZE = 4
+
+
+class TruncatedInputWarning(UserWarning):
+    """The input stopped decoding before its stated end; results cover the frames before."""
 
 
 # ---------------------------------------------------------------------------
@@ -551,7 +557,8 @@ def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
 
     Notes
     -----
-    A truncated file gives the frames that decode, and a warning is logged.
+    A truncated file gives the frames that decode, with a
+    :class:`TruncatedInputWarning` naming the frame where decoding stopped.
     Use :func:`open_source` for long videos (memory independent of length).
     """
     if _is_camera(path):
@@ -559,7 +566,7 @@ def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
     src = open_source(path, backend=backend)
     frames = [f for _, f in src]
     if src.truncated:
-        log.warning("%s", src.message)
+        warnings.warn(src.message, TruncatedInputWarning, stacklevel=2)
     return np.stack(frames), src.fps
 
 
@@ -620,7 +627,7 @@ class VideoWriter:
 
             self._cv2 = cv2
             self.enc_size = (w, h)
-            fourccs = ("MJPG",) if self.codec == "mjpg" else ("avc1", "mp4v")
+            fourccs = ("MJPG",) if self.codec == "mjpg" else ("mp4v", "avc1")
             self._writer = None
             for code in fourccs:
                 wr = cv2.VideoWriter(str(self.tmp), cv2.VideoWriter_fourcc(*code), self.fps, self.enc_size)

@@ -109,7 +109,7 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
         summaries = {s["id"]: s for s in (fields or {}).get(model, [])}
         if d["fields"]:
             ranked = sorted(d["fields"], key=lambda k: -max(d["fields"][k][1]))
-            shown = ranked[:top]
+            shown = sorted(ranked[:top])  # legend in id (= birth) order
             cmap = _colours(len(shown))
             for fid in ranked[top:]:
                 fr, val = _segments(*d["fields"][fid])
@@ -155,7 +155,8 @@ def _colours(k: int):
 
     if k <= 10:
         return [colormaps["tab10"](i) for i in range(k)]
-    return [colormaps["tab20"](i % 20) for i in range(k)]
+    order = list(range(0, 20, 2)) + list(range(1, 20, 2))  # dark shades first, then light
+    return [colormaps["tab20"](order[i % 20]) for i in range(k)]
 
 
 def _label(fid: int, summary: dict | None, series) -> str:

@@ -20,6 +20,7 @@ when complete, so a file with its final name is never half-written.
 from __future__ import annotations
 
 import csv
+import io
 import json
 import logging
 import math
@@ -30,7 +31,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from .io import FrameSource, VideoWriter, atomic_path, open_source
+from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, get_model
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "default_out_dir",
@@ -40,10 +41,6 @@ log = logging.getLogger(__name__)
 
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
-
-
-class TruncatedInputWarning(UserWarning):
-    """The input stopped decoding before its stated end; results cover the frames before."""
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -326,8 +323,11 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
         if out_dir is not None:
             csv_path = out_dir / "responses.csv"
             csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
-            writer = csv.DictWriter(csv_file, fieldnames=COLUMNS, lineterminator="\n")
+            buf = io.StringIO()
+            writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
             writer.writeheader()
+            csv_file.write(buf.getvalue())
+            csv_file.flush()
             result.files["responses.csv"] = csv_path
             if video:
                 vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
@@ -343,10 +343,14 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             for name, out, tracker in zip(names, outputs, trackers):
                 frame_rows.extend(_rows(index, time_s, name, out, to_input))
                 tracker.update(index, out, to_input)
-            result.rows.extend(frame_rows)
             if writer is not None:
+                # One write() per frame, then flush: an interrupt leaves whole frames only.
+                buf.seek(0)
+                buf.truncate()
                 writer.writerows(frame_rows)
+                csv_file.write(buf.getvalue())
                 csv_file.flush()
+            result.rows.extend(frame_rows)
             if vw is not None:
                 from .plots import annotate_frame
 
@@ -466,9 +470,8 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     :func:`run` (``mlplc2``, ``slplc2``, ``lplc2`` and ``lgmd2`` when it is
     registered; ``video=True``) with its outputs in ``out/demo_mlplc2``.
 
-    ``matches`` has one entry per ground-truth object: the mLPLC2 field
-    nearest to the object's centre among those born while the object was on
-    screen (``None`` if none), with the distance in pixels.
+    ``matches`` has one entry per ground-truth object (see :func:`match_fields`):
+    the mLPLC2 field that stands for it and the distance in pixels.
     """
     from .models.base import available_models
 
@@ -482,8 +485,13 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     return DemoResult(res, truth, video_path, match_fields(res.fields.get("mlplc2", []), truth))
 
 
-def match_fields(fields: list[dict], truth: dict) -> list[dict]:
-    """For each ground-truth object, the nearest field born during its presence."""
+def match_fields(fields: list[dict], truth: dict, *, radius: float = 25.0) -> list[dict]:
+    """For each ground-truth object, the field that stands for it.
+
+    Among the fields born while the object is on screen, the one with the
+    largest peak response within ``radius`` px of the object's centre, else
+    the nearest one (``None`` when no field was born meanwhile).
+    """
     matches = []
     for obj in truth.get("objects", []):
         if obj.get("center") is None:
@@ -493,7 +501,11 @@ def match_fields(fields: list[dict], truth: dict) -> list[dict]:
         t0 = min(s[0] for s in spans) if spans else 0
         t1 = max(s[1] for s in spans) if spans else math.inf
         cand = [f for f in fields if t0 <= f["born"] < t1]
-        best = min(cand, key=lambda f: math.hypot(f["x"] - cx, f["y"] - cy), default=None)
+        near = [f for f in cand if math.hypot(f["x"] - cx, f["y"] - cy) <= radius]
+        if near:  # the strongest field near the object (a field may be replaced while it looms)
+            best = max(near, key=lambda f: (f["peak_response"], -f["born"]))
+        else:
+            best = min(cand, key=lambda f: math.hypot(f["x"] - cx, f["y"] - cy), default=None)
         matches.append({
             "object": obj.get("id"), "center": [cx, cy], "frames": [t0, t1],
             "field": None if best is None else best["id"],

@@ -1,0 +1,346 @@
+"""End-to-end tests of the ``mlplc2`` command line (in-process via ``main``)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2.cli import SUBCOMMANDS, add_subcommand, main
+from mlplc2.io import write_video
+from mlplc2.runner import COLUMNS, RunInterrupted, TruncatedInputWarning, run
+
+# A dark square approaching (growing 4 px/frame) at a known centre, 320x240.
+CX, CY = 200, 100
+W, H, T = 320, 240, 60
+
+
+def _square_frames(n=T, w=W, h=H, cx=CX, cy=CY):
+    rng = np.random.default_rng(0)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (h, w)).astype(np.float32), (0, 0), 4)
+    bg = cv2.normalize(bg, None, 90, 230, cv2.NORM_MINMAX).astype(np.uint8)
+    for i in range(n):
+        f = bg.copy()
+        side = 0 if i < 5 else 4 * (i - 5) + 2
+        if side:
+            cv2.rectangle(f, (cx - side // 2, cy - side // 2), (cx + side // 2, cy + side // 2), 0, -1)
+        yield cv2.cvtColor(f, cv2.COLOR_GRAY2RGB)
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    out = {"avi": d / "square.avi", "mp4": d / "square.mp4", "images": d / "frames"}
+    write_video(out["avi"], _square_frames(), 30.0)
+    write_video(out["mp4"], _square_frames(), 30.0)
+    out["images"].mkdir()
+    for i, f in enumerate(_square_frames(40, 160, 120, 100, 50)):
+        cv2.imwrite(str(out["images"] / f"img{i}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
+    return out
+
+
+def _read_csv(path):
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        header = next(reader)
+        rows = [dict(zip(header, r)) for r in reader]
+    return header, rows
+
+
+def _one_error_line(err: str) -> str:
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith("mlplc2: error: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def _frame_count(path):
+    cap = cv2.VideoCapture(str(path))
+    n = 0
+    size = (int(cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+    while cap.read()[0]:
+        n += 1
+    cap.release()
+    return n, size
+
+
+# -- the main path ---------------------------------------------------------------
+def test_run_avi_resize_maps_fields_back(data, tmp_path, capsys):
+    out = tmp_path / "out"
+    rc = main(["run", str(data["avi"]), "--resize", "160x120", "--out", str(out), "--video", "--quiet"])
+    assert rc == 0
+    assert capsys.readouterr().out == ""  # --quiet
+    header, rows = _read_csv(out / "responses.csv")
+    assert header == list(COLUMNS) == ["frame", "time_s", "model", "field_id", "x", "y", "response",
+                                       "collision"]
+    assert sorted({int(r["frame"]) for r in rows}) == list(range(T))
+    assert {r["model"] for r in rows} == {"mlplc2"}
+    for r in rows:
+        assert float(r["time_s"]) == pytest.approx(int(r["frame"]) / 30.0, abs=1e-6)
+        assert r["collision"] in ("0", "1")
+        assert float(r["response"]) >= 0
+        if r["field_id"]:
+            assert 0 <= float(r["x"]) < W and 0 <= float(r["y"]) < H
+        else:
+            assert r["x"] == r["y"] == "" and float(r["response"]) == 0
+    # the strongest field sits on the square's centre, in input pixels
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["size"] == [W, H] and summary["model_size"] == [160, 120]
+    assert summary["fps"] == 30.0 and summary["n_frames"] == T and summary["complete"]
+    fields = summary["models"]["mlplc2"]
+    assert fields
+    best = max(fields, key=lambda f: f["peak_response"])
+    assert best["peak_response"] > 0
+    assert math.hypot(best["x"] - CX, best["y"] - CY) < 12  # 6 model pixels at this resize
+    # fields.json agrees with the CSV
+    by_id = {}
+    for r in rows:
+        if r["field_id"]:
+            by_id.setdefault(int(r["field_id"]), []).append(r)
+    assert {f["id"] for f in fields} == set(by_id)
+    for f in fields:
+        frames = sorted(int(r["frame"]) for r in by_id[f["id"]])
+        assert f["born"] == frames[0]
+        assert f["died"] == (None if frames[-1] == T - 1 else frames[-1] + 1)
+        peak_row = max(by_id[f["id"]], key=lambda r: float(r["response"]))
+        assert f["peak_response"] == pytest.approx(float(peak_row["response"]))
+        if f["first_alarm_frame"] is not None:
+            assert min(int(r["frame"]) for r in by_id[f["id"]] if r["collision"] == "1") == f[
+                "first_alarm_frame"]
+    # a real figure
+    png = out / "responses.png"
+    assert png.stat().st_size > 15_000
+    img = cv2.imread(str(png))
+    assert img is not None and img.std() > 10
+    # the annotated video has the input's frames and size
+    assert _frame_count(out / "annotated.mp4") == (T, (W, H))
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temp files left
+
+
+def test_run_mp4_several_models(data, tmp_path, capsys):
+    out = tmp_path / "multi"
+    models = ["mlplc2,lplc2", "slplc2"]
+    extra = [m for m in ("lgmd2", "lgmd1") if m in mlplc2.available_models()]
+    argv = ["run", str(data["mp4"]), "--out", str(out), "--scale", "0.5", "--end", "30"]
+    for m in models + extra:
+        argv += ["--model", m]
+    assert main(argv) == 0
+    text = capsys.readouterr().out
+    assert "30 frames" in text and "320x240 -> 160x120" in text
+    _, rows = _read_csv(out / "responses.csv")
+    names = ["mlplc2", "lplc2", "slplc2"] + extra
+    for name in names:
+        frames = [int(r["frame"]) for r in rows if r["model"] == name]
+        assert sorted(set(frames)) == list(range(30)), name
+    for r in rows:
+        if r["model"] == "lplc2" and r["field_id"]:  # one cell at the frame centre, in input pixels
+            assert (float(r["x"]), float(r["y"])) == (160.0, 120.0)
+    for name in extra:  # no fields: one row per frame with empty field columns
+        mine = [r for r in rows if r["model"] == name]
+        assert len(mine) == 30 and all(r["field_id"] == r["x"] == r["y"] == "" for r in mine)
+    summary = json.loads((out / "fields.json").read_text())
+    assert list(summary["models"]) == names
+    assert not (out / "annotated.mp4").exists()
+
+
+def test_run_image_folder_default_out_and_fps(data, capsys):
+    rc = main(["run", str(data["images"]), "--fps", "20", "--start", "5", "--quiet"])
+    assert rc == 0
+    out = data["images"].parent / "frames_mlplc2"
+    _, rows = _read_csv(out / "responses.csv")
+    frames = sorted({int(r["frame"]) for r in rows})
+    assert frames == list(range(5, 40))
+    r = next(r for r in rows if r["frame"] == "10")
+    assert float(r["time_s"]) == pytest.approx(0.5)
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["fps"] == 20.0 and summary["start"] == 5
+    assert all(f["born"] >= 5 for f in summary["models"]["mlplc2"])
+    assert (out / "responses.png").exists()
+
+
+# -- bad input: exit 2 and one line ------------------------------------------------
+@pytest.mark.parametrize("case", ["missing", "empty_dir", "text_mp4", "unknown_model", "bad_resize",
+                                  "bad_resize_zero", "resize_and_scale", "end_before_start", "no_source",
+                                  "bad_fps"])
+def test_bad_input_exit_2(case, data, tmp_path, capsys):
+    video = str(data["avi"])
+    argv = {
+        "missing": ["run", str(tmp_path / "missing.mp4")],
+        "empty_dir": ["run", str(tmp_path)],
+        "text_mp4": ["run", str(tmp_path / "fake.mp4")],
+        "unknown_model": ["run", video, "--model", "mlplc2,nosuchmodel"],
+        "bad_resize": ["run", video, "--resize", "big"],
+        "bad_resize_zero": ["run", video, "--resize", "0x120"],
+        "resize_and_scale": ["run", video, "--resize", "160x120", "--scale", "0.5"],
+        "end_before_start": ["run", video, "--start", "10", "--end", "5"],
+        "no_source": ["run"],
+        "bad_fps": ["run", video, "--fps", "-3"],
+    }[case]
+    if case == "text_mp4":
+        (tmp_path / "fake.mp4").write_text("not a video\n")
+    rc = main(argv + ["--out", str(tmp_path / "o")] if case != "no_source" else argv)
+    assert rc == 2
+    line = _one_error_line(capsys.readouterr().err)
+    expect = {"missing": "no such file", "empty_dir": "no images", "text_mp4": "not a video",
+              "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "bad --resize 'big'",
+              "bad_resize_zero": "bad --resize", "resize_and_scale": "not allowed with",
+              "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps"}[case]
+    assert expect in line
+    assert not (tmp_path / "o" / "fields.json").exists()
+
+
+def test_no_command_and_version(capsys):
+    assert main([]) == 2
+    _one_error_line(capsys.readouterr().err)
+    assert main(["--version"]) == 0
+    assert mlplc2.__version__ in capsys.readouterr().out
+
+
+# -- truncated input and Ctrl-C --------------------------------------------------------
+def test_truncated_video_keeps_outputs_and_exits_nonzero(data, tmp_path, capsys):
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.6)])
+    out = tmp_path / "out"
+    rc = main(["run", str(cut), "--out", str(out), "--quiet", "--video"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert "mlplc2: warning:" in err and "Traceback" not in err
+    summary = json.loads((out / "fields.json").read_text())
+    k = summary["n_frames"]
+    assert 0 < k < T and summary["truncated"] and not summary["complete"]
+    assert f"frame {k} " in err
+    _, rows = _read_csv(out / "responses.csv")
+    assert sorted({int(r["frame"]) for r in rows}) == list(range(k))
+    assert _frame_count(out / "annotated.mp4")[0] == k
+    assert (out / "responses.png").exists()
+
+
+def test_truncated_video_warns_in_python(data, tmp_path):
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.5)])
+    with pytest.warns(TruncatedInputWarning, match="stopped at frame"):
+        res = run(cut, out=False, quiet=True)
+    assert res.truncated and 0 < res.n_frames < T
+
+
+def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
+    k = 12
+    original = mlplc2.MLPLC2.step
+
+    def step(self, frame):
+        if self.frame_index == k:
+            raise KeyboardInterrupt
+        return original(self, frame)
+
+    monkeypatch.setattr(mlplc2.MLPLC2, "step", step)
+    out = tmp_path / "out"
+    rc = main(["run", str(data["avi"]), "--out", str(out), "--quiet", "--video"])
+    assert rc == 130
+    assert "interrupted after 12 frames" in capsys.readouterr().err
+    header, rows = _read_csv(out / "responses.csv")
+    assert header == list(COLUMNS)
+    assert sorted({int(r["frame"]) for r in rows}) == list(range(k))
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["interrupted"] and summary["n_frames"] == k
+    assert _frame_count(out / "annotated.mp4")[0] == k
+    with pytest.raises(RunInterrupted) as info:
+        run(data["avi"], out=False, quiet=True)
+    assert info.value.result.n_frames == k
+
+
+# -- the Python API behind `run` --------------------------------------------------------
+def test_run_api_without_outputs_and_dataframe(data, tmp_path):
+    res = run(str(data["images"]), ["mlplc2", "lplc2"], out=False, progress=False)
+    assert res.out is None and res.files == {} and res.n_frames == 40
+    assert not (data["images"].parent / "nothing").exists()
+    pd = pytest.importorskip("pandas")
+    df = res.to_dataframe()
+    assert list(df.columns) == list(COLUMNS) and len(df) == len(res.rows)
+    assert isinstance(df, pd.DataFrame) and str(df["field_id"].dtype) == "Int64"
+
+
+def test_to_dataframe_without_pandas(data, monkeypatch):
+    res = run(str(data["images"]), end=3, out=False, quiet=True)
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"pip install 'mlplc2\[pandas\]'"):
+        res.to_dataframe()
+
+
+def test_subcommand_table_is_extensible(capsys):
+    saved = list(SUBCOMMANDS)
+    try:
+        add_subcommand("hello", "say hello", lambda p: p.add_argument("--name", default="fly"),
+                       lambda a: print(f"hello {a.name}") or 0)
+        assert main(["hello", "--name", "lplc2"]) == 0
+        assert capsys.readouterr().out == "hello lplc2\n"
+    finally:
+        SUBCOMMANDS[:] = saved
+
+
+def test_console_script_help():
+    exe = Path(sys.executable).with_name("mlplc2")
+    cmd = [str(exe)] if exe.exists() else [sys.executable, "-m", "mlplc2.cli"]
+    proc = subprocess.run(cmd + ["--help"], capture_output=True, text=True, timeout=60,
+                          env={**os.environ, "COLUMNS": "100"})
+    assert proc.returncode == 0, proc.stderr
+    for word in ("run", "stimulus", "demo"):
+        assert word in proc.stdout
+
+
+# -- stimulus and demo (need mlplc2.stimuli) ------------------------------------------------
+def test_stimulus_command(tmp_path, capsys):
+    stimuli = pytest.importorskip("mlplc2.stimuli")
+    out = tmp_path / "six.mp4"
+    assert main(["stimulus", "six_objects", "--out", str(out), "--seed", "3", "--quiet"]) == 0
+    gt = json.loads((tmp_path / "six_gt.json").read_text())
+    stim = stimuli.six_objects(seed=3)
+    assert gt["frames"] == len(stim) and len(gt["objects"]) == 6
+    assert _frame_count(out) == (len(stim), stim.size)
+    assert main(["stimulus", "nosuch", "--out", str(out)]) == 2
+    assert "unknown stimulus" in _one_error_line(capsys.readouterr().err)
+    assert main(["stimulus", "test_black_approach", "--out", str(out), "--seed", "1"]) == 2
+    _one_error_line(capsys.readouterr().err)
+
+
+@pytest.mark.slow
+def test_demo_command(tmp_path, capsys):
+    pytest.importorskip("mlplc2.stimuli")
+    out = tmp_path / "demo"
+    assert main(["demo", "--out", str(out), "--scene", "six_objects"]) == 0
+    text = capsys.readouterr().out
+    assert "matched an object" in text
+    assert (out / "demo.mp4").exists() and (out / "demo_gt.json").exists()
+    res = out / "demo_mlplc2"
+    for name in ("responses.csv", "fields.json", "responses.png", "annotated.mp4"):
+        assert (res / name).exists(), name
+    summary = json.loads((res / "fields.json").read_text())
+    assert {"mlplc2", "slplc2", "lplc2"} <= set(summary["models"])
+
+
+# -- a real clip from the paper -----------------------------------------------------------
+@pytest.mark.paper
+def test_paper_car_fullres_mapped_back(paper_dir, tmp_path):
+    clip = paper_dir / "uav" / "car_attack_fullres.mp4"
+    if not clip.exists():
+        pytest.skip("car_attack_fullres.mp4 absent")
+    out = tmp_path / "car"
+    rc = main(["run", str(clip), "--resize", "320x240", "--video", "--out", str(out), "--quiet"])
+    assert rc == 0
+    _, rows = _read_csv(out / "responses.csv")
+    pts = [(float(r["x"]), float(r["y"])) for r in rows if r["field_id"]]
+    assert pts
+    assert all(0 <= x < 1012 and 0 <= y < 738 for x, y in pts)
+    assert any(x > 320 or y > 240 for x, y in pts)
+    assert _frame_count(out / "annotated.mp4") == (81, (1012, 738))
