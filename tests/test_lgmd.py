@@ -169,7 +169,7 @@ def test_lgmd1_approach_beats_recede():
 
     For a square growing linearly, the frame differences of recession are those of
     approach in reverse order, so LGMD1's *peak* is the same (both saturate, see
-    docs/lgmd.md); the difference is when it fires: at the end of an approach
+    docs/model.md (Baselines)); the difference is when it fires: at the end of an approach
     (just before collision) it is high, at the end of a recession it has decayed.
     """
     m = LGMD1()

@@ -2,7 +2,7 @@
 
 Both are whole-field looming detectors: one neuron integrates every pixel, so
 they neither localise nor separate objects (``Output.fields`` is empty).
-``docs/lgmd.md`` gives the equations, the parameter sources and every choice
+``docs/model.md`` (Baselines) gives the equations, the parameter sources and every choice
 made where the sources differ.
 
 * :class:`LGMD2` - Fu & Yue (2015) and Fu, Hu, Peng, Rind & Yue, "A robust
@@ -122,7 +122,7 @@ class LGMD2Params(_ParamsMixin):
     """Parameters of the LGMD2 network (Fu et al., IEEE TCYB 2020; Fu & Yue 2015).
 
     Defaults follow Fu's open-source LGMD2 ("lgmd2OpenSource", the code of the
-    TCYB paper) except where ``docs/lgmd.md`` says otherwise (``a_on``, the
+    TCYB paper) except where ``docs/model.md`` (Baselines) says otherwise (``a_on``, the
     biased-ON weight from the mLPLC2 authors' Python LGMD2). Time constants are
     in ms and become filter coefficients from the frame rate.
     """
@@ -303,7 +303,7 @@ class LGMD1Params(_ParamsMixin):
 
     Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
     of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
-    the shared grouping layer; ``docs/lgmd.md`` lists the sources.
+    the shared grouping layer; ``docs/model.md`` (Baselines) lists the sources.
     """
 
     w_i_kernel: tuple[float, float] = (0.25, 0.125)
