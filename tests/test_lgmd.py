@@ -21,8 +21,10 @@ from mlplc2.models.lgmd import (
 
 SIZE = 100
 N_FRAMES = 50
-SCENE = "/work/shared/data/paper/scenes/outdoor_2_black_4_period.avi"
-BASIC = "/work/shared/data/paper/basic"
+from .conftest import PAPER, read_gray
+
+SCENE = str(PAPER / "scenes" / "outdoor_2_black_4_period.avi")
+BASIC = str(PAPER / "basic")
 
 
 # --------------------------------------------------------------------------- stimuli
@@ -264,18 +266,7 @@ def test_resolution_invariance_roughly():
 
 # --------------------------------------------------------------------------- paper videos
 def _decode(path):
-    import cv2
-
-    cap = cv2.VideoCapture(path)
-    frames = []
-    while True:
-        ok, img = cap.read()
-        if not ok:
-            break
-        frames.append(cv2.cvtColor(img, cv2.COLOR_BGR2GRAY))
-    fps = cap.get(cv2.CAP_PROP_FPS) or 30.0
-    cap.release()
-    return frames, fps
+    return read_gray(path), 30.0
 
 
 @pytest.mark.skipif(not os.path.exists(SCENE), reason="four-phase scene not available")

@@ -12,20 +12,11 @@ import pytest
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
 
-PAPER = Path("/work/shared/data/paper")
+from .conftest import PAPER, read_gray
 
 
 def _read_video(path: Path) -> np.ndarray:
-    cv2 = pytest.importorskip("cv2")
-    cap = cv2.VideoCapture(str(path))
-    frames = []
-    while True:
-        ok, frame = cap.read()
-        if not ok:
-            break
-        frames.append(cv2.cvtColor(frame, cv2.COLOR_BGR2GRAY))
-    cap.release()
-    return np.array(frames)
+    return np.array(read_gray(path))
 
 
 def _need_paper(*parts: str) -> Path:
