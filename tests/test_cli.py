@@ -271,6 +271,18 @@ def test_run_api_without_outputs_and_dataframe(data, tmp_path):
     assert isinstance(df, pd.DataFrame) and str(df["field_id"].dtype) == "Int64"
 
 
+def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
+    """Long/live runs: rows go to the CSV only, the result keeps no per-frame rows."""
+    kept = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "a", progress=False)
+    lean = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "b", progress=False, keep_rows=False)
+    assert lean.rows == [] and lean.targets == [] and kept.rows
+    assert (tmp_path / "a" / "responses.csv").read_text() == (tmp_path / "b" / "responses.csv").read_text()
+    assert (tmp_path / "b" / "responses.png").stat().st_size > 10_000
+    for name in ("mlplc2", "lgmd2"):
+        frames = sorted({r["frame"] for r in kept.rows if r["model"] == name and r["collision"]})
+        assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
+
+
 def test_to_dataframe_without_pandas(data, monkeypatch):
     res = run(str(data["images"]), end=3, out=False, quiet=True)
     monkeypatch.setitem(sys.modules, "pandas", None)

@@ -119,11 +119,15 @@ def test_image_folder_natural_order_and_glob(tmp_path):
     assert levels == [20, 40, 60, 200]
 
 
-def test_image_size_mismatch_raises(tmp_path):
+def test_image_size_mismatch_stops_like_a_damaged_image(tmp_path):
+    """An image of another size ends the sequence there: frames before it are kept."""
     cv2.imwrite(str(tmp_path / "a1.png"), np.zeros((20, 30, 3), np.uint8))
-    cv2.imwrite(str(tmp_path / "a2.png"), np.zeros((22, 30, 3), np.uint8))
-    with pytest.raises(InputValueError, match="first image is 30x20"):
-        list(open_source(tmp_path))
+    cv2.imwrite(str(tmp_path / "a2.png"), np.zeros((20, 30, 3), np.uint8))
+    cv2.imwrite(str(tmp_path / "a3.png"), np.zeros((22, 30, 3), np.uint8))
+    src = open_source(tmp_path)
+    assert len(list(src)) == 2
+    assert src.truncated and src.truncated_at == 2
+    assert "a3.png (30x22, not 30x20 like the first image)" in src.message
 
 
 # -- errors ---------------------------------------------------------------------

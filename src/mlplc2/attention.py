@@ -16,9 +16,9 @@ quadrants are mirror images of one another.
 
 from __future__ import annotations
 
-import itertools
 from collections import deque
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 
@@ -35,6 +35,16 @@ class Field:
 
     ``x`` is the column and ``y`` the row of the centre in the pixels of the
     frames given to the model; ``born`` is the frame index at creation.
+
+    Target estimates (:mod:`mlplc2.targets`, ``docs/targets.md``; None while not
+    estimable): ``ttc_s`` time to collision in seconds; ``expansion_rate``
+    d(theta)/dt of the object's angular size in degrees per second when the model
+    was given ``hfov_deg``, else d(size)/dt in pixels per second;
+    ``azimuth_deg`` / ``elevation_deg`` the bearing of the expansion centre in
+    degrees from the optical axis (azimuth positive right, elevation positive up)
+    when ``hfov_deg`` was given, else its offsets in pixels from the image centre
+    (same signs); ``rank`` 1 = most urgent field of the frame (smallest
+    ``ttc_s``), None without ``ttc_s``.
     """
 
     id: int
@@ -45,6 +55,11 @@ class Field:
     collision: bool
     born: int
     quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
+    ttc_s: float | None = None
+    expansion_rate: float | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+    rank: int | None = None
 
 
 @dataclass
@@ -60,10 +75,21 @@ class AttentionField:
     response: float = 0.0
     quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     collision: bool = False
+    target: Any = None
+    """Per-field state of the target estimators (:class:`mlplc2.targets.TargetTracker`)."""
+    estimate: Any = None
+    """This frame's :class:`mlplc2.targets.TargetEstimate` (None before the first)."""
+    rank: int | None = None
 
     def snapshot(self) -> Field:
+        e = self.estimate
+        if e is None:
+            return Field(self.id, float(self.x), float(self.y), float(self.radius), self.response,
+                         self.collision, self.born, self.quadrants, rank=self.rank)
         return Field(self.id, float(self.x), float(self.y), float(self.radius), self.response,
-                     self.collision, self.born, self.quadrants)
+                     self.collision, self.born, self.quadrants, ttc_s=e.ttc_s,
+                     expansion_rate=e.expansion_rate, azimuth_deg=e.azimuth_deg,
+                     elevation_deg=e.elevation_deg, rank=self.rank)
 
 
 def _window(cx: int, cy: int, r: int, shape: tuple[int, int]):
@@ -151,11 +177,18 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
 
 
 class IdCounter:
-    """Stable, increasing integer ids for fields (1, 2, 3, ...)."""
+    """Stable, increasing integer ids for fields (1, 2, 3, ...).
+
+    A plain int, not ``itertools.count``: pickling/deep-copying ``itertools``
+    objects is deprecated in Python 3.12 and removed in 3.14, and models must
+    stay picklable.
+    """
 
     def __init__(self) -> None:
-        self._it = itertools.count(1)
+        self._next = 1
 
     def __call__(self) -> int:
-        return next(self._it)
+        value = self._next
+        self._next += 1
+        return value
 

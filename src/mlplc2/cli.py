@@ -114,6 +114,16 @@ def _pos_float(text: str) -> float:
     return value
 
 
+def _hfov(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180), got {text!r}") from None
+    if not math.isfinite(value) or not 0 < value < 180:
+        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180), got {text!r}")
+    return value
+
+
 def _add_run(p: argparse.ArgumentParser) -> None:
     from .models.base import available_models
 
@@ -134,6 +144,9 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start", type=_nonneg_int, default=0, metavar="N", help="first frame (0-based)")
     p.add_argument("--end", type=_nonneg_int, metavar="N", help="stop before this frame")
     p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the fields drawn")
+    p.add_argument("--hfov", type=_hfov, metavar="DEG",
+                   help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
+                        "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
     p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv; pyav needs mlplc2[video])")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
@@ -151,7 +164,8 @@ def _cmd_run(args) -> int:
         warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
         try:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
-                         start=args.start, end=args.end, video=args.video, quiet=args.quiet)
+                         start=args.start, end=args.end, video=args.video, quiet=args.quiet,
+                         hfov_deg=args.hfov, keep_rows=False)
         except RunInterrupted as exc:
             res = exc.result
             print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
@@ -180,8 +194,8 @@ def _print_run_summary(args, result) -> None:
                              f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
                              f"at frame {f['peak_frame']}{alarm}")
         else:
-            alarm_frames = [r["frame"] for r in result.rows if r["model"] == name and r["collision"]]
-            first = f", first alarm at frame {alarm_frames[0]}" if alarm_frames else ", no alarm"
+            first_alarm = result.alarms[name]["first"]
+            first = f", first alarm at frame {first_alarm}" if first_alarm is not None else ", no alarm"
             lines.append(f"  {name}: no fields{first}")
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
@@ -259,6 +273,117 @@ def _cmd_demo(args) -> int:
 
 
 # ---------------------------------------------------------------------------
+# evaluate (docs/evaluation.md)
+# ---------------------------------------------------------------------------
+def _add_evaluate(p: argparse.ArgumentParser) -> None:
+    p.add_argument("inputs", nargs="+", metavar="RESULTS_OR_VIDEOS",
+                   help="output folders of 'mlplc2 run' / 'mlplc2 batch' (responses.csv + fields.json), "
+                        "or videos (the models are run first)")
+    p.add_argument("--gt", required=True, metavar="GT.json", help="ground truth (see docs/evaluation.md)")
+    p.add_argument("--model", "-m", action="append", metavar="NAME",
+                   help="model(s) to score, repeatable or comma-separated (default: all in the results; "
+                        "for videos: all registered models)")
+    p.add_argument("--out", "-o", metavar="DIR", help="write evaluation.md and evaluation.json here")
+    p.add_argument("--match-radius", type=_pos_float, default=20.0, metavar="PX",
+                   help="a field this close to an object's centre stands for it (default 20, ground-truth pixels)")
+    p.add_argument("--tail", type=_nonneg_int, default=25, metavar="FRAMES",
+                   help="frames after an approach during which its fields/alarms still count (default 25)")
+    p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
+    p.add_argument("--details", action="store_true", help="also print the per-video table")
+    p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
+
+
+def _cmd_evaluate(args) -> int:
+    from .evaluate import evaluate
+    from .io import parse_resize
+
+    models = _model_names(args.model) if args.model else None
+    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
+                  run_options=options, progress=not args.quiet)
+    for s in ev.skipped:
+        _warn(f"{s}: no ground truth for it in {args.gt}; not scored")
+    _say(args, ev.to_markdown(details=args.details))
+    if args.out:
+        files = ev.write(args.out)
+        _say(args, f"wrote {', '.join(str(f) for f in files.values())}")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
+# batch (docs/evaluation.md)
+# ---------------------------------------------------------------------------
+def _add_batch(p: argparse.ArgumentParser) -> None:
+    p.add_argument("inputs", nargs="+", metavar="INPUTS",
+                   help="videos, folders of videos, image folders or quoted glob patterns")
+    p.add_argument("--out", "-o", required=True, metavar="DIR", help="output folder (results.csv + per-video outputs)")
+    p.add_argument("--models", "--model", "-m", dest="model", action="append", metavar="NAME",
+                   help="model(s), repeatable or comma-separated (default: mlplc2)")
+    p.add_argument("--params", metavar="FILE.json", help="JSON object of Params fields overriding the defaults")
+    p.add_argument("--sweep", action="append", metavar="PARAM=V1,V2,...",
+                   help="sweep a parameter, repeatable (Cartesian product); MODEL.PARAM for one model's own")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="tcp://host:8786 of a running Dask scheduler (default: start a local cluster)")
+    p.add_argument("--workers", type=_nonneg_int, metavar="N",
+                   help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
+    p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
+    p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
+    p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
+    p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pandas, pyarrow)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+
+def _cmd_batch(args) -> int:
+    from .batch import batch
+    from .io import parse_resize
+
+    models = _model_names(args.model)
+    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
+                scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
+                progress=not args.quiet, force=args.force, parquet=args.parquet)
+    reported = set()
+    for r in res.rows:
+        if r["status"] == "error" and r["out"] not in reported:  # once per task
+            reported.add(r["out"])
+            _warn(f"{r['video']} ({r['model']}, {r['out']}): {r['error']}")
+    _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done, {res.failed} failed; "
+               f"{len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
+         f"results in {res.table}")
+    return EXIT_INPUT if res.failed else EXIT_OK
+
+
+# ---------------------------------------------------------------------------
+# reproduce (implemented in mlplc2.reproduce, imported only when used)
+# ---------------------------------------------------------------------------
+def _add_reproduce(p: argparse.ArgumentParser) -> None:
+    from .reproduce import add_arguments
+
+    add_arguments(p)
+
+
+def _cmd_reproduce(args) -> int:
+    from .reproduce import cli_handler
+
+    return cli_handler(args)
+
+
+# ---------------------------------------------------------------------------
+# bench (implemented in mlplc2.bench; benchmarks/README.md)
+# ---------------------------------------------------------------------------
+def _add_bench(p: argparse.ArgumentParser) -> None:
+    from .bench import add_arguments
+
+    add_arguments(p)
+
+
+def _cmd_bench(args) -> int:
+    from .bench import cli_handler
+
+    return cli_handler(args)
+
+
+# ---------------------------------------------------------------------------
 # the table and main
 # ---------------------------------------------------------------------------
 #: Subcommands in help order. Add one entry per new subcommand.
@@ -269,6 +394,14 @@ SUBCOMMANDS: list[Subcommand] = [
                _cmd_stimulus),
     Subcommand("demo", "generate a multi-object scene, run the models on it, compare with the truth",
                _add_demo, _cmd_demo),
+    Subcommand("evaluate", "score results (or videos) against ground truth; per-model comparison table",
+               _add_evaluate, _cmd_evaluate),
+    Subcommand("batch", "run every (video, model, parameter set) as a Dask task; one results table",
+               _add_batch, _cmd_batch),
+    Subcommand("reproduce", "run the paper's Sec. IV experiments; write Fig. 3-6 and a PASS/FAIL report",
+               _add_reproduce, _cmd_reproduce),
+    Subcommand("bench", "time the LPLC2 models per frame size: ms/frame, reference, bandwidth probe, memory",
+               _add_bench, _cmd_bench),
 ]
 
 

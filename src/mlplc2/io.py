@@ -237,10 +237,10 @@ class _ImageDecoder(_Decoder):
             self.failed = path
             return None
         if (frame.shape[1], frame.shape[0]) != self.size:
+            # Like an undecodable image: stop here, keep the outputs for the frames before.
             w0, h0 = self.size
-            raise InputValueError(
-                f"{path} is {frame.shape[1]}x{frame.shape[0]} but the first image is {w0}x{h0}; "
-                "all images must have one size")
+            self.failed = f"{path} ({frame.shape[1]}x{frame.shape[0]}, not {w0}x{h0} like the first image)"
+            return None
         self._i += 1
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
 

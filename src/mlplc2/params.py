@@ -12,6 +12,8 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
+from ._validation import InputValueError
+
 __all__ = ["Params"]
 
 
@@ -105,8 +107,11 @@ class Params:
     removed, Eq. 16 (Table I)."""
     d: int = 10
     """d (frames): window of the removal rule, Eq. 16 ("10 tau_i" in Table I)."""
-    grace: int = 10
-    """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5)."""
+    grace: int = 15
+    """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5).
+    A field is created when the expansion starts (3-5 frames after onset) but answers only
+    once the expansion is wider than the lamina filters (~5 frames later); 15 frames give it
+    a full window of d responses before it is judged."""
     q_min: float = 0.03
     """Extra. Arbour threshold: the all-four-arbours gate of Eq. 15 opens when every quadrant
     sum Q_i exceeds q_min times the quadrant's area in pixels (the paper's bool(prod Q_i),
@@ -126,30 +131,30 @@ class Params:
                     "gamma_on", "gamma_off")
         for name in positive:
             if not getattr(self, name) > 0:
-                raise ValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
+                raise InputValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
         non_negative = ("exclusion", "w_i", "after_image", "beta", "leaky_slope", "lm_gain", "t_a",
                         "t_d", "q_min", "alarm_threshold")
         for name in non_negative:
             if not getattr(self, name) >= 0:
-                raise ValueError(f"Params.{name} must be >= 0, got {getattr(self, name)!r}")
+                raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)!r}")
         at_least_one = ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields")
         for name in at_least_one:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise ValueError(f"Params.{name} must be an integer >= 1, got {value!r}")
+                raise InputValueError(f"Params.{name} must be an integer >= 1, got {value!r}")
         if not isinstance(self.grace, int) or self.grace < 0:
-            raise ValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
+            raise InputValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
         if self.after_image >= 1:
-            raise ValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
+            raise InputValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
         if self.field_shape not in ("square", "disc"):
-            raise ValueError(f"Params.field_shape must be 'square' or 'disc', got {self.field_shape!r}")
+            raise InputValueError(f"Params.field_shape must be 'square' or 'disc', got {self.field_shape!r}")
 
     def replace(self, **changes) -> "Params":
         """Return a copy with ``changes`` applied (validated like the constructor)."""
         names = {f.name for f in dataclasses.fields(self)}
         unknown = sorted(set(changes) - names)
         if unknown:
-            raise ValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
         return dataclasses.replace(self, **changes)
 
     def delays_ms(self) -> tuple[float, ...]:

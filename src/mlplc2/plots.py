@@ -195,7 +195,9 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
             ay = max(1, int(round(f.radius * scale_y)))
             cv2.ellipse(img, (cx, cy), (ax, ay), 0, 0, 360, c, th + (1 if f.collision else 0), cv2.LINE_AA)
             cv2.drawMarker(img, (cx, cy), c, cv2.MARKER_CROSS, max(4, int(8 * fs * 2)), th)
-            _text(img, f"{f.id}:{_fmt(f.response)}", (cx + 4, cy - 4), c, fs)
+            ttc = getattr(f, "ttc_s", None)  # time to collision (docs/targets.md)
+            label = f"{f.id}:{_fmt(f.response)}" + ("" if ttc is None else f" ttc {ttc:.2f}s")
+            _text(img, label, (cx + 4, cy - 4), c, fs)
     y = 4
     for name, out in zip(names, outputs):
         alarm = bool(out.collision)

@@ -7,7 +7,13 @@ steps every model on each frame, writing as it goes:
     one row per active field per frame (``frame,time_s,model,field_id,x,y,response,collision``),
     flushed after every frame: a run stopped by Ctrl-C leaves a valid file.
 ``fields.json``
-    one summary per attention field (centre, birth, death, peak, first alarm).
+    one summary per attention field (centre, birth, death, peak, first alarm,
+    and the target estimates at the peak and the last one, see ``docs/targets.md``).
+``targets.csv``
+    (models with attention fields) one row per field per frame:
+    ``frame,model,field_id,ttc_s,expansion_rate,azimuth_deg,elevation_deg,rank``
+    (time to collision, expansion rate, bearing and TTC rank; empty cells while
+    not estimable; degrees with ``hfov_deg``, else input pixels).
 ``responses.png``
     response against frame, one panel per model (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
@@ -34,13 +40,16 @@ from typing import Any
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, get_model
 
-__all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "default_out_dir",
+__all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
+           "default_out_dir",
            "write_stimulus", "demo", "DemoResult", "match_fields"]
 
 log = logging.getLogger(__name__)
 
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
+#: Columns of ``targets.csv``, in order (``docs/targets.md``).
+TARGET_COLUMNS = ("frame", "model", "field_id", "ttc_s", "expansion_rate", "azimuth_deg", "elevation_deg", "rank")
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -62,7 +71,11 @@ class RunResult:
     ----------
     rows : list of dict
         The rows of ``responses.csv`` (keys :data:`COLUMNS`; ``None`` where the
-        CSV cell is empty; ``collision`` is 0 or 1).
+        CSV cell is empty; ``collision`` is 0 or 1). Empty when the run was made
+        with ``keep_rows=False`` (the rows are then only in the CSV).
+    alarms : dict
+        Per model name, the frames with the collision flag set: ``{"count": n,
+        "first": frame or None}`` (kept whatever ``keep_rows`` says).
     fields : dict
         Per model name, the list of field summaries written to ``fields.json``.
     fps : float
@@ -91,6 +104,10 @@ class RunResult:
     message: str | None = None
     out: Path | None = None
     files: dict[str, Path] = field(default_factory=dict)
+    targets: list[dict] = field(default_factory=list)
+    """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
+    alarms: dict[str, dict] = field(default_factory=dict)
+    hfov_deg: float | None = None
 
     def to_dataframe(self):
         """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``)."""
@@ -117,6 +134,7 @@ class RunResult:
             "complete": not (self.truncated or self.interrupted),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
+            "hfov_deg": self.hfov_deg,
             "models": self.fields,
         }
 
@@ -124,10 +142,11 @@ class RunResult:
 class _FieldTracker:
     """Follows the fields of one model across frames to build their summaries."""
 
-    def __init__(self, offset: int):
+    def __init__(self, offset: int, to_target=None):
         self.offset = offset  # source index of model frame 0
         self.fields: dict[int, dict] = {}
         self.alive: set[int] = set()
+        self.to_target = to_target  # Field -> dict of target estimates (None: no estimates)
 
     def update(self, index: int, out: Output, to_input) -> None:
         present = set()
@@ -140,8 +159,15 @@ class _FieldTracker:
                     "id": f.id, "x": _r(x), "y": _r(y), "born": f.born + self.offset, "died": None,
                     "peak_response": _num(f.response), "peak_frame": index, "first_alarm_frame": None,
                 }
+                if self.to_target is not None:
+                    s["at_peak"] = self.to_target(f)
+                    s["last_estimate"] = None
             elif f.response > s["peak_response"]:
                 s.update(x=_r(x), y=_r(y), peak_response=_num(f.response), peak_frame=index)
+                if self.to_target is not None:
+                    s["at_peak"] = self.to_target(f)
+            if self.to_target is not None and getattr(f, "ttc_s", None) is not None:
+                s["last_estimate"] = {"frame": index, **self.to_target(f)}
             if f.collision and s["first_alarm_frame"] is None:
                 s["first_alarm_frame"] = index
         for fid in self.alive - present:
@@ -173,6 +199,39 @@ def _rows(index: int, time_s: float, name: str, out: Output, to_input) -> list[d
     return rows
 
 
+def _opt(v, digits: int = 4):
+    return None if v is None else round(float(v), digits) + 0.0  # + 0.0: no "-0.0"
+
+
+def _target_converter(model: Model, scale_x: float, scale_y: float):
+    """Field -> dict of its target estimates in output units, or None for models without fields.
+
+    With a field of view (the model's ``hfov_deg``) bearings are degrees and the
+    expansion rate deg/s; without one, the model's pixel offsets and px/s are
+    turned into input pixels (``--resize``).
+    """
+    if not model.localises:
+        return None
+    degrees = getattr(model, "hfov_deg", None) is not None
+    sx, sy = (1.0, 1.0) if degrees else (scale_x, scale_y)
+
+    def convert(f) -> dict:
+        az, el, rate = (getattr(f, k, None) for k in ("azimuth_deg", "elevation_deg", "expansion_rate"))
+        return {"ttc_s": _opt(getattr(f, "ttc_s", None)),
+                "expansion_rate": _opt(None if rate is None else rate * sx),
+                "azimuth_deg": _opt(None if az is None else az * sx),
+                "elevation_deg": _opt(None if el is None else el * sy),
+                "rank": getattr(f, "rank", None)}
+
+    return convert
+
+
+def _target_rows(index: int, name: str, out: Output, convert) -> list[dict]:
+    if convert is None:
+        return []
+    return [{"frame": index, "model": name, "field_id": f.id, **convert(f)} for f in out.fields]
+
+
 def default_out_dir(source) -> Path:
     """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``)."""
     from .io import _is_camera
@@ -192,7 +251,7 @@ def default_out_dir(source) -> Path:
     return p.parent / f"{p.stem}_mlplc2"
 
 
-def _build_models(models, fps: float, params) -> list[Model]:
+def _build_models(models, fps: float, params, hfov_deg=None) -> list[Model]:
     if isinstance(models, (str, Model)):
         models = [models]
     built: list[Model] = []
@@ -201,11 +260,16 @@ def _build_models(models, fps: float, params) -> list[Model]:
         if isinstance(m, Model):
             model = m
             model.reset()
+            if hfov_deg is not None and hasattr(model, "hfov_deg"):
+                from .targets import check_hfov
+
+                model.hfov_deg = check_hfov(hfov_deg)
         else:
             name = str(m).strip().lower()
             cls = get_model(name)
             p = params.get(name) if isinstance(params, Mapping) else params
-            model = cls(fps=fps) if p is None else cls(fps=fps, params=p)
+            kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.localises) else {}
+            model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
         if model.name in seen:
             continue
         seen.add(model.name)
@@ -217,19 +281,27 @@ def _build_models(models, fps: float, params) -> list[Model]:
     return built
 
 
-def _primary(models: Sequence[Model]) -> int | None:
-    """Index of the first model of the LPLC2 family (the one drawn on the video)."""
-    from .models.lplc2 import _LPLC2Family
+def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
+    """Frames (after resizing) smaller than a model's ``min_size``: one clear error."""
+    need = max(m.min_size for m in models)
+    w, h = src.out_size
+    if w < need or h < need:
+        from ._validation import InputValueError
 
-    for i, m in enumerate(models):
-        if isinstance(m, _LPLC2Family):
-            return i
-    return None
+        resized = " after resizing" if src.out_size != src.size else ""
+        raise InputValueError(f"{src.name}: frames are {w}x{h} pixels{resized}; "
+                              f"the models need at least {need}x{need}")
+
+
+def _primary(models: Sequence[Model]) -> int | None:
+    """Index of the first model that localises (the one drawn on the video)."""
+    return next((i for i, m in enumerate(models) if m.localises), None)
 
 
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, fps=None, resize=None,
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
-        params=None, progress: bool = True, plot: bool = True, backend: str = "opencv") -> RunResult:
+        params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
+        hfov_deg: float | None = None, keep_rows: bool = True) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -264,6 +336,15 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Write ``responses.png``.
     backend : {'opencv', 'pyav'}
         Video decoder.
+    hfov_deg : float, optional
+        Horizontal field of view of the camera in degrees, given to the models
+        with attention fields: bearings in ``targets.csv`` / ``fields.json`` are
+        then degrees from the optical axis (else input pixels from the image
+        centre); see ``docs/targets.md``.
+    keep_rows : bool
+        Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
+        ``.targets`` (default). Set False for long or live runs: memory then stays
+        flat whatever the length (the rows are in the CSV files; the CLI does this).
 
     Returns
     -------
@@ -292,13 +373,17 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
                       keep_original=video, backend=backend)
     try:
-        built = _build_models(models, src.fps, params)
+        built = _build_models(models, src.fps, params, hfov_deg)
+        _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     except BaseException:
         src.close()
         raise
     names = [m.name for m in built]
     result = RunResult(source=str(source), models=names, fps=src.fps, size=src.size,
-                       model_size=src.out_size, start=src.start)
+                       model_size=src.out_size, start=src.start,
+                       hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
+                                     None))
+    result.alarms = {name: {"count": 0, "first": None} for name in names}
     out_dir = None
     if out is not False:
         out_dir = Path(out) if out is not None else default_out_dir(source)
@@ -308,15 +393,19 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
             src.close()
             raise
         result.out = out_dir
-    return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot)
+    return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
+                 keep_rows=keep_rows)
 
 
-def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot) -> RunResult:
+def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
+          keep_rows=True) -> RunResult:
     from tqdm import tqdm
 
-    trackers = [_FieldTracker(src.start) for _ in built]
+    converters = [_target_converter(m, src.scale_x, src.scale_y) for m in built]
+    trackers = [_FieldTracker(src.start, conv) for conv in converters]
     primary = _primary(built)
     csv_file = writer = vw = None
+    tcsv_file = twriter = None
     interrupted = False
     bar = None
     try:
@@ -329,6 +418,15 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             csv_file.write(buf.getvalue())
             csv_file.flush()
             result.files["responses.csv"] = csv_path
+            if any(c is not None for c in converters):
+                tpath = out_dir / "targets.csv"
+                tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
+                tbuf = io.StringIO()
+                twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS, lineterminator="\n")
+                twriter.writeheader()
+                tcsv_file.write(tbuf.getvalue())
+                tcsv_file.flush()
+                result.files["targets.csv"] = tpath
             if video:
                 vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
         bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
@@ -340,9 +438,19 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             outputs = [m.step(frame) for m in built]
             time_s = round(index / fps, 6)
             frame_rows = []
-            for name, out, tracker in zip(names, outputs, trackers):
+            target_rows = []
+            for name, out, tracker, conv in zip(names, outputs, trackers, converters):
                 frame_rows.extend(_rows(index, time_s, name, out, to_input))
+                target_rows.extend(_target_rows(index, name, out, conv))
                 tracker.update(index, out, to_input)
+            if twriter is not None and target_rows:
+                tbuf.seek(0)
+                tbuf.truncate()
+                twriter.writerows(target_rows)
+                tcsv_file.write(tbuf.getvalue())
+                tcsv_file.flush()
+            if keep_rows:
+                result.targets.extend(target_rows)
             if writer is not None:
                 # One write() per frame, then flush: an interrupt leaves whole frames only.
                 buf.seek(0)
@@ -350,7 +458,14 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                 writer.writerows(frame_rows)
                 csv_file.write(buf.getvalue())
                 csv_file.flush()
-            result.rows.extend(frame_rows)
+            if keep_rows:
+                result.rows.extend(frame_rows)
+            for name, out in zip(names, outputs):
+                if out.collision:
+                    a = result.alarms[name]
+                    a["count"] += 1
+                    if a["first"] is None:
+                        a["first"] = index
             if vw is not None:
                 from .plots import annotate_frame
 
@@ -369,6 +484,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             bar.close()
         if csv_file is not None:
             csv_file.close()
+        if tcsv_file is not None:
+            tcsv_file.close()
         src.close()
 
     result.interrupted = interrupted
@@ -407,7 +524,9 @@ def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool
 
         path = out_dir / "responses.png"
         title = f"{Path(result.source).name}: {', '.join(result.models)}"
-        plot_responses(result.rows, path, fields=result.fields, title=title, fps=result.fps)
+        rows = result.rows or result.files.get("responses.csv")
+        if rows is not None:
+            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps)
         result.files["responses.png"] = path
 
 

@@ -47,10 +47,23 @@ class Output:
 
     @property
     def most_urgent(self) -> Field | None:
-        """The field with the largest response (None without fields)."""
+        """The field with the smallest time to collision (``Field.ttc_s``).
+
+        Ties go to the larger response, then the smaller id. Without any TTC
+        estimate this frame: the field with the largest response. None without fields.
+        """
         if not self.fields:
             return None
+        timed = [f for f in self.fields if getattr(f, "ttc_s", None) is not None]
+        if timed:
+            return min(timed, key=lambda f: (f.ttc_s, -f.response, f.id))
         return max(self.fields, key=lambda f: f.response)
+
+    @property
+    def threats(self) -> tuple[Field, ...]:
+        """Fields with a time-to-collision estimate, most urgent first (the ``Field.rank`` order)."""
+        timed = [f for f in self.fields if getattr(f, "ttc_s", None) is not None]
+        return tuple(sorted(timed, key=lambda f: (f.ttc_s, -f.response, f.id)))
 
 
 REGISTRY: dict[str, type["Model"]] = {}
@@ -88,8 +101,16 @@ class Model(abc.ABC):
     """
 
     name: ClassVar[str] = "model"
-    #: Smallest frame side the model accepts.
+    #: Smallest frame side (pixels) the model accepts; smaller frames raise
+    #: :class:`~mlplc2.InputError` naming this minimum. 3 for every model: an
+    #: LPLC2 field needs a centre row and column plus one pixel per quadrant, and
+    #: the LGMD lateral inhibition and grouping are 3x3 neighbourhoods. Frames
+    #: smaller than the LPLC2 filter windows (11 and 23 px) or than a field
+    #: (2 R_AF + 1 = 81 px) are numerically safe (zero borders; every output
+    #: finite, tested), but the default parameters are meant for about 320x240.
     min_size: ClassVar[int] = 3
+    #: True for models whose output has attention fields (positions); False for whole-field neurons.
+    localises: ClassVar[bool] = False
 
     def __init__(self, fps: float = 30.0, params: Any = None):
         self.fps = check_fps(fps)
@@ -103,7 +124,15 @@ class Model(abc.ABC):
         return self._frame
 
     def step(self, frame: np.ndarray) -> Output:
-        """Process one frame: (H, W) grey, (H, W, 3) RGB or (H, W, 4) RGBA, 0-255."""
+        """Process one frame: (H, W) grey, (H, W, 1), (H, W, 3) RGB or (H, W, 4) RGBA, 0-255.
+
+        Scaling and rejected inputs are those of :func:`mlplc2._validation.as_gray`
+        (uint16 / 257; floats and other integers clipped to 0-255; bool, non-numeric
+        dtypes and NaN/inf rejected). Every frame after the first must have the
+        first frame's size until :meth:`reset`. ``frame`` is never modified.
+        A rejected frame raises :class:`~mlplc2.InputError` (a ``ValueError`` or
+        ``TypeError``) before any state changes, so the model can go on.
+        """
         gray = as_gray(frame, min_size=self.min_size)
         if self._shape is None:
             self._shape = gray.shape

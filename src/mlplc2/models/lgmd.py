@@ -28,6 +28,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
+from .._validation import InputTypeError, InputValueError
 from ..retina import photoreceptors
 from .base import Model, Output, register
 
@@ -76,15 +77,15 @@ def _check(cls_name: str, obj, positive=(), non_negative=(), ints=()) -> None:
     for name in positive:
         v = getattr(obj, name)
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
-            raise ValueError(f"{cls_name}.{name} must be a finite number > 0, got {v!r}")
+            raise InputValueError(f"{cls_name}.{name} must be a finite number > 0, got {v!r}")
     for name in non_negative:
         v = getattr(obj, name)
         if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
-            raise ValueError(f"{cls_name}.{name} must be a finite number >= 0, got {v!r}")
+            raise InputValueError(f"{cls_name}.{name} must be a finite number >= 0, got {v!r}")
     for name in ints:
         v = getattr(obj, name)
         if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-            raise ValueError(f"{cls_name}.{name} must be an integer >= 1, got {v!r}")
+            raise InputValueError(f"{cls_name}.{name} must be an integer >= 1, got {v!r}")
 
 
 class _ParamsMixin:
@@ -212,7 +213,7 @@ class LGMD2(Model):
     def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None):
         params = LGMD2Params() if params is None else params
         if not isinstance(params, LGMD2Params):
-            raise TypeError(f"params must be LGMD2Params, got {type(params).__name__}")
+            raise InputTypeError(f"params must be LGMD2Params, got {type(params).__name__}")
         super().__init__(fps=fps, params=params)
         p = params
         self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
@@ -354,7 +355,7 @@ class LGMD1(Model):
     def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None):
         params = LGMD1Params() if params is None else params
         if not isinstance(params, LGMD1Params):
-            raise TypeError(f"params must be LGMD1Params, got {type(params).__name__}")
+            raise InputTypeError(f"params must be LGMD1Params, got {type(params).__name__}")
         super().__init__(fps=fps, params=params)
         kn, kd = params.w_i_kernel
         self._kernel = np.array([[kd, kn, kd], [kn, 0.0, kn], [kd, kn, kd]], np.float32)

@@ -7,11 +7,13 @@ from collections import deque
 
 import numpy as np
 
+from .._validation import InputTypeError
 from ..attention import (AttentionField, IdCounter, argmax_outside, lplc2_response, quadrant_areas,
                          quadrant_sums)
-from ..frontend import FrontEnd
+from ..frontend import make_frontend
 from ..lobula_plate import LocalMotion
 from ..params import Params
+from ..targets import TargetParams, TargetTracker, check_hfov, focal_length
 from .base import Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
@@ -20,22 +22,44 @@ __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
 class _LPLC2Family(Model):
     """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping."""
 
-    def __init__(self, fps: float = 30.0, params: Params | None = None):
+    localises = True
+
+    def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
+                 target_params: TargetParams | None = None, backend: str = "auto"):
         params = Params() if params is None else params
         if not isinstance(params, Params):
-            raise TypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
+            raise InputTypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
+        target_params = TargetParams() if target_params is None else target_params
+        if not isinstance(target_params, TargetParams):
+            raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
         super().__init__(fps=fps, params=params)
-        self.frontend = FrontEnd(params, self.fps)
+        self.hfov_deg = check_hfov(hfov_deg)
+        """Horizontal field of view (degrees) of the camera, or None. Given: bearings in degrees
+        and expansion rates in deg/s; None: pixel offsets and px/s (``docs/targets.md``)."""
+        self.target_params = target_params
+        self.frontend = make_frontend(params, self.fps, backend)
+        self.backend = self.frontend.backend
+        """Front end in use: "numba" (fast, the default) or "reference" (``frontend.BACKENDS``)."""
+        if self.backend == "numba":  # Eq. 14 in one compiled pass (4x faster per field)
+            from .. import _fast
+
+            self._quadrant_sums = _fast.quadrant_sums
+        else:
+            self._quadrant_sums = quadrant_sums
         self._fields: list[AttentionField] = []
         self._ids = IdCounter()
         self.maps: LocalMotion | None = None
         """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
+        self._trackers: dict[int, TargetTracker] = {}
+        self._orphans: list[tuple[int, TargetTracker]] = []
 
     def _reset(self) -> None:
         self.frontend.reset()
         self._fields = []
         self._ids = IdCounter()
         self.maps = None
+        self._trackers = {}
+        self._orphans = []
 
     # -- field bookkeeping ---------------------------------------------------
     def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
@@ -48,14 +72,46 @@ class _LPLC2Family(Model):
     def _integrate(self, f: AttentionField, lm: LocalMotion) -> None:
         """Eq. 14-15 for one field, plus its alarm state."""
         p = self.params
-        f.quadrants = quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
+        f.quadrants = self._quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
         areas = quadrant_areas(f.x, f.y, f.radius, lm.magnitude.shape)
         f.response = lplc2_response(f.quadrants, [p.q_min * a for a in areas])
         f.history.append(f.response)
         recent = list(f.history)[-p.alarm_window:]
         f.collision = sum(recent) >= p.alarm_threshold
 
+    def _estimate_targets(self, index: int) -> None:
+        """Time to collision, expansion rate and bearing of every field, then the TTC ranking.
+
+        Per field: four thin strips of the last LM maps (``targets.measure_extent``)
+        and a regression over a few numbers; see ``docs/targets.md``.
+        """
+        lm = self.maps
+        if lm is None:
+            return
+        focal = focal_length(lm.magnitude.shape[1], self.hfov_deg)
+        alive = {f.id for f in self._fields}
+        # Trackers of fields removed in the last few frames stay available for adoption.
+        self._orphans = [(i, t) for i, t in self._orphans if index - i <= self.target_params.coast_frames]
+        self._orphans += [(index, t) for fid, t in self._trackers.items() if fid not in alive]
+        known = [f.target for f in self._fields if f.target is not None] + [t for _, t in self._orphans[::-1]]
+        for f in self._fields:
+            if f.target is None:
+                f.target = TargetTracker(self.target_params)
+                # A field born inside an object already measured continues that object's track.
+                parent = next((t for t in known if t.covers(f.x, f.y, index)), None)
+                if parent is not None:
+                    f.target.adopt(parent)
+            f.estimate = f.target.update(lm, f.x, f.y, index, self.fps, focal)
+        self._trackers = {f.id: f.target for f in self._fields}
+        timed = sorted((f for f in self._fields if f.estimate.ttc_s is not None),
+                       key=lambda f: (f.estimate.ttc_s, -f.response, f.id))
+        for f in self._fields:
+            f.rank = None
+        for rank, f in enumerate(timed, 1):
+            f.rank = rank
+
     def _output(self, index: int) -> Output:
+        self._estimate_targets(index)
         fields = tuple(f.snapshot() for f in self._fields)
         response = max((f.response for f in fields), default=0.0)
         collision = any(f.collision for f in fields)
@@ -73,6 +129,10 @@ class MLPLC2(_LPLC2Family):
         Frame rate of the input (sets the frame interval tau_i of Eq. 8 and 10).
     params : Params, optional
         Model parameters; Table I defaults.
+    backend : {"auto", "numba", "reference"}, keyword-only
+        Front-end implementation (:func:`mlplc2.frontend.make_frontend`): the fast
+        OpenCV + Numba one by default, the plain reference one on request or when Numba
+        is unavailable. Both give the same fields; the LM maps agree to ~1e-6.
 
     Examples
     --------
@@ -125,11 +185,15 @@ class SLPLC2(_LPLC2Family):
             self._new_field(0, 0, index, p.r_af)
         if self._fields:
             f = self._fields[0]
-            total = float(mag.sum(dtype=np.float64))
+            # Centroid of the salient local motion: LM above T_a, the level Eq. 13 calls
+            # salient (docs/model.md). With every pixel weighted, a moving background
+            # would pin the centroid to the frame centre.
+            salient = np.where(mag > p.t_a, mag, np.float32(0))
+            total = float(salient.sum(dtype=np.float64))
             if total > 0:
                 h, w = mag.shape
-                f.x = int(round(float(mag.sum(axis=0, dtype=np.float64) @ np.arange(w)) / total))
-                f.y = int(round(float(mag.sum(axis=1, dtype=np.float64) @ np.arange(h)) / total))
+                f.x = int(round(float(salient.sum(axis=0, dtype=np.float64) @ np.arange(w)) / total))
+                f.y = int(round(float(salient.sum(axis=1, dtype=np.float64) @ np.arange(h)) / total))
             self._integrate(f, lm)
         return self._output(index)
 

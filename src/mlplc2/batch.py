@@ -1,0 +1,606 @@
+"""Run many (video, model, parameter set) combinations, on Dask (the ``mlplc2 batch`` command).
+
+Every combination is one task: :func:`mlplc2.run` on one video with one model
+and one parameter set, writing ``responses.csv`` and ``fields.json`` into
+``OUT/<video>/<param set>/<model>/`` and then, last, a ``done.json`` marker
+holding the task's summary row. :func:`batch` submits the tasks to a
+``distributed`` cluster (by default a :class:`distributed.LocalCluster` it
+starts and stops itself; or an existing scheduler), shows progress as they
+finish, and writes one row per (video, model, parameter set) to
+``OUT/results.csv`` (a model shares one task between parameter sets that
+differ only in parameters it does not use). A rerun skips the
+tasks whose ``done.json`` exists; a task that fails (corrupt video, ...) is
+reported with ``status = "error"`` and its one-line message, and is retried by
+the next run.
+
+Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
+cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
+after the other in this process without it.
+"""
+
+from __future__ import annotations
+
+import csv
+import glob
+import hashlib
+import itertools
+import json
+import math
+import os
+import sys
+import time
+import warnings
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+from ._validation import InputValueError
+
+__all__ = ["batch", "BatchResult", "param_sets", "parse_sweep", "expand_inputs", "start_local_cluster",
+           "RESULT_COLUMNS", "DONE_MARKER"]
+
+#: Columns of ``results.csv``, in order.
+RESULT_COLUMNS = ("video", "model", "param_set", "params", "n_frames", "fields", "alarms", "first_alarm_frame",
+                  "seconds", "status", "error", "out")
+#: Written last into a task's folder: the task is finished when it exists.
+DONE_MARKER = "done.json"
+_DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"
+
+
+# ---------------------------------------------------------------------------
+# inputs and parameter sets
+# ---------------------------------------------------------------------------
+def expand_inputs(inputs) -> list[str]:
+    """Videos to process: files as given; a folder holding video files gives
+    each of them (sorted); a folder of images is one image-sequence input;
+    glob patterns are expanded. Missing paths raise InputValueError."""
+    from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
+
+    if isinstance(inputs, (str, Path)):
+        inputs = [inputs]
+    out: list[str] = []
+    for item in inputs:
+        s = str(item)
+        p = Path(s)
+        if p.is_dir():
+            vids = sorted(str(q) for q in p.iterdir() if q.is_file() and q.suffix.lower() in VIDEO_EXTENSIONS)
+            if vids:
+                out.extend(vids)
+            elif any(q.suffix.lower() in IMAGE_EXTENSIONS for q in p.iterdir() if q.is_file()):
+                out.append(s)
+            else:
+                raise InputValueError(f"{s}: folder has neither videos nor images")
+        elif p.exists():
+            out.append(s)
+        elif any(ch in s for ch in "*?["):
+            matches = sorted(glob.glob(s))
+            if not matches:
+                raise InputValueError(f"{s}: pattern matches no file")
+            out.extend(matches)
+        else:
+            raise InputValueError(f"{s}: no such file or folder")
+    seen, unique = set(), []
+    for s in out:
+        key = os.path.abspath(s)
+        if key not in seen:
+            seen.add(key)
+            unique.append(s)
+    if not unique:
+        raise InputValueError("no input videos")
+    return unique
+
+
+def _parse_value(text: str):
+    text = text.strip()
+    try:
+        return json.loads(text)
+    except json.JSONDecodeError:
+        return text
+
+
+def parse_sweep(specs) -> dict[str, list]:
+    """``["t_a=8,10,12", "beta=1.5"]`` (or a dict name -> values) -> ``{name: [values]}``.
+
+    Values are parsed as JSON scalars (``10`` int, ``1.5`` float, ``true``,
+    else a string). ``MODEL.NAME=...`` sweeps a parameter of one model only
+    (e.g. ``lgmd2.some_param``)."""
+    if specs is None:
+        return {}
+    if isinstance(specs, Mapping):
+        return {str(k): list(v) if isinstance(v, (list, tuple)) else [v] for k, v in specs.items()}
+    if isinstance(specs, str):
+        specs = [specs]
+    sweep: dict[str, list] = {}
+    for spec in specs:
+        name, sep, values = str(spec).partition("=")
+        name = name.strip()
+        if not sep or not name or not values.strip():
+            raise InputValueError(f"--sweep {spec!r}: expected PARAM=V1,V2,...")
+        vals = [_parse_value(v) for v in values.split(",") if v.strip()]
+        if name in sweep:
+            raise InputValueError(f"--sweep: parameter {name!r} given twice")
+        sweep[name] = vals
+    return sweep
+
+
+def _param_class(model: str):
+    from .models.base import get_model
+
+    return type(get_model(model)(fps=30.0).params)
+
+
+def _lplc2_family(model: str) -> bool:
+    from .models.base import get_model
+    from .models.lplc2 import _LPLC2Family
+
+    return issubclass(get_model(model), _LPLC2Family)
+
+
+def _model_overrides(pset: Mapping, model: str) -> dict:
+    """The parameter overrides of ``pset`` that apply to ``model``: flat keys
+    (``Params`` fields) for the LPLC2 family, plus a ``{model: {...}}`` section."""
+    flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
+    section = pset.get(model) if isinstance(pset.get(model), Mapping) else {}
+    return {**(flat if _lplc2_family(model) else {}), **section}
+
+
+def _build_params(pset: Mapping, model: str):
+    over = _model_overrides(pset, model)
+    if not over:
+        return None
+    cls = _param_class(model)
+    try:
+        return cls().replace(**over)
+    except (TypeError, ValueError) as exc:
+        raise InputValueError(f"parameters for {model}: {exc}") from None
+
+
+def _restrict(pset: Mapping, model: str) -> dict:
+    """The part of parameter set ``pset`` that ``model`` uses (flat Params fields
+    for the LPLC2 family, plus its own section)."""
+    own = {k: v for k, v in pset.items() if not isinstance(v, Mapping)} if _lplc2_family(model) else {}
+    if isinstance(pset.get(model), Mapping) and pset[model]:
+        own[model] = dict(pset[model])
+    return own
+
+
+def param_set_id(pset: Mapping) -> str:
+    """Stable id: ``default`` for no overrides, else ``p`` + 8 hex digits of a hash of the sorted JSON."""
+    if not pset:
+        return "default"
+    text = json.dumps(pset, sort_keys=True, separators=(",", ":"))
+    return "p" + hashlib.sha1(text.encode()).hexdigest()[:8]
+
+
+def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> list[dict]:
+    """Parameter sets: the overrides in ``params`` (a dict, or a JSON file of
+    ``Params`` fields, with optional ``{"lgmd2": {...}}`` sections per model)
+    combined with every point of the Cartesian product of ``sweep``.
+
+    Each is checked by building the parameters of every model in ``models``.
+    """
+    base: dict = {}
+    if params is not None:
+        if isinstance(params, (str, Path)):
+            path = Path(params)
+            if not path.is_file():
+                raise InputValueError(f"{path}: parameter file not found")
+            try:
+                base = json.loads(path.read_text(encoding="utf-8"))
+            except json.JSONDecodeError as exc:
+                raise InputValueError(f"{path}: not valid JSON ({exc})") from None
+        elif hasattr(params, "to_dict"):
+            from .params import Params
+
+            default = Params().to_dict()
+            base = {k: v for k, v in params.to_dict().items() if default.get(k) != v}
+        else:
+            base = dict(params)
+        if not isinstance(base, Mapping):
+            raise InputValueError("--params: expected a JSON object {name: value}")
+        base = {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in base.items()}
+    sweep = parse_sweep(sweep)
+    names = list(sweep)
+    sets = []
+    for combo in itertools.product(*(sweep[n] for n in names)) if names else [()]:
+        pset = json.loads(json.dumps(base))
+        for name, value in zip(names, combo):
+            model, dot, pname = name.partition(".")
+            if dot:
+                pset.setdefault(model, {})[pname] = value
+            else:
+                pset[name] = value
+        sets.append(pset)
+    from .params import Params
+
+    pnames = {f for f in Params().to_dict()}
+    for pset in sets:
+        for k, v in pset.items():
+            if isinstance(v, Mapping):
+                from .models.base import available_models
+
+                if k not in available_models():
+                    raise InputValueError(f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
+            elif k not in pnames:
+                raise InputValueError(f"parameters: unknown parameter {k!r} (Params fields: see help(mlplc2.Params); "
+                                      f"other models' parameters go in a section {{\"lgmd2\": {{...}}}} or "
+                                      f"--sweep lgmd2.NAME=...)")
+        for m in models:
+            _build_params(pset, m)
+    return sets
+
+
+# ---------------------------------------------------------------------------
+# one task
+# ---------------------------------------------------------------------------
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split()) or "unknown error"
+
+
+def _write_json_atomic(path: Path, data) -> None:
+    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
+    tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    os.replace(tmp, path)
+
+
+_MALLOC_TUNED = False
+
+
+def _tune_malloc() -> None:
+    """Undo a 5x slowdown in Dask workers (Linux, glibc).
+
+    The Dask nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``. Setting
+    any glibc malloc variable freezes the mmap threshold at 128 KiB, so every
+    frame-sized array (320x240 float32 = 300 KB; the models allocate many per
+    frame) is mmap'd, zero-filled by page faults and unmapped again: mLPLC2 runs
+    about 5x slower. When that variable is set, raise the mmap threshold to
+    16 MiB (``mallopt(M_MMAP_THRESHOLD)``); trimming stays on. No-op elsewhere.
+    """
+    global _MALLOC_TUNED
+    if _MALLOC_TUNED or not sys.platform.startswith("linux") or "MALLOC_TRIM_THRESHOLD_" not in os.environ \
+            or "MALLOC_MMAP_THRESHOLD_" in os.environ:
+        return
+    _MALLOC_TUNED = True
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL("libc.so.6")
+        libc.mallopt(-3, 16 * 1024 * 1024)  # M_MMAP_THRESHOLD
+    except (OSError, AttributeError):  # pragma: no cover - not glibc
+        pass
+
+
+def run_task(task: dict) -> dict:
+    """Run one (video, model, parameter set) task; return its results row.
+
+    Never raises for a bad video: the row then has ``status = "error"`` and
+    the one-line message. Writes ``done.json`` last (not for errors)."""
+    out = Path(task["out"])
+    row = {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
+           "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
+           "alarms": None, "first_alarm_frame": None, "seconds": None, "status": "error", "error": "",
+           "out": task["rel_out"]}
+    _tune_malloc()
+    t0 = time.perf_counter()
+    try:
+        from .io import TruncatedInputWarning
+        from .runner import run
+
+        params = _build_params(task["pset"], task["model"])
+        marker = out / DONE_MARKER
+        if marker.exists():
+            marker.unlink()  # the outputs are about to change
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore", TruncatedInputWarning)
+            res = run(task["video"], [task["model"]], out=out, quiet=True, progress=False, params=params,
+                      plot=task.get("plot", False), keep_rows=False, **task.get("run_options", {}))
+        alarms = res.alarms[task["model"]]
+        row.update(n_frames=res.n_frames, fields=len(res.fields.get(task["model"], [])),
+                   alarms=alarms["count"], first_alarm_frame=alarms["first"],
+                   status="truncated" if res.truncated else "ok", error=_one_line(res.message) if res.truncated else "")
+    except Exception as exc:  # noqa: BLE001 - reported in the table, the batch goes on
+        msg = str(exc)
+        if isinstance(exc, OSError) and getattr(exc, "filename", None) and exc.strerror:
+            msg = f"{exc.filename}: {exc.strerror}"
+        row["error"] = _one_line(f"{type(exc).__name__}: {msg}" if not _is_input_error(exc) else msg)
+        row["seconds"] = round(time.perf_counter() - t0, 3)
+        return row
+    row["seconds"] = round(time.perf_counter() - t0, 3)
+    _write_json_atomic(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
+    return row
+
+
+def _is_input_error(exc) -> bool:
+    from ._validation import InputError
+
+    return isinstance(exc, InputError)
+
+
+def _done_row(task: dict) -> dict | None:
+    """The saved row of a finished task, if its outputs are complete."""
+    out = Path(task["out"])
+    marker = out / DONE_MARKER
+    if not marker.is_file() or not (out / "responses.csv").is_file() or not (out / "fields.json").is_file():
+        return None
+    try:
+        saved = json.loads(marker.read_text(encoding="utf-8"))
+    except (OSError, json.JSONDecodeError):
+        return None
+    if saved.get("pset") != task["pset"] or saved.get("video") != task["video"] \
+            or saved.get("run_options", {}) != task.get("run_options", {}):
+        return None
+    return {k: saved.get(k) for k in RESULT_COLUMNS}
+
+
+# ---------------------------------------------------------------------------
+# the batch
+# ---------------------------------------------------------------------------
+@dataclass
+class BatchResult:
+    """What :func:`batch` did.
+
+    ``rows``: one dict per (video, parameter set, model) (keys
+    :data:`RESULT_COLUMNS`, in that order); ``table``: path of
+    ``results.csv``; ``tasks``: distinct runs (a model shares one run between
+    parameter sets that differ only in parameters it does not use);
+    ``ran`` / ``skipped``: tasks run now / already done; ``failed``: rows
+    with ``status == "error"``; ``seconds``: wall time; ``videos``: the inputs.
+    """
+
+    rows: list[dict]
+    table: Path
+    out: Path
+    videos: list[str]
+    param_sets: dict[str, dict]
+    ran: int = 0
+    skipped: int = 0
+    failed: int = 0
+    seconds: float = 0.0
+    scheduler: str = "sync"
+    tasks: int = 0
+
+    @property
+    def videos_per_min(self) -> float:
+        return len(self.videos) / self.seconds * 60.0 if self.seconds > 0 else math.inf
+
+    def to_dataframe(self):
+        import pandas as pd
+
+        return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
+
+
+def _video_keys(videos: list[str]) -> dict[str, str]:
+    stems: dict[str, list[str]] = {}
+    for v in videos:
+        p = Path(v)
+        stems.setdefault(p.stem if p.suffix else p.name, []).append(v)
+    keys = {}
+    for stem, vs in stems.items():
+        for v in vs:
+            keys[v] = stem if len(vs) == 1 else \
+                f"{stem}-{hashlib.sha1(os.path.abspath(v).encode()).hexdigest()[:6]}"
+    return keys
+
+
+def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
+    """``results.csv`` (and ``results.parquet``), atomically."""
+    table = out / "results.csv"
+    tmp = table.with_name(f".results.partial-{os.getpid()}.csv")
+    with open(tmp, "w", newline="", encoding="utf-8") as f:
+        w = csv.DictWriter(f, fieldnames=RESULT_COLUMNS, lineterminator="\n", extrasaction="ignore")
+        w.writeheader()
+        for r in rows:
+            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS})
+    os.replace(tmp, table)
+    if parquet:
+        import pandas as pd
+
+        df = pd.DataFrame(rows, columns=list(RESULT_COLUMNS))
+        for col in ("n_frames", "fields", "alarms", "first_alarm_frame"):
+            df[col] = df[col].astype("Int64")
+        df["seconds"] = df["seconds"].astype("float64")
+        path = out / "results.parquet"
+        tmp = path.with_name(f".results.partial-{os.getpid()}.parquet")
+        df.to_parquet(tmp, index=False)
+        os.replace(tmp, path)
+    return table
+
+
+def start_local_cluster(workers: int, **kwargs):
+    """``distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)``
+    (no dashboard unless ``dashboard_address`` is given) and a Client on it: ``(cluster, client)``.
+
+    The workers get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set) and not
+    Dask's ``MALLOC_TRIM_THRESHOLD_`` (see :func:`_tune_malloc`)."""
+    try:
+        from distributed import Client, LocalCluster
+    except ImportError:
+        raise InputValueError(_DASK_MISSING) from None
+    import dask
+
+    kwargs.setdefault("dashboard_address", None)
+    # Dask's default MALLOC_TRIM_THRESHOLD_ makes the models ~5x slower (see _tune_malloc): not for ours.
+    # Each worker's Numba threads (the fast front end's bands) share the cores with the other workers.
+    environ = {"MALLOC_TRIM_THRESHOLD_": None}
+    if "NUMBA_NUM_THREADS" not in os.environ:
+        environ["NUMBA_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // max(1, workers)))
+    with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
+    try:
+        client = Client(cluster)
+    except BaseException:
+        cluster.close()
+        raise
+    return cluster, client
+
+
+def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None, sweep=None,
+          scheduler: str | None = None, workers: int | None = None, client=None,
+          run_options: Mapping[str, Any] | None = None, plot: bool = False, progress: bool = True,
+          force: bool = False, parquet: bool = False) -> BatchResult:
+    """Run every (video, model, parameter set) as a task and tabulate the results.
+
+    Parameters
+    ----------
+    inputs : path or list of paths
+        Videos, image folders, folders of videos, glob patterns (see :func:`expand_inputs`).
+    out : path
+        Output folder: ``results.csv`` plus ``<video>/<param set>/<model>/``
+        with each task's ``responses.csv``, ``fields.json`` and ``done.json``.
+    models : list of str
+        Registry names.
+    params : dict, Params or path to a JSON file, optional
+        Parameter overrides (``Params`` fields; ``{"lgmd2": {...}}`` sections
+        for other models' parameter classes).
+    sweep : list of "NAME=V1,V2,..." or dict, optional
+        Parameters to sweep; the Cartesian product gives the parameter sets.
+    scheduler : str, optional
+        ``tcp://host:port`` of a running Dask scheduler (its workers must see
+        the same paths); ``"sync"`` runs sequentially here without Dask.
+    workers : int, optional
+        Workers of the local cluster started by default
+        (``LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)``);
+        default ``min(4, CPU count)``; ``0`` runs sequentially here without Dask.
+    client : distributed.Client, optional
+        Use this client (its cluster is left running).
+    run_options : dict, optional
+        Extra keyword arguments of :func:`mlplc2.run` (``resize``, ``start``, ``end``, ...).
+    plot : bool
+        Also write each task's ``responses.png``.
+    progress : bool
+        Progress bar (tqdm on stderr) as tasks finish.
+    force : bool
+        Rerun tasks that are already done.
+    parquet : bool
+        Also write ``results.parquet`` (needs pandas and pyarrow).
+
+    Returns
+    -------
+    BatchResult
+    """
+    from .models.base import available_models
+
+    if isinstance(models, str):
+        models = [m for m in models.split(",") if m.strip()]
+    names: list[str] = []
+    for m in models:
+        m = str(m).strip().lower()
+        if m not in available_models():
+            raise InputValueError(f"unknown model {m!r}; choose from {', '.join(available_models())}")
+        if m not in names:
+            names.append(m)
+    if not names:
+        raise InputValueError("no model given")
+    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
+        raise InputValueError(f"workers must be an integer >= 0, got {workers!r}")
+    if parquet:
+        try:
+            import pandas  # noqa: F401
+            import pyarrow  # noqa: F401
+        except ImportError:
+            raise InputValueError("parquet=True needs pandas and pyarrow: pip install pandas pyarrow") from None
+    videos = expand_inputs(inputs)
+    sets = param_sets(params, sweep, names)
+    ids = {param_set_id(s): s for s in sets}
+    out = Path(out)
+    out.mkdir(parents=True, exist_ok=True)
+    keys = _video_keys(videos)
+    run_options = dict(run_options or {})
+    # One row per (video, parameter set, model); one task per distinct (video, model, the
+    # parameters that apply to that model): an LGMD model is not rerun for each value of a
+    # swept Params field it does not use.
+    tasks: list[dict] = []
+    slots: list[tuple[int, str]] = []  # per row: (task index, parameter set id)
+    by_out: dict[str, int] = {}
+    for v in videos:
+        for pid, pset in ids.items():
+            for m in names:
+                own = _restrict(pset, m)
+                rel = Path(keys[v]) / param_set_id(own) / m
+                key = rel.as_posix()
+                if key not in by_out:
+                    by_out[key] = len(tasks)
+                    tasks.append({"video": v, "model": m, "param_set": param_set_id(own), "pset": own,
+                                  "overrides": _model_overrides(own, m), "out": str((out / rel).resolve()),
+                                  "rel_out": key, "plot": plot, "run_options": run_options})
+                slots.append((by_out[key], pid))
+    for pid, pset in ids.items():  # what each parameter set id stands for
+        _write_json_atomic(out / f"param_set_{pid}.json", pset)
+
+    rows: dict[int, dict] = {}
+    todo = []
+    for i, t in enumerate(tasks):
+        saved = None if force else _done_row(t)
+        if saved is not None:
+            rows[i] = saved
+        else:
+            todo.append(i)
+    skipped = len(tasks) - len(todo)
+    sequential = scheduler == "sync" or (workers == 0 and scheduler is None)
+    t0 = time.perf_counter()
+    from tqdm import tqdm
+
+    bar = tqdm(total=len(tasks), initial=skipped, disable=not progress, unit="task", file=sys.stderr,
+               desc="batch", dynamic_ncols=True)
+    used = "sync"
+    try:
+        if sequential or not todo:
+            for i in todo:
+                rows[i] = run_task(tasks[i])
+                bar.update()
+        else:
+            try:
+                import distributed  # noqa: F401
+            except ImportError:
+                raise InputValueError(_DASK_MISSING) from None
+            from distributed import Client, as_completed
+
+            cluster = own = None
+            try:
+                if client is None:
+                    if scheduler:
+                        own = Client(scheduler)
+                        used = scheduler
+                    else:
+                        n = workers if workers else min(4, os.cpu_count() or 1)
+                        cluster, own = start_local_cluster(n)
+                        used = f"LocalCluster({n} workers)"
+                    c = own
+                else:
+                    c = client
+                    used = str(getattr(client, "scheduler", None) and client.scheduler.address)
+                futures = {}
+                for i in todo:
+                    t = tasks[i]
+                    key = f"mlplc2-{Path(t['out']).relative_to(out.resolve()).as_posix()}-" \
+                          f"{hashlib.sha1(t['out'].encode()).hexdigest()[:6]}-{time.time_ns()}"
+                    futures[c.submit(run_task, t, key=key, pure=False)] = i
+                for fut in as_completed(futures):
+                    i = futures[fut]
+                    try:
+                        rows[i] = fut.result()
+                    except Exception as exc:  # noqa: BLE001 - a worker died, ...
+                        t = tasks[i]
+                        rows[i] = {"video": t["video"], "model": t["model"], "param_set": t["param_set"],
+                                   "params": json.dumps(t["overrides"], sort_keys=True), "n_frames": None,
+                                   "fields": None, "alarms": None, "first_alarm_frame": None, "seconds": None,
+                                   "status": "error", "error": _one_line(f"{type(exc).__name__}: {exc}"),
+                                   "out": t["rel_out"]}
+                    bar.update()
+            finally:
+                if own is not None:
+                    own.close()
+                if cluster is not None:
+                    cluster.close()
+    except KeyboardInterrupt:
+        _write_table([{**rows[i], "param_set": pid} for i, pid in slots if i in rows], out, parquet)
+        raise
+    finally:
+        bar.close()
+    seconds = time.perf_counter() - t0
+    ordered = [{**rows[i], "param_set": pid} for i, pid in slots if i in rows]
+    table = _write_table(ordered, out, parquet)
+    failed = sum(1 for r in ordered if r["status"] == "error")
+    return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
+                       skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks))

@@ -1,0 +1,331 @@
+"""Speed benchmark of the LPLC2 family: ``mlplc2 bench`` / ``python -m mlplc2.bench``.
+
+For every model and frame size it reports, measured in the same run:
+
+* ms/frame and frames/s of the model with the fast front end (median over ``--frames``
+  frames after a warm-up; the frames are generated in memory beforehand, so no decoding is
+  timed; the time is that of ``model.step(uint8 frame)``, input conversion, front end,
+  attention fields and target estimates included);
+* the same for the reference front end (``backend="reference"``, fewer frames) and the
+  speed-up;
+* a memory-bandwidth probe: the time to copy the float32 planes the fast pipeline touches
+  (:data:`mlplc2._fast.PLANES`, N = 26 planes, i.e. 52 plane reads + writes, the traffic
+  its kernels do, :func:`mlplc2._fast.plane_traffic`) with the same thread count, and the
+  ratio of the model's time to it;
+* the peak memory one stream allocates (``tracemalloc``: model state, scratch and one
+  frame's output maps; Numba's row buffers and OpenCV's strip buffers are not traced and
+  are a few rows).
+
+The input is a procedural background scrolling by one pixel per frame with five dark squares
+approaching at different places and times (sizes scaled with the frame), so that mLPLC2
+keeps a few attention fields; the table reports the largest number of fields seen.
+"""
+
+from __future__ import annotations
+
+import argparse
+import statistics
+import sys
+import time
+import tracemalloc
+from dataclasses import dataclass
+
+import numpy as np
+
+__all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
+           "run_bench", "format_table", "add_arguments", "cli_handler", "main"]
+
+DEFAULT_SIZES = "100x100,320x240,640x480,1280x720"
+
+
+@dataclass
+class BenchRow:
+    model: str
+    size: tuple[int, int]
+    threads: int
+    frames: int
+    fields: int
+    ms: float
+    ref_ms: float | None
+    fe_ms: float
+    ref_fe_ms: float | None
+    probe_ms: float
+    planes: int
+    peak_mb: float
+
+    @property
+    def fps(self) -> float:
+        return 1000.0 / self.ms if self.ms > 0 else float("inf")
+
+    @property
+    def speedup(self) -> float | None:
+        return None if self.ref_ms is None else self.ref_ms / self.ms
+
+    @property
+    def fe_speedup(self) -> float | None:
+        return None if self.ref_fe_ms is None else self.ref_fe_ms / self.fe_ms
+
+    @property
+    def probe_ratio(self) -> float:
+        return self.ms / self.probe_ms if self.probe_ms > 0 else float("inf")
+
+
+def parse_sizes(text: str) -> list[tuple[int, int]]:
+    """'320x240,640x480' -> [(320, 240), (640, 480)] (width x height)."""
+    from ._validation import InputValueError
+
+    sizes = []
+    for part in str(text).split(","):
+        part = part.strip().lower()
+        if not part:
+            continue
+        try:
+            w, h = (int(v) for v in part.split("x"))
+        except ValueError:
+            raise InputValueError(f"--sizes: expected WxH[,WxH...], got {part!r}") from None
+        if w < 16 or h < 16:
+            raise InputValueError(f"--sizes: {part} is too small (at least 16x16)")
+        sizes.append((w, h))
+    if not sizes:
+        raise InputValueError("--sizes needs at least one WxH")
+    return sizes
+
+
+def synthetic_frames(width: int, height: int, n: int, seed: int = 0) -> np.ndarray:
+    """(n, H, W) uint8: scrolling background + five dark looming squares, like the four-phase scene.
+
+    The background is one procedural texture made for 320x240, resized to the frame, scrolling
+    by 1 px per frame; the squares grow by 2 px per frame as in the paper's scenes (up to 79 px,
+    at most 40 % of the frame's smaller side), one starting every n/10 frames. The attention
+    fields have a fixed size in pixels (R_AF = 40), so this keeps about one field per square at
+    every frame size (up to five).
+    """
+    from .stimuli import SceneObject, procedural_background, scene
+
+    texture = procedural_background(320 + n + 16, 240, seed=seed)
+    spots = [(0.5, 0.5), (0.25, 0.3), (0.75, 0.7), (0.25, 0.72), (0.78, 0.28)]
+    objs = []
+    for k, (fx, fy) in enumerate(spots):
+        onset = min(k * max(n // 10, 1), n - 1)
+        approach = max(min(40, n - onset), 1)
+        objs.append(SceneObject(center=(fx * width, fy * height), onset=onset, approach=approach,
+                                hold=n, recede=0, max_side=min(79.0, 0.4 * min(width, height))))
+    return scene(objs, size=(width, height), frames=n, background=texture, scroll=1.0).frames
+
+
+def bandwidth_probe(width: int, height: int, planes: int, repeats: int = 15) -> float:
+    """Fastest copy (ms) of ``planes`` float32 (H, W) planes: plane k -> plane k + 1, so the
+    working set is ``planes + 1`` planes and the traffic ``planes`` reads + ``planes`` writes.
+
+    ``np.copyto`` (memcpy) split over Numba's thread count like the front end's bands, and on
+    one thread; the faster of the two, and the fastest of ``repeats`` tries (not the median): a
+    bandwidth figure is what the machine can do, the strictest yardstick for the ratio."""
+    import numba
+
+    from ._fast import copy_chain
+
+    stack = np.ones((planes + 1, height * width), np.float32)
+    best = float("inf")
+    for threads in sorted({1, numba.get_num_threads()}):
+        copy_chain(stack, threads)
+        for _ in range(repeats):
+            t0 = time.perf_counter()
+            copy_chain(stack, threads)
+            best = min(best, time.perf_counter() - t0)
+    return 1e3 * best
+
+
+def time_model(name: str, frames: np.ndarray, backend: str, warmup: int, fps: float = 30.0):
+    """(median ms per step, max fields) of model ``name`` over ``frames[warmup:]``."""
+    from .models.base import get_model
+
+    model = get_model(name)(fps=fps, backend=backend)
+    for f in frames[:warmup]:
+        model.step(f)
+    times = []
+    fields = 0
+    for f in frames[warmup:]:
+        t0 = time.perf_counter()
+        out = model.step(f)
+        times.append(time.perf_counter() - t0)
+        fields = max(fields, len(out.fields))
+    return 1e3 * statistics.median(times), fields
+
+
+def time_frontend(frames: np.ndarray, backend: str, warmup: int, fps: float = 30.0) -> float:
+    """Median ms of the front end alone (Eq. 1-12) on float32 frames."""
+    from .frontend import make_frontend
+    from .params import Params
+
+    fe = make_frontend(Params(), fps, backend)
+    gray = [np.asarray(f, np.float32) for f in frames]
+    for g in gray[:warmup]:
+        fe.step(g)
+    times = []
+    for g in gray[warmup:]:
+        t0 = time.perf_counter()
+        fe.step(g)
+        times.append(time.perf_counter() - t0)
+    return 1e3 * statistics.median(times)
+
+
+def peak_memory_mb(name: str, frames: np.ndarray, backend: str = "auto", n: int = 4) -> float:
+    """Peak bytes (MB) allocated while one stream is built and steps ``n`` frames (tracemalloc)."""
+    from .models.base import get_model
+
+    tracemalloc.start()
+    try:
+        tracemalloc.reset_peak()
+        model = get_model(name)(fps=30.0, backend=backend)
+        for f in frames[:n]:
+            model.step(f)
+        _, peak = tracemalloc.get_traced_memory()
+    finally:
+        tracemalloc.stop()
+    del model
+    return peak / 2**20
+
+
+def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames: int = 100,
+              ref_frames: int = 12, warmup: int = 10, reference: bool = True, rounds: int = 1,
+              progress=None):
+    """Run the benchmark; returns a list of :class:`BenchRow`.
+
+    Each figure is a median over the frames of one round; with ``rounds`` > 1 the whole
+    measurement is repeated and the smallest median kept, which filters out other processes
+    that share the CPU for a while (the load average is printed with the table).
+    """
+    import numba
+
+    from . import _fast
+
+    _fast.set_threads(numba.get_num_threads() if threads is None else threads)
+    n_threads = numba.get_num_threads()
+    sizes = parse_sizes(DEFAULT_SIZES) if sizes is None else sizes
+    planes = sum(count for _, count, _ in _fast.PLANES)
+    rows = []
+    for w, h in sizes:
+        total = warmup + max(frames, ref_frames)
+        video = synthetic_frames(w, h, total)
+        fast_video = video[:warmup + frames]
+        ref_video = video[:warmup + ref_frames]
+        best: dict = {}
+
+        def keep(key, value):
+            best[key] = value if key not in best else min(best[key], value)
+
+        for r in range(max(1, rounds)):
+            if progress:
+                progress(f"{w}x{h} round {r + 1}/{rounds} ...")
+            keep("probe", bandwidth_probe(w, h, planes))
+            keep("fe", time_frontend(fast_video, "numba", warmup))
+            if reference:
+                keep("ref_fe", time_frontend(ref_video, "reference", warmup))
+            for name in models:
+                ms, fields = time_model(name, fast_video, "numba", warmup)
+                keep((name, "ms"), ms)
+                best[(name, "fields")] = fields
+                if reference:
+                    keep((name, "ref"), time_model(name, ref_video, "reference", warmup)[0])
+        for name in models:
+            peak = peak_memory_mb(name, video)
+            rows.append(BenchRow(name, (w, h), n_threads, frames, best[(name, "fields")], best[(name, "ms")],
+                                 best.get((name, "ref")), best["fe"], best.get("ref_fe"), best["probe"],
+                                 planes, peak))
+    return rows
+
+
+def format_table(rows) -> str:
+    """A Markdown table of the rows."""
+    head = ("| model | size | threads | fields | ms/frame | frames/s | reference ms | speed-up | "
+            "front end ms | reference front end ms | front-end speed-up | probe ms (N planes) | "
+            "x probe | peak MB/stream |")
+    lines = [head, "|" + "---|" * 14]
+
+    def opt(v, fmt):
+        return "-" if v is None else format(v, fmt)
+
+    for r in rows:
+        lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.threads} | {r.fields} | {r.ms:.2f} | "
+                     f"{r.fps:.0f} | {opt(r.ref_ms, '.1f')} | {opt(r.speedup, '.1f')}x | {r.fe_ms:.2f} | "
+                     f"{opt(r.ref_fe_ms, '.1f')} | {opt(r.fe_speedup, '.1f')}x | {r.probe_ms:.2f} ({r.planes}) | "
+                     f"{r.probe_ratio:.1f} | {r.peak_mb:.1f} |")
+    return "\n".join(lines)
+
+
+# ---------------------------------------------------------------------------
+# command line (mlplc2 bench, python -m mlplc2.bench)
+# ---------------------------------------------------------------------------
+def _positive_int(text: str) -> int:
+    try:
+        value = int(text)
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
+    if value < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
+    return value
+
+
+def add_arguments(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--sizes", default=DEFAULT_SIZES, metavar="WxH,...",
+                   help=f"frame sizes (default {DEFAULT_SIZES})")
+    p.add_argument("--models", "--model", "-m", dest="models", action="append", metavar="NAME",
+                   help="LPLC2-family model(s), repeatable or comma-separated (default: mlplc2)")
+    p.add_argument("--threads", type=_positive_int, metavar="N",
+                   help="threads for the fast front end and OpenCV (default: Numba's, i.e. all cores)")
+    p.add_argument("--frames", type=_positive_int, default=100, metavar="N",
+                   help="timed frames per model and size after 10 warm-up frames (default 100)")
+    p.add_argument("--ref-frames", type=_positive_int, default=12, metavar="N",
+                   help="timed frames of the reference front end (default 12)")
+    p.add_argument("--rounds", type=_positive_int, default=1, metavar="R",
+                   help="repeat every measurement R times and keep the smallest median (default 1)")
+    p.add_argument("--no-reference", action="store_true", help="skip the reference front end")
+    p.add_argument("--quiet", "-q", action="store_true", help="only the table")
+
+
+def cli_handler(args) -> int:
+    from ._validation import InputValueError
+    from .models.base import available_models
+
+    names = []
+    for v in args.models or ["mlplc2"]:
+        for name in v.split(","):
+            name = name.strip().lower()
+            if name and name not in names:
+                names.append(name)
+    family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
+    bad = [n for n in names if n not in family]
+    if bad:
+        raise InputValueError(f"--models: {', '.join(bad)} not benchmarked; choose from {', '.join(family)}")
+    sizes = parse_sizes(args.sizes)
+
+    def progress(msg):
+        if not args.quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    rows = run_bench(sizes, names, threads=args.threads, frames=args.frames, ref_frames=args.ref_frames,
+                     reference=not args.no_reference, rounds=args.rounds, progress=progress)
+    print(format_table(rows))
+    if not args.quiet:
+        from . import _fast
+
+        traffic = sum(_fast.plane_traffic().values())
+        import os
+
+        load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+        print(f"\nms/frame: median of model.step over {args.frames} in-memory uint8 frames (no decoding; "
+              f"smallest of {args.rounds} round(s)): front end, attention fields and target estimates. "
+              f"front end: Eq. 1-12 alone. probe: fastest copy of the N float32 planes one stream touches "
+              f"({traffic} plane reads+writes per frame in the kernels), same threads; 'x probe' = "
+              f"ms/frame / probe. Load average after the run: {load}.")
+    return 0
+
+
+def main(argv=None) -> int:
+    p = argparse.ArgumentParser(prog="python -m mlplc2.bench", description=__doc__.splitlines()[0])
+    add_arguments(p)
+    return cli_handler(p.parse_args(argv))
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())

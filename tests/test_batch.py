@@ -1,0 +1,202 @@
+"""Batch runs over many videos on a 2-worker Dask LocalCluster (started here, no external service)."""
+
+from __future__ import annotations
+
+import csv
+import json
+import shutil
+import sys
+
+import pytest
+
+from mlplc2 import stimuli
+from mlplc2._validation import InputValueError
+from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, batch, expand_inputs, param_set_id, param_sets,
+                          parse_sweep, start_local_cluster)
+from mlplc2.cli import main
+from mlplc2.evaluate import evaluate
+from mlplc2.io import write_video
+
+MODELS = ["mlplc2", "lgmd2"]
+
+
+@pytest.fixture(scope="module")
+def videos(tmp_path_factory):
+    """Six small generated clips (96x72, 24 frames), one looming square each, at different places."""
+    d = tmp_path_factory.mktemp("videos")
+    paths, truth = [], {}
+    centers = [(30, 30), (60, 40), (48, 36), (70, 20), (20, 50), (50, 25)]
+    for k, c in enumerate(centers):
+        st = stimuli.scene([stimuli.SceneObject(center=c, onset=2, approach=16, hold=4, recede=0)],
+                           size=(96, 72), frames=24, background="plain", scroll=0.0)
+        p = d / f"clip{k}.avi"
+        write_video(p, st.frames, 30.0)
+        paths.append(str(p))
+        truth[p.name] = st.to_ground_truth()
+    return {"dir": d, "paths": paths, "gt": {"videos": truth}}
+
+
+@pytest.fixture(scope="module")
+def client():
+    pytest.importorskip("distributed")
+    cluster, client = start_local_cluster(2)
+    try:
+        yield client
+    finally:
+        client.close()
+        cluster.close()
+
+
+def _comparable(rows):
+    return [{k: r[k] for k in RESULT_COLUMNS if k != "seconds"} for r in rows]
+
+
+def _read_table(path):
+    with open(path, newline="") as f:
+        return list(csv.DictReader(f))
+
+
+def test_cluster_matches_sequential(videos, client, tmp_path):
+    seq = batch(videos["paths"], tmp_path / "seq", models=MODELS, workers=0, progress=False)
+    dist = batch(videos["paths"], tmp_path / "dist", models=MODELS, client=client, progress=False)
+    assert seq.scheduler == "sync" and dist.scheduler.startswith("tcp://")
+    assert len(seq.rows) == len(dist.rows) == 12
+    assert all(r["status"] == "ok" for r in dist.rows)
+    assert _comparable(seq.rows) == _comparable(dist.rows)
+    t_seq, t_dist = _read_table(seq.table), _read_table(dist.table)
+    assert list(t_seq[0]) == list(RESULT_COLUMNS)
+    assert [{k: v for k, v in r.items() if k != "seconds"} for r in t_seq] == \
+        [{k: v for k, v in r.items() if k != "seconds"} for r in t_dist]
+    # per-row outputs: one folder per task, readable by evaluate
+    for r in dist.rows:
+        folder = tmp_path / "dist" / r["out"]
+        assert (folder / "responses.csv").is_file() and (folder / "fields.json").is_file()
+        assert json.loads((folder / DONE_MARKER).read_text())["status"] == "ok"
+    ev = evaluate(tmp_path / "dist", videos["gt"], models=["mlplc2"])
+    assert ev.models["mlplc2"]["objects"] == 6 and ev.models["mlplc2"]["videos"] == 6
+
+
+def test_corrupt_video_is_reported(videos, client, tmp_path):
+    bad = tmp_path / "broken.avi"
+    bad.write_bytes(b"RIFF" + b"\x00garbage" * 500)
+    inputs = videos["paths"][:3] + [str(bad)]
+    res = batch(inputs, tmp_path / "out", models=["mlplc2"], client=client, progress=False)
+    status = {r["video"]: r for r in res.rows}
+    assert status[str(bad)]["status"] == "error" and "broken.avi" in status[str(bad)]["error"]
+    assert "\n" not in status[str(bad)]["error"]
+    assert [status[v]["status"] for v in videos["paths"][:3]] == ["ok"] * 3
+    assert res.failed == 1 and len(_read_table(res.table)) == 4
+    # the rerun retries only the failed task
+    again = batch(inputs, tmp_path / "out", models=["mlplc2"], workers=0, progress=False)
+    assert (again.ran, again.skipped, again.failed) == (1, 3, 1)
+
+
+def test_sweep_gives_two_result_sets(videos, client, tmp_path):
+    res = batch(videos["paths"][:2], tmp_path / "sw", models=MODELS, sweep=["t_a=8,12"], client=client,
+                progress=False)
+    assert len(res.param_sets) == 2
+    ids = sorted(res.param_sets)
+    assert {json.dumps(p, sort_keys=True) for p in res.param_sets.values()} == {'{"t_a": 8}', '{"t_a": 12}'}
+    assert len(res.rows) == 2 * 2 * 2
+    ml = [r for r in res.rows if r["model"] == "mlplc2"]
+    assert sorted({r["param_set"] for r in ml}) == ids and sorted({r["params"] for r in ml}) == \
+        ['{"t_a": 12}', '{"t_a": 8}']
+    for pid in ids:
+        assert (tmp_path / "sw" / "clip0" / pid / "mlplc2" / DONE_MARKER).is_file()
+    # LGMD2 does not use t_a: one run per video, shared by both parameter sets
+    lg = [r for r in res.rows if r["model"] == "lgmd2"]
+    assert {r["out"] for r in lg} == {"clip0/default/lgmd2", "clip1/default/lgmd2"} and res.tasks == 6
+    ev = evaluate(tmp_path / "sw", videos["gt"], models=["mlplc2"])
+    assert sorted(ev.models) == sorted(f"mlplc2@{pid}" for pid in ids)
+
+
+def test_rerun_skips_finished_tasks(videos, tmp_path):
+    first = batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
+    assert (first.ran, first.skipped) == (2, 0)
+    again = batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
+    assert (again.ran, again.skipped) == (0, 2)
+    assert _comparable(again.rows) == _comparable(first.rows)
+    assert [r["seconds"] for r in again.rows] == [r["seconds"] for r in first.rows]  # read back, not rerun
+    (tmp_path / "o" / first.rows[1]["out"] / DONE_MARKER).unlink()   # an unfinished task
+    third = batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
+    assert (third.ran, third.skipped) == (1, 1)
+    forced = batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=False, force=True)
+    assert forced.ran == 2
+
+
+def test_param_sets_and_ids(tmp_path):
+    assert parse_sweep(["t_a=8,10", "lgmd2.a_on=0.5"]) == {"t_a": [8, 10], "lgmd2.a_on": [0.5]}
+    sets = param_sets({"beta": 1.2}, ["t_a=8,10", "d=5,6"], ["mlplc2"])
+    assert len(sets) == 4 and all(s["beta"] == 1.2 for s in sets)
+    assert len({param_set_id(s) for s in sets}) == 4
+    assert param_set_id({"t_a": 8, "d": 5}) == param_set_id({"d": 5, "t_a": 8})
+    assert param_set_id({}) == "default"
+    f = tmp_path / "p.json"
+    f.write_text('{"t_a": 12}')
+    assert param_sets(f) == [{"t_a": 12}]
+    with pytest.raises(InputValueError, match="unknown parameter"):
+        param_sets({"nope": 1})
+    with pytest.raises(InputValueError, match="t_a"):
+        param_sets({"t_a": -1})
+    with pytest.raises(InputValueError, match="PARAM=V1"):
+        parse_sweep(["t_a"])
+    f.write_text("{bad")
+    with pytest.raises(InputValueError, match="not valid JSON"):
+        param_sets(f)
+
+
+def test_inputs(videos, tmp_path):
+    assert expand_inputs(videos["dir"]) == sorted(videos["paths"])
+    assert expand_inputs(str(videos["dir"] / "clip[01].avi")) == videos["paths"][:2]
+    with pytest.raises(InputValueError, match="no such file"):
+        expand_inputs(tmp_path / "missing.avi")
+    # two videos with the same stem get distinct folders
+    (tmp_path / "a").mkdir()
+    shutil.copy(videos["paths"][0], tmp_path / "a" / "clip0.avi")
+    res = batch([videos["paths"][0], tmp_path / "a" / "clip0.avi"], tmp_path / "o", models=["lgmd2"], workers=0,
+                progress=False)
+    assert len({r["out"] for r in res.rows}) == 2
+
+
+def test_dask_is_optional(videos, tmp_path, monkeypatch):
+    monkeypatch.setitem(sys.modules, "distributed", None)   # import distributed -> ImportError
+    with pytest.raises(InputValueError, match=r"pip install 'mlplc2\[dask\]'"):
+        batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=1, progress=False)
+    res = batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
+    assert res.rows[0]["status"] == "ok"
+
+
+def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
+    pfile = tmp_path / "params.json"
+    pfile.write_text('{"t_a": 12}')
+    code = main(["batch", *videos["paths"][:2], "--out", str(tmp_path / "o"), "--models", "mlplc2,lgmd2",
+                 "--params", str(pfile), "--sweep", "d=5,10", "--scheduler", client.scheduler.address, "-q"])
+    assert code == 0
+    rows = _read_table(tmp_path / "o" / "results.csv")
+    assert len(rows) == 2 * 2 * 2 and {r["status"] for r in rows} == {"ok"}
+    assert {r["params"] for r in rows if r["model"] == "mlplc2"} == {'{"d": 5, "t_a": 12}', '{"d": 10, "t_a": 12}'}
+    # bad input: one line, exit 2
+    assert main(["batch", str(tmp_path / "none.avi"), "--out", str(tmp_path / "x"), "--workers", "0"]) == 2
+    err = capsys.readouterr().err
+    assert "mlplc2: error:" in err and "no such file" in err
+
+
+def test_cli_batch_failure_exit_code(videos, tmp_path, capsys):
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"not a video")
+    code = main(["batch", videos["paths"][0], str(bad), "--out", str(tmp_path / "o"), "-m", "lgmd2",
+                 "--workers", "0", "-q"])
+    assert code == 2
+    err = capsys.readouterr().err
+    assert "mlplc2: warning:" in err and "bad.avi" in err
+    rows = _read_table(tmp_path / "o" / "results.csv")
+    assert [r["status"] for r in rows] == ["ok", "error"]
+
+
+def test_parquet_table(videos, tmp_path):
+    pd = pytest.importorskip("pandas")
+    pytest.importorskip("pyarrow")
+    res = batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=False, parquet=True)
+    df = pd.read_parquet(tmp_path / "o" / "results.parquet")
+    assert list(df.columns) == list(RESULT_COLUMNS) and len(df) == 2
+    assert df["n_frames"].tolist() == [r["n_frames"] for r in res.rows] == [24, 24]

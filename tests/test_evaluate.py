@@ -1,0 +1,322 @@
+"""Evaluation against ground truth: loader, object-level and clip-level metrics, CLI."""
+
+from __future__ import annotations
+
+import copy
+import json
+
+import pytest
+
+import mlplc2
+from mlplc2 import stimuli
+from mlplc2._validation import InputValueError
+from mlplc2.cli import main
+from mlplc2.evaluate import Evaluation, evaluate, load_ground_truth
+from mlplc2.io import write_video
+from mlplc2.runner import RunResult
+
+FPS = 30.0
+
+
+# ---------------------------------------------------------------------------
+# a generated scene with known truth, run once
+# ---------------------------------------------------------------------------
+@pytest.fixture(scope="module")
+def scene(tmp_path_factory):
+    """Two dark squares looming one after the other over a scrolling background (160x120, 50 frames)."""
+    d = tmp_path_factory.mktemp("scene")
+    st = stimuli.scene([stimuli.SceneObject(center=(50, 40), onset=3, approach=20, hold=5, recede=0),
+                        stimuli.SceneObject(center=(120, 80), onset=20, approach=20, hold=5, recede=0)],
+                       size=(160, 120), frames=50, background="procedural", scroll=1.0)
+    video = d / "clips" / "two.avi"
+    video.parent.mkdir()
+    write_video(video, st.frames, FPS)
+    gt = {"videos": {"clips/two.avi": st.to_ground_truth()}}
+    res = mlplc2.run(video, ["mlplc2", "lgmd2"], out=d / "two_out", quiet=True, plot=False)
+    return {"dir": d, "video": video, "gt": gt, "result": res, "stim": st}
+
+
+def test_known_scene_detections_and_latencies(scene):
+    ev = evaluate(scene["result"], scene["gt"])
+    assert list(ev.models) == ["mlplc2", "lgmd2"]
+    objs = [o for o in ev.objects if o["model"] == "mlplc2"]
+    assert [o["object"] for o in objs] == [1, 2]
+    for o in objs:
+        assert o["detected"] is True
+        assert 0 <= o["latency_field"] <= 8          # a field within a few frames of the onset
+        assert o["error_detect"] <= 8.0 and o["error_life"] <= 8.0
+        assert o["fields"] == 1
+        assert o["alarmed"] and o["latency_field"] < o["latency_alarm"] <= 20 + 25
+    s = ev.models["mlplc2"]
+    assert (s["objects"], s["detected"], s["false_alarms"], s["fields_total"]) == (2, 2, 0, 2)
+    assert s["detection_rate"] == 1.0
+    assert s["minutes"] == pytest.approx(50 / FPS / 60, abs=1e-4)
+    # LGMD2 does not localise: no detection metrics, only alarms
+    lg = ev.models["lgmd2"]
+    assert lg["detected"] is None and lg["fields_total"] is None and lg["localises"] is False
+
+
+def test_folder_and_video_inputs_give_the_same_scores(scene):
+    ev_mem = evaluate(scene["result"], scene["gt"])
+    ev_dir = evaluate(scene["dir"] / "two_out", scene["gt"])
+    assert ev_dir.models == ev_mem.models
+    assert ev_dir.objects == ev_mem.objects
+    ev_vid = evaluate(scene["video"], scene["gt"], models=["mlplc2"])
+    assert ev_vid.models["mlplc2"] == ev_mem.models["mlplc2"]
+    # a parent folder is searched for results
+    assert evaluate(scene["dir"], scene["gt"]).models == ev_mem.models
+
+
+def _shifted(res: RunResult, dx: float) -> RunResult:
+    rows = [dict(r, x=None if r["x"] is None else r["x"] + dx) for r in res.rows]
+    fields = {m: [dict(f, x=f["x"] + dx) for f in fs] for m, fs in res.fields.items()}
+    return RunResult(source=res.source, models=res.models, fps=res.fps, size=res.size, model_size=res.model_size,
+                     start=res.start, n_frames=res.n_frames, rows=rows, fields=fields)
+
+
+def test_shifted_result_is_a_miss(scene):
+    res = scene["result"]
+    ev = evaluate(_shifted(res, 60.0), scene["gt"], models=["mlplc2"])
+    s = ev.models["mlplc2"]
+    assert s["detected"] == 0 and s["alarmed"] == 0
+    assert all(o["detected"] is False and o["fields"] == 0 for o in ev.objects)
+    # the alarms that were hits are now false alarms, one per alarming field
+    n_alarming = sum(1 for f in res.fields["mlplc2"] if f["first_alarm_frame"] is not None)
+    assert n_alarming >= 1 and s["false_alarms"] == n_alarming
+    assert s["false_alarms_per_min"] == pytest.approx(n_alarming / (50 / FPS / 60), rel=1e-3)
+    # a small shift (within the match radius) still matches
+    assert evaluate(_shifted(res, 5.0), scene["gt"], models=["mlplc2"]).models["mlplc2"]["detected"] == 2
+
+
+def test_gt_size_rescales_results(scene):
+    """Results of a run on a 2x larger copy of the video are scored in ground-truth pixels."""
+    res = scene["result"]
+    big = _shifted(res, 0.0)
+    big.size = (res.size[0] * 2, res.size[1] * 2)
+    big.rows = [dict(r, x=None if r["x"] is None else 2 * r["x"], y=None if r["y"] is None else 2 * r["y"])
+                for r in res.rows]
+    assert evaluate(big, scene["gt"], models=["mlplc2"]).objects == \
+        evaluate(res, scene["gt"], models=["mlplc2"]).objects
+
+
+# ---------------------------------------------------------------------------
+# hand-made rows: exact numbers
+# ---------------------------------------------------------------------------
+def _result(source, frames, *, field_rows=None, alarms=(), model="mlplc2", fps=FPS, size=(200, 100)):
+    """RunResult with rows per frame: ``field_rows[frame] = [(id, x, y, collision)]`` or, for an
+    LGMD-like model, one row per frame with collision on ``alarms``."""
+    rows = []
+    for f in range(frames):
+        fr = (field_rows or {}).get(f)
+        if fr:
+            for fid, x, y, c in fr:
+                rows.append({"frame": f, "time_s": f / fps, "model": model, "field_id": fid, "x": x, "y": y,
+                             "response": 1.0, "collision": int(c)})
+        else:
+            rows.append({"frame": f, "time_s": f / fps, "model": model, "field_id": None, "x": None, "y": None,
+                         "response": 0.0, "collision": int(f in alarms)})
+    ids = sorted({fid for v in (field_rows or {}).values() for fid, *_ in v})
+    fields = {model: [{"id": i, "x": 0, "y": 0, "born": 0, "died": None, "peak_response": 1, "peak_frame": 0,
+                       "first_alarm_frame": None} for i in ids]}
+    return RunResult(source=source, models=[model], fps=fps, size=size, model_size=size, n_frames=frames,
+                     rows=rows, fields=fields)
+
+
+OBJ_GT = {"videos": {"v.avi": {"size": [200, 100], "frames": 120, "objects": [
+    {"id": 1, "center": [50, 50], "polarity": "dark", "approach": [10, 50], "hold": [50, 60]},
+    {"id": 2, "center": [150, 50], "polarity": "dark", "recede": [0, 40]}]}}}
+
+
+def test_object_metrics_exact():
+    fr = {}
+    for f in range(14, 70):                      # field 1 near object 1 from frame 14 to 69
+        fr.setdefault(f, []).append((1, 53.0, 54.0, 30 <= f < 40))
+    for f in range(5, 30):                       # field 2 on the receding object: alarm 20-24 = false alarm
+        fr.setdefault(f, []).append((2, 150.0, 50.0, 20 <= f < 25))
+    for f in range(90, 100):                     # field 3 far from everything, alarm at 95 = false alarm
+        fr.setdefault(f, []).append((3, 100.0, 10.0, f >= 95))
+    for f in range(80, 84):                      # field 1's area after the tail (50 + 25 = 75): false alarm
+        fr.setdefault(f, []).append((4, 50.0, 50.0, True))
+    ev = evaluate(_result("/data/v.avi", 120, field_rows=fr), OBJ_GT)
+    (o,) = ev.objects
+    assert o["detected"] and o["detect_frame"] == 14 and o["latency_field"] == 4 and o["field"] == 1
+    assert o["error_detect"] == 5.0 and o["error_life"] == 5.0   # (3, 4) off during 14..59
+    assert o["alarm_frame"] == 30 and o["latency_alarm"] == 20 and o["fields"] == 1
+    s = ev.models["mlplc2"]
+    assert s["false_alarms"] == 3 and s["false_alarm_frames"] == 5 + 5 + 4
+    assert s["false_alarms_per_min"] == pytest.approx(3 / (120 / 30 / 60))
+    assert s["fields_total"] == 4
+    # a longer tail explains field 4's alarm
+    ev2 = evaluate(_result("/data/v.avi", 120, field_rows=fr), OBJ_GT, tail=40)
+    assert ev2.models["mlplc2"]["false_alarms"] == 2
+    # a smaller radius misses the field 5 px away
+    assert evaluate(_result("/data/v.avi", 120, field_rows=fr), OBJ_GT, match_radius=4).objects[0]["detected"] is False
+
+
+def test_non_localising_alarms_and_false_alarms():
+    alarms = set(range(40, 45)) | set(range(100, 103))
+    ev = evaluate(_result("v.avi", 120, alarms=alarms, model="lgmd2"), OBJ_GT)
+    (o,) = ev.objects
+    assert o["detected"] is None and o["alarm_frame"] == 40 and o["latency_alarm"] == 30
+    assert ev.models["lgmd2"]["false_alarms"] == 1 and ev.models["lgmd2"]["false_alarm_frames"] == 3
+
+
+def test_clip_level_metrics():
+    gt = {"videos": {
+        "a.mp4": {"label": "collision", "collision_frame": 20},
+        "b.mp4": {"label": "collision", "collision_frame": 20},
+        "c.mp4": {"label": "no_collision"},
+        "d.mp4": {"label": "no_collision"},
+        "e.mp4": {"label": "collision"},
+    }}
+    results = [_result("x/a.mp4", 30, alarms={15, 16}, model="lgmd1"),   # TP, warning 5 frames
+               _result("x/b.mp4", 30, alarms={25}, model="lgmd1"),       # alarm too late: FN
+               _result("x/c.mp4", 30, alarms={3}, model="lgmd1"),        # FP
+               _result("x/d.mp4", 30, model="lgmd1"),                    # TN
+               _result("x/e.mp4", 30, alarms={29}, model="lgmd1")]       # TP, no collision frame
+    ev = evaluate(results, gt)
+    s = ev.models["lgmd1"]
+    assert (s["clips"], s["tp"], s["fp"], s["tn"], s["fn"]) == (5, 2, 1, 1, 1)
+    assert s["accuracy"] == pytest.approx(3 / 5)
+    assert s["precision"] == pytest.approx(2 / 3, abs=1e-4) and s["recall"] == pytest.approx(2 / 3, abs=1e-4)
+    assert s["warning_s"] == pytest.approx(5 / 30, abs=1e-4)
+    assert [v["outcome"] for v in ev.videos] == ["TP", "FN", "FP", "TN", "TP"]
+    md = ev.to_markdown()
+    assert "| lgmd1 | 5 | 2 | 1 | 1 | 1 | 0.60 | 0.67 | 0.67 | 0.17 |" in md
+
+
+def test_markdown_and_json_round_trip(scene, tmp_path):
+    ev = evaluate(scene["result"], scene["gt"])
+    md = ev.to_markdown()
+    assert md.splitlines()[0].startswith("| model |") and "| mlplc2 | 1 | 2 | 2/2 |" in md
+    files = ev.write(tmp_path / "ev")
+    data = json.loads(files["evaluation.json"].read_text())
+    assert data["models"]["mlplc2"]["detected"] == 2 and len(data["objects"]) == 4
+    assert data["settings"]["match_radius"] == 20.0 and data["settings"]["tail"] == 25
+    assert "| model |" in files["evaluation.md"].read_text()
+
+
+# ---------------------------------------------------------------------------
+# ground-truth loading and matching
+# ---------------------------------------------------------------------------
+def test_paper_ground_truth_loads(paper_dir):
+    gt = load_ground_truth(paper_dir / "ground_truth.json")
+    assert len(gt) == 8
+    six = gt.match(paper_dir / "scenes" / "outdoor_3_black_expand_multi_6.avi")
+    assert six.size == (320, 240) and len(six.objects) == 6 and six.objects[0].approach == (5, 45)
+    assert gt.match("/elsewhere/test_grating.avi").key == "basic/test_grating.avi"
+    assert gt.match("/elsewhere/unknown.avi") is None
+
+
+def test_stimulus_ground_truth_entry(tmp_path):
+    """A single entry (as written by 'mlplc2 stimulus') is accepted and matched by its video name."""
+    st = stimuli.six_objects(background="plain")
+    entry = {"name": "six_objects", "video": "six.mp4", **st.to_ground_truth()}
+    gt = load_ground_truth(entry)
+    assert gt.match(tmp_path / "six.mp4") is not None and gt.match(tmp_path / "other.mp4") is None
+    anon = load_ground_truth(st.to_ground_truth())
+    assert anon.match("anything.avi") is not None
+
+
+def test_matching_by_suffix_and_ambiguity():
+    e = {"size": [10, 10], "frames": 5, "objects": []}
+    gt = load_ground_truth({"videos": {"a/x.avi": e, "b/x.avi": e, "y.avi": e}})
+    assert gt.match("/data/a/x.avi").key == "a/x.avi"
+    assert gt.match("/data/y.avi").key == "y.avi"
+    with pytest.raises(InputValueError, match="ambiguous"):
+        gt.match("/data/c/x.avi")
+
+
+def test_track_and_kind():
+    gt = load_ground_truth({"videos": {"t.avi": {"size": [100, 100], "frames": 30, "objects": [
+        {"id": "car", "track": [[20, 60, 50], [0, 40, 50]], "kind": "approaching", "interval": [0, 20]}]}}})
+    (o,) = gt["t.avi"].objects
+    assert o.approach == (0, 20) and o.center_at(10) == (50.0, 50.0) and o.center_at(25) == (60.0, 50.0)
+    fr = {f: [(1, 40 + f, 50, f >= 15)] for f in range(2, 30)}
+    ev = evaluate(_result("t.avi", 30, field_rows=fr, size=(100, 100)), gt)
+    (r,) = ev.objects
+    assert r["detected"] and r["latency_field"] == 2 and r["error_detect"] == 0.0
+    assert r["error_life"] == 0.0 and r["latency_alarm"] == 15
+
+
+GOOD = {"size": [320, 240], "frames": 100, "objects": [{"id": 1, "center": [10, 20], "approach": [0, 40]}]}
+
+
+@pytest.mark.parametrize("mutate, message", [
+    (lambda e: e.pop("objects"), "needs 'objects'"),
+    (lambda e: e["objects"][0].update(approach=[40, 10]), "end > start"),
+    (lambda e: e["objects"][0].update(approach=[0]), "interval"),
+    (lambda e: e["objects"][0].pop("center"), "needs a 'center'"),
+    (lambda e: e["objects"][0].update(center=[1, "a"]), "finite number"),
+    (lambda e: e["objects"][0].update(track=[[0, 1]]), r"\[frame, x, y\]"),
+    (lambda e: e["objects"][0].update(polarity="grey"), "polarity"),
+    (lambda e: e["objects"][0].update(kind="flying"), "kind"),
+    (lambda e: e.update(size=[320]), "size"),
+    (lambda e: e.update(frames=1.5), "integer"),
+    (lambda e: e.update(objects={}), "list"),
+    (lambda e: e.update(label="maybe"), "label"),
+    (lambda e: e.update(label="no_collision", collision_frame=3), "collision frame"),
+])
+def test_malformed_ground_truth(mutate, message):
+    entry = copy.deepcopy(GOOD)
+    mutate(entry)
+    with pytest.raises(InputValueError, match=message):
+        load_ground_truth({"videos": {"v.avi": entry}})
+
+
+def test_malformed_ground_truth_files(tmp_path):
+    with pytest.raises(InputValueError, match="not found"):
+        load_ground_truth(tmp_path / "none.json")
+    bad = tmp_path / "bad.json"
+    bad.write_text("{not json")
+    with pytest.raises(InputValueError, match="not valid JSON"):
+        load_ground_truth(bad)
+    bad.write_text("[1, 2]")
+    with pytest.raises(InputValueError, match="JSON object"):
+        load_ground_truth(bad)
+    bad.write_text('{"videos": {}}')
+    with pytest.raises(InputValueError, match="non-empty"):
+        load_ground_truth(bad)
+
+
+def test_evaluate_errors(scene):
+    with pytest.raises(InputValueError, match="no ground truth"):
+        evaluate(scene["result"], {"videos": {"other.avi": GOOD}})
+    with pytest.raises(InputValueError, match="unknown model"):
+        evaluate(scene["result"], scene["gt"], models=["nope"])
+    with pytest.raises(InputValueError, match="match_radius"):
+        evaluate(scene["result"], scene["gt"], match_radius=0)
+
+
+# ---------------------------------------------------------------------------
+# command line
+# ---------------------------------------------------------------------------
+def test_cli_evaluate(scene, tmp_path, capsys):
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps(scene["gt"]))
+    code = main(["evaluate", str(scene["dir"] / "two_out"), "--gt", str(gt), "--out", str(tmp_path / "ev"),
+                 "-m", "mlplc2"])
+    out = capsys.readouterr().out
+    assert code == 0
+    assert "| mlplc2 | 1 | 2 | 2/2 |" in out and "lgmd2" not in out.split("wrote")[0]
+    assert (tmp_path / "ev" / "evaluation.md").is_file() and (tmp_path / "ev" / "evaluation.json").is_file()
+    ev = json.loads((tmp_path / "ev" / "evaluation.json").read_text())
+    assert list(ev["models"]) == ["mlplc2"]
+
+
+def test_cli_evaluate_bad_gt(scene, tmp_path, capsys):
+    gt = tmp_path / "gt.json"
+    gt.write_text('{"videos": {"x.avi": {"size": [1, 1]}}}')
+    assert main(["evaluate", str(scene["dir"] / "two_out"), "--gt", str(gt)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mlplc2: error:") and "needs 'objects'" in err and len(err.strip().splitlines()) == 1
+
+
+def test_evaluation_type():
+    assert isinstance(evaluate(_result("v.avi", 120), OBJ_GT), Evaluation)
+    assert mlplc2.evaluate is evaluate
+
+
+def test_missing_input(scene, tmp_path):
+    with pytest.raises(InputValueError, match="no such file"):
+        evaluate(tmp_path / "nothing.avi", scene["gt"])

@@ -1,0 +1,291 @@
+"""The fast front end (mlplc2._fast) against the reference (mlplc2.frontend.FrontEnd), the oracle.
+
+LM maps agree to 1e-4 of their largest value (in practice ~1e-6: only x ** 0.9 is computed
+differently); mLPLC2 with either backend makes the same fields. No timings here: see
+``mlplc2 bench`` and benchmarks/README.md.
+"""
+
+from __future__ import annotations
+
+import copy
+import functools
+import logging
+import pickle
+
+import numba
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2 import _fast, attention, frontend, stimuli
+from mlplc2.frontend import FrontEnd, make_frontend
+from mlplc2.lobula_plate import LocalMotion
+
+from .conftest import read_gray
+
+MAPS = ("r", "l", "d", "u", "magnitude")
+
+
+@pytest.fixture(autouse=True)
+def _numba_env(monkeypatch):
+    """Numba refuses to compile while NUMBA_NUM_THREADS in os.environ differs from its running
+    thread pool; an earlier test that starts a Dask local cluster can leave it changed."""
+    monkeypatch.setenv("NUMBA_NUM_THREADS", str(numba.config.NUMBA_NUM_THREADS))
+RTOL = 1e-4
+ATOL = 1e-6
+
+
+def assert_maps_close(ref: LocalMotion, fast: LocalMotion, where: str = "") -> None:
+    for name in MAPS:
+        a, b = getattr(ref, name), getattr(fast, name)
+        assert a.shape == b.shape and b.dtype == np.float32
+        scale = float(np.abs(a).max())
+        err = float(np.abs(a - b).max())
+        assert err <= RTOL * scale + ATOL, f"{where} LM_{name}: max |fast - ref| = {err:g}, max |ref| = {scale:g}"
+
+
+def run_both(frames, params=None, fps=30.0, fast=None):
+    params = mlplc2.Params() if params is None else params
+    ref = FrontEnd(params, fps)
+    fast = _fast.FastFrontEnd(params, fps) if fast is None else fast
+    for i, frame in enumerate(frames):
+        gray = np.asarray(frame, np.float32)
+        assert_maps_close(ref.step(gray), fast.step(gray), where=f"frame {i}")
+    return ref, fast
+
+
+@functools.lru_cache(maxsize=1)
+def four_phase() -> np.ndarray:
+    frames = stimuli.four_phase().frames
+    frames.flags.writeable = False
+    return frames
+
+
+def noise(shape, n=8, seed=0):
+    return np.random.default_rng(seed).integers(0, 256, (n, *shape)).astype(np.uint8)
+
+
+# --- LM maps -------------------------------------------------------------------------------
+STIMULI = {
+    "four_phase": lambda: four_phase()[:14],
+    "four_phase_two_objects": lambda: four_phase()[318:330],
+    "dark_approach": lambda: stimuli.basic("dark_approach").frames[::3],
+    "bright_recede": lambda: stimuli.basic("bright_recede").frames[::4],
+    "grating": lambda: stimuli.basic("grating").frames[:10],
+    "translating": lambda: stimuli.basic("translating").frames[::4],
+    "noise_37x53": lambda: noise((37, 53)),
+    "noise_5x7": lambda: noise((5, 7)),
+    "noise_3x3": lambda: noise((3, 3)),
+    "noise_tall_300x41": lambda: noise((300, 41), n=5),
+}
+
+
+@pytest.mark.parametrize("name", list(STIMULI))
+def test_lm_maps_match_reference(name):
+    run_both(STIMULI[name]())
+
+
+PARAMS = {
+    "extras": mlplc2.Params(after_image=0.1, average_distances=False, n_c=3, tau_1=60.0, beta=1.0),
+    "gammas": mlplc2.Params(gamma_on=0.7, gamma_off=1.3, leaky_slope=0.01, lm_gain=10.0, epsilon=0.2),
+    "square_gammas_literal_kernels": mlplc2.Params(gamma_on=2.0, gamma_off=1.0, normalise_kernels=False,
+                                                   r_i=4, r_e=2, r_c=7, w_i=0.5),
+}
+
+
+@pytest.mark.parametrize("fps", [30.0, 120.0, 7.5])
+@pytest.mark.parametrize("variant", list(PARAMS))
+def test_lm_maps_match_reference_other_params(variant, fps):
+    frames = list(four_phase()[20:28, 30:150, 60:260]) + list(noise((120, 200), n=3))
+    run_both(frames, PARAMS[variant], fps)
+
+
+def test_state_before_the_power_is_bit_identical():
+    """Everything up to T4/T5 uses the reference's own float32 operations (same OpenCV
+    Gaussians, same numpy tanh, same order, no fused multiply-add): N and M-hat are
+    bit-identical; only x ** gamma differs (within 1e-6)."""
+    ref, fast = run_both(four_phase()[:8])
+    pad = fast._pad
+    n_prev = fast._n_prev[:, pad:-pad, pad:-pad]
+    assert np.array_equal(n_prev[0], ref.state.n_prev["on"])
+    assert np.array_equal(n_prev[1], ref.state.n_prev["off"])
+    assert not fast._n_prev[:, :pad].any() and not fast._n_prev[:, :, -pad:].any()  # zero border
+    for c, channel in enumerate(("on", "off")):
+        for k, direction in enumerate("rldu"):
+            assert np.array_equal(fast._m[c, k], ref.state.m_prev[channel][direction])
+
+
+def test_bands_give_identical_results(monkeypatch):
+    """Splitting the rows into bands (threads) changes nothing, bit for bit."""
+    frames = four_phase()[30:38]
+    one = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    monkeypatch.setattr(one, "_nbands", lambda h, w: 1)
+    many = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    monkeypatch.setattr(many, "_nbands", lambda h, w: 5)
+    for i, f in enumerate(frames):
+        a, b = one.step(f.astype(np.float32)), many.step(f.astype(np.float32))
+        if i == 3:  # the band count may change between frames
+            monkeypatch.setattr(many, "_nbands", lambda h, w: 2)
+        for name in MAPS:
+            assert np.array_equal(getattr(a, name), getattr(b, name))
+
+
+def test_thread_count_sets_bands():
+    fe = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    before = numba.get_num_threads()
+    try:
+        numba.set_num_threads(1)
+        assert fe._nbands(720, 1280) == 1
+        numba.set_num_threads(before)
+        assert fe._nbands(720, 1280) == before
+        assert fe._nbands(20, 20) == 1  # small frames: no threads
+    finally:
+        numba.set_num_threads(before)
+
+
+def test_reset_and_new_size_match_a_fresh_front_end():
+    fast = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    for f in noise((40, 50), n=4):
+        fast.step(f.astype(np.float32))
+    fast.reset()
+    run_both(noise((33, 61), n=4, seed=3), fast=fast)
+
+
+def test_maps_are_new_arrays_each_frame():
+    fast = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    frames = noise((30, 40), n=3)
+    first = fast.step(frames[0].astype(np.float32))
+    kept = first.magnitude.copy()
+    fast.step(frames[1].astype(np.float32))
+    fast.step(frames[2].astype(np.float32))
+    assert np.array_equal(first.magnitude, kept)
+
+
+# --- attention helpers -----------------------------------------------------------------------
+@pytest.mark.parametrize("shape", ["square", "disc"])
+def test_quadrant_sums_match_attention(shape):
+    rng = np.random.default_rng(1)
+    for _ in range(60):
+        h, w = (int(v) for v in rng.integers(3, 90, 2))
+        lm = LocalMotion(*[rng.random((h, w), dtype=np.float32) * 10 - 2 for _ in range(5)])
+        fields = [(int(rng.integers(0, w)), int(rng.integers(0, h)), int(rng.integers(0, 40)))
+                  for _ in range(3)] + [(w // 2, h // 2, max(h, w))]
+        for x, y, r in fields:
+            np.testing.assert_allclose(_fast.quadrant_sums(lm, x, y, r, shape),
+                                       attention.quadrant_sums(lm, x, y, r, shape), rtol=1e-12, atol=1e-9)
+        np.testing.assert_allclose(_fast.quadrant_sums_all(lm, fields, shape),
+                                   [attention.quadrant_sums(lm, *f, shape) for f in fields], rtol=1e-12, atol=1e-9)
+
+
+# --- models with either backend ---------------------------------------------------------------
+def field_key(out):
+    return [(f.id, f.x, f.y, f.born) for f in out.fields]
+
+
+def compare_models(frames, name="mlplc2"):
+    cls = mlplc2.models.base.get_model(name)
+    fast, ref = cls(fps=30.0, backend="numba"), cls(fps=30.0, backend="reference")
+    assert fast.backend == "numba" and ref.backend == "reference"
+    created = 0
+    for i, frame in enumerate(frames):
+        a, b = fast.step(frame), ref.step(frame)
+        assert field_key(a) == field_key(b), f"frame {i}"
+        for fa, fb in zip(a.fields, b.fields):
+            assert fa.response == pytest.approx(fb.response, rel=1e-4, abs=1e-3)
+            assert fa.collision == fb.collision
+        assert a.collision == b.collision
+        created = max([created] + [f.id for f in a.fields])
+    return created
+
+
+def test_fields_identical_on_a_generated_scene():
+    assert compare_models(stimuli.six_objects(seed=0).frames) >= 6
+
+
+@pytest.mark.parametrize("name", ["slplc2", "lplc2"])
+def test_other_family_models_identical(name):
+    compare_models(four_phase()[:40], name)
+
+
+@pytest.mark.paper
+@pytest.mark.slow
+@pytest.mark.parametrize("video", ["outdoor_2_black_4_period.avi", "outdoor_3_black_expand_multi_6.avi"])
+def test_fields_identical_on_paper_scenes(paper_dir, video):
+    assert compare_models(read_gray(paper_dir / "scenes" / video)) >= 5
+
+
+def test_default_backend_is_fast_and_model_pickles():
+    model = mlplc2.MLPLC2(fps=30.0)
+    assert model.backend == "numba"
+    frames = stimuli.six_objects().frames[:30]
+    for f in frames[:20]:
+        model.step(f)
+    twin = pickle.loads(pickle.dumps(model))
+    clone = copy.deepcopy(model)
+    for f in frames[20:]:
+        a, b, c = model.step(f), twin.step(f), clone.step(f)
+        assert a == b == c
+
+
+# --- backend selection -----------------------------------------------------------------------
+def test_make_frontend_backends():
+    p = mlplc2.Params()
+    assert isinstance(make_frontend(p, 30.0, "reference"), FrontEnd)
+    assert isinstance(make_frontend(p, 30.0, "numba"), _fast.FastFrontEnd)
+    assert isinstance(make_frontend(p, 30.0), _fast.FastFrontEnd)
+    with pytest.raises(ValueError, match="backend"):
+        make_frontend(p, 30.0, "cuda")
+    with pytest.raises(ValueError, match="backend"):
+        mlplc2.MLPLC2(backend="fast")
+
+
+def test_without_numba_auto_falls_back_with_a_warning(monkeypatch, caplog):
+    monkeypatch.setattr(frontend, "fast_available", lambda: False)
+    monkeypatch.setattr(frontend, "_WARNED", False)
+    with caplog.at_level(logging.WARNING, logger="mlplc2"):
+        model = mlplc2.MLPLC2(fps=30.0)
+    assert model.backend == "reference"
+    assert "Numba is unavailable" in caplog.text
+    with pytest.raises(ImportError):
+        make_frontend(mlplc2.Params(), 30.0, "numba")
+
+
+def test_jit_without_a_writable_cache(monkeypatch):
+    """Where Numba cannot cache (no writable location) the kernels still compile."""
+    real = numba.njit
+
+    def njit(*args, cache=False, **kwargs):
+        if cache:
+            raise RuntimeError("cannot cache function: no locator available")
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(numba, "njit", njit)
+
+    @_fast._jit()
+    def add_one(x):
+        return x + 1
+
+    assert add_one(1) == 2
+
+
+# --- the benchmark (logic only; no timing is checked) ------------------------------------------
+def test_bench_runs_and_formats():
+    from mlplc2 import bench
+
+    rows = bench.run_bench([(48, 40)], ["mlplc2"], frames=3, ref_frames=2, warmup=2)
+    (row,) = rows
+    assert row.ms > 0 and row.ref_ms > 0 and row.probe_ms > 0 and row.peak_mb > 0
+    assert row.planes == sum(n for _, n, _ in _fast.PLANES)
+    table = bench.format_table(rows)
+    assert "| mlplc2 | 48x40 |" in table
+    assert bench.parse_sizes("320x240, 64x48") == [(320, 240), (64, 48)]
+    with pytest.raises(ValueError):
+        bench.parse_sizes("320by240")
+
+
+def test_bench_cli(capsys):
+    from mlplc2.cli import main
+
+    assert main(["bench", "--sizes", "40x32", "--frames", "2", "--ref-frames", "1", "--quiet"]) == 0
+    assert "| mlplc2 | 40x32 |" in capsys.readouterr().out
+    assert main(["bench", "--models", "lgmd2", "--sizes", "40x32"]) == 2

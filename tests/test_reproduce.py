@@ -1,0 +1,116 @@
+"""`mlplc2 reproduce --quick`: every claim of Sec. IV passes, except the documented
+known deviations (flagged in report.json only while they still fail)."""
+
+from __future__ import annotations
+
+import json
+
+import pytest
+
+from mlplc2 import cli, reproduce
+
+# The documented deviations (docs/model.md "Open problems" and docs/reproduce.md
+# "Deviations found"). Adding one to mlplc2.reproduce.KNOWN_DEVIATIONS must be a
+# deliberate edit of this list too, so no new failure slips through unnoticed.
+DOCUMENTED = {
+    # docs/model.md "Open problems"
+    "IV-A.silent.lplc2.bright_recede",
+    "IV-A.silent.slplc2.bright_recede",
+    "IV-A.bright_answered.slplc2",
+    "IV-A.bright_answered.mlplc2",
+    # docs/reproduce.md "Deviations found"
+    "IV-B4.lgmd2.recede",
+    "IV-B5.persistence",
+    "IV-C.alarm.bird_attack_2",  # paper data only (docs/model.md "Open problems")
+    "IV-C.multi.bird_attack_2",
+}
+
+# Lines the report must contain (the claims named in issue 5).
+REQUIRED = (
+    [f"IV-A.silent.{m}.{s}" for m in ("lplc2", "slplc2", "mlplc2")
+     for s in ("dark_recede", "bright_recede", "translating", "grating")]
+    + [f"IV-A.dark_over_bright.{m}" for m in ("lplc2", "slplc2", "mlplc2")]
+    + ["IV-A.lgmd2.bright_recede", "IV-A.lgmd2.translating"]
+    + [f"IV-B4.lgmd2.phase{k}" for k in range(1, 5)]
+    + [f"IV-B4.latency.obj{i}" for i in range(1, 6)] + [f"IV-B4.error.obj{i}" for i in range(1, 6)]
+    + ["IV-B4.slplc2.phase4", "IV-B4.lplc2.phase2", "IV-B4.lplc2.phase3", "IV-B4.lplc2.phase4",
+       "IV-B4.fields", "IV-B4.no_false_alarm"]
+    + [f"IV-B5.latency.obj{i}" for i in range(1, 7)] + [f"IV-B5.error.obj{i}" for i in range(1, 7)]
+    + ["IV-B5.persistence", "IV-B5.fields", "IV-B5.no_false_alarm"]
+)
+
+
+def check_report(doc: dict) -> None:
+    claims = doc["claims"]
+    ids = [c["id"] for c in claims]
+    assert len(ids) == len(set(ids)), "claim ids must be unique"
+    for c in claims:
+        assert c["status"] in ("PASS", "FAIL")
+        if c["status"] == "PASS":
+            assert not c["known_deviation"], f"{c['id']} passes but is flagged"
+        else:
+            assert c["known_deviation"], f"unexpected FAIL: {c['id']}: {c['claim']}: {c['measured']}"
+            assert "known deviation" in c["note"] and "docs/" in c["note"]
+    flagged = {c["id"] for c in claims if c["known_deviation"]}
+    assert flagged <= DOCUMENTED, f"flagged but not documented: {sorted(flagged - DOCUMENTED)}"
+    s = doc["summary"]
+    assert s["claims"] == len(claims)
+    assert s["pass"] + s["fail"] == len(claims)
+    assert s["known_deviation"] == len(flagged) and s["unexpected_fail"] == 0
+
+
+def test_known_deviations_are_the_documented_set():
+    assert set(reproduce.KNOWN_DEVIATIONS) == DOCUMENTED
+
+
+@pytest.fixture(scope="module")
+def quick_report(tmp_path_factory):
+    out = tmp_path_factory.mktemp("repro")
+    rc = cli.main(["reproduce", "--quick", "--out", str(out), "--quiet"])
+    assert rc == 0
+    return out, json.loads((out / "report.json").read_text())
+
+
+@pytest.mark.slow
+def test_quick_reproduction_passes(quick_report):
+    out, doc = quick_report
+    assert doc["quick"] is True
+    check_report(doc)
+    ids = {c["id"] for c in doc["claims"]}
+    missing = [i for i in REQUIRED if i not in ids]
+    assert not missing, f"report lacks {missing}"
+
+
+@pytest.mark.slow
+def test_quick_reproduction_outputs(quick_report):
+    out, doc = quick_report
+    for name in ("fig3_selectivity.png", "fig4_four_phases.png", "fig5_six_objects.png"):
+        data = (out / name).read_bytes()
+        assert data[:8] == b"\x89PNG\r\n\x1a\n" and len(data) > 10_000
+    assert not (out / "fig6_real_clips.png").exists()
+    md = (out / "report.md").read_text()
+    assert "Fig. 6" in md and "skipped" in md
+    # one table line per claim, with its status
+    rows = [line for line in md.splitlines() if line.startswith("| ") and not line.startswith("| status")]
+    assert len(rows) == len(doc["claims"])
+    for line, c in zip(rows, doc["claims"]):
+        assert c["status"] in line
+        if c["paper"]:
+            assert c["paper"].split(" (")[0] in line
+
+
+def test_bad_data_folder(tmp_path, capsys):
+    rc = cli.main(["reproduce", "--data", str(tmp_path), "--out", str(tmp_path / "o"), "--quiet"])
+    assert rc == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mlplc2: error:") and "ground_truth.json" in err
+    rc = cli.main(["reproduce", "--data", str(tmp_path / "missing"), "--quiet"])
+    assert rc == 2
+
+
+@pytest.mark.paper
+@pytest.mark.slow
+def test_quick_reproduction_on_paper_videos(paper_dir, tmp_path):
+    rc = cli.main(["reproduce", "--quick", "--data", str(paper_dir), "--out", str(tmp_path), "--quiet"])
+    assert rc == 0
+    check_report(json.loads((tmp_path / "report.json").read_text()))
