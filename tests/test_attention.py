@@ -58,6 +58,9 @@ def test_argmax_outside_excludes_zones():
     assert argmax_outside(lm, [])[:2] == (10, 10)
     assert argmax_outside(lm, [(12, 12, 5)])[:2] == (50, 40)
     assert argmax_outside(np.ones((5, 5), np.float32), [(2, 2, 10)]) is None
+    for shape in ("square", "disc"):  # zones centred outside the frame exclude nothing there
+        assert argmax_outside(lm, [(-30, 10, 5), (200, 200, 8)], shape)[:2] == (10, 10)
+        assert argmax_outside(lm, [(-3, 10, 15)], shape)[:2] == (50, 40)
 
 
 def test_field_removal_keeps_last_field_and_respects_grace():

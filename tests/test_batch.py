@@ -39,7 +39,13 @@ def videos(tmp_path_factory):
 @pytest.fixture(scope="module")
 def client():
     pytest.importorskip("distributed")
+    import os
+
+    before = {k: os.environ.get(k) for k in ("NUMBA_NUM_THREADS", "MALLOC_TRIM_THRESHOLD_")}
     cluster, client = start_local_cluster(2)
+    # The workers' environment must not leak into this process (a later Numba compile here
+    # would fail on a changed NUMBA_NUM_THREADS).
+    assert {k: os.environ.get(k) for k in before} == before
     try:
         yield client
     finally:

@@ -26,11 +26,6 @@ from .conftest import read_gray
 MAPS = ("r", "l", "d", "u", "magnitude")
 
 
-@pytest.fixture(autouse=True)
-def _numba_env(monkeypatch):
-    """Numba refuses to compile while NUMBA_NUM_THREADS in os.environ differs from its running
-    thread pool; an earlier test that starts a Dask local cluster can leave it changed."""
-    monkeypatch.setenv("NUMBA_NUM_THREADS", str(numba.config.NUMBA_NUM_THREADS))
 RTOL = 1e-4
 ATOL = 1e-6
 

@@ -63,6 +63,58 @@ def test_fit_contact_is_exact_for_constant_speed():
     assert fit_contact([3, 3], [10, 12]) is None
 
 
+def test_robust_fit_keeps_the_newest_size():
+    """A fit that drops the current size is no new fit and confirms nothing (the cause of a
+    junk estimate persisting for 10 frames on a scrolling background, docs/targets.md)."""
+    from collections import deque
+
+    tr = TargetTracker()
+    # junk first sizes of a field (true sizes ~66-72 px, contact at frame 75)
+    tr.history = deque([(25, 83.2, 228, 121), (26, 90.5, 252, 121), (28, 85.2, 242, 120), (29, 110.1, 239, 143)])
+    assert tr._refit(29) and not tr.confirmed
+    junk = tr.contact
+    for frame, size in [(30, 77.0), (31, 77.8)]:
+        tr.history.append((frame, size, 240, 120))
+        if tr._refit(frame):
+            assert tr.history[-1][0] == frame       # the accepted fit kept the newest size
+        assert not (tr.confirmed and abs(tr.contact - junk) < 1.5)
+
+
+def test_robust_fit_matches_brute_force():
+    """The fast paths of the subset search give the all-subsets answer (random histories)."""
+    import itertools
+    from collections import deque
+
+    rng = np.random.default_rng(0)
+    p = TargetParams()
+    tr = TargetTracker(p)
+    for _ in range(300):
+        n = int(rng.integers(2, 7))
+        frames = np.sort(rng.choice(np.arange(30, 42), n, replace=False))
+        sizes = 400.0 / (rng.uniform(45, 90) - frames) * (1 + rng.normal(0, rng.choice([0.01, 0.05, 0.2]), n))
+        sizes = np.abs(sizes) + 0.1
+        tr.history = deque((int(f), float(v), 0.0, 0.0) for f, v in zip(frames, sizes))
+        got = tr._robust_fit(int(frames[-1]))
+        need = max(p.min_points, math.ceil(p.min_inliers * n))
+        best = None
+        for k in range(n, need - 1, -1):              # largest subset with the newest size, then smallest rms
+            for keep in itertools.combinations(range(n - 1), k - 1):
+                idx = list(keep) + [n - 1]
+                t, y = frames[idx] - frames[-1], 1.0 / sizes[idx]
+                if -t[0] < p.min_span:
+                    continue
+                b, a = np.polyfit(t, y, 1)
+                rms = math.sqrt(np.mean(((y - a - b * t) / y) ** 2))
+                if b < 0 < a and rms <= p.max_residual and -b / a / a / 2 <= p.max_edge_speed:
+                    if best is None or rms < best[0]:
+                        best = (rms, frames[-1] - a / b, tuple(idx))
+            if best is not None:
+                break
+        assert (got is None) == (best is None)
+        if got is not None:
+            assert got[2] == best[2] and got[0] == pytest.approx(best[1], rel=1e-6)
+
+
 def test_edge_distance_outer_boundary_and_nearest_edge():
     p = np.zeros(120)
     p[20:26] = [1, 4, 8, 8, 4, 1]           # this object's edge
@@ -199,7 +251,7 @@ def test_no_estimate_without_expansion():
 # ---------------------------------------------------------------------------
 # ranking: two objects approaching at once
 # ---------------------------------------------------------------------------
-def _two_objects(swap: bool, scroll: float):
+def _two_objects(swap: bool, scroll: float, seed: int = 0):
     # The later-contact object is *larger* on the image, so ranking by size or response would fail.
     spec = [((80, 120), 0.5, 60.0), ((240, 120), 1.0, 75.0)]
     if swap:
@@ -207,12 +259,15 @@ def _two_objects(swap: bool, scroll: float):
     objs = [stimuli.SceneObject(center=c, approach=48, hold=0, recede=0, looming="physical", half_size=h,
                                 speed=5.0, contact_frame=tc) for c, h, tc in spec]
     return stimuli.scene(objs, size=(320, 240), frames=48, background="procedural", scroll=scroll,
-                         hfov_deg=HFOV)
+                         hfov_deg=HFOV, seed=seed)
 
 
+# Several background seeds: on a scrolling background the early sizes of the later object are
+# junk on some seeds and not others (a fit to junk once ranked it first, see docs/targets.md).
+@pytest.mark.parametrize("seed", [0, 1, 2])
 @pytest.mark.parametrize("swap,scroll", [(False, 0.0), (True, 0.0), (False, 1.0)])
-def test_ranking_puts_earlier_contact_first(swap, scroll):
-    stim = _two_objects(swap, scroll)
+def test_ranking_puts_earlier_contact_first(swap, scroll, seed):
+    stim = _two_objects(swap, scroll, seed)
     f = stimuli.focal_length_px(320, HFOV)
     earlier = min(stim.objects, key=lambda o: o.contact_frame).id
 

@@ -43,7 +43,7 @@ import cv2
 import numba
 import numpy as np
 
-from .lamina import gaussian_kernel_1d
+from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
 from .params import Params
 
@@ -510,15 +510,8 @@ class FastFrontEnd:
     backend = "numba"
 
     def __init__(self, params: Params, fps: float):
-        self.params = params
-        self.fps = float(fps)
-        tau_i = 1000.0 / self.fps
-        self.alphas = tuple(tau_i / (tau_i + tau) for tau in params.delays_ms())
-        self.alpha_out = tau_i / (tau_i + params.tau_nc)
+        set_coefficients(self, params, fps)
         p = params
-        self.k_e = gaussian_kernel_1d(p.r_e, p.sigma_e, normalise=p.normalise_kernels)
-        self.k_i = gaussian_kernel_1d(p.r_i, p.sigma_i, normalise=p.normalise_kernels)
-        self.k_c = gaussian_kernel_1d(p.r_c, p.sigma_c, normalise=p.normalise_kernels)
         # float32 coefficients exactly as the reference forms them
         a = np.array([np.float32(x) for x in self.alphas], np.float32)
         self._a = a

@@ -162,6 +162,8 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
     for fx, fy, r in zones:
         rows = slice(max(fy - r, 0), min(fy + r + 1, h))
         cols = slice(max(fx - r, 0), min(fx + r + 1, w))
+        if rows.start >= rows.stop or cols.start >= cols.stop:
+            continue  # the zone lies outside the frame
         if shape == "disc":
             m = field_mask(r)[rows.start - fy + r:rows.stop - fy + r,
                               cols.start - fx + r:cols.stop - fx + r]

@@ -425,8 +425,18 @@ def start_local_cluster(workers: int, **kwargs):
     environ = {"MALLOC_TRIM_THRESHOLD_": None}
     if "NUMBA_NUM_THREADS" not in os.environ:
         environ["NUMBA_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // max(1, workers)))
-    with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}):
-        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
+    # The nanny applies its pre-spawn environment in *this* process too; put ours back after,
+    # or a later Numba compile here fails ("Cannot set NUMBA_NUM_THREADS ...").
+    saved = {k: os.environ.get(k) for k in environ}
+    try:
+        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}):
+            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
+    finally:
+        for k, v in saved.items():
+            if v is None:
+                os.environ.pop(k, None)
+            else:
+                os.environ[k] = v
     try:
         client = Client(cluster)
     except BaseException:

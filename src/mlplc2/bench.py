@@ -257,13 +257,9 @@ def format_table(rows) -> str:
 # command line (mlplc2 bench, python -m mlplc2.bench)
 # ---------------------------------------------------------------------------
 def _positive_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}") from None
-    if value < 1:
-        raise argparse.ArgumentTypeError(f"expected a positive integer, got {text!r}")
-    return value
+    from .cli import number_type
+
+    return number_type(int, lambda v: v >= 1, "a positive integer")(text)
 
 
 def add_arguments(p: argparse.ArgumentParser) -> None:

@@ -94,34 +94,25 @@ def _model_names(values) -> list[str]:
     return names
 
 
-def _nonneg_int(text: str) -> int:
-    try:
-        value = int(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}") from None
-    if value < 0:
-        raise argparse.ArgumentTypeError(f"expected an integer >= 0, got {text!r}")
-    return value
+def number_type(cast, ok, expected: str):
+    """An argparse ``type``: ``cast(text)``, accepted when ``ok(value)``; else
+    "expected <expected>, got '<text>'" (argparse turns it into a one-line usage error)."""
+
+    def parse(text: str):
+        try:
+            value = cast(text)
+        except ValueError:
+            value = None
+        if value is None or not ok(value):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
 
 
-def _pos_float(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}") from None
-    if not math.isfinite(value) or value <= 0:
-        raise argparse.ArgumentTypeError(f"expected a positive number, got {text!r}")
-    return value
-
-
-def _hfov(text: str) -> float:
-    try:
-        value = float(text)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180), got {text!r}") from None
-    if not math.isfinite(value) or not 0 < value < 180:
-        raise argparse.ArgumentTypeError(f"expected degrees in (0, 180), got {text!r}")
-    return value
+_nonneg_int = number_type(int, lambda v: v >= 0, "an integer >= 0")
+_pos_float = number_type(float, lambda v: math.isfinite(v) and v > 0, "a positive number")
+_hfov = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees in (0, 180)")
 
 
 def _add_run(p: argparse.ArgumentParser) -> None:

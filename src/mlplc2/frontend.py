@@ -84,6 +84,21 @@ class FrontEndState:
     """M-hat(t-1) per channel and direction, for Eq. 10."""
 
 
+def set_coefficients(front_end, params: Params, fps: float) -> None:
+    """Give a front end its ``params``, ``fps`` and the filter coefficients both
+    implementations share: the delay coefficients ``alphas`` (Eq. 8, one per sampling
+    distance) and ``alpha_out`` (Eq. 10), alpha = tau_i / (tau_i + tau) with
+    tau_i = 1000 / fps ms, and the 1-D Gaussian factors ``k_e``, ``k_i``, ``k_c`` (Eq. 3)."""
+    front_end.params = params
+    front_end.fps = float(fps)
+    tau_i = 1000.0 / front_end.fps
+    front_end.alphas = tuple(tau_i / (tau_i + tau) for tau in params.delays_ms())
+    front_end.alpha_out = tau_i / (tau_i + params.tau_nc)
+    front_end.k_e = gaussian_kernel_1d(params.r_e, params.sigma_e, normalise=params.normalise_kernels)
+    front_end.k_i = gaussian_kernel_1d(params.r_i, params.sigma_i, normalise=params.normalise_kernels)
+    front_end.k_c = gaussian_kernel_1d(params.r_c, params.sigma_c, normalise=params.normalise_kernels)
+
+
 class FrontEnd:
     """Reference implementation of Eq. 1-12 in plain NumPy/OpenCV (``backend="reference"``).
 
@@ -99,15 +114,7 @@ class FrontEnd:
     backend = "reference"
 
     def __init__(self, params: Params, fps: float):
-        self.params = params
-        self.fps = float(fps)
-        tau_i = 1000.0 / self.fps
-        self.alphas = tuple(tau_i / (tau_i + tau) for tau in params.delays_ms())
-        self.alpha_out = tau_i / (tau_i + params.tau_nc)
-        p = params
-        self.k_e = gaussian_kernel_1d(p.r_e, p.sigma_e, normalise=p.normalise_kernels)
-        self.k_i = gaussian_kernel_1d(p.r_i, p.sigma_i, normalise=p.normalise_kernels)
-        self.k_c = gaussian_kernel_1d(p.r_c, p.sigma_c, normalise=p.normalise_kernels)
+        set_coefficients(self, params, fps)
         self.state = FrontEndState()
 
     def reset(self) -> None:

@@ -34,7 +34,7 @@ class Params:
     >>> Params(beta=-1)
     Traceback (most recent call last):
     ...
-    ValueError: Params.beta must be >= 0, got -1
+    mlplc2._validation.InputValueError: Params.beta must be >= 0, got -1
     """
 
     # --- Lamina, Eq. 2-4 ---------------------------------------------------

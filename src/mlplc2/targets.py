@@ -35,12 +35,15 @@ Method (see ``docs/targets.md`` for the measurements behind every choice)
    at least ``min_span`` frames, a negative slope (growth), a small residual and
    an implied edge speed the front end can follow; it is robust (the largest
    subset of >= ``min_inliers`` of the sizes that passes wins, outliers are
-   forgotten) and reported only once two successive fits agree on ``t_c``
-   (``confirm_frames`` / ``confirm_rel``). After a field has measured once, its
-   strips start from the estimated expansion centre; a new field inside an
-   object already tracked continues that track.
+   forgotten; every subset keeps the newest size, so a fit never outlives the
+   data that contradict it) and reported only once two successive fits agree on
+   ``t_c`` (``confirm_frames`` / ``confirm_rel``). After a field has measured
+   once, its strips start from the estimated expansion centre; a new field
+   inside an object already tracked continues that track, and the fields of one
+   object share the frame's measurement and fit (``cache`` of
+   :meth:`TargetTracker.update`).
 3. *Saturation / coasting.* When the edges move faster than ``max_edge_speed``
-   px/frame the correlators alias and the lobes fall far behind the edge; when an
+   px/frame (as predicted by a confirmed fit) the correlators alias and the lobes fall far behind the edge; when an
    edge leaves the frame it cannot be located. Such frames add no measurement
    and the estimate *coasts* on the last fit (``t_c`` unchanged, so ``ttc_s``
    keeps counting down) for at most ``coast_frames`` frames, then becomes None.
@@ -60,9 +63,10 @@ in pixels.
 
 from __future__ import annotations
 
+import bisect
+import functools
 import itertools
 import math
-import statistics
 from collections import deque
 from dataclasses import dataclass, field
 
@@ -212,6 +216,72 @@ def bearing(x: float, y: float, shape: tuple[int, int], focal: float | None) -> 
     return math.degrees(math.atan2(dx, focal)), math.degrees(math.atan2(dy, focal))
 
 
+def _edge_distances(prof: np.ndarray, lens, scale, params: TargetParams) -> list:
+    """:func:`edge_distance` of several profiles at once (rows of ``prof``).
+
+    ``prof``: (m, L) float64, row ``i`` valid in ``[:lens[i]]`` and -inf beyond (padding),
+    ``L > max(lens)``; row ``i`` holds ``scale[i]`` x the profile (strip *sums*: every test
+    below is a ratio, except the floor ``min_peak``, which is scaled).
+
+    Only the samples above half the noise floor matter (a complex's peak, the largest
+    value near its start and its outer boundary are all among them once the peak passes
+    the floor), so after one sort (the floors) and one threshold the scan is a short
+    Python loop over those samples, stopping at each row's first edge.
+    """
+    m, width = prof.shape
+    srt = np.sort(prof, axis=1)                         # the padding sorts first
+    floors = []
+    for i in range(m):
+        n = lens[i]
+        q = float(srt[i, width - n + int(0.75 * (n - 1))]) if n > 0 else 0.0   # 75th percentile
+        floors.append(max(params.min_peak * scale[i], params.noise_k * max(q, 0.0)))
+    thr = np.array(floors)
+    r, c = np.nonzero(prof >= 0.5 * thr[:, None])      # the padding never counts
+    out = [None] * m
+    if r.size == 0:
+        return out
+    vals = prof[r, c].tolist()
+    r = r.tolist()
+    c = c.tolist()
+    ns = len(r)
+    gap, local, rel_start, rel_edge = params.gap, params.local, params.rel_start, params.rel_edge
+    i = 0
+    while i < ns:
+        row = r[i]
+        floor = floors[row]
+        row_end = bisect.bisect_right(r, row, i)
+        # complexes of this row, outwards, until the first that passes
+        while i < row_end:
+            j = i
+            peak = vals[i]
+            while j + 1 < row_end and c[j + 1] - c[j] <= gap:
+                j += 1
+                if vals[j] > peak:
+                    peak = vals[j]
+            if peak >= floor:
+                near = peak
+                k = j + 1
+                lim = c[i] + local
+                while k < row_end and c[k] < lim:
+                    if vals[k] > near:
+                        near = vals[k]
+                    k += 1
+                if peak >= rel_start * near:
+                    level = rel_edge * peak
+                    k = j
+                    while vals[k] < level:
+                        k -= 1
+                    ck = c[k]
+                    if ck + 1 < lens[row]:
+                        a, b = vals[k], max(float(prof[row, ck + 1]), 0.0)
+                        frac = (a - level) / max(a - b, 1e-12 * scale[row])
+                        out[row] = float(ck + 1 + min(max(frac, 0.0), 1.0))
+                    break
+            i = j + 1
+        i = row_end
+    return out
+
+
 def edge_distance(profile: np.ndarray, params: TargetParams = TargetParams()) -> float | None:
     """Distance (px from the centre) of the outer boundary of the nearest outward edge complex.
 
@@ -225,47 +295,53 @@ def edge_distance(profile: np.ndarray, params: TargetParams = TargetParams()) ->
     or the complex reaches the end of the profile (the edge is at or beyond the
     frame border). ``edge_offset`` is *not* added.
     """
-    p = np.maximum(np.asarray(profile, dtype=np.float64), 0.0)
-    if p.size < 2:
+    p = np.asarray(profile, dtype=np.float64).ravel()
+    n = p.size
+    if n < 2:
         return None
-    q75 = int(0.75 * (p.size - 1))
-    floor = max(params.min_peak, params.noise_k * float(np.partition(p, q75)[q75]))
-    sig = np.flatnonzero(p >= 0.5 * floor)
-    if sig.size == 0:
-        return None
-    breaks = np.flatnonzero(np.diff(sig) > params.gap)
-    starts = np.r_[sig[0], sig[breaks + 1]]
-    ends = np.r_[sig[breaks], sig[-1]]
-    for i0, i1 in zip(starts.tolist(), ends.tolist()):
-        seg = p[i0:i1 + 1]
-        peak = float(seg.max())
-        if peak < floor or peak < params.rel_start * float(p[i0:i0 + params.local].max()):
-            continue
-        level = params.rel_edge * peak
-        k = i0 + int(np.flatnonzero(seg >= level)[-1])
-        if k + 1 >= p.size:
-            return None
-        frac = (p[k] - level) / max(p[k] - p[k + 1], 1e-12)
-        return float(k + 1 + min(max(frac, 0.0), 1.0))
-    return None
+    prof = np.full((1, n + 1), -np.inf)
+    prof[0, :n] = p
+    return _edge_distances(prof, [n], [1.0], params)[0]
+
+
+def _strip_profiles(lm: LocalMotion, x: int, y: int, band: int):
+    """The four outward profiles around (x, y) as rows of one padded array.
+
+    Rows: right (LM_r along the row), left (LM_l), up (LM_u along the column), down
+    (LM_d); each the *sum* over the ``2 band + 1`` px wide strip (float64), from distance 1
+    to the frame border, -inf beyond (padding). Returns (array (4, max(W, H) + 1),
+    lengths, number of pixels summed per row).
+    """
+    h, w = lm.magnitude.shape
+    r0, r1 = max(y - band, 0), min(y + band + 1, h)
+    c0, c1 = max(x - band, 0), min(x + band + 1, w)
+    lens = [w - 1 - x, x, y, h - 1 - y]
+    prof = np.full((4, max(w, h) + 1), -np.inf)
+    add = np.add.reduce
+    f64 = np.float64
+    if lens[0]:
+        add(lm.r[r0:r1, x + 1:], axis=0, dtype=f64, out=prof[0, :lens[0]])
+    if lens[1]:
+        add(lm.l[r0:r1, x - 1::-1], axis=0, dtype=f64, out=prof[1, :lens[1]])
+    if lens[2]:
+        add(lm.u[y - 1::-1, c0:c1], axis=1, dtype=f64, out=prof[2, :lens[2]])
+    if lens[3]:
+        add(lm.d[y + 1:, c0:c1], axis=1, dtype=f64, out=prof[3, :lens[3]])
+    nr, nc = float(r1 - r0), float(c1 - c0)
+    return prof, lens, [nr, nr, nc, nc]
 
 
 def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = TargetParams()) -> Extent:
     """Width, height and centre of the outward-expanding edges around (x, y).
 
-    Cost: four strips of ``2 band + 1`` px from the centre to the frame border.
+    Cost: four strips of ``2 band + 1`` px from the centre to the frame border, summed,
+    sorted and thresholded together; then a short scan (:func:`_edge_distances`).
     """
     h, w = lm.magnitude.shape
     x = int(min(max(x, 0), w - 1))
     y = int(min(max(y, 0), h - 1))
-    b = params.band
-    r0, r1 = max(y - b, 0), min(y + b + 1, h)
-    c0, c1 = max(x - b, 0), min(x + b + 1, w)
-    right = lm.r[r0:r1, x + 1:].mean(axis=0, dtype=np.float64) if x + 1 < w else np.zeros(0)
-    left = lm.l[r0:r1, :x][:, ::-1].mean(axis=0, dtype=np.float64) if x > 0 else np.zeros(0)
-    down = lm.d[y + 1:, c0:c1].mean(axis=1, dtype=np.float64) if y + 1 < h else np.zeros(0)
-    up = lm.u[:y, c0:c1][::-1].mean(axis=1, dtype=np.float64) if y > 0 else np.zeros(0)
-    dr, dl, du, dd = (edge_distance(p, params) for p in (right, left, up, down))
+    prof, lens, scale = _strip_profiles(lm, x, y, params.band)
+    dr, dl, du, dd = _edge_distances(prof, lens, scale, params)
     off = params.edge_offset
     width = height = None
     cx, cy = float(x), float(y)
@@ -308,6 +384,34 @@ def fit_contact(frames, sizes) -> tuple[float, float, float] | None:
     return -a / b, b, float(np.sqrt(np.mean(rel ** 2)))
 
 
+@functools.lru_cache(maxsize=64)
+def _subsets(n: int, need: int):
+    """The subsets of ``n`` sizes a robust fit tries: each keeps the newest one (index ``n - 1``).
+
+    Returns (mask (m, n) of 0/1 floats, subset sizes (m,), index of each subset's first size
+    (m,)), largest subsets first, each size in lexicographic order.
+    """
+    rows = []
+    for k in range(n, need - 1, -1):
+        for keep in itertools.combinations(range(n - 1), k - 1):
+            row = [0.0] * n
+            for i in keep:
+                row[i] = 1.0
+            row[n - 1] = 1.0
+            rows.append(row)
+    mask = np.array(rows, dtype=np.float64).reshape(len(rows), n)
+    sizes, first = mask.sum(axis=1), mask.argmax(axis=1)
+    for arr in (mask, sizes, first):
+        arr.flags.writeable = False     # shared by every tracker (lru_cache)
+    return mask, sizes, first
+
+
+def _median(values) -> float:
+    v = sorted(values)
+    m = len(v) // 2
+    return float(v[m]) if len(v) % 2 else (v[m - 1] + v[m]) / 2.0
+
+
 @dataclass
 class TargetTracker:
     """Per-field state of the estimators: recent sizes and the last fit."""
@@ -320,6 +424,7 @@ class TargetTracker:
     center: tuple[float, float] | None = None
     misses: int = 0                  # consecutive measurements that contradict the fit
     confirmed: bool = False          # the fit agrees with the previous one (estimates reported)
+    last: tuple | None = None        # (frame, TargetEstimate) of the last update
 
     def reset(self) -> None:
         self.history.clear()
@@ -327,46 +432,85 @@ class TargetTracker:
         self.center = None
         self.misses = 0
         self.confirmed = False
+        self.last = None
 
-    def _refit(self, frame: int) -> bool:
-        """Fit the history robustly; True if a fit was accepted.
+    def _robust_fit(self, frame: int):
+        """The accepted robust fit of the history: (contact frame, slope, kept indices) or None.
 
-        Every subset that drops at most ``1 - min_inliers`` of the sizes is
-        tried (at most a few dozen tiny fits: the window is 6 sizes); the
-        accepted fit keeps the most sizes, then has the smallest residual. The
-        sizes it leaves out (outliers, e.g. a field born on the object's edge
-        first measures the wrong thing) are forgotten.
+        Every subset that keeps the newest size and drops at most ``1 - min_inliers`` of the
+        sizes is fitted at once (one small matrix product: at most 16 subsets of <= 6
+        sizes); the accepted fit keeps the most sizes, then has the smallest residual.
+        The newest size must be kept: a fit that disowns the current measurement is not a
+        new fit, and "confirming" an old fit on the same old sizes is no confirmation.
         """
         p = self.params
-        pts = list(self.history)
+        pts = self.history
         n = len(pts)
         need = max(p.min_points, math.ceil(p.min_inliers * n))
-        best = None
-        for k in range(n, need - 1, -1):
-            for keep in itertools.combinations(range(n), k):
-                sub = [pts[i] for i in keep]
-                if sub[-1][0] - sub[0][0] < p.min_span:
-                    continue
-                line = _line_fit([q[0] for q in sub], [q[1] for q in sub])
-                if line is None:
-                    continue
-                a, b, rel = line
-                if not b < 0:
-                    continue
-                y_last = a + b * sub[-1][0]           # 1/s at the last size
-                rms = float(np.sqrt(np.mean(rel ** 2)))
-                # Accept: growing, contact ahead, small residual, and edges no faster than the
-                # front end can follow (a fit claiming faster edges was fitted to something else).
-                if (-a / b > frame and rms <= p.max_residual and y_last > 0
-                        and -b / (y_last * y_last) / 2.0 <= p.max_edge_speed):
-                    if best is None or rms < best[0]:
-                        best = (rms, a, b, sub)
-            if best is not None:
-                break
-        if best is None:
+        if n < need or n < 2:
+            return None
+        t_new = pts[-1][0]
+        tl = [q[0] - t_new for q in pts]                     # <= 0, newest at 0
+        if min(q[1] for q in pts) <= 0:
+            return None
+        yl = [1.0 / q[1] for q in pts]
+        # The full set first, in plain floats: when it passes (steady tracking) it is the
+        # answer (the largest subset), and the subset search below is not needed.
+        if -tl[0] >= p.min_span:
+            st, sy = sum(tl), sum(yl)
+            stt = sum(v * v for v in tl)
+            sty = sum(u * v for u, v in zip(tl, yl))
+            den = n * stt - st * st
+            if den > 0:
+                b = (n * sty - st * sy) / den
+                a = (sy - b * st) / n
+                if b < 0 < a and -b / (a * a) / 2.0 <= p.max_edge_speed:
+                    ss = sum(((v - a - b * u) / v) ** 2 for u, v in zip(tl, yl))
+                    if math.sqrt(ss / n) <= p.max_residual:
+                        return t_new - a / b, b, tuple(range(n))
+        if need >= n:
+            return None
+        t = np.array(tl)
+        yv = np.array(yl)
+        mask, k, first = _subsets(n, need)
+        st, sy = mask @ t, mask @ yv
+        stt, sty = mask @ (t * t), mask @ (t * yv)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            den = k * stt - st * st
+            b = (k * sty - st * sy) / den
+            a = (sy - b * st) / k                    # 1/s at the newest frame
+            rel = (yv - a[:, None] - b[:, None] * t) / yv
+            rel2 = mask * (rel * rel)
+            rms = np.sqrt(rel2.sum(axis=1) / k)
+            speed = -b / (a * a) / 2.0               # px/frame per edge at the newest frame
+            # Accept: growing, contact ahead, small residual, and edges no faster than the
+            # front end can follow (a fit claiming faster edges was fitted to something else).
+            ok = ((-t[first] >= p.min_span) & (den > 0) & (b < 0) & (a > 0)
+                  & (rms <= p.max_residual) & (speed <= p.max_edge_speed))
+        idx = np.flatnonzero(ok)
+        if idx.size == 0:
+            return None
+        best = idx[k[idx] == k[idx[0]]]
+        j = int(best[np.argmin(rms[best])])
+        return t_new - float(a[j]) / float(b[j]), float(b[j]), tuple(np.flatnonzero(mask[j]).tolist())
+
+    def _refit(self, frame: int, cache: dict | None = None) -> bool:
+        """Fit the history robustly (:meth:`_robust_fit`); True if a fit was accepted.
+
+        The sizes the accepted fit leaves out (outliers, e.g. a field born on the
+        object's edge first measures the wrong thing) are forgotten.
+        """
+        p = self.params
+        if cache is not None:
+            key = ("fit", frame, tuple((q[0], q[1]) for q in self.history))
+            res = cache.get(key, _MISSING)
+            if res is _MISSING:
+                res = cache[key] = self._robust_fit(frame)
+        else:
+            res = self._robust_fit(frame)
+        if res is None:
             return False
-        _, a, b, sub = best
-        contact = -a / b
+        contact, b, keep = res
         # Confirmed when two successive fits agree on the contact frame.
         tol = max(p.confirm_frames, p.confirm_rel * (contact - frame))
         if self.contact is not None and abs(contact - self.contact) <= tol:
@@ -374,7 +518,9 @@ class TargetTracker:
         elif not (self.confirmed and self.contact is not None and abs(contact - self.contact) <= 2 * tol):
             self.confirmed = False
         self.contact, self.slope, self.fit_frame = contact, b, frame
-        self.history = deque(sub)
+        if len(keep) < len(self.history):
+            pts = self.history
+            self.history = deque(pts[i] for i in keep)
         return True
 
     def _predicted_size(self, frame: float) -> float | None:
@@ -401,15 +547,25 @@ class TargetTracker:
         self.contact, self.slope, self.fit_frame = other.contact, other.slope, other.fit_frame
         self.center = other.center
         self.confirmed = other.confirmed
+        self.misses = other.misses
+        self.last = other.last
 
     def update(self, lm: LocalMotion, x: int, y: int, frame: int, fps: float,
-               focal: float | None = None) -> TargetEstimate:
+               focal: float | None = None, cache: dict | None = None) -> TargetEstimate:
         """Measure around field centre (x, y) in this frame's maps and return the estimates.
 
         Once an expansion centre is known the strips start from it instead of
         the field centre (the field centre is where the edge was when the field
         was born, often a corner of the object).
+
+        ``cache``: an optional dict shared by the trackers of *one* frame (same ``lm``,
+        ``frame`` and ``params``; start a new one every frame). Trackers measuring from the
+        same point or fitting the same sizes (fields on one object) then do that work once.
         """
+        if self.last is not None and self.last[0] == frame:
+            # Adopted from a tracker that has already measured this frame: same track, same
+            # estimate (measuring again would count this frame's size twice).
+            return self.last[1]
         p = self.params
         h, w = lm.magnitude.shape
         if self.center is not None and self.history:
@@ -418,7 +574,13 @@ class TargetTracker:
                 mx, my = x, y
         else:
             mx, my = x, y
-        ext = measure_extent(lm, mx, my, p)
+        if cache is not None:
+            key = ("extent", mx, my)
+            ext = cache.get(key)
+            if ext is None:
+                ext = cache[key] = measure_extent(lm, mx, my, p)
+        else:
+            ext = measure_extent(lm, mx, my, p)
         size = ext.size
         cx, cy = ext.cx, ext.cy
         if size is None and self.center is not None and self.history:
@@ -430,14 +592,22 @@ class TargetTracker:
                                   None if e[2] is None else c[1] - e[2], None if e[3] is None else e[3] - c[1])
                       if v is not None]
             if len(halves) >= 2 and min(halves) > 0:
-                size = 2.0 * float(np.mean(halves))
+                size = 2.0 * sum(halves) / len(halves)
                 cx, cy = c
         while self.history and frame - self.history[0][0] > p.max_age:
             self.history.popleft()
         status = "no_fit"
         if size is not None and self.contact is not None:
             s_pred = self._predicted_size(frame)
-            if s_pred is None or not math.isfinite(s_pred) or abs(size - s_pred) > p.max_deviation * s_pred:
+            if self.confirmed and s_pred is not None and math.isfinite(s_pred) \
+                    and -self.slope * s_pred * s_pred / 2.0 > p.max_edge_speed:
+                # Aliasing: edges faster than max_edge_speed px/frame leave lobes far behind
+                # the edge. Such sizes are neither fitted nor held against a confirmed fit;
+                # the estimate coasts. (An unconfirmed fit vetoes nothing: a fit to junk
+                # predicting fast edges would otherwise block every correction.)
+                size = None
+                status = "saturated"
+            elif s_pred is None or not math.isfinite(s_pred) or abs(size - s_pred) > p.max_deviation * s_pred:
                 # A size the fit does not predict; two in a row and the fit is dropped.
                 self.misses += 1
                 if self.misses >= 2:
@@ -446,24 +616,18 @@ class TargetTracker:
                     self.confirmed = False
             else:
                 self.misses = 0
-            if self.contact is not None and -self.slope * s_pred * s_pred / 2.0 > p.max_edge_speed:
-                # Aliasing: edges faster than max_edge_speed px/frame leave lobes far behind
-                # the edge. Such sizes are not fitted; the estimate coasts.
-                size = None
-                status = "saturated"
         if size is not None:
             self.history.append((frame, size, cx, cy))
             while len(self.history) > p.window:
                 self.history.popleft()
             # Fit, rejecting outliers (e.g. a field born on the object's edge first measures
             # the wrong thing).
-            if self._refit(frame):
+            if self._refit(frame, cache):
                 status = "tracking"
                 self.misses = 0
-            self.center = (float(statistics.median(h[2] for h in self.history)),
-                           float(statistics.median(h[3] for h in self.history)))
+            self.center = (_median([q[2] for q in self.history]), _median([q[3] for q in self.history]))
         est_center = self.center if self.center is not None and self.history else (float(x), float(y))
-        az, el = bearing(est_center[0], est_center[1], lm.magnitude.shape, focal)
+        az, el = bearing(est_center[0], est_center[1], (h, w), focal)
         ttc = rate = s_now = None
         if self.contact is not None and frame - self.fit_frame > p.coast_frames:
             self.contact = self.slope = self.fit_frame = None
@@ -487,8 +651,13 @@ class TargetTracker:
             else:
                 half = s_now / (2.0 * focal)
                 rate = math.degrees(ds / focal / (1.0 + half * half))
-        return TargetEstimate(ttc_s=ttc, expansion_rate=rate, azimuth_deg=az, elevation_deg=el,
-                              size_px=s_now if s_now is not None else size, center=est_center, status=status)
+        est = TargetEstimate(ttc_s=ttc, expansion_rate=rate, azimuth_deg=az, elevation_deg=el,
+                             size_px=s_now if s_now is not None else size, center=est_center, status=status)
+        self.last = (frame, est)
+        return est
+
+
+_MISSING = object()
 
 
 def rank_by_ttc(items, key=lambda f: f.ttc_s):

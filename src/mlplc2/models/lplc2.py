@@ -94,6 +94,7 @@ class _LPLC2Family(Model):
         self._orphans = [(i, t) for i, t in self._orphans if index - i <= self.target_params.coast_frames]
         self._orphans += [(index, t) for fid, t in self._trackers.items() if fid not in alive]
         known = [f.target for f in self._fields if f.target is not None] + [t for _, t in self._orphans[::-1]]
+        cache: dict = {}  # this frame's strips and fits, shared by the fields of one object
         for f in self._fields:
             if f.target is None:
                 f.target = TargetTracker(self.target_params)
@@ -101,7 +102,7 @@ class _LPLC2Family(Model):
                 parent = next((t for t in known if t.covers(f.x, f.y, index)), None)
                 if parent is not None:
                     f.target.adopt(parent)
-            f.estimate = f.target.update(lm, f.x, f.y, index, self.fps, focal)
+            f.estimate = f.target.update(lm, f.x, f.y, index, self.fps, focal, cache=cache)
         self._trackers = {f.id: f.target for f in self._fields}
         timed = sorted((f for f in self._fields if f.estimate.ttc_s is not None),
                        key=lambda f: (f.estimate.ttc_s, -f.response, f.id))
@@ -129,6 +130,12 @@ class MLPLC2(_LPLC2Family):
         Frame rate of the input (sets the frame interval tau_i of Eq. 8 and 10).
     params : Params, optional
         Model parameters; Table I defaults.
+    hfov_deg : float, optional, keyword-only
+        Horizontal field of view of the camera: field bearings (``azimuth_deg``,
+        ``elevation_deg``) in degrees and expansion rates in deg/s; without it, pixel
+        offsets from the image centre and px/s. Time to collision needs no field of view.
+    target_params : mlplc2.targets.TargetParams, optional, keyword-only
+        Settings of the time-to-collision estimator (``docs/targets.md``).
     backend : {"auto", "numba", "reference"}, keyword-only
         Front-end implementation (:func:`mlplc2.frontend.make_frontend`): the fast
         OpenCV + Numba one by default, the plain reference one on request or when Numba
