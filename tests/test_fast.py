@@ -125,6 +125,28 @@ def test_bands_give_identical_results(monkeypatch):
             assert np.array_equal(getattr(a, name), getattr(b, name))
 
 
+def test_a_failing_band_raises_without_hanging(monkeypatch):
+    """A phase that raises on any band (the calling thread's or a pool thread's) releases the
+    spin barriers of the others and the exception reaches the caller; the front end keeps working."""
+    fe = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    monkeypatch.setattr(fe, "_nbands", lambda h, w: 3)
+    frame = noise((90, 120), n=1)[0].astype(np.float32)
+    fe.step(frame)
+    phase2 = fe._phase2
+    for bad in (0, 2):
+        def failing(bd, bad=bad):
+            if bd is fe._bands[bad]:
+                raise RuntimeError(f"band {bad}")
+            return phase2(bd)
+
+        monkeypatch.setattr(fe, "_phase2", failing)
+        with pytest.raises(RuntimeError, match=f"band {bad}"):
+            fe.step(frame)
+    monkeypatch.setattr(fe, "_phase2", phase2)
+    fe.reset()
+    run_both(noise((90, 120), n=3, seed=4), fast=fe)
+
+
 def test_thread_count_sets_bands():
     fe = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
     before = numba.get_num_threads()

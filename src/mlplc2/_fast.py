@@ -15,8 +15,8 @@ T4/T5 outputs is bit-identical to it:
   operations of the reference in the reference's order (no fused multiply-add:
   ``fastmath=False``);
 * the only difference is ``x ** gamma`` for exponents other than 0.5, 1 and 2: a vectorised
-  float32 power (:func:`_power`, relative error below 1e-6, like NumPy's own float32
-  power), so the LM maps agree to ~1e-6 relative (``tests/test_fast.py``).
+  float32 power (:func:`_power`, compiled with fused multiply-adds, relative error ~1e-6 like
+  NumPy's own float32 power), so the LM maps agree to ~1e-6 relative (``tests/test_fast.py``).
 
 Work is split into horizontal bands, one per thread (``numba.get_num_threads()``, so
 ``numba.set_num_threads`` and ``mlplc2 bench --threads`` set it). Each band runs three
@@ -29,7 +29,10 @@ phases; a barrier separates them because each needs a few rows of its neighbours
 3. the fused kernel :func:`_motion_rows` (Eq. 8-12) for the band's rows.
 
 OpenCV and NumPy release the GIL and every kernel is ``nogil``, so the bands run in parallel
-in a small thread pool. All state is float32; the planes per stream are listed in
+in a small thread pool: band 0 on the calling thread, each other band on a pool thread that
+runs all three phases. The barriers spin without the GIL (:func:`_spin_wait`, ~1 us per poll):
+waking a sleeping thread costs ~35 us here, and three wake-ups per frame used to cost 10-15 %
+of a 320x240 frame. All state is float32; the planes per stream are listed in
 :data:`PLANES`.
 """
 
@@ -37,6 +40,7 @@ from __future__ import annotations
 
 import math
 import threading
+import time
 from concurrent.futures import ThreadPoolExecutor
 
 import cv2
@@ -193,13 +197,15 @@ def _output_dir(acc, m_flat, m_off, t, t_off, ao, bo, nc_div, average, w):
         t[t_off + x] = tv if tv > zero else zero
 
 
-@_jit()
+@_jit(fastmath={"contract"})
 def _power(t, base, n, g, mode, mb, kb, pb):
     """Eq. 11: t[base:base + n] = t ** g in place (t >= 0), vectorised.
 
     ``mode`` (:func:`_pow_mode`): 1 sqrt (g = 0.5), 2 identity (g = 1), 3 square (g = 2), which
     is what NumPy does for these exponents (bit-identical); 0 any other g: log2/exp2 polynomials
-    in float32, relative error < 1e-6 for normal results (NumPy's own float32 power: ~1e-6);
+    in float32 (fused multiply-adds allowed: ``fastmath={"contract"}``, which leaves the sqrt
+    and the square exact), relative error ~1e-6 for normal results (NumPy's own float32
+    power: ~2e-6; the rounding of g * log2(x) dominates for tiny x);
     subnormal inputs or results give 0. ``mb``, ``kb`` (int32), ``pb`` (float32): scratch.
     """
     if mode == 1:
@@ -229,13 +235,12 @@ def _power(t, base, n, g, mode, mb, kb, pb):
         z2 = z * z
         # log2(m) = 2 atanh(z) / ln 2 with |z| <= 0.172
         l2 = _F32(2.8853900817779268) * z * (one + z2 * (_F32(0.3333333333333333) + z2 * (
-            _F32(0.2) + z2 * (_F32(0.14285714285714285) + z2 * _F32(0.1111111111111111)))))
+            _F32(0.2) + z2 * _F32(0.14285714285714285))))
         yy = g * (e + l2)
         yk = np.floor(yy + _F32(0.5))
         f = (yy - yk) * _F32(0.6931471805599453)
         p = one + f * (one + f * (_F32(0.5) + f * (_F32(0.16666666666666666) + f * (
-            _F32(0.041666666666666664) + f * (_F32(0.008333333333333333) + f * (
-                _F32(0.001388888888888889) + f * _F32(0.0001984126984126984)))))))
+            _F32(0.041666666666666664) + f * (_F32(0.008333333333333333) + f * _F32(0.001388888888888889))))))
         pb[j] = p
         ki = np.int32(yk)
         kb[j] = ki if xi >= 0x00800000 else np.int32(-1000)
@@ -458,6 +463,61 @@ def copy_chain(stack: np.ndarray, threads: int | None = None) -> None:
         f.result()
 
 
+#: ``arrive`` value of a band that finished the frame (or failed).
+_DONE = 1 << 30
+
+#: Polls (~0.5 us each) before the spin barrier falls back to sleeping.
+_POLLS = 20000
+
+# libc's sched_yield, called by symbol (resolved in the process at link time; unlike a ctypes
+# pointer, this keeps the kernel cacheable).
+_sched_yield = numba.types.ExternalFunction("sched_yield", numba.types.int32())
+
+
+@_jit()
+def _spin(arrive, stage, polls):
+    """Poll (``sched_yield`` between polls, which also keeps LLVM from hoisting the loads) until
+    every entry of ``arrive`` is at least ``stage``, at most ``polls`` times; True when reached."""
+    n = arrive.shape[0]
+    for _ in range(polls):
+        lo = arrive[0]
+        for k in range(1, n):
+            v = arrive[k]
+            lo = v if v < lo else lo
+        if lo >= stage:
+            return True
+        _sched_yield()
+    return False
+
+
+_SPIN_OK: bool | None = None
+
+
+def _spin_ok() -> bool:
+    """Whether :func:`_spin` compiles here (``sched_yield`` is a POSIX symbol); checked once."""
+    global _SPIN_OK
+    if _SPIN_OK is None:
+        try:
+            _spin(np.zeros(1, np.int64), 0, 1)
+            _SPIN_OK = True
+        except Exception:  # pragma: no cover - platforms without sched_yield
+            _SPIN_OK = False
+    return _SPIN_OK
+
+
+def _spin_wait(arrive: np.ndarray, stage: int) -> None:
+    """Spin barrier: wait, without the GIL, until every band's ``arrive`` entry is >= ``stage``.
+
+    Waking a sleeping thread (a future, a lock) costs ~35 us here, as much as a phase of a
+    small frame; a poll costs ~1 us. After ~20000 polls (a band held up: a busy machine) it
+    sleeps 50 us between rounds of polls instead of keeping a shared core busy.
+    """
+    if _spin(arrive, stage, _POLLS):
+        return
+    while not _spin(arrive, stage, 20):
+        time.sleep(5e-5)
+
+
 def set_threads(n: int) -> None:
     """Use ``n`` threads for the fast front end (Numba's thread count) and OpenCV."""
     numba.set_num_threads(int(n))
@@ -599,6 +659,38 @@ class FastFrontEnd:
         n = min(n, max(1, (h * w) // MIN_BAND_PIXELS), max(1, h // 16))
         return n
 
+    def _band_task(self, k, bd, gray, p_prev, p_next, lm, arrive) -> None:
+        """Band ``k``: the three phases, with a spin barrier (:func:`_spin_wait`) between them."""
+        try:
+            self._phase1(bd, gray, p_prev, p_next)
+            arrive[k] = 1
+            _spin_wait(arrive, 1)
+            self._phase2(bd)
+            arrive[k] = 2
+            _spin_wait(arrive, 2)
+            self._phase3(bd, lm)
+        finally:
+            arrive[k] = _DONE
+
+    def _run_bands(self, bands, gray, p_prev, p_next, lm) -> None:
+        """All bands in parallel: band 0 on this thread, the others on the pool's threads.
+
+        The phases are separated by spin barriers on ``arrive`` (one entry per band, the last
+        stage it reached): waking a sleeping thread costs tens of microseconds per barrier
+        here, as much as a phase of a small frame. A band that fails marks itself done so
+        that the others never wait forever; its exception is raised here.
+        """
+        n = len(bands)
+        arrive = np.zeros(n, np.int64)
+        futs = [_pool(n - 1).submit(self._band_task, k, bd, gray, p_prev, p_next, lm, arrive)
+                for k, bd in enumerate(bands) if k]
+        try:
+            self._band_task(0, bands[0], gray, p_prev, p_next, lm, arrive)
+        finally:
+            _spin_wait(arrive, _DONE)
+            for f in futs:
+                f.result()
+
     def step(self, gray: np.ndarray) -> LocalMotion:
         gray = np.ascontiguousarray(gray, dtype=np.float32)
         h, w = gray.shape
@@ -618,21 +710,16 @@ class FastFrontEnd:
             self._phase1(bd, gray, p_prev, p_next)
             self._phase2(bd)
             self._phase3(bd, lm)
-        else:
+        elif _spin_ok():
+            self._run_bands(bands, gray, p_prev, p_next, lm)
+        else:  # pragma: no cover - no spin barrier: one thread-pool round trip per phase
             pool = _pool(len(bands) - 1)
-            rest = bands[1:]
-            futs = [pool.submit(self._phase1, bd, gray, p_prev, p_next) for bd in rest]
-            self._phase1(bands[0], gray, p_prev, p_next)
-            for f in futs:
-                f.result()
-            futs = [pool.submit(self._phase2, bd) for bd in rest]
-            self._phase2(bands[0])
-            for f in futs:
-                f.result()
-            futs = [pool.submit(self._phase3, bd, lm) for bd in rest]
-            self._phase3(bands[0], lm)
-            for f in futs:
-                f.result()
+            for phase, args in ((self._phase1, (gray, p_prev, p_next)), (self._phase2, ()),
+                                (self._phase3, (lm,))):
+                futs = [pool.submit(phase, bd, *args) for bd in bands[1:]]
+                phase(bands[0], *args)
+                for f in futs:
+                    f.result()
         self._p = [p_next, p_prev]
         self._n, self._n_prev = self._n_prev, self._n
         self._first = False
