@@ -16,6 +16,7 @@ quadrants are mirror images of one another.
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, field
 from typing import Any
@@ -25,7 +26,7 @@ import numpy as np
 from .lobula_plate import LocalMotion
 from .params import Params
 
-__all__ = ["AttentionField", "Field", "quadrant_sums", "lplc2_response", "field_mask",
+__all__ = ["AttentionField", "Field", "quadrant_sums", "quadrant_areas", "gate_area", "lplc2_response", "field_mask",
            "argmax_outside"]
 
 
@@ -134,6 +135,18 @@ def quadrant_areas(cx: int, cy: int, r: int, frame_shape: tuple[int, int]) -> tu
     """Number of pixels of each quadrant Q1..Q4 inside the frame."""
     return tuple((rows.stop - rows.start) * (cols.stop - cols.start)
                  for rows, cols in _window(cx, cy, r, frame_shape))
+
+
+def gate_area(area: float, r_af: int) -> float:
+    """Area (px) that scales the arbour threshold of a quadrant of ``area`` pixels.
+
+    Up to a full attention-field quadrant (R_AF^2) it is the area itself, so a field
+    clipped by the frame border needs proportionally less; beyond, it grows as
+    sqrt(area * R_AF^2): a larger cell (the frame-wide LPLC2) integrates more
+    background, but the signal of one object does not grow with the cell.
+    """
+    full = float(r_af) * float(r_af)
+    return float(area) if area <= full else math.sqrt(float(area) * full)
 
 
 def lplc2_response(q, thresholds=0.0) -> float:

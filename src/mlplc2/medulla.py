@@ -27,10 +27,14 @@ __all__ = ["DIRECTIONS", "contrast_normalise", "delayed", "shift", "correlator",
 DIRECTIONS: dict[str, tuple[int, int]] = {"r": (1, 0), "l": (-1, 0), "d": (0, 1), "u": (0, -1)}
 
 
-def contrast_normalise(n: np.ndarray, k_c: np.ndarray, epsilon: float) -> np.ndarray:
-    """Eq. 6-7: N <- tanh(N / (epsilon + K_c * N))."""
+def contrast_normalise(n: np.ndarray, k_c: np.ndarray, epsilon: float, floor: float = 0.0) -> np.ndarray:
+    """Eq. 6-7: N <- tanh(N / (epsilon + K_c * N)), then values below ``floor`` set to 0
+    (``Params.n_floor``; 0 = the paper)."""
     n_hat = gaussian_filter(n, k_c)
-    return np.tanh(n / (np.float32(epsilon) + n_hat)).astype(np.float32, copy=False)
+    out = np.tanh(n / (np.float32(epsilon) + n_hat)).astype(np.float32, copy=False)
+    if floor:
+        out[out < np.float32(floor)] = 0
+    return out
 
 
 def delayed(n: np.ndarray, n_prev: np.ndarray, alpha: float) -> np.ndarray:

@@ -60,6 +60,11 @@ class Params:
     """r_Dc (px): radius of the contrast-normalisation window of K_c, Eq. 7 (Table I)."""
     sigma_c: float = 20.0
     """sigma_c (px): standard deviation of K_c (Table I)."""
+    n_floor: float = 0.0
+    """Extra. Contrast-normalised signals N below this are set to 0 after Eq. 6 (authors' code:
+    0.67-0.75, tuned per video; the paper: none). 0 by default: 0.2 removes the brief answer of
+    LPLC2 and sLPLC2 to a bright receding square but delays fields on busy backgrounds
+    (docs/model.md, "Open problems")."""
     epsilon: float = 25.0
     """epsilon: constant of the contrast normalisation, Eq. 6, on the 0-255 scale of the input.
     Table I gives 0.2; that value makes every change, however faint, saturate the tanh
@@ -87,9 +92,10 @@ class Params:
     """Extra. Slope of the Leaky-ReLU f of Eq. 11 for negative input. The paper gives none
     (authors' code: 0.01); 0.5 lets inward (null-direction) motion inhibit a quadrant, as the
     LPLC2 literature describes, so a translating background does not open the gate."""
-    lm_gain: float = 100.0
+    lm_gain: float = 160.0
     """Extra. Gain applied to the local-motion maps LM_v after Eq. 11, which puts LM on the
-    scale of the Table I thresholds (authors' code multiplies the fused signal by 10)."""
+    scale of the Table I thresholds T_a and T_d (authors' code multiplies the fused signal by
+    10). 160 lets the weaker bright (ON) approach reach T_a = 10, as Sec. IV-A reports."""
 
     # --- Attention fields, Eq. 13-16 ---------------------------------------
     r_af: int = 40
@@ -112,12 +118,13 @@ class Params:
     A field is created when the expansion starts (3-5 frames after onset) but answers only
     once the expansion is wider than the lamina filters (~5 frames later); 15 frames give it
     a full window of d responses before it is judged."""
-    q_min: float = 0.03
+    q_min: float = 0.05
     """Extra. Arbour threshold: the all-four-arbours gate of Eq. 15 opens when every quadrant
     sum Q_i exceeds q_min times the quadrant's area in pixels (the paper's bool(prod Q_i),
-    which with a leaky f would open on any faint net outward motion). 0.0625 = 100 over a
-    40 x 40 quadrant."""
-    alarm_threshold: float = 6000.0
+    which with a leaky f would open on any faint net outward motion). 0.05 = 80 over a
+    40 x 40 quadrant. Quadrants larger than R_AF^2 (the frame-wide LPLC2) count as
+    sqrt(area * R_AF^2) pixels (``attention.gate_area``)."""
+    alarm_threshold: float = 10000.0
     """Extra. A field is in collision alarm when its responses summed over the last
     ``alarm_window`` frames reach this (the paper's "fatal" fields; NOTES 17)."""
     alarm_window: int = 5
@@ -132,7 +139,7 @@ class Params:
         for name in positive:
             if not getattr(self, name) > 0:
                 raise InputValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
-        non_negative = ("exclusion", "w_i", "after_image", "beta", "leaky_slope", "lm_gain", "t_a",
+        non_negative = ("exclusion", "w_i", "after_image", "beta", "leaky_slope", "lm_gain", "n_floor", "t_a",
                         "t_d", "q_min", "alarm_threshold")
         for name in non_negative:
             if not getattr(self, name) >= 0:
@@ -144,6 +151,8 @@ class Params:
                 raise InputValueError(f"Params.{name} must be an integer >= 1, got {value!r}")
         if not isinstance(self.grace, int) or self.grace < 0:
             raise InputValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
+        if self.n_floor >= 1:
+            raise InputValueError(f"Params.n_floor must be < 1 (N lies in [0, 1)), got {self.n_floor!r}")
         if self.after_image >= 1:
             raise InputValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
         if self.field_shape not in ("square", "disc"):

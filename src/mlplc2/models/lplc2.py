@@ -8,7 +8,7 @@ from collections import deque
 import numpy as np
 
 from .._validation import InputTypeError
-from ..attention import (AttentionField, IdCounter, argmax_outside, lplc2_response, quadrant_areas,
+from ..attention import (AttentionField, IdCounter, argmax_outside, gate_area, lplc2_response, quadrant_areas,
                          quadrant_sums)
 from ..frontend import make_frontend
 from ..lobula_plate import LocalMotion
@@ -74,7 +74,7 @@ class _LPLC2Family(Model):
         p = self.params
         f.quadrants = self._quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
         areas = quadrant_areas(f.x, f.y, f.radius, lm.magnitude.shape)
-        f.response = lplc2_response(f.quadrants, [p.q_min * a for a in areas])
+        f.response = lplc2_response(f.quadrants, [p.q_min * gate_area(a, p.r_af) for a in areas])
         f.history.append(f.response)
         recent = list(f.history)[-p.alarm_window:]
         f.collision = sum(recent) >= p.alarm_threshold
