@@ -6,6 +6,7 @@ import numpy as np
 import pytest
 
 import mlplc2
+from mlplc2 import stimuli
 from mlplc2.frontend import FrontEnd
 from mlplc2.lamina import gaussian_kernel_1d, on_off, vdog
 from mlplc2.medulla import contrast_normalise, shift
@@ -127,3 +128,24 @@ def test_maps_are_reachable_after_step():
     lm = model.maps
     assert lm.magnitude.shape == (SIZE, SIZE)
     assert np.allclose(lm.magnitude, np.sqrt(np.maximum(lm.r, lm.l) ** 2 + np.maximum(lm.d, lm.u) ** 2))
+
+
+def test_n_floor_zeroes_weak_normalised_signals():
+    """Params.n_floor: N below the floor is 0, N above it unchanged (reference and fast path)."""
+    rng = np.random.default_rng(1)
+    sig = rng.uniform(0, 60, (40, 50)).astype(np.float32)
+    k_c = gaussian_kernel_1d(5, 20.0)
+    plain = contrast_normalise(sig, k_c, 25.0)
+    floored = contrast_normalise(sig, k_c, 25.0, floor=0.3)
+    assert (plain < 0.3).any() and (plain >= 0.3).any()
+    assert np.all(floored[plain < 0.3] == 0)
+    np.testing.assert_array_equal(floored[plain >= 0.3], plain[plain >= 0.3])
+    pytest.importorskip("numba")
+    params = mlplc2.Params(n_floor=0.2)
+    st = stimuli.basic("bright_recede")
+    ref = mlplc2.LPLC2(fps=30.0, params=params, backend="reference")
+    fast = mlplc2.LPLC2(fps=30.0, params=params, backend="numba")
+    for frame in st.frames[:12]:
+        ref.step(frame)
+        fast.step(frame)
+        np.testing.assert_allclose(fast.maps.magnitude, ref.maps.magnitude, rtol=1e-4, atol=1e-4)

@@ -16,13 +16,10 @@ DOCUMENTED = {
     # docs/model.md "Open problems"
     "IV-A.silent.lplc2.bright_recede",
     "IV-A.silent.slplc2.bright_recede",
-    "IV-A.bright_answered.slplc2",
-    "IV-A.bright_answered.mlplc2",
     # docs/reproduce.md "Deviations found"
     "IV-B4.lgmd2.recede",
     "IV-B5.persistence",
     "IV-C.alarm.bird_attack_2",  # paper data only (docs/model.md "Open problems")
-    "IV-C.multi.bird_attack_2",
 }
 
 # Lines the report must contain (the claims named in issue 5).

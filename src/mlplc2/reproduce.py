@@ -78,15 +78,9 @@ KNOWN_DEVIATIONS: dict[str, str] = {
         "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %)",
     "IV-A.silent.slplc2.bright_recede":
         "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %)",
-    "IV-A.bright_answered.slplc2":
-        "known deviation, see docs/model.md 'Open problems' (bright approach: no answer)",
-    "IV-A.bright_answered.mlplc2":
-        "known deviation, see docs/model.md 'Open problems' (bright approach: no answer)",
     "IV-B4.lgmd2.recede":
         "known deviation, see docs/reproduce.md 'Deviations found' (LGMD2 flat at rest while objects recede)",
     "IV-C.alarm.bird_attack_2":
-        "known deviation (paper data only), see docs/model.md 'Open problems' (low-contrast raptor clip)",
-    "IV-C.multi.bird_attack_2":
         "known deviation (paper data only), see docs/model.md 'Open problems' (low-contrast raptor clip)",
     "IV-B5.persistence":
         "known deviation, see docs/reproduce.md 'Deviations found' (fields are removed before the object vanishes)",

@@ -85,7 +85,7 @@ class TargetParams:
 
     band: int = 2
     """Half-width (px) of the strips along the field's row and column."""
-    min_peak: float = 0.05
+    min_peak: float = 0.08
     """Smallest outward LM (profile mean, after the gain) that counts as an edge."""
     noise_k: float = 3.0
     """An edge complex must exceed ``noise_k`` x the 75th percentile of its profile (noise floor)."""
@@ -118,11 +118,15 @@ class TargetParams:
     max_residual: float = 0.1
     """Largest rms relative residual of the ``1/s`` fit that is accepted."""
     confirm_frames: float = 1.5
-    confirm_rel: float = 0.25
+    confirm_rel: float = 0.15
     """A fit is reported once the next fit's contact frame agrees within
     ``max(confirm_frames, confirm_rel x ttc)`` frames (a fit to junk is unstable)."""
     min_inliers: float = 0.6
     """Outlier rejection may drop at most this complement: a fit keeps >= 60 % of the sizes."""
+    max_shift: float = 40.0
+    """Px: while a track has no size yet, a measured expansion centre further than this (in x
+    or y) from the field centre is rejected: it lies outside the field (R_AF = 40), so the
+    edges found are most likely two things taken for one (or background)."""
     max_deviation: float = 0.2
     """A size further than this (relative) from the fit's prediction contradicts the fit."""
 
@@ -134,7 +138,7 @@ class TargetParams:
         if self.min_points < 2:
             raise ValueError(f"TargetParams.min_points must be >= 2, got {self.min_points!r}")
         for name in ("min_peak", "noise_k", "rel_start", "rel_edge", "edge_offset", "lag", "max_edge_speed", "max_ttc_s",
-                     "max_residual", "max_deviation", "min_inliers",
+                     "max_residual", "max_deviation", "max_shift", "min_inliers",
                      "confirm_frames", "confirm_rel"):
             v = float(getattr(self, name))
             if not math.isfinite(v) or v < 0:
@@ -583,6 +587,10 @@ class TargetTracker:
             ext = measure_extent(lm, mx, my, p)
         size = ext.size
         cx, cy = ext.cx, ext.cy
+        if size is not None and not self.history and max(abs(cx - mx), abs(cy - my)) > p.max_shift:
+            # A new track's first edges enclose a point far from the field centre they were
+            # sought from: two objects (or an object and background) taken for one.
+            size = None
         if size is None and self.center is not None and self.history:
             # Edges beyond the frame border (object partly out of view): half-sizes of the
             # edges still found, measured from the known expansion centre (at least two).
