@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import numpy as np
+import pytest
 
 import mlplc2
 from mlplc2.attention import argmax_outside, lplc2_response, quadrant_sums
@@ -105,3 +106,26 @@ def test_params_validation_and_defaults():
         p.replace(nope=1)
     with pytest.raises(ValueError, match="field_shape"):
         mlplc2.Params(field_shape="hexagon")
+
+
+@pytest.mark.parametrize("shape", ["square", "disc"])
+def test_argmax_outside_matches_masking_the_map(shape):
+    """Eq. 13 with or without the no-copy shortcut: the first maximum outside the zones,
+    ties included (integer-valued maps have many)."""
+    rng = np.random.default_rng(7)
+    yy, xx = np.mgrid[0:40, 0:50]
+    for _ in range(300):
+        lm = rng.integers(0, 6, (40, 50)).astype(np.float32)
+        zones = [(int(rng.integers(-5, 55)), int(rng.integers(-5, 45)), int(rng.integers(1, 15)))
+                 for _ in range(int(rng.integers(0, 4)))]
+        masked = lm.copy()
+        for fx, fy, r in zones:
+            inside = (np.abs(xx - fx) <= r) & (np.abs(yy - fy) <= r)
+            if shape == "disc":
+                inside &= (xx - fx) ** 2 + (yy - fy) ** 2 <= r * r
+            masked[inside] = -np.inf
+        if np.isinf(masked).all():
+            assert argmax_outside(lm, zones, shape) is None
+            continue
+        y, x = divmod(int(np.argmax(masked)), 50)
+        assert argmax_outside(lm, zones, shape) == (x, y, float(lm[y, x]))

@@ -110,6 +110,46 @@ def test_state_before_the_power_is_bit_identical():
             assert np.array_equal(fast._m[c, k], ref.state.m_prev[channel][direction])
 
 
+@pytest.mark.parametrize("n_c", [1, 2, 8])
+def test_any_number_of_distances_is_bit_identical_up_to_the_power(n_c):
+    """The motion kernels unroll the loop over the N_c distances (N_c is compiled in, one
+    specialisation per N_c): every N_c gives the reference's N and M-hat bit for bit, with
+    the M-hat planes stored row-interleaved, and LM maps within the tolerance."""
+    params = mlplc2.Params(n_c=n_c, tau_1=30.0, beta=0.5)
+    frames = list(four_phase()[24:30, 20:140, 40:200]) + list(noise((120, 160), n=2, seed=7))
+    ref, fast = run_both(frames, params)
+    pad = fast._pad
+    assert pad == n_c
+    n_prev = fast._n_prev[:, pad:-pad, pad:-pad]
+    assert np.array_equal(n_prev[0], ref.state.n_prev["on"])
+    assert np.array_equal(n_prev[1], ref.state.n_prev["off"])
+    for c, channel in enumerate(("on", "off")):
+        for k, direction in enumerate("rldu"):
+            m_ref = ref.state.m_prev[channel][direction]
+            assert m_ref.any()
+            assert np.array_equal(fast._m[c, k], m_ref)
+            assert np.array_equal(fast._m_rows[:, c, k], m_ref)
+
+
+@pytest.mark.parametrize("floor, radius", [(0.0, 10), (0.6, 3), (0.2, 25)])
+def test_n_floor_paths_bit_identical_in_bands(monkeypatch, floor, radius):
+    """Params.n_floor: without it N goes straight into the padded planes; with it every band
+    forms N on n_floor_radius rows of context and floors it against its local maximum. Either
+    way N (hence M-hat) is the reference's bit for bit, with one band or many."""
+    params = mlplc2.Params(n_floor=floor, n_floor_radius=radius)
+    frames = list(four_phase()[30:36, 10:130, 30:190])
+    for bands in (1, 4):
+        fast = _fast.FastFrontEnd(params, 30.0)
+        monkeypatch.setattr(fast, "_nbands", lambda h, w, bands=bands: bands)
+        ref, fast = run_both(frames, params, fast=fast)
+        pad = fast._pad
+        for c, channel in enumerate(("on", "off")):
+            n_ref = ref.state.n_prev[channel]
+            assert np.array_equal(fast._n_prev[c, pad:-pad, pad:-pad], n_ref)
+            if floor:
+                assert (n_ref == 0).sum() > (fast._n_prev[c] == 0).size // 20  # the floor acts
+
+
 def test_bands_give_identical_results(monkeypatch):
     """Splitting the rows into bands (threads) changes nothing, bit for bit."""
     frames = four_phase()[30:38]
@@ -292,7 +332,7 @@ def test_bench_runs_and_formats():
     rows = bench.run_bench([(48, 40)], ["mlplc2"], frames=3, ref_frames=2, warmup=2)
     (row,) = rows
     assert row.ms > 0 and row.ref_ms > 0 and row.probe_ms > 0 and row.peak_mb > 0
-    assert row.planes == sum(n for _, n, _ in _fast.PLANES)
+    assert row.planes == _fast.plane_count(mlplc2.Params().n_floor > 0) == 26
     table = bench.format_table(rows)
     assert "| mlplc2 | 48x40 |" in table
     assert bench.parse_sizes("320x240, 64x48") == [(320, 240), (64, 48)]

@@ -130,19 +130,24 @@ def test_maps_are_reachable_after_step():
     assert np.allclose(lm.magnitude, np.sqrt(np.maximum(lm.r, lm.l) ** 2 + np.maximum(lm.d, lm.u) ** 2))
 
 
-def test_n_floor_zeroes_weak_normalised_signals():
-    """Params.n_floor: N below the floor is 0, N above it unchanged (reference and fast path)."""
+def test_relative_floor_zeroes_the_tails_of_each_band():
+    """Params.n_floor: N below n_floor x its local maximum (radius n_floor_radius) is 0, the
+    rest unchanged; the fast path does the same."""
     rng = np.random.default_rng(1)
     sig = rng.uniform(0, 60, (40, 50)).astype(np.float32)
     k_c = gaussian_kernel_1d(5, 20.0)
     plain = contrast_normalise(sig, k_c, 25.0)
-    floored = contrast_normalise(sig, k_c, 25.0, floor=0.3)
-    assert (plain < 0.3).any() and (plain >= 0.3).any()
-    assert np.all(floored[plain < 0.3] == 0)
-    np.testing.assert_array_equal(floored[plain >= 0.3], plain[plain >= 0.3])
+    floored = contrast_normalise(sig, k_c, 25.0, floor=0.8, floor_radius=3)
+    # the local maximum, by brute force
+    pad = np.pad(plain, 3)
+    lmax = np.max([pad[dy:dy + 40, dx:dx + 50] for dy in range(7) for dx in range(7)], axis=0)
+    cut = plain < 0.8 * lmax
+    assert cut.any() and (~cut).any()
+    assert np.all(floored[cut] == 0)
+    np.testing.assert_array_equal(floored[~cut], plain[~cut])
     pytest.importorskip("numba")
-    params = mlplc2.Params(n_floor=0.2)
     st = stimuli.basic("bright_recede")
+    params = mlplc2.Params(n_floor=0.35)
     ref = mlplc2.LPLC2(fps=30.0, params=params, backend="reference")
     fast = mlplc2.LPLC2(fps=30.0, params=params, backend="numba")
     for frame in st.frames[:12]:

@@ -25,7 +25,10 @@ phases; a barrier separates them because each needs a few rows of its neighbours
 1. L = P(t) - P(t-1) on the band plus r_i rows of context, E and I (``sepFilter2D``), vDoG and
    ON/OFF for the band's rows (Eq. 1-5);
 2. K_c * ON and K_c * OFF on the band plus r_c rows, N = tanh(ON / (epsilon + K_c * ON))
-   (Eq. 6-7);
+   (Eq. 6-7); with the relative floor of ``Params.n_floor`` (on by default) N is formed on
+   ``n_floor_radius`` more rows of context and set to 0 where it is below ``n_floor`` times
+   its local maximum (the reference's own ``medulla.local_max``, an OpenCV dilation), so no
+   extra barrier is needed;
 3. the fused kernel :func:`_motion_rows` (Eq. 8-12) for the band's rows.
 
 OpenCV and NumPy release the GIL and every kernel is ``nogil``, so the bands run in parallel
@@ -49,6 +52,7 @@ import numpy as np
 
 from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
+from .medulla import local_max
 from .params import Params
 
 __all__ = ["FastFrontEnd", "quadrant_sums", "quadrant_sums_all", "set_threads", "PLANES",
@@ -142,6 +146,38 @@ def _ratio_rows(sig, k_band, k_off, n_pad, c, pad, y0, y1, eps):
             n_pad[cu, yo, x + pu] = sig[yu, x] / (eps + k_band[yk, x])
 
 
+@_jit()
+def _ratio_band(sig, k_band, k_off, out, o_off, y0, y1, eps):
+    """Eq. 6 before the tanh on rows [y0, y1) into ``out[y - o_off]`` (a band's scratch, for
+    the relative floor of ``Params.n_floor``); same operation as :func:`_ratio_rows`."""
+    w = sig.shape[1]
+    for y in range(y0, y1):
+        s = sig[y]
+        k = k_band[y - k_off]
+        o = out[y - o_off]
+        for x in range(w):
+            o[x] = s[x] / (eps + k[x])
+
+
+@_jit()
+def _floor_rows(nb, lmax, off, n_pad, c, pad, y0, y1, floor):
+    """The relative floor of ``Params.n_floor`` (``medulla.contrast_normalise``) on rows
+    [y0, y1): N = 0 where N < floor * (local maximum of N), else N; from ``nb[y - off]`` (with
+    ``lmax[y - off]``) into channel ``c`` of the padded planes ``n_pad``."""
+    zero = _F32(0.0)
+    w = U64(nb.shape[1])
+    wp = U64(n_pad.shape[2])
+    src = nb.reshape(nb.size)
+    mx = lmax.reshape(lmax.size)
+    dst = n_pad.reshape(n_pad.size)
+    for y in range(y0, y1):
+        i0 = U64(y - off) * w
+        o0 = (U64(c) * U64(n_pad.shape[1]) + U64(y + pad)) * wp + U64(pad)
+        for x in range(w):
+            v = src[i0 + x]
+            dst[o0 + x] = zero if v < floor * mx[i0 + x] else v
+
+
 # ---------------------------------------------------------------------------
 # Phase 3: the fused medulla + lobula-plate kernel (Eq. 8-12)
 # ---------------------------------------------------------------------------
@@ -149,54 +185,11 @@ def _ratio_rows(sig, k_band, k_off, n_pad, c, pad, y0, y1, eps):
 # arrays and unsigned offsets (no views: no reference counting; no negative-index wrap-around)
 # and writes at most two arrays (LLVM's run-time alias checks stay within its limit), so LLVM
 # vectorises every one; as one big function, register pressure made LLVM spill in the loops.
-@_jit()
-def _corr_pair(o1, o2, flat_n, flat_p, base, o1_far, o2_far, a_s, b_s, beta, w, first):
-    """Eq. 8-9 for one distance s and two opposite directions, accumulated (``first``: assigned).
-
-    ``flat_n``/``flat_p``: N(t)/N(t-1) planes (padded), flattened. For x < w the centre is
-    ``base + x``: o1[x] (+)= (N_f - beta N) D D_f with the far point at offset ``o1_far``
-    (likewise o2), D = a_s N(t) + b_s N(t-1). Offsets are unsigned; a negative offset is
-    its two's complement, which wraps back.
-    """
-    if first:
-        for x in range(w):
-            i = base + x
-            nx = flat_n[i]
-            bnx = beta * nx
-            d = a_s * nx + b_s * flat_p[i]
-            j = i + o1_far
-            nf = flat_n[j]
-            o1[x] = ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
-            j = i + o2_far
-            nf = flat_n[j]
-            o2[x] = ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
-    else:
-        for x in range(w):
-            i = base + x
-            nx = flat_n[i]
-            bnx = beta * nx
-            d = a_s * nx + b_s * flat_p[i]
-            j = i + o1_far
-            nf = flat_n[j]
-            o1[x] += ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
-            j = i + o2_far
-            nf = flat_n[j]
-            o2[x] += ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
-
-
-@_jit()
-def _output_dir(acc, m_flat, m_off, t, t_off, ao, bo, nc_div, average, w):
-    """Eq. 10 for one direction on one row: mean over distances, two-tap filter with M-hat(t-1)
-    (``m_flat[m_off + x]``, replaced by M-hat(t)), T rectified into ``t[t_off + x]``."""
-    zero = _F32(0.0)
-    for x in range(w):
-        v = acc[x] / nc_div if average else acc[x]
-        j = m_off + x
-        tv = ao * v + bo * m_flat[j]
-        m_flat[j] = v
-        t[t_off + x] = tv if tv > zero else zero
-
-
+# Per row and channel: D_s of the row for every distance (:func:`_d_rows`), then two kernels
+# (right/left, down/up) that loop over x with the distances unrolled inside (N_c is the length
+# of a tuple, a compile-time constant), so the sums over s stay in registers and each pixel's
+# D_s is formed once for the centre and the horizontal far points; Eq. 10 is applied in the
+# same loop (:func:`_eq10`). Then the power (:func:`_power`) and Eq. 11-12 (:func:`_lobula_row`).
 @_jit(fastmath={"contract"})
 def _power(t, base, n, g, mode, mb, kb, pb):
     """Eq. 11: t[base:base + n] = t ** g in place (t >= 0), vectorised.
@@ -253,36 +246,111 @@ def _power(t, base, n, g, mode, mb, kb, pb):
 
 
 @_jit()
-def _opponency(t, w, hz, vt):
-    """Eq. 11: r - l and d - u with r = T4_r^g1 + T5_r^g2 etc. (t: 8 rows of powered T)."""
-    for x in range(w):
-        hz[x] = (t[x] + t[U64(4) * w + x]) - (t[w + x] + t[U64(5) * w + x])
-        vt[x] = (t[U64(2) * w + x] + t[U64(6) * w + x]) - (t[U64(3) * w + x] + t[U64(7) * w + x])
-
-
-@_jit()
-def _leaky_pair(src, out, o_pos, o_neg, gain, slope, w):
-    """Eq. 11: out[o_pos + x] = g f(src), out[o_neg + x] = g f(-src), f the Leaky ReLU."""
+def _lobula_row(t, lm_flat, row, plane, gain, slope, w):
+    """Eq. 11-12 on one row, fused: r - l and d - u with r = T4_r^g1 + T5_r^g2 etc. (``t``: the
+    8 rows of powered T), LM_r = g f(r - l), LM_l = g f(l - r), LM_d, LM_u likewise (f the
+    Leaky ReLU), LM = sqrt(max(LM_r, LM_l)^2 + max(LM_d, LM_u)^2), written to the five planes
+    of ``lm_flat`` at ``row + k * plane``."""
     zero = _F32(0.0)
     for x in range(w):
-        v = src[x]
-        nv = -v
-        out[o_pos + x] = gain * (v if v >= zero else slope * v)
-        out[o_neg + x] = gain * (nv if nv >= zero else slope * nv)
-
-
-@_jit()
-def _magnitude(lm_flat, off, plane, w):
-    """Eq. 12: LM = sqrt(max(LM_r, LM_l)^2 + max(LM_d, LM_u)^2) on one row."""
-    for x in range(w):
-        j = off + x
-        vr = lm_flat[j]
-        vl = lm_flat[j + plane]
-        vd = lm_flat[j + U64(2) * plane]
-        vu = lm_flat[j + U64(3) * plane]
+        hz = (t[x] + t[U64(4) * w + x]) - (t[w + x] + t[U64(5) * w + x])
+        vt = (t[U64(2) * w + x] + t[U64(6) * w + x]) - (t[U64(3) * w + x] + t[U64(7) * w + x])
+        nh = -hz
+        nv = -vt
+        vr = gain * (hz if hz >= zero else slope * hz)
+        vl = gain * (nh if nh >= zero else slope * nh)
+        vd = gain * (vt if vt >= zero else slope * vt)
+        vu = gain * (nv if nv >= zero else slope * nv)
+        j = row + x
+        lm_flat[j] = vr
+        lm_flat[j + plane] = vl
+        lm_flat[j + U64(2) * plane] = vd
+        lm_flat[j + U64(3) * plane] = vu
         hh = vr if vr >= vl else vl
         vv = vd if vd >= vu else vu
         lm_flat[j + U64(4) * plane] = np.sqrt(hh * hh + vv * vv)
+
+
+@_jit()
+def _d_rows(flat_n, flat_p, row, a, b, drow, wp):
+    """Eq. 8 on one padded row: drow[s * wp + x] = a_s N(t) + b_s N(t-1) at ``row + x``, every
+    distance s, the whole padded width (zero in the border)."""
+    for s in range(len(a)):
+        a_s = a[s]
+        b_s = b[s]
+        o = U64(s) * wp
+        for x in range(wp):
+            drow[o + x] = a_s * flat_n[row + x] + b_s * flat_p[row + x]
+
+
+@_jit(inline="always")
+def _eq10(total, m_flat, j, t, k, ao, bo, nc_div, average):
+    """Eq. 10 for one pixel and direction: mean over the distances, two-tap filter with
+    M-hat(t-1) = ``m_flat[j]`` (replaced by M-hat(t)), rectified T into ``t[k]``."""
+    v = total / nc_div if average else total
+    tv = ao * v + bo * m_flat[j]
+    m_flat[j] = v
+    t[k] = tv if tv > _F32(0.0) else _F32(0.0)
+
+
+@_jit()
+def _corr_h(flat_n, centre, wp, drow, pad, a, beta, m_flat, m1, m2, t, t1, t2, ao, bo, nc_div, average, w):
+    """Eq. 8-9 for one row of one channel, directions right (``o1``) and left (``o2``), all
+    distances at once.
+
+    ``centre + x`` (x < w) is the pixel in the padded, flattened N(t) planes; ``drow`` holds
+    D_s of this row (:func:`_d_rows`). ``a`` is a tuple: its length N_c is a compile-time
+    constant, so the loop over the distances is unrolled and the sums stay in registers
+    (two written arrays per kernel: LLVM's run-time alias checks stay within its limit). The
+    sums are formed in the reference's order (0, then s = 1..N_c). Then Eq. 10 as in
+    :func:`_eq10`: M-hat(t-1) at ``m_flat[m1 + x]`` (right; ``m2``: left) is replaced by
+    M-hat(t) and the rectified T goes to ``t[t1 + x]`` (``t2``).
+    """
+    nc = len(a)
+    zero = _F32(0.0)
+    for x in range(w):
+        i = centre + x
+        bnx = beta * flat_n[i]
+        sr = zero
+        sl = zero
+        for s in range(nc):
+            sd = U64(s + 1)
+            jd = U64(s) * wp + pad + x
+            d = drow[jd]
+            nf = flat_n[i + sd]
+            sr += ((nf - bnx) * d) * drow[jd + sd]
+            nf = flat_n[i - sd]
+            sl += ((nf - bnx) * d) * drow[jd - sd]
+        _eq10(sr, m_flat, m1 + x, t, t1 + x, ao, bo, nc_div, average)
+        _eq10(sl, m_flat, m2 + x, t, t2 + x, ao, bo, nc_div, average)
+
+
+@_jit()
+def _corr_v(flat_n, flat_p, centre, wp, drow, pad, a, b, beta, m_flat, m1, m2, t, t1, t2, ao, bo, nc_div,
+            average, w):
+    """Like :func:`_corr_h` for directions down (``m1``, ``t1``) and up (``m2``, ``t2``): the
+    far points' D_s = a_s N(t) + b_s N(t-1) is formed from the rows s above and below (same
+    operations)."""
+    nc = len(a)
+    zero = _F32(0.0)
+    for x in range(w):
+        i = centre + x
+        bnx = beta * flat_n[i]
+        sd_ = zero
+        su = zero
+        for s in range(nc):
+            sd = U64(s + 1)
+            a_s = a[s]
+            b_s = b[s]
+            d = drow[U64(s) * wp + pad + x]
+            j = i + sd * wp
+            nf = flat_n[j]
+            sd_ += ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
+            j = i - sd * wp
+            nf = flat_n[j]
+            su += ((nf - bnx) * d) * (a_s * nf + b_s * flat_p[j])
+        _eq10(sd_, m_flat, m1 + x, t, t1 + x, ao, bo, nc_div, average)
+        _eq10(su, m_flat, m2 + x, t, t2 + x, ao, bo, nc_div, average)
 
 
 @_jit()
@@ -294,29 +362,24 @@ def _motion_rows(n_cur, n_prev, pad, m, lm, y0, y1, a, b, ao, bo, beta, nc_div, 
         OFF channels, frame pixel (y, x) at (y + pad, x + pad), zero in the border of width
         ``pad`` >= N_c: a correlator whose far point is outside the frame then adds
         (0 - beta N) D * 0 = 0, the reference's zero padding, without a bounds test.
-    m : (2, 4, H, W) M-hat(t-1) per channel and direction (r, l, d, u); overwritten with
-        M-hat(t) (the state of Eq. 10).
+    m : (H, 2, 4, W) M-hat(t-1) per row, channel and direction (r, l, d, u), the eight rows
+        of a frame row next to each other (one memory stream instead of eight); overwritten
+        with M-hat(t) (the state of Eq. 10).
     lm : (5, H, W) output LM_r, LM_l, LM_d, LM_u, LM.
-    a, b : (N_c,) float32 delay coefficients a_s and 1 - a_s of Eq. 8.
+    a, b : tuples of N_c float32 delay coefficients a_s and 1 - a_s of Eq. 8.
     mode_on, mode_off : how ``T ** gamma`` is computed (:func:`_power`).
 
     The float32 operations are those of ``medulla.motion_detectors`` and
     ``lobula_plate.local_motion`` in the same order (the reference), row by row; only row-sized
     scratch buffers are allocated.
     """
-    h = m.shape[2]
+    h = m.shape[0]
     w = m.shape[3]
     wu = U64(w)
     wp = U64(w + 2 * pad)
     plane = U64(h * w)
-    nc = a.shape[0]
-    tr = np.empty(w, np.float32)
-    tl = np.empty(w, np.float32)
-    td = np.empty(w, np.float32)
-    tu = np.empty(w, np.float32)
-    tots = (tr, tl, td, tu)
-    hz = np.empty(w, np.float32)
-    vt = np.empty(w, np.float32)
+    nc = len(a)
+    drow = np.empty(nc * (w + 2 * pad), np.float32)
     t = np.empty(8 * w, np.float32)  # T of channel c, direction k at (c * 4 + k) * w + x
     mb = np.empty(4 * w, np.int32)
     kb = np.empty(4 * w, np.int32)
@@ -332,27 +395,19 @@ def _motion_rows(n_cur, n_prev, pad, m, lm, y0, y1, a, b, ao, bo, beta, nc_div, 
         yp = yu + pu
         for c in range(2):
             cu = U64(c)
-            for s in range(nc):
-                sd = U64(s + 1)
-                first = s == 0
-                # right (far x + s) and left (x - s); down (far y + s) and up (y - s)
-                centre = cu * plane_p + yp * wp + pu
-                _corr_pair(tr, tl, flat_n, flat_p, centre, sd, U64(0) - sd, a[s], b[s], beta, wu, first)
-                _corr_pair(td, tu, flat_n, flat_p, centre, sd * wp, U64(0) - sd * wp, a[s], b[s], beta,
-                           wu, first)
-            base = cu * U64(4) * wu
-            for k in range(4):
-                _output_dir(tots[k], m_flat, ((cu * U64(4) + U64(k)) * U64(h) + yu) * wu, t,
-                            base + U64(k) * wu, ao, bo, nc_div, average, wu)
+            row = cu * plane_p + yp * wp
+            _d_rows(flat_n, flat_p, row, a, b, drow, wp)
+            base = cu * U64(4) * wu  # T of this channel in t
+            mo = (yu * U64(2) + cu) * U64(4) * wu  # its M-hat rows (r, l, d, u)
+            _corr_h(flat_n, row + pu, wp, drow, pu, a, beta, m_flat, mo, mo + wu, t, base, base + wu,
+                    ao, bo, nc_div, average, wu)
+            _corr_v(flat_n, flat_p, row + pu, wp, drow, pu, a, b, beta, m_flat, mo + U64(2) * wu,
+                    mo + U64(3) * wu, t, base + U64(2) * wu, base + U64(3) * wu, ao, bo, nc_div, average, wu)
             if c == 0:
                 _power(t, base, U64(4) * wu, g_on, mode_on, mb, kb, pb)
             else:
                 _power(t, base, U64(4) * wu, g_off, mode_off, mb, kb, pb)
-        _opponency(t, wu, hz, vt)
-        row = yu * wu
-        _leaky_pair(hz, lm_flat, row, row + plane, gain, slope, wu)
-        _leaky_pair(vt, lm_flat, row + U64(2) * plane, row + U64(3) * plane, gain, slope, wu)
-        _magnitude(lm_flat, row, plane, wu)
+        _lobula_row(t, lm_flat, yu * wu, plane, gain, slope, wu)
 
 
 # ---------------------------------------------------------------------------
@@ -535,21 +590,30 @@ PLANES: tuple[tuple[str, int, str], ...] = (
     ("ON, OFF", 2, "lamina outputs (Eq. 5)"),
     ("K_c ON, K_c OFF bands", 2, "contrast-normalisation Gaussians, per band"),
     ("N(t), N(t-1)", 4, "contrast-normalised ON/OFF, now and one frame ago"),
+    ("N band, local max", 2, "only with Params.n_floor > 0: N of a band with n_floor_radius rows "
+                             "of context, and its local maximum"),
     ("M-hat", 8, "correlator state per channel and direction (Eq. 10)"),
     ("LM", 5, "LM_r, LM_l, LM_d, LM_u, LM (the output)"),
 )
 
 
-def plane_traffic() -> dict[str, int]:
+def plane_count(floor: bool = False) -> int:
+    """Float32 planes one stream touches (:data:`PLANES`; the floor's two only with ``floor``)."""
+    return sum(count for name, count, _ in PLANES if floor or not name.startswith("N band"))
+
+
+def plane_traffic(floor: bool = False) -> dict[str, int]:
     """Plane-sized reads and writes per frame of :class:`FastFrontEnd` (counted from the kernels).
 
     Phase 1: read gray, P(t-1), write L, write P(t) (4); E and I read L and write (4); vDoG
     reads E, I and writes ON, OFF (4). Phase 2: the K_c filters read ON/OFF and write (4); the
-    ratio reads ON, OFF, K_c ON, K_c OFF and writes N (6); tanh reads and writes N (4).
+    ratio reads ON, OFF, K_c ON, K_c OFF and writes N (6); tanh reads and writes N (4); with
+    the relative floor of ``Params.n_floor`` (``floor``; off by default) the local maximum reads N
+    and writes its result (4) and the floor reads both and writes N (6).
     Phase 3: reads N(t), N(t-1) (4), reads and writes M-hat (16), writes LM (5).
     Attention: Eq. 13 copies LM and reads the copy (3; the quadrant sums touch only the fields).
     """
-    return {"phase1": 12, "phase2": 14, "phase3": 25, "attention": 3}
+    return {"phase1": 12, "phase2": 24 if floor else 14, "phase3": 25, "attention": 3}
 
 
 # ---------------------------------------------------------------------------
@@ -576,6 +640,9 @@ class FastFrontEnd:
         a = np.array([np.float32(x) for x in self.alphas], np.float32)
         self._a = a
         self._b = (np.float32(1) - a).astype(np.float32)
+        # tuples for the kernels: N_c becomes a compile-time constant (unrolled distance loop)
+        self._a_t = tuple(np.float32(v) for v in a)
+        self._b_t = tuple(np.float32(v) for v in self._b)
         self._ao = np.float32(self.alpha_out)
         self._bo = np.float32(1) - self._ao
         self._beta = np.float32(p.beta)
@@ -583,6 +650,10 @@ class FastFrontEnd:
         self._w_i = np.float32(p.w_i)
         self._after = np.float32(p.after_image)
         self._eps = np.float32(p.epsilon)
+        self._floor = np.float32(p.n_floor)
+        # relative floor (Params.n_floor > 0): N is compared with its local maximum within
+        # n_floor_radius px, so phase 2 forms N on that many rows of context as well
+        self._floor_r = int(p.n_floor_radius) if p.n_floor else 0
         self._g_on = np.float32(p.gamma_on)
         self._g_off = np.float32(p.gamma_off)
         self._mode_on = _pow_mode(p.gamma_on)
@@ -606,7 +677,8 @@ class FastFrontEnd:
         pad = self._pad = p.n_c  # zero border: correlator far points outside the frame read 0
         self._n = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._n_prev = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
-        self._m = np.zeros((2, 4, h, w), np.float32)
+        self._m_rows = np.zeros((h, 2, 4, w), np.float32)  # what the kernel uses
+        self._m = self._m_rows.transpose(1, 2, 0, 3)  # (2, 4, H, W) view: channel, direction
         self._plan(nbands)
 
     def _plan(self, nbands: int) -> None:
@@ -618,9 +690,12 @@ class FastFrontEnd:
         for y0, y1 in zip(edges[:-1], edges[1:]):
             ys, ye = max(y0 - p.r_i, 0), min(y1 + p.r_i, h)
             es, ee = max(y0 - p.r_e, 0), min(y1 + p.r_e, h)
-            cs, ce = max(y0 - p.r_c, 0), min(y1 + p.r_c, h)
+            fr = self._floor_r
+            ns, ne = max(y0 - fr, 0), min(y1 + fr, h)  # rows of N the floor needs
+            cs, ce = max(ns - p.r_c, 0), min(ne + p.r_c, h)
             bands.append(dict(
-                y0=y0, y1=y1, ys=ys, ye=ye, es=es, ee=ee, cs=cs, ce=ce,
+                y0=y0, y1=y1, ys=ys, ye=ye, es=es, ee=ee, cs=cs, ce=ce, ns=ns, ne=ne,
+                nb=np.empty((ne - ns, w), np.float32) if fr else None,
                 l=np.empty((ye - ys, w), np.float32),
                 e=np.empty((ee - es, w), np.float32),
                 i=np.empty((ye - ys, w), np.float32),
@@ -645,12 +720,18 @@ class FastFrontEnd:
             cv2.sepFilter2D(sig[cs:ce], cv2.CV_32F, self.k_c, self.k_c, dst=kb,
                             borderType=cv2.BORDER_CONSTANT)
             pad = self._pad
+            if self._floor_r:  # Params.n_floor: N on the band and n_floor_radius rows of context
+                nb, ns = bd["nb"], bd["ns"]
+                _ratio_band(sig, kb, cs, nb, ns, ns, bd["ne"], self._eps)
+                np.tanh(nb, out=nb)
+                _floor_rows(nb, local_max(nb, self._floor_r), ns, self._n, c, pad, y0, y1, self._floor)
+                continue
             _ratio_rows(sig, kb, cs, self._n, c, pad, y0, y1, self._eps)
             rows = self._n[c, y0 + pad:y1 + pad, pad:-pad]
             np.tanh(rows, out=rows)
 
     def _phase3(self, bd, lm) -> None:
-        _motion_rows(self._n, self._n_prev, self._pad, self._m, lm, bd["y0"], bd["y1"], self._a, self._b,
+        _motion_rows(self._n, self._n_prev, self._pad, self._m_rows, lm, bd["y0"], bd["y1"], self._a_t, self._b_t,
                      self._ao, self._bo, self._beta, self._nc_div, bool(self.params.average_distances),
                      self._g_on, self._g_off, self._mode_on, self._mode_off, self._gain, self._slope)
 

@@ -9,8 +9,9 @@ For every model and frame size it reports, measured in the same run:
 * the same for the reference front end (``backend="reference"``, fewer frames) and the
   speed-up;
 * a memory-bandwidth probe: the time to copy the float32 planes the fast pipeline touches
-  (:data:`mlplc2._fast.PLANES`, N = 26 planes, i.e. 52 plane reads + writes, the traffic
-  its kernels do, :func:`mlplc2._fast.plane_traffic`) with the same thread count, and the
+  (:func:`mlplc2._fast.plane_count`: N = 26 planes with the default parameters, 28 with the
+  relative floor ``Params.n_floor``; the kernels do 54 or 64 plane reads + writes,
+  :func:`mlplc2._fast.plane_traffic`) with the same thread count, and the
   ratio of the model's time to it;
 * the peak memory one stream allocates (``tracemalloc``: model state, scratch and one
   frame's output maps; Numba's row buffers and OpenCV's strip buffers are not traced and
@@ -31,6 +32,8 @@ import tracemalloc
 from dataclasses import dataclass
 
 import numpy as np
+
+from .params import Params
 
 __all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
            "run_bench", "format_table", "add_arguments", "cli_handler", "main"]
@@ -202,7 +205,7 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
     _fast.set_threads(numba.get_num_threads() if threads is None else threads)
     n_threads = numba.get_num_threads()
     sizes = parse_sizes(DEFAULT_SIZES) if sizes is None else sizes
-    planes = sum(count for _, count, _ in _fast.PLANES)
+    planes = _fast.plane_count(Params().n_floor > 0)
     rows = []
     for w, h in sizes:
         total = warmup + max(frames, ref_frames)
@@ -305,7 +308,7 @@ def cli_handler(args) -> int:
     if not args.quiet:
         from . import _fast
 
-        traffic = sum(_fast.plane_traffic().values())
+        traffic = sum(_fast.plane_traffic(Params().n_floor > 0).values())
         import os
 
         load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"

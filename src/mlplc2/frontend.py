@@ -130,7 +130,7 @@ class FrontEnd:
             st.onoff_prev = (on, off)
         t = {}
         for channel, signal in (("on", on), ("off", off)):
-            n = contrast_normalise(signal, self.k_c, p.epsilon, p.n_floor)  # Eq. 6-7
+            n = contrast_normalise(signal, self.k_c, p.epsilon, p.n_floor, p.n_floor_radius)  # Eq. 6-7
             n_prev = st.n_prev.get(channel)
             if n_prev is None:
                 n_prev = np.zeros_like(n)

@@ -17,24 +17,33 @@ x = column, y = row; "down" is increasing row, "up" decreasing row.
 
 from __future__ import annotations
 
+import cv2
 import numpy as np
 
 from .lamina import gaussian_filter
 
-__all__ = ["DIRECTIONS", "contrast_normalise", "delayed", "shift", "correlator", "motion_detectors"]
+__all__ = ["DIRECTIONS", "contrast_normalise", "local_max", "delayed", "shift", "correlator", "motion_detectors"]
 
 #: Unit steps (dx, dy) of the four cardinal directions: right, left, down, up.
 DIRECTIONS: dict[str, tuple[int, int]] = {"r": (1, 0), "l": (-1, 0), "d": (0, 1), "u": (0, -1)}
 
 
-def contrast_normalise(n: np.ndarray, k_c: np.ndarray, epsilon: float, floor: float = 0.0) -> np.ndarray:
-    """Eq. 6-7: N <- tanh(N / (epsilon + K_c * N)), then values below ``floor`` set to 0
-    (``Params.n_floor``; 0 = the paper)."""
+def contrast_normalise(n: np.ndarray, k_c: np.ndarray, epsilon: float, floor: float = 0.0,
+                       floor_radius: int = 10) -> np.ndarray:
+    """Eq. 6-7: N <- tanh(N / (epsilon + K_c * N)), then the relative floor: N set to 0
+    where it is below ``floor`` times the largest N within ``floor_radius`` px
+    (``Params.n_floor``; ``floor = 0``: the paper, no floor)."""
     n_hat = gaussian_filter(n, k_c)
     out = np.tanh(n / (np.float32(epsilon) + n_hat)).astype(np.float32, copy=False)
     if floor:
-        out[out < np.float32(floor)] = 0
+        out[out < np.float32(floor) * local_max(out, floor_radius)] = 0
     return out
+
+
+def local_max(a: np.ndarray, radius: int) -> np.ndarray:
+    """Largest value of ``a`` in the (2 radius + 1)^2 square around each pixel (0 outside the frame)."""
+    k = np.ones((2 * radius + 1, 2 * radius + 1), np.uint8)
+    return cv2.dilate(a, k, borderType=cv2.BORDER_CONSTANT, borderValue=0)
 
 
 def delayed(n: np.ndarray, n_prev: np.ndarray, alpha: float) -> np.ndarray:

@@ -61,10 +61,17 @@ class Params:
     sigma_c: float = 20.0
     """sigma_c (px): standard deviation of K_c (Table I)."""
     n_floor: float = 0.0
-    """Extra. Contrast-normalised signals N below this are set to 0 after Eq. 6 (authors' code:
-    0.67-0.75, tuned per video; the paper: none). 0 by default: 0.2 removes the brief answer of
-    LPLC2 and sLPLC2 to a bright receding square but delays fields on busy backgrounds
-    (docs/model.md, "Open problems")."""
+    """Extra. Relative floor on the contrast-normalised signal (after Eq. 6): N is set to 0
+    where it is below n_floor times the largest N within ``n_floor_radius`` px. 0 (the
+    default) = the paper, no floor. 0.3-0.5 removes the low tails of each moving band, where
+    the triple correlator of Eq. 9 answers the shape of the band (a square's corners) rather
+    than its motion, and with it the ~20 % answer of LPLC2 and sLPLC2 to a bright receding
+    square; it is not the default because it costs field creation, alarms and speed on
+    textured scenes (docs/model.md, "Open problems"). The authors' code zeroes N below an
+    absolute 0.67-0.75 tuned per video (NOTES 6)."""
+    n_floor_radius: int = 10
+    """Extra. Radius (px) of the square window of the local maximum used by ``n_floor``
+    (21 x 21: about one band of the inhibitory vDoG window, r_Di = 11)."""
     epsilon: float = 25.0
     """epsilon: constant of the contrast normalisation, Eq. 6, on the 0-255 scale of the input.
     Table I gives 0.2; that value makes every change, however faint, saturate the tanh
@@ -144,7 +151,8 @@ class Params:
         for name in non_negative:
             if not getattr(self, name) >= 0:
                 raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)!r}")
-        at_least_one = ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields")
+        at_least_one = ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields",
+                        "n_floor_radius")
         for name in at_least_one:
             value = getattr(self, name)
             if not isinstance(value, int) or isinstance(value, bool) or value < 1:
@@ -152,7 +160,7 @@ class Params:
         if not isinstance(self.grace, int) or self.grace < 0:
             raise InputValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
         if self.n_floor >= 1:
-            raise InputValueError(f"Params.n_floor must be < 1 (N lies in [0, 1)), got {self.n_floor!r}")
+            raise InputValueError(f"Params.n_floor must be < 1 (a fraction of the local maximum), got {self.n_floor!r}")
         if self.after_image >= 1:
             raise InputValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
         if self.field_shape not in ("square", "disc"):

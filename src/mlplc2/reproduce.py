@@ -75,9 +75,11 @@ BEAR_CONTACT = 60          # frame at which the bear hits the camera (ground_tru
 #: Claims that fail for a documented reason. A claim is flagged only while it fails.
 KNOWN_DEVIATIONS: dict[str, str] = {
     "IV-A.silent.lplc2.bright_recede":
-        "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %)",
+        "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %; "
+        "Params(n_floor=0.35) removes it)",
     "IV-A.silent.slplc2.bright_recede":
-        "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %)",
+        "known deviation, see docs/model.md 'Open problems' (bright receding square, ~20 %; "
+        "Params(n_floor=0.35) removes it)",
     "IV-B4.lgmd2.recede":
         "known deviation, see docs/reproduce.md 'Deviations found' (LGMD2 flat at rest while objects recede)",
     "IV-C.alarm.bird_attack_2":
