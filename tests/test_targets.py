@@ -115,6 +115,146 @@ def test_robust_fit_matches_brute_force():
             assert got[2] == best[2] and got[0] == pytest.approx(best[1], rel=1e-6)
 
 
+# ---------------------------------------------------------------------------
+# the Numba kernels (mlplc2._fast_targets) against the NumPy code (the oracle)
+# ---------------------------------------------------------------------------
+@pytest.fixture
+def fast_targets():
+    pytest.importorskip("numba")
+    from mlplc2 import targets
+
+    fast = targets._fast_targets()
+    assert fast is not None
+    return fast
+
+
+def _numpy_path(monkeypatch):
+    from mlplc2 import targets
+
+    monkeypatch.setattr(targets, "_FAST", False)
+
+
+def _random_lm(rng, h, w, kind):
+    """LM maps with edges (lobes of several widths), noise, exact ties and all-negative strips."""
+    from mlplc2.lobula_plate import LocalMotion
+
+    maps = []
+    for _ in range(4):
+        if kind == "ties":        # few distinct values: ties everywhere (floors, peaks, boundaries)
+            a = rng.integers(-2, 4, (h, w)).astype(np.float32) * np.float32(0.25)
+        elif kind == "negative":  # no outward motion: the profiles are <= 0
+            a = -rng.random((h, w), dtype=np.float32)
+        elif kind == "zeros":
+            a = np.zeros((h, w), np.float32)
+        else:
+            a = (rng.normal(0, {"quiet": 0.01, "noisy": 0.3}[kind], (h, w))).astype(np.float32)
+            for _ in range(int(rng.integers(1, 6))):    # edges: lobes, some close together
+                c = int(rng.integers(0, max(w, h)))
+                amp = float(rng.choice([0.05, 0.5, 2.0]))
+                width = int(rng.integers(1, 8))
+                if rng.random() < 0.5:
+                    a[:, c:c + width] += np.float32(amp)
+                else:
+                    a[c:c + width, :] += np.float32(amp)
+        maps.append(a)
+    return LocalMotion(r=maps[0], l=maps[1], d=maps[2], u=maps[3], magnitude=np.abs(maps[0]))
+
+
+@pytest.mark.parametrize("kind", ["quiet", "noisy", "ties", "negative", "zeros"])
+def test_fast_extent_matches_numpy(fast_targets, kind):
+    """edges4 gives the NumPy path's four edge distances bit for bit (every border, odd params)."""
+    from mlplc2.targets import _edge_distances, _strip_profiles
+
+    rng = np.random.default_rng(7)
+    params = [TargetParams(), TargetParams(min_peak=0.0), TargetParams(noise_k=0.0), TargetParams(band=0, gap=0),
+              TargetParams(band=5, local=0, rel_start=1.0), TargetParams(rel_edge=1.0, noise_k=10.0),
+              TargetParams(rel_edge=0.0, min_peak=0.0, noise_k=0.0)]
+    checked = found = 0
+    for h, w in [(240, 320), (31, 17), (3, 2), (1, 1)]:
+        lm = _random_lm(rng, h, w, kind)
+        pts = [(0, 0), (w - 1, h - 1), (0, h - 1), (w - 1, 0), (1, 1), (w // 2, h // 2)]
+        pts += [(int(rng.integers(0, w)), int(rng.integers(0, h))) for _ in range(20)]
+        pts = [(min(x, w - 1), min(y, h - 1)) for x, y in pts]     # inside the frame (as measure_extent)
+        for p in params:
+            for x, y in pts:
+                prof, lens, scale = _strip_profiles(lm, x, y, p.band)
+                want = _edge_distances(prof, lens, scale, p)
+                got = fast_targets.edges4(lm.r, lm.l, lm.u, lm.d, x, y, p.band, p.min_peak, p.noise_k,
+                                          p.rel_start, p.rel_edge, p.gap, p.local)
+                assert [None if v < 0 else v for v in got] == want, (h, w, x, y, p)
+                checked += 1
+                found += sum(v is not None for v in want)
+    assert checked and (found > 0) == (kind not in ("negative", "zeros"))
+
+
+def test_fast_measure_extent_matches_numpy(fast_targets, monkeypatch):
+    """measure_extent (fast by default) equals the NumPy path, float64 maps included."""
+    from mlplc2.lobula_plate import LocalMotion
+    from mlplc2.targets import measure_extent
+
+    rng = np.random.default_rng(3)
+    cases = []
+    for kind in ("quiet", "noisy", "ties"):
+        lm = _random_lm(rng, 120, 160, kind)
+        cases.append(lm)
+        cases.append(LocalMotion(*(getattr(lm, n).astype(np.float64) for n in ("r", "l", "d", "u", "magnitude"))))
+    pts = [(-5, 300), (0, 0), (159, 119)] + [(int(rng.integers(0, 160)), int(rng.integers(0, 120))) for _ in range(30)]
+    fast = [measure_extent(lm, x, y) for lm in cases for x, y in pts]
+    _numpy_path(monkeypatch)
+    assert [measure_extent(lm, x, y) for lm in cases for x, y in pts] == fast
+    assert sum(e.width is not None for e in fast) > 10
+
+
+def _history(rng, n, kind):
+    frames = np.sort(rng.choice(np.arange(30, 42), n, replace=False))
+    if kind == "constant":      # no growth: the slope is 0 up to rounding (its sign decides)
+        sizes = np.full(n, float(rng.choice([40.0, 55.3, 1.0 / 3.0])))
+        if rng.random() < 0.5:
+            sizes[int(rng.integers(0, n))] *= 1 + rng.choice([1e-15, 0.3, -0.3])
+    else:
+        sizes = 400.0 / (rng.uniform(45, 90) - frames) * (1 + rng.normal(0, rng.choice([0.01, 0.05, 0.2]), n))
+        sizes = np.abs(sizes) + 0.1
+    return [(int(f), float(v), 0.0, 0.0) for f, v in zip(frames, sizes)]
+
+
+def test_fast_robust_fit_matches_numpy(fast_targets, monkeypatch):
+    """The compiled fits equal the NumPy path's bit for bit (the full set and the subset search)."""
+    from collections import deque
+
+    rng = np.random.default_rng(11)
+    tr = TargetTracker(TargetParams())
+    hists = [_history(rng, int(rng.integers(2, 7)), kind) for kind in ("growth", "constant") for _ in range(400)]
+    hists.append([(30, 40.0, 0, 0), (31, -1.0, 0, 0), (32, 42.0, 0, 0), (33, 43.0, 0, 0)])   # a size <= 0
+    fast = []
+    for hist in hists:
+        tr.history = deque(hist)
+        fast.append(tr._robust_fit(hist[-1][0]))
+    _numpy_path(monkeypatch)
+    for hist, got in zip(hists, fast):
+        tr.history = deque(hist)
+        assert got == tr._robust_fit(hist[-1][0]), hist
+    assert sum(r is not None and len(r[2]) < len(h) for r, h in zip(fast, hists)) > 10     # a subset won
+    assert sum(r is not None and r[2] == tuple(range(len(h))) for r, h in zip(fast, hists)) > 10
+
+
+@pytest.mark.parametrize("make", [lambda: stimuli.six_objects().frames[:90],
+                                  lambda: _two_objects(False, 1.0, 1).frames])
+def test_fast_targets_model_estimates_identical(fast_targets, monkeypatch, make):
+    """The model gives the same estimates per field per frame with and without the kernels."""
+    frames = make()
+
+    def run():
+        model = MLPLC2(fps=FPS, hfov_deg=HFOV)
+        return [[(fl.id, fl.ttc_s, fl.expansion_rate, fl.azimuth_deg, fl.elevation_deg, fl.rank)
+                 for fl in model.step(f).fields]
+                + [(fl.id, fl.estimate) for fl in model._fields] for f in frames]
+
+    fast = run()
+    _numpy_path(monkeypatch)
+    assert run() == fast
+    assert sum(fl[1] is not None for out in fast for fl in out if len(fl) == 6) > 20
+
+
 def test_edge_distance_outer_boundary_and_nearest_edge():
     p = np.zeros(120)
     p[20:26] = [1, 4, 8, 8, 4, 1]           # this object's edge

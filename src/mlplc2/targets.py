@@ -78,6 +78,26 @@ from .lobula_plate import LocalMotion
 __all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure_extent", "edge_distance",
            "fit_contact", "bearing", "focal_length", "rank_by_ttc"]
 
+_FAST = None    # the module mlplc2._fast_targets once imported, False without Numba (tests set False)
+_FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
+
+
+def _fast_targets():
+    """The Numba kernels (:mod:`mlplc2._fast_targets`), imported on first use; None without Numba.
+
+    They compute what the NumPy code below computes (which stays the fallback and the oracle
+    of ``tests/test_targets.py``), bit for bit: the edge distances of :func:`measure_extent`
+    and the subset search of :meth:`TargetTracker._robust_fit`.
+    """
+    global _FAST
+    if _FAST is None:
+        try:
+            from . import _fast_targets as mod
+        except Exception:  # noqa: BLE001 - ImportError, or numba failing to initialise
+            mod = False
+        _FAST = mod
+    return _FAST or None
+
 
 @dataclass(frozen=True)
 class TargetParams:
@@ -339,13 +359,22 @@ def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = Targe
     """Width, height and centre of the outward-expanding edges around (x, y).
 
     Cost: four strips of ``2 band + 1`` px from the centre to the frame border, summed,
-    sorted and thresholded together; then a short scan (:func:`_edge_distances`).
+    sorted and thresholded together; then a short scan (:func:`_edge_distances`). With Numba,
+    all of it in one compiled pass (:func:`mlplc2._fast_targets.edges4`, same results).
     """
     h, w = lm.magnitude.shape
     x = int(min(max(x, 0), w - 1))
     y = int(min(max(y, 0), h - 1))
-    prof, lens, scale = _strip_profiles(lm, x, y, params.band)
-    dr, dl, du, dd = _edge_distances(prof, lens, scale, params)
+    fast = _FAST if _FAST is not None else _fast_targets()
+    r, l, u, d = lm.r, lm.l, lm.u, lm.d  # noqa: E741
+    if fast and params.rel_edge <= 1.0 and r.dtype in _FLOATS and r.dtype == l.dtype == u.dtype == d.dtype \
+            and r.shape == l.shape == u.shape == d.shape == (h, w):
+        dist = fast.edges4(r, l, u, d, x, y, int(params.band), float(params.min_peak), float(params.noise_k),
+                           float(params.rel_start), float(params.rel_edge), int(params.gap), int(params.local))
+        dr, dl, du, dd = [None if v < 0 else v for v in dist]
+    else:
+        prof, lens, scale = _strip_profiles(lm, x, y, params.band)
+        dr, dl, du, dd = _edge_distances(prof, lens, scale, params)
     off = params.edge_offset
     width = height = None
     cx, cy = float(x), float(y)
@@ -408,6 +437,12 @@ def _subsets(n: int, need: int):
     for arr in (mask, sizes, first):
         arr.flags.writeable = False     # shared by every tracker (lru_cache)
     return mask, sizes, first
+
+
+@functools.lru_cache(maxsize=64)
+def _subset_keeps(n: int, need: int) -> tuple:
+    """The kept indices of each row of ``_subsets(n, need)`` (tuples)."""
+    return tuple(tuple(np.flatnonzero(row).tolist()) for row in _subsets(n, need)[0])
 
 
 def _median(values) -> float:
@@ -474,6 +509,19 @@ class TargetTracker:
                         return t_new - a / b, b, tuple(range(n))
         if need >= n:
             return None
+        fast = _FAST if _FAST is not None else _fast_targets()
+        if fast:
+            # The same search compiled (mlplc2._fast_targets.subset_fit), one subset at a time;
+            # the two sums that are not exact in any order still come from NumPy (BLAS), so
+            # the fits are bit-identical.
+            t = np.array(tl, dtype=np.float64)
+            yv = np.array(yl)
+            mask, _, first = _subsets(n, need)
+            j, a, b = fast.subset_fit(t, yv, mask, first, mask @ yv, mask @ (t * yv), float(p.min_span),
+                                      float(p.max_edge_speed), float(p.max_residual))
+            if j < 0:
+                return None
+            return t_new - a / b, b, _subset_keeps(n, need)[j]
         t = np.array(tl)
         yv = np.array(yl)
         mask, k, first = _subsets(n, need)

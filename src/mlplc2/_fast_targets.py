@@ -1,0 +1,216 @@
+"""Numba kernels of the target estimators (:mod:`mlplc2.targets`), used when Numba imports.
+
+* :func:`edges4` is :func:`mlplc2.targets._strip_profiles` followed by
+  :func:`mlplc2.targets._edge_distances` in one compiled pass: the same strip sums (float64,
+  rows / columns added in the same order as ``np.add.reduce``), the same order statistic for
+  the noise floor (the 75th percentile as ``np.partition``), the same threshold and the same
+  scan over the samples above it, so the four distances are bit-identical to the NumPy path.
+* :func:`subset_fit` is the subset search of :meth:`mlplc2.targets.TargetTracker._robust_fit`
+  (every subset of ``_subsets``, one at a time instead of NumPy's masked arrays). It takes the
+  two sums that are not exact in any order (``mask @ y``, ``mask @ (t * y)``: BLAS, whose
+  order is its own) from NumPy, so it gives the NumPy path's fits bit for bit. This matters:
+  a nearly constant size gives a slope near 0 whose sign a rounding decides. (The full-set
+  fit stays in Python: its ``** 2`` is libm's ``pow``, which differs from ``x * x`` in the
+  last bit for ~0.1 % of the values.)
+
+Every kernel is ``nogil`` and cached on disk where possible; nothing here is public API.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numba
+import numpy as np
+
+__all__ = ["edges4", "subset_fit"]
+
+
+def _jit(**options):
+    """``numba.njit`` with an on-disk cache when one can be written, without one otherwise."""
+    base = dict(fastmath=False, nogil=True, error_model="numpy")
+    base.update(options)
+
+    def deco(func):
+        try:
+            return numba.njit(cache=True, **base)(func)
+        except (RuntimeError, OSError):  # pragma: no cover - depends on the file system
+            return numba.njit(cache=False, **base)(func)
+
+    return deco
+
+
+@_jit()
+def _edge_of(prof, n, scale, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals):
+    """:func:`mlplc2.targets._edge_distances` of one profile ``prof[:n]``; -1.0 for None.
+
+    ``cols`` / ``vals``: scratch buffers of at least ``n`` entries. The comparisons and
+    ``max`` / ``min`` follow Python's semantics (``max(a, b)`` is ``a`` unless ``b > a``).
+    """
+    floor = min_peak * scale
+    if n > 0:
+        # floor = max(floor, noise_k * max(q, 0)) with q the 75th percentile (order statistic
+        # kq). q only matters when noise_k * q > floor; then the n - kq samples at or above q
+        # in sorted order (NaN sorts last) all fail noise_k * v <= floor. Count those first
+        # (one pass) and select q only when there are enough of them (a noisy profile).
+        kq = int(0.75 * (n - 1))
+        above = 0
+        for c in range(n):
+            if not noise_k * prof[c] <= floor:
+                above += 1
+        if above >= n - kq:
+            q = np.partition(prof[:n], kq)[kq]
+            if 0.0 > q:
+                q = 0.0
+            f2 = noise_k * q
+            if f2 > floor:
+                floor = f2
+    sel = 0.5 * floor
+    ns = 0
+    for c in range(n):
+        v = prof[c]
+        if v >= sel:
+            cols[ns] = c
+            vals[ns] = v
+            ns += 1
+    i = 0
+    while i < ns:
+        j = i
+        peak = vals[i]
+        while j + 1 < ns and cols[j + 1] - cols[j] <= gap:
+            j += 1
+            if vals[j] > peak:
+                peak = vals[j]
+        if peak >= floor:
+            near = peak
+            k = j + 1
+            lim = cols[i] + local
+            while k < ns and cols[k] < lim:
+                if vals[k] > near:
+                    near = vals[k]
+                k += 1
+            if peak >= rel_start * near:
+                level = rel_edge * peak
+                k = j
+                while vals[k] < level:      # stops at the peak (rel_edge <= 1, checked by the caller)
+                    k -= 1
+                ck = cols[k]
+                if ck + 1 < n:
+                    a = vals[k]
+                    b = prof[ck + 1]
+                    if 0.0 > b:
+                        b = 0.0
+                    den = a - b
+                    tiny = 1e-12 * scale
+                    if tiny > den:
+                        den = tiny
+                    frac = (a - level) / den
+                    if 0.0 > frac:
+                        frac = 0.0
+                    if 1.0 < frac:
+                        frac = 1.0
+                    return (ck + 1) + frac
+                return -1.0
+        i = j + 1
+    return -1.0
+
+
+@_jit()
+def edges4(r, l, u, d, x, y, band, min_peak, noise_k, rel_start, rel_edge, gap, local):  # noqa: E741
+    """The four edge distances (right, left, up, down; -1.0 for None) around (x, y).
+
+    ``r, l, u, d``: the LM maps (H, W); ``x``, ``y`` inside the frame; ``rel_edge <= 1``.
+    """
+    h, w = r.shape
+    r0 = max(y - band, 0)
+    r1 = min(y + band + 1, h)
+    c0 = max(x - band, 0)
+    c1 = min(x + band + 1, w)
+    nr = float(r1 - r0)
+    nc = float(c1 - c0)
+    m = max(w, h)
+    prof = np.empty(m)
+    cols = np.empty(m, np.int64)
+    vals = np.empty(m)
+    out = np.empty(4)
+    # right: LM_r along the row, summed over the strip's rows (in order, like np.add.reduce)
+    n = w - 1 - x
+    for k in range(n):
+        prof[k] = np.float64(r[r0, x + 1 + k])
+    for row in range(r0 + 1, r1):
+        for k in range(n):
+            prof[k] += np.float64(r[row, x + 1 + k])
+    out[0] = _edge_of(prof, n, nr, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
+    # left: LM_l, outwards from x - 1
+    n = x
+    for k in range(n):
+        prof[k] = np.float64(l[r0, x - 1 - k])
+    for row in range(r0 + 1, r1):
+        for k in range(n):
+            prof[k] += np.float64(l[row, x - 1 - k])
+    out[1] = _edge_of(prof, n, nr, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
+    # up: LM_u along the column, upwards from y - 1, summed over the strip's columns
+    n = y
+    for k in range(n):
+        s = np.float64(u[y - 1 - k, c0])
+        for c in range(c0 + 1, c1):
+            s += np.float64(u[y - 1 - k, c])
+        prof[k] = s
+    out[2] = _edge_of(prof, n, nc, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
+    # down: LM_d, downwards from y + 1
+    n = h - 1 - y
+    for k in range(n):
+        s = np.float64(d[y + 1 + k, c0])
+        for c in range(c0 + 1, c1):
+            s += np.float64(d[y + 1 + k, c])
+        prof[k] = s
+    out[3] = _edge_of(prof, n, nc, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
+    return out[0], out[1], out[2], out[3]
+
+
+@_jit()
+def subset_fit(t, y, mask, first, sy, sty, min_span, max_edge_speed, max_residual):
+    """The subset search of :meth:`mlplc2.targets.TargetTracker._robust_fit`: (row, a, b), row -1
+    when no subset is accepted.
+
+    ``t``: frames minus the newest frame (float64, exact integers); ``y``: 1 / size (sizes > 0);
+    ``mask`` / ``first``: ``_subsets(n, need)``; ``sy`` / ``sty``: ``mask @ y`` and
+    ``mask @ (t * y)`` from NumPy (BLAS sums in its own order: passing them in keeps the fits
+    bit-identical to the NumPy path). The other sums are of small integers (exact in any
+    order); the rest is the NumPy path's elementwise arithmetic, one subset at a time.
+    """
+    n = t.size
+    best = -1
+    best_k = 0.0
+    best_rms = 0.0
+    best_a = 0.0
+    best_b = 0.0
+    for j in range(mask.shape[0]):
+        k = 0.0
+        st = 0.0
+        stt = 0.0
+        for i in range(n):
+            if mask[j, i] != 0.0:
+                k += 1.0
+                st += t[i]
+                stt += t[i] * t[i]
+        if best >= 0 and k != best_k:
+            break                   # subsets come largest first: a smaller one never wins
+        den = k * stt - st * st
+        if not den > 0:
+            continue
+        b = (k * sty[j] - st * sy[j]) / den
+        a = (sy[j] - b * st) / k
+        if not (-t[first[j]] >= min_span and b < 0 and a > 0):
+            continue
+        ss = 0.0
+        for i in range(n):
+            if mask[j, i] != 0.0:
+                e = (y[i] - a - b * t[i]) / y[i]
+                ss += e * e
+        rms = math.sqrt(ss / k)
+        if not (rms <= max_residual and -b / (a * a) / 2.0 <= max_edge_speed):
+            continue
+        if best < 0 or rms < best_rms:
+            best, best_k, best_rms, best_a, best_b = j, k, rms, a, b
+    return best, best_a, best_b
