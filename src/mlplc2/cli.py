@@ -25,6 +25,7 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from ._validation import InputError, InputValueError
+from .models.base import MAX_REPEATS, REPEAT_THRESHOLD
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "add_subcommand",
            "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
@@ -113,6 +114,7 @@ def number_type(cast, ok, expected: str):
 _nonneg_int = number_type(int, lambda v: v >= 0, "an integer >= 0")
 _pos_float = number_type(float, lambda v: math.isfinite(v) and v > 0, "a positive number")
 _hfov = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees in (0, 180)")
+_nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
 def _add_run(p: argparse.ArgumentParser) -> None:
@@ -140,6 +142,11 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
     p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv; pyav needs mlplc2[video])")
+    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
+                   help=f"hold the models' output on duplicated frames: frames in which no pixel changed "
+                        f"by more than LEVEL grey levels (default LEVEL {REPEAT_THRESHOLD:g}) since the last "
+                        f"processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
+                        f"repeated to raise the frame rate (docs/model.md)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
@@ -156,7 +163,7 @@ def _cmd_run(args) -> int:
         try:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False)
+                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats)
         except RunInterrupted as exc:
             res = exc.result
             print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",

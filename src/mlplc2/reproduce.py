@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 
 from ._validation import InputValueError
+from .models.base import REPEAT_THRESHOLD as _REPEAT_THRESHOLD
 
 __all__ = ["reproduce", "ReproduceResult", "Claim", "Trace", "KNOWN_DEVIATIONS", "FAMILY", "MODELS",
            "PAPER_BASIC_FILES", "FOUR_PHASE_FILE", "SIX_OBJECTS_FILE", "add_arguments", "cli_handler"]
@@ -82,8 +83,6 @@ KNOWN_DEVIATIONS: dict[str, str] = {
         "Params(n_floor=0.35) removes it)",
     "IV-B4.lgmd2.recede":
         "known deviation, see docs/reproduce.md 'Deviations found' (LGMD2 flat at rest while objects recede)",
-    "IV-C.alarm.bird_attack_2":
-        "known deviation (paper data only), see docs/model.md 'Open problems' (low-contrast raptor clip)",
     "IV-B5.persistence":
         "known deviation, see docs/reproduce.md 'Deviations found' (fields are removed before the object vanishes)",
 }
@@ -138,11 +137,18 @@ class Trace:
         return [f for f in self.fields.values() if f.alarms]
 
 
+#: Every model of the reproduction holds duplicated frames (``Model.repeat_threshold``): the
+#: paper's real clips repeat many frames (the raptor clip most of them); the synthetic
+#: stimuli change on every frame, so their results are the same with or without it.
+REPEAT_THRESHOLD = _REPEAT_THRESHOLD
+
+
 def run_model(name: str, frames, fps: float, progress=None) -> Trace:
-    """Run model ``name`` (registry name, default parameters) over ``frames``."""
+    """Run model ``name`` (registry name, default parameters, duplicated frames held:
+    :data:`REPEAT_THRESHOLD`) over ``frames``."""
     from .models import get_model
 
-    model = get_model(name)(fps=fps)
+    model = get_model(name)(fps=fps, repeat_threshold=REPEAT_THRESHOLD)
     resp, coll = [], []
     fields: dict[int, FieldTrace] = {}
     for frame in frames:
@@ -699,7 +705,8 @@ def write_markdown(result: ReproduceResult, path: Path) -> Path:
     from .io import atomic_path
 
     lines = ["# mLPLC2 reproduction of Sec. IV", "",
-             f"Input: {result.source}. Parameters: `mlplc2.Params()` defaults, one set for every input."
+             f"Input: {result.source}. Parameters: `mlplc2.Params()` defaults, one set for every input; "
+             f"duplicated frames held (`repeat_threshold={REPEAT_THRESHOLD:g}`, docs/model.md)."
              + (" **Quick run** (reduced set, see below)." if result.quick else ""), "",
              f"**{result.n_pass} PASS, {result.n_fail} FAIL** of {len(result.claims)} claims "
              f"({result.n_known} of the FAILs are documented known deviations, "

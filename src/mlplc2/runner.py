@@ -38,7 +38,7 @@ from pathlib import Path
 from typing import Any
 
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
-from .models.base import Model, Output, get_model
+from .models.base import Model, Output, check_repeat_threshold, get_model
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir",
@@ -251,7 +251,7 @@ def default_out_dir(source) -> Path:
     return p.parent / f"{p.stem}_mlplc2"
 
 
-def _build_models(models, fps: float, params, hfov_deg=None) -> list[Model]:
+def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=None) -> list[Model]:
     if isinstance(models, (str, Model)):
         models = [models]
     built: list[Model] = []
@@ -264,11 +264,14 @@ def _build_models(models, fps: float, params, hfov_deg=None) -> list[Model]:
                 from .targets import check_hfov
 
                 model.hfov_deg = check_hfov(hfov_deg)
+            if repeat_threshold is not None:
+                model.repeat_threshold = check_repeat_threshold(repeat_threshold)
         else:
             name = str(m).strip().lower()
             cls = get_model(name)
             p = params.get(name) if isinstance(params, Mapping) else params
             kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.localises) else {}
+            kw["repeat_threshold"] = repeat_threshold
             model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
         if model.name in seen:
             continue
@@ -301,7 +304,8 @@ def _primary(models: Sequence[Model]) -> int | None:
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, fps=None, resize=None,
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
-        hfov_deg: float | None = None, keep_rows: bool = True) -> RunResult:
+        hfov_deg: float | None = None, keep_rows: bool = True,
+        repeat_threshold: float | None = None) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -345,6 +349,11 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
         ``.targets`` (default). Set False for long or live runs: memory then stays
         flat whatever the length (the rows are in the CSV files; the CLI does this).
+    repeat_threshold : float, optional
+        Treat a frame in which no pixel differs from the last processed one by more than
+        this many grey levels as a duplicate: the models hold their last output for it
+        (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
+        paper's clips). Default: every frame steps the models.
 
     Returns
     -------
@@ -373,7 +382,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
                       keep_original=video, backend=backend)
     try:
-        built = _build_models(models, src.fps, params, hfov_deg)
+        built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold)
         _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     except BaseException:
         src.close()

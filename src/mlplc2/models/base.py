@@ -8,16 +8,19 @@ Every model is built as ``Model(fps=..., params=...)`` and offers
 from __future__ import annotations
 
 import abc
+import dataclasses
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, ClassVar
 
+import cv2
 import numpy as np
 
 from .._validation import InputValueError, as_gray, check_fps
 from ..attention import Field
 
-__all__ = ["Output", "Model", "REGISTRY", "register", "get_model", "available_models"]
+__all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "register", "get_model",
+           "available_models"]
 
 
 @dataclass(frozen=True)
@@ -37,6 +40,9 @@ class Output:
         Collision alarm this frame (LPLC2 family: any field in alarm).
     spike : bool
         A spike this frame (LGMD models; the LPLC2 family spikes when it alarms).
+    repeated : bool
+        The frame repeated the last processed one (see ``Model.repeat_threshold``): the
+        model did not step, and this output is the previous one with this frame's index.
     """
 
     frame: int
@@ -44,6 +50,7 @@ class Output:
     fields: tuple[Field, ...] = ()
     collision: bool = False
     spike: bool = False
+    repeated: bool = False
 
     @property
     def most_urgent(self) -> Field | None:
@@ -64,6 +71,31 @@ class Output:
         """Fields with a time-to-collision estimate, most urgent first (the ``Field.rank`` order)."""
         timed = [f for f in self.fields if getattr(f, "ttc_s", None) is not None]
         return tuple(sorted(timed, key=lambda f: (f.ttc_s, -f.response, f.id)))
+
+
+#: Suggested ``Model.repeat_threshold`` (grey levels, 0-255; the default is None, off):
+#: duplicated frames in the paper's clips differ from their original by at most 15 grey
+#: levels (compression noise), frames with real motion there by 15-255 (docs/model.md,
+#: "Repeated frames"). Off by default because a slow, faint change (a far object looming)
+#: also stays under it for a few frames and would be sampled less often.
+REPEAT_THRESHOLD = 16.0
+#: Longest run of repeated frames held as duplicates (a 6 fps source stored at 30 fps repeats
+#: each frame 4 times; the paper's raptor clip has runs of up to 5). From the next repeat on
+#: the scene is taken to be still and every frame steps the model again, so it settles.
+MAX_REPEATS = 5
+
+
+def check_repeat_threshold(value) -> float | None:
+    """``value`` as a non-negative float, or None (repeat detection off)."""
+    if value is None:
+        return None
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise InputValueError(f"repeat_threshold must be a number of grey levels or None, got {value!r}") from None
+    if not (v >= 0 and np.isfinite(v)):
+        raise InputValueError(f"repeat_threshold must be a finite number >= 0 or None, got {value!r}")
+    return v
 
 
 REGISTRY: dict[str, type["Model"]] = {}
@@ -112,11 +144,21 @@ class Model(abc.ABC):
     #: True for models whose output has attention fields (positions); False for whole-field neurons.
     localises: ClassVar[bool] = False
 
-    def __init__(self, fps: float = 30.0, params: Any = None):
+    def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | None = None):
         self.fps = check_fps(fps)
         self.params = params
+        self.repeat_threshold = check_repeat_threshold(repeat_threshold)
+        """A frame in which no pixel differs from the last processed frame by more than this
+        many grey levels (0-255) is a repeat (a duplicated frame of a frame-rate conversion,
+        compression noise aside): the model does not step and returns its last output
+        (``Output.repeated``), at most :data:`MAX_REPEATS` times in a row. None (the default):
+        every frame steps. :data:`REPEAT_THRESHOLD` = 16 suits videos with duplicated frames.
+        See docs/model.md, "Repeated frames"."""
         self._shape: tuple[int, int] | None = None
         self._frame = 0
+        self._last_gray: np.ndarray | None = None
+        self._last_out: Output | None = None
+        self._repeats = 0
 
     @property
     def frame_index(self) -> int:
@@ -141,14 +183,33 @@ class Model(abc.ABC):
             h, w = gray.shape
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
+        if self.repeat_threshold is not None:
+            last = self._last_gray
+            if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= self.repeat_threshold:
+                self._repeats += 1
+                if self._repeats <= MAX_REPEATS:
+                    out = dataclasses.replace(self._last_out, frame=self._frame, repeated=True)
+                    self._frame += 1
+                    return out
+                # A longer run is a still scene, not a duplicated frame: step as usual.
+            else:
+                self._repeats = 0
+                if last is None:
+                    self._last_gray = gray.copy()
+                else:
+                    np.copyto(last, gray)
         out = self._step(gray, self._frame)
         self._frame += 1
+        self._last_out = out
         return out
 
     def reset(self) -> None:
         """Forget all state: the next frame is frame 0 and may have a new size."""
         self._shape = None
         self._frame = 0
+        self._last_gray = None
+        self._last_out = None
+        self._repeats = 0
         self._reset()
 
     def run(self, frames: Iterable[np.ndarray]) -> Iterator[Output]:

@@ -210,11 +210,12 @@ class LGMD2(Model):
     0.5
     """
 
-    def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None):
+    def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None, *,
+                 repeat_threshold: float | None = None):
         params = LGMD2Params() if params is None else params
         if not isinstance(params, LGMD2Params):
             raise InputTypeError(f"params must be LGMD2Params, got {type(params).__name__}")
-        super().__init__(fps=fps, params=params)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
         p = params
         self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
         self.alpha_off = tuple(lowpass_alpha(t, self.fps) for t in p.tau_off)
@@ -352,11 +353,12 @@ class LGMD1(Model):
     0.5
     """
 
-    def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None):
+    def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None, *,
+                 repeat_threshold: float | None = None):
         params = LGMD1Params() if params is None else params
         if not isinstance(params, LGMD1Params):
             raise InputTypeError(f"params must be LGMD1Params, got {type(params).__name__}")
-        super().__init__(fps=fps, params=params)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
         kn, kd = params.w_i_kernel
         self._kernel = np.array([[kd, kn, kd], [kn, 0.0, kn], [kd, kn, kd]], np.float32)
         self._reset()

@@ -25,14 +25,15 @@ class _LPLC2Family(Model):
     localises = True
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
-                 target_params: TargetParams | None = None, backend: str = "auto"):
+                 target_params: TargetParams | None = None, backend: str = "auto",
+                 repeat_threshold: float | None = None):
         params = Params() if params is None else params
         if not isinstance(params, Params):
             raise InputTypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
         target_params = TargetParams() if target_params is None else target_params
         if not isinstance(target_params, TargetParams):
             raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
-        super().__init__(fps=fps, params=params)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
         self.hfov_deg = check_hfov(hfov_deg)
         """Horizontal field of view (degrees) of the camera, or None. Given: bearings in degrees
         and expansion rates in deg/s; None: pixel offsets and px/s (``docs/targets.md``)."""

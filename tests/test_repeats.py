@@ -1,0 +1,106 @@
+"""Repeated (duplicated) frames: Model.repeat_threshold and ``mlplc2 run --skip-repeats``."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2 import cli, stimuli
+from mlplc2.models.base import MAX_REPEATS, REGISTRY, REPEAT_THRESHOLD
+
+from .conftest import read_gray
+
+
+def _duplicated(frames, every=3, copies=2, noise=6, seed=0):
+    """Each ``every``-th frame repeated ``copies`` times with +-``noise`` grey levels of jitter
+    (a frame-rate conversion of a compressed video); returns (frames, index of the original)."""
+    rng = np.random.default_rng(seed)
+    out, origin = [], []
+    for i, f in enumerate(frames):
+        out.append(f)
+        origin.append(i)
+        if i % every == 0:
+            for _ in range(copies):
+                jitter = rng.integers(-noise, noise + 1, f.shape)
+                out.append(np.clip(f.astype(np.int16) + jitter, 0, 255).astype(np.uint8))
+                origin.append(i)
+    return out, origin
+
+
+@pytest.mark.parametrize("name", sorted(REGISTRY))
+def test_duplicates_are_held_and_do_not_change_the_model(name):
+    frames = stimuli.four_phase(seed=0).frames[:60]
+    dup, origin = _duplicated(frames)
+    plain = REGISTRY[name](fps=30.0)
+    ref = [plain.step(f) for f in frames]
+    model = REGISTRY[name](fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
+    outs = [model.step(f) for f in dup]
+    for k, out in enumerate(outs):
+        assert out.frame == k
+        first = k == 0 or origin[k] != origin[k - 1]
+        assert out.repeated == (not first)
+        want = ref[origin[k]]
+        assert out.response == want.response and out.collision == want.collision
+        assert [(f.x, f.y, f.response) for f in out.fields] == [(f.x, f.y, f.response) for f in want.fields]
+
+
+def test_without_threshold_every_frame_steps():
+    frames = stimuli.four_phase(seed=0).frames[:30]
+    dup, _ = _duplicated(frames)
+    model = mlplc2.MLPLC2(fps=30.0)
+    assert model.repeat_threshold is None
+    assert not any(model.step(f).repeated for f in dup)
+
+
+def test_a_still_scene_is_not_held_forever():
+    """After MAX_REPEATS held frames the scene counts as still and the model steps (and settles)."""
+    st = stimuli.scene([stimuli.SceneObject(center=(160, 120), onset=0, approach=30, hold=0, recede=0)],
+                       frames=30, background="plain")
+    model = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
+    assert max(model.step(f).response for f in st.frames) > 0
+    tail = [model.step(st.frames[-1]) for _ in range(60)]
+    assert all(o.repeated for o in tail[:MAX_REPEATS])
+    assert not any(o.repeated for o in tail[MAX_REPEATS:])
+    assert tail[-1].response == 0.0 and not tail[-1].collision
+
+
+def test_slow_drift_is_measured_against_the_last_processed_frame():
+    """Changes below the threshold accumulate: the frame that takes the total over it steps."""
+    base = np.full((60, 80), 100, np.uint8)
+    model = mlplc2.LGMD2(fps=30.0, repeat_threshold=10)
+    flags = [model.step(base + np.uint8(4 * k)).repeated for k in range(8)]
+    # 0 steps; +4, +8 repeat; +12 steps; +16, +20 repeat; +24 steps; +28 repeats
+    assert flags == [False, True, True, False, True, True, False, True]
+
+
+@pytest.mark.parametrize("bad", [-1, float("nan"), "x"])
+def test_bad_threshold_is_a_clear_error(bad):
+    with pytest.raises(mlplc2.InputError, match="repeat_threshold"):
+        mlplc2.MLPLC2(fps=30.0, repeat_threshold=bad)
+
+
+def test_cli_skip_repeats(tmp_path, capsys):
+    video = tmp_path / "dup.avi"
+    frames, _ = _duplicated(stimuli.four_phase(seed=0).frames[:20])
+    from mlplc2.io import write_video
+
+    write_video(video, np.stack(frames), 30.0)
+    assert cli.main(["run", str(video), "--skip-repeats", "--out", str(tmp_path / "o"), "-q"]) == 0
+    assert (tmp_path / "o" / "responses.csv").exists()
+    assert cli.main(["run", str(video), "--skip-repeats", "-1", "--out", str(tmp_path / "p"), "-q"]) == 2
+    assert "--skip-repeats" in capsys.readouterr().err
+
+
+@pytest.mark.paper
+def test_raptor_clip_alarms_once_duplicates_are_held(paper_dir):
+    """uav/bird_attack_2.avi repeats most frames (real changes every 3-6 frames): stepped on
+    every frame, the correlators get one frame of motion between several of stillness (no
+    alarm); holding the duplicates, mLPLC2 raises its alarm on the raptor (docs/model.md,
+    "Repeated frames")."""
+    frames = read_gray(paper_dir / "uav" / "bird_attack_2.avi")
+    plain = mlplc2.MLPLC2(fps=30.0)
+    assert not any(plain.step(f).collision for f in frames)
+    held = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
+    alarms = [k for k, f in enumerate(frames) if held.step(f).collision]
+    assert alarms and alarms[0] < 30  # the raptor fills the view from frame ~33
