@@ -104,3 +104,31 @@ def test_raptor_clip_alarms_once_duplicates_are_held(paper_dir):
     held = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
     alarms = [k for k, f in enumerate(frames) if held.step(f).collision]
     assert alarms and alarms[0] < 30  # the raptor fills the view from frame ~33
+
+
+def test_batch_passes_skip_repeats(tmp_path):
+    frames, _ = _duplicated(stimuli.four_phase(seed=0).frames[:12])
+    from mlplc2.io import write_video
+
+    write_video(tmp_path / "v.avi", np.stack(frames), 30.0)
+    assert cli.main(["batch", str(tmp_path / "v.avi"), "--out", str(tmp_path / "b"), "--workers", "0",
+                     "--skip-repeats", "-q"]) == 0
+    import json
+
+    done = list((tmp_path / "b").rglob("*.json"))
+    assert any(json.loads(p.read_text()).get("run_options", {}).get("repeat_threshold") == REPEAT_THRESHOLD
+               for p in done)
+
+
+def test_evaluate_passes_skip_repeats(tmp_path):
+    st = stimuli.four_phase(seed=0)
+    frames, origin = _duplicated(st.frames[:40])
+    from mlplc2.io import write_video
+
+    write_video(tmp_path / "v.avi", np.stack(frames), 30.0)
+    import json
+
+    gt = {"videos": {"v.avi": {"size": [320, 240], "frames": len(frames), "objects": []}}}
+    (tmp_path / "gt.json").write_text(json.dumps(gt))
+    assert cli.main(["evaluate", str(tmp_path / "v.avi"), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2",
+                     "--skip-repeats", "-q"]) == 0

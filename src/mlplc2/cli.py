@@ -287,6 +287,9 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tail", type=_nonneg_int, default=25, metavar="FRAMES",
                    help="frames after an approach during which its fields/alarms still count (default 25)")
     p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
+    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
+                   help="for video inputs: hold the models' output on duplicated frames "
+                        "(as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--details", action="store_true", help="also print the per-video table")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -297,6 +300,8 @@ def _cmd_evaluate(args) -> int:
 
     models = _model_names(args.model) if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    if args.skip_repeats is not None:
+        options["repeat_threshold"] = args.skip_repeats
     ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
                   run_options=options, progress=not args.quiet)
     for s in ev.skipped:
@@ -325,6 +330,8 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=_nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
+    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
+                   help="hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pandas, pyarrow)")
@@ -337,6 +344,8 @@ def _cmd_batch(args) -> int:
 
     models = _model_names(args.model)
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    if args.skip_repeats is not None:
+        options["repeat_threshold"] = args.skip_repeats
     res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
                 scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
                 progress=not args.quiet, force=args.force, parquet=args.parquet)
