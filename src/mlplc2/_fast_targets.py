@@ -20,24 +20,11 @@ from __future__ import annotations
 
 import math
 
-import numba
 import numpy as np
 
+from ._fast import _jit  # the same njit options and on-disk cache fallback as the front end
+
 __all__ = ["edges4", "subset_fit"]
-
-
-def _jit(**options):
-    """``numba.njit`` with an on-disk cache when one can be written, without one otherwise."""
-    base = dict(fastmath=False, nogil=True, error_model="numpy")
-    base.update(options)
-
-    def deco(func):
-        try:
-            return numba.njit(cache=True, **base)(func)
-        except (RuntimeError, OSError):  # pragma: no cover - depends on the file system
-            return numba.njit(cache=False, **base)(func)
-
-    return deco
 
 
 @_jit()

@@ -166,11 +166,9 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
     ``zones`` is a sequence of (x, y, r): excluded squares (or discs) of
     half-side r centred on (x, y).
     """
-    idx = int(np.argmax(lm_map))
-    y, x = divmod(idx, lm_map.shape[1])
-    if not any(_in_zone(x, y, z, shape) for z in zones):
-        # The first maximum of the whole map is outside every zone: it is also the first
-        # maximum of the masked map (no copy needed; ties resolve the same way).
+    if not zones:
+        idx = int(np.argmax(lm_map))
+        y, x = divmod(idx, lm_map.shape[1])
         return x, y, float(lm_map[y, x])
     masked = lm_map.copy()
     h, w = masked.shape
@@ -191,14 +189,6 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
     if value == -np.inf:
         return None
     return x, y, value
-
-
-def _in_zone(x: int, y: int, zone, shape: str) -> bool:
-    """Whether pixel (x, y) lies in the excluded square (or disc) ``zone`` = (fx, fy, r)."""
-    fx, fy, r = zone
-    if abs(x - fx) > r or abs(y - fy) > r:
-        return False
-    return shape != "disc" or (x - fx) ** 2 + (y - fy) ** 2 <= r * r
 
 
 class IdCounter:
