@@ -4,15 +4,19 @@ from __future__ import annotations
 
 import csv
 import json
+import os
 import shutil
+import signal
+import subprocess
 import sys
+import time
 
 import pytest
 
 from mlplc2 import stimuli
-from mlplc2._validation import InputValueError
-from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, batch, expand_inputs, param_set_id, param_sets,
-                          parse_sweep, start_local_cluster)
+from mlplc2._validation import InputTypeError, InputValueError
+from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, expand_inputs, param_set_id,
+                          param_sets, parse_sweep, start_local_cluster)
 from mlplc2.cli import main
 from mlplc2.evaluate import evaluate
 from mlplc2.io import write_video
@@ -180,7 +184,8 @@ def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
     assert code == 0
     rows = _read_table(tmp_path / "o" / "results.csv")
     assert len(rows) == 2 * 2 * 2 and {r["status"] for r in rows} == {"ok"}
-    assert {r["params"] for r in rows if r["model"] == "mlplc2"} == {'{"d": 5, "t_a": 12}', '{"d": 10, "t_a": 12}'}
+    # d=10 is the default: no override
+    assert {r["params"] for r in rows if r["model"] == "mlplc2"} == {'{"d": 5, "t_a": 12}', '{"t_a": 12}'}
     # bad input: one line, exit 2
     assert main(["batch", str(tmp_path / "none.avi"), "--out", str(tmp_path / "x"), "--workers", "0"]) == 2
     err = capsys.readouterr().err
@@ -206,3 +211,152 @@ def test_parquet_table(videos, tmp_path):
     df = pd.read_parquet(tmp_path / "o" / "results.parquet")
     assert list(df.columns) == list(RESULT_COLUMNS) and len(df) == 2
     assert df["n_frames"].tolist() == [r["n_frames"] for r in res.rows] == [24, 24]
+
+
+def _one_error_line(err):
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mlplc2: error:"), err
+    return lines[0]
+
+
+def test_scheduler_address_is_checked_first(videos, tmp_path, capsys):
+    pytest.importorskip("distributed")
+    out = tmp_path / "o"
+    assert main(["batch", videos["paths"][0], "--out", str(out), "--scheduler", "notanaddress", "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "'notanaddress'" in line and "tcp://HOST:PORT" in line
+    assert not out.exists()   # nothing written before the address is checked
+    for bad in ("tcp://host:abc", "tcp://host:0", "foo://host:1", "tcp://:8786"):
+        with pytest.raises(InputValueError, match="scheduler address"):
+            batch(videos["paths"][0], out, scheduler=bad, progress=False)
+    with pytest.raises(InputTypeError, match="scheduler"):
+        batch(videos["paths"][0], out, scheduler=8786, progress=False)
+    assert not out.exists()
+
+
+def test_workers_scheduler_client_conflict(videos, tmp_path, capsys):
+    out = tmp_path / "o"
+    assert main(["batch", videos["paths"][0], "--out", str(out), "--workers", "0", "--scheduler",
+                 "tcp://127.0.0.1:1", "-q"]) == 2
+    assert "cannot be combined" in _one_error_line(capsys.readouterr().err)
+    with pytest.raises(InputValueError, match="cannot be combined"):
+        batch(videos["paths"][0], out, workers=2, scheduler="tcp://127.0.0.1:1", progress=False)
+    with pytest.raises(InputValueError, match="client cannot be combined"):
+        batch(videos["paths"][0], out, client=object(), workers=0, progress=False)
+    assert not out.exists()
+    res = batch(videos["paths"][0], out, models=["lgmd2"], workers=0, scheduler="sync", progress=False)
+    assert res.scheduler == "sync" and res.ran == 1
+
+
+def test_plot_on_rerun_draws_missing_plots(videos, client, tmp_path):
+    paths = videos["paths"][:2]
+    first = batch(paths, tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
+    pngs = [tmp_path / "o" / r["out"] / "responses.png" for r in first.rows]
+    assert not any(p.exists() for p in pngs)
+    again = batch(paths[:1], tmp_path / "o", models=["lgmd2"], workers=0, progress=False, plot=True)
+    assert (again.ran, again.skipped, again.plotted) == (0, 1, 1)
+    assert pngs[0].stat().st_size > 0 and not pngs[1].exists()
+    assert _comparable(again.rows) == _comparable(first.rows[:1])
+    assert again.rows[0]["seconds"] == first.rows[0]["seconds"]   # the task was not rerun
+    # on a cluster too; a task that has its plot is left alone
+    dist = batch(paths, tmp_path / "o", models=["lgmd2"], client=client, progress=False, plot=True)
+    assert (dist.ran, dist.skipped, dist.plotted) == (0, 2, 1) and pngs[1].stat().st_size > 0
+    assert _comparable(dist.rows) == _comparable(first.rows)
+    assert batch(paths, tmp_path / "o", models=["lgmd2"], workers=0, progress=False, plot=True).plotted == 0
+
+
+def test_interrupt_writes_table_and_says_where(videos, tmp_path, monkeypatch, capsys):
+    import mlplc2.batch as batch_module
+
+    calls = []
+    real = batch_module.run_task
+
+    def run_then_interrupt(task):
+        calls.append(task)
+        if len(calls) == 2:
+            raise KeyboardInterrupt
+        return real(task)
+
+    monkeypatch.setattr(batch_module, "run_task", run_then_interrupt)
+    out = tmp_path / "o"
+    with pytest.raises(KeyboardInterrupt) as info:
+        batch(videos["paths"][:3], out, models=["lgmd2"], workers=0)
+    exc = info.value
+    assert isinstance(exc, BatchInterrupted)
+    assert "1 of 3 task(s) done" in str(exc) and str(out / "results.csv") in str(exc)
+    assert len(exc.result.rows) == exc.result.ran == 1 and exc.result.tasks == 3
+    assert len(_read_table(out / "results.csv")) == 1
+    assert f"batch: {exc}" in capsys.readouterr().err   # with the progress bar
+    calls.clear()   # the CLI under -q: one line with the counts, exit 130
+    assert main(["batch", *map(str, videos["paths"][:3]), "--out", str(tmp_path / "q"), "-m", "lgmd2",
+                 "--workers", "0", "--force", "-q"]) == 130
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mlplc2: interrupted with 1 of 3 task(s) done"), err
+
+
+@pytest.mark.skipif(not hasattr(os, "killpg"), reason="POSIX process groups")
+def test_ctrl_c_on_local_cluster_is_one_line(tmp_path):
+    """Ctrl-C reaches the whole process group, Dask workers included: no worker
+    tracebacks or Dask warnings, just the CLI's line."""
+    pytest.importorskip("distributed")
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    st = stimuli.scene([stimuli.SceneObject(center=(80, 60), onset=2, approach=100, hold=4, recede=0)],
+                       size=(160, 120), frames=110, background="plain", scroll=0.0)
+    for k in range(8):
+        write_video(clips / f"c{k}.avi", st.frames, 30.0)
+    out = tmp_path / "o"
+    cmd = [sys.executable, "-c", "import sys; from mlplc2.cli import main; sys.exit(main())", "batch", str(clips),
+           "--out", str(out), "-m", "mlplc2,slplc2", "--workers", "2", "-q"]
+    proc = subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, text=True,
+                            start_new_session=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    try:
+        deadline = time.monotonic() + 120
+        while not list(out.glob(f"*/*/*/{DONE_MARKER}")) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.05)
+        os.killpg(proc.pid, signal.SIGINT)   # as a terminal does
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            os.killpg(proc.pid, signal.SIGKILL)
+            proc.wait()
+    assert proc.returncode == 130, err
+    lines = err.strip().splitlines()
+    assert len(lines) == 1 and lines[0].startswith("mlplc2: interrupted"), err
+    assert len(_read_table(out / "results.csv")) < 16   # the rows of the tasks received
+
+
+def test_parameters_of_every_section_are_checked(videos, tmp_path, capsys):
+    # a section of a model that does not run is checked too
+    with pytest.raises(InputValueError, match="nosuch"):
+        param_sets({"lgmd2": {"nosuch": 1}}, models=["mlplc2"])
+    with pytest.raises(InputValueError, match="nosuch"):
+        param_sets(None, ["lgmd2.nosuch=1"], ["mlplc2"])
+    with pytest.raises(InputValueError, match="lgmd2.*t_sp"):
+        param_sets({"lgmd2": {"t_sp": -1}}, models=["mlplc2"])
+    # and Params fields when no LPLC2-family model runs
+    with pytest.raises(InputValueError, match="t_a"):
+        param_sets({"t_a": -1}, models=["lgmd2"])
+    # a value of the wrong type: one line naming the parameter and the value
+    for given in [dict(sweep=["t_a=abc"]), dict(params={"t_a": "abc"}), dict(params={"t_a": "abc"}, models=["lgmd2"])]:
+        with pytest.raises(InputTypeError, match=r"^parameters: t_a must be a number, got 'abc'$"):
+            param_sets(**given)
+    with pytest.raises(InputTypeError, match=r"lgmd2.on_kernel must be a list of 3 numbers, got \[1, 2\]"):
+        param_sets({"lgmd2": {"on_kernel": [1, 2]}})
+    with pytest.raises(InputTypeError, match="normalise_kernels must be true or false, got 1"):
+        param_sets(None, ["normalise_kernels=1"])
+    out = tmp_path / "o"
+    for option in (["--sweep", "lgmd2.nosuch=1"], ["--sweep", "t_a=abc"]):
+        assert main(["batch", videos["paths"][0], "--out", str(out), "--workers", "0", "-q", *option]) == 2
+        _one_error_line(capsys.readouterr().err)
+        assert not out.exists()
+
+
+def test_default_values_are_no_override():
+    assert param_sets(None, ["t_a=8,10,10.0"]) == [{"t_a": 8}, {}]   # t_a = 10 is the default
+    assert [param_set_id(s) for s in param_sets(None, ["t_a=10"])] == ["default"]
+    assert param_sets({"lgmd2": {"a_on": 0.5, "on_kernel": [2, 0.5, 0.25]}, "beta": 1.5}) == [{}]
+    # an LPLC2-family section entry is compared with the flat value it overrides
+    assert param_sets({"t_a": 12, "mlplc2": {"t_a": 10}}) == [{"t_a": 12, "mlplc2": {"t_a": 10}}]
+    assert param_sets({"t_a": 12, "mlplc2": {"t_a": 12}}) == [{"t_a": 12}]

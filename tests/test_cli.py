@@ -171,7 +171,7 @@ def test_run_image_folder_default_out_and_fps(data, capsys):
 # -- bad input: exit 2 and one line ------------------------------------------------
 @pytest.mark.parametrize("case", ["missing", "empty_dir", "text_mp4", "unknown_model", "bad_resize",
                                   "bad_resize_zero", "resize_and_scale", "end_before_start", "no_source",
-                                  "bad_fps"])
+                                  "bad_fps", "huge_resize", "huge_scale"])
 def test_bad_input_exit_2(case, data, tmp_path, capsys):
     video = str(data["avi"])
     argv = {
@@ -185,6 +185,8 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
         "end_before_start": ["run", video, "--start", "10", "--end", "5"],
         "no_source": ["run"],
         "bad_fps": ["run", video, "--fps", "-3"],
+        "huge_resize": ["run", video, "--resize", "20000x20000"],
+        "huge_scale": ["run", video, "--scale", "100"],
     }[case]
     if case == "text_mp4":
         (tmp_path / "fake.mp4").write_text("not a video\n")
@@ -194,7 +196,8 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
     expect = {"missing": "no such file", "empty_dir": "no images", "text_mp4": "not a video",
               "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "bad --resize 'big'",
               "bad_resize_zero": "bad --resize", "resize_and_scale": "not allowed with",
-              "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps"}[case]
+              "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps",
+              "huge_resize": "--resize 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large"}[case]
     assert expect in line
     assert not (tmp_path / "o" / "fields.json").exists()
 
@@ -356,3 +359,92 @@ def test_paper_car_fullres_mapped_back(paper_dir, tmp_path):
     assert all(0 <= x < 1012 and 0 <= y < 738 for x, y in pts)
     assert any(x > 320 or y > 240 for x, y in pts)
     assert _frame_count(out / "annotated.mp4") == (81, (1012, 738))
+
+
+def test_stimulus_output_paths(tmp_path, capsys):
+    """Bad output names fail before anything is written; a new ground-truth folder is created."""
+    (tmp_path / "folder").mkdir()
+    cases = {"is a directory": ["--out", str(tmp_path / "folder")],
+             "cannot write .mkv": ["--out", str(tmp_path / "v.mkv")],
+             "cannot write a file without a suffix": ["--out", str(tmp_path / "v")],
+             "both be written to": ["--out", str(tmp_path / "same.avi"), "--gt", str(tmp_path / "same.avi")]}
+    for expect, args in cases.items():
+        assert main(["stimulus", "grating", *args]) == 2
+        assert expect in _one_error_line(capsys.readouterr().err)
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["folder"]
+    assert main(["stimulus", "grating", "--out", str(tmp_path / "a" / "g.avi"),
+                 "--gt", str(tmp_path / "b" / "g.json"), "-q"]) == 0
+    assert (tmp_path / "a" / "g.avi").is_file() and json.loads((tmp_path / "b" / "g.json").read_text())["frames"] == 50
+
+
+def test_output_file_blocked_by_a_folder_names_the_file(data, tmp_path, capsys):
+    """fields.json cannot be written (a folder of that name): the error names fields.json, and
+    no hidden temporary file is left behind."""
+    out = tmp_path / "o"
+    (out / "fields.json").mkdir(parents=True)
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "8", "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert line.endswith("o/fields.json: Is a directory"), line
+    assert not [p.name for p in out.iterdir() if p.name.startswith(".")]
+
+
+def test_rerun_in_the_same_folder_removes_stale_outputs(data, tmp_path):
+    """A folder never mixes two runs: the second run (no --video, no localising model) leaves
+    no annotated.mp4 or targets.csv from the first."""
+    out = tmp_path / "o"
+    (out).mkdir()
+    (out / "notes.txt").write_text("mine\n")
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "12", "--video", "-q"]) == 0
+    assert {"annotated.mp4", "targets.csv"} <= {p.name for p in out.iterdir()}
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "12", "-m", "lgmd2", "-q"]) == 0
+    names = {p.name for p in out.iterdir()}
+    assert "annotated.mp4" not in names and "targets.csv" not in names
+    assert {"responses.csv", "fields.json", "notes.txt"} <= names
+    assert list(json.loads((out / "fields.json").read_text())["models"]) == ["lgmd2"]
+
+
+def test_output_folder_that_is_a_file(data, tmp_path, capsys):
+    (tmp_path / "afile").write_text("x\n")
+    assert main(["run", str(data["avi"]), "--out", str(tmp_path / "afile"), "-q"]) == 2
+    assert "afile: is a file, expected a folder" in _one_error_line(capsys.readouterr().err)
+
+
+def test_output_folder_may_not_be_the_frame_folder(data, capsys):
+    before = sorted(p.name for p in data["images"].iterdir())
+    assert main(["run", str(data["images"]), "--out", str(data["images"]), "-q"]) == 2
+    assert "folder of input frames" in _one_error_line(capsys.readouterr().err)
+    assert sorted(p.name for p in data["images"].iterdir()) == before
+
+
+def test_bench_rejects_more_threads_than_the_machine_allows(capsys):
+    import numba
+
+    n = int(numba.config.NUMBA_NUM_THREADS) + 1
+    assert main(["bench", "--sizes", "32x32", "--threads", str(n), "--no-reference", "-q"]) == 2
+    assert f"got {n}" in _one_error_line(capsys.readouterr().err)
+
+
+def test_run_api_rejects_ambiguous_models_and_params(data):
+    from mlplc2._validation import InputError
+
+    with pytest.raises(InputError, match="t_a is not a model of this run"):
+        run(data["avi"], ["mlplc2"], out=False, end=5, params={"t_a": 1000})
+    with pytest.raises(InputError, match="mlpcl2 is not a model"):
+        run(data["avi"], ["mlplc2"], out=False, end=5, params={"mlpcl2": mlplc2.Params()})
+    with pytest.raises(InputError, match="two models named 'mlplc2'"):
+        run(data["avi"], [mlplc2.MLPLC2(fps=30.0), mlplc2.MLPLC2(fps=30.0, params=mlplc2.Params(t_a=20.0))],
+            out=False, end=5)
+    with pytest.warns(UserWarning, match="built for 60 fps but the input runs at 30 fps"):
+        run(data["avi"], [mlplc2.MLPLC2(fps=60.0)], out=False, end=3)
+    res = run(data["avi"], ["mlplc2", "lgmd2"], out=False, end=5, params={"mlplc2": mlplc2.Params(t_a=20.0)})
+    assert res.models == ["mlplc2", "lgmd2"]
+
+
+def test_run_api_on_an_array_says_what_to_do():
+    from mlplc2._validation import InputError
+
+    frames = np.zeros((10, 40, 40), np.uint8)
+    with pytest.raises(InputError) as exc:
+        run(frames, ["mlplc2"], out=False)
+    msg = str(exc.value)
+    assert "\n" not in msg and len(msg) < 200 and "ndarray of shape (10, 40, 40)" in msg and "model.run(frames)" in msg

@@ -185,7 +185,7 @@ def test_default_params_immutable_and_untouched(name, frames):
 
 
 @pytest.mark.parametrize("name", NAMES)
-@pytest.mark.parametrize("fps", [0, -30, float("nan"), float("inf"), "fast", None])
+@pytest.mark.parametrize("fps", [0, -30, float("nan"), float("inf"), "fast", None, True, "30"])
 def test_bad_fps_rejected(name, fps):
     with pytest.raises(InputError, match="fps must be"):
         REGISTRY[name](fps=fps)

@@ -3,15 +3,19 @@
 from __future__ import annotations
 
 import copy
+import csv
 import json
+import shutil
+import sys
+import warnings
 
 import pytest
 
 import mlplc2
 from mlplc2 import stimuli
-from mlplc2._validation import InputValueError
+from mlplc2._validation import InputError, InputTypeError, InputValueError
 from mlplc2.cli import main
-from mlplc2.evaluate import Evaluation, evaluate, load_ground_truth
+from mlplc2.evaluate import Evaluation, EvaluationWarning, evaluate, load_ground_truth
 from mlplc2.io import write_video
 from mlplc2.runner import RunResult
 
@@ -161,6 +165,29 @@ def test_non_localising_alarms_and_false_alarms():
     assert ev.models["lgmd2"]["false_alarms"] == 1 and ev.models["lgmd2"]["false_alarm_frames"] == 3
 
 
+def test_label_only_clips_have_no_object_level_false_alarms():
+    """Alarms on a clip with only a clip-level label are its TP/FP outcome, not object-level
+    false alarms; FA/min is over the videos with object-level truth."""
+    gt = {"videos": {"clipA.avi": OBJ_GT["videos"]["v.avi"], "clipB.avi": {"label": "collision", "collision_frame": 45}}}
+    fr_a = {f: [(1, 50.0, 50.0, 30 <= f < 40)] for f in range(12, 60)}
+    fr_b = {f: [(1, 80.0, 50.0, 30 <= f < 40 or 50 <= f < 55)] for f in range(12, 60)}
+    ev = evaluate([_result("clipA.avi", 120, field_rows=fr_a), _result("clipB.avi", 60, field_rows=fr_b)], gt)
+    s = ev.models["mlplc2"]
+    assert (s["videos"], s["objects"], s["alarmed"], s["tp"]) == (2, 1, 1, 1)
+    assert s["false_alarms"] == 0 and s["false_alarm_frames"] == 0 and s["false_alarms_per_min"] == 0.0
+    b = next(v for v in ev.videos if v["video"] == "clipB.avi")
+    assert b["outcome"] == "TP" and b["false_alarms"] is None and b["object_level"] is False
+    # an unexplained alarm on the object-level clip is counted per minute of that clip only (120 frames)
+    fr_a[100] = [(2, 150.0, 90.0, True)]
+    s = evaluate([_result("clipA.avi", 120, field_rows=fr_a), _result("clipB.avi", 60, field_rows=fr_b)],
+                 gt).models["mlplc2"]
+    assert s["false_alarms"] == 1 and s["false_alarms_per_min"] == pytest.approx(1 / (120 / FPS / 60))
+    # only label-only clips: no false-alarm figures at all
+    only_b = evaluate(_result("clipB.avi", 60, field_rows=fr_b), gt)
+    assert only_b.models["mlplc2"]["false_alarms"] is None and only_b.models["mlplc2"]["false_alarms_per_min"] is None
+    assert "| - | - |" in only_b.object_table()
+
+
 def test_clip_level_metrics():
     gt = {"videos": {
         "a.mp4": {"label": "collision", "collision_frame": 20},
@@ -251,6 +278,7 @@ GOOD = {"size": [320, 240], "frames": 100, "objects": [{"id": 1, "center": [10, 
     (lambda e: e["objects"][0].update(track=[[0, 1]]), r"\[frame, x, y\]"),
     (lambda e: e["objects"][0].update(polarity="grey"), "polarity"),
     (lambda e: e["objects"][0].update(kind="flying"), "kind"),
+    (lambda e: e["objects"][0].update(kind=["approaching"]), "kind"),     # unhashable: not a raw TypeError
     (lambda e: e.update(size=[320]), "size"),
     (lambda e: e.update(frames=1.5), "integer"),
     (lambda e: e.update(objects={}), "list"),
@@ -267,6 +295,11 @@ def test_malformed_ground_truth(mutate, message):
 def test_malformed_ground_truth_files(tmp_path):
     with pytest.raises(InputValueError, match="not found"):
         load_ground_truth(tmp_path / "none.json")
+    with pytest.raises(InputValueError, match="is a folder, not a ground truth JSON file$"):
+        load_ground_truth(tmp_path)
+    (tmp_path / "ground_truth.json").write_text("{}")
+    with pytest.raises(InputValueError, match="is a folder.*did you mean its ground_truth.json"):
+        load_ground_truth(tmp_path)
     bad = tmp_path / "bad.json"
     bad.write_text("{not json")
     with pytest.raises(InputValueError, match="not valid JSON"):
@@ -286,6 +319,139 @@ def test_evaluate_errors(scene):
         evaluate(scene["result"], scene["gt"], models=["nope"])
     with pytest.raises(InputValueError, match="match_radius"):
         evaluate(scene["result"], scene["gt"], match_radius=0)
+
+
+@pytest.mark.parametrize("kw, error, message", [
+    ({"models": 5}, InputTypeError, "models must be"),
+    ({"models": [None]}, InputTypeError, "model names"),
+    ({"models": []}, InputValueError, "models is empty"),
+    ({"match_radius": "x"}, InputTypeError, "match_radius must be a number"),
+    ({"match_radius": None}, InputTypeError, "match_radius must be a number"),
+    ({"match_radius": True}, InputTypeError, "match_radius must be a number"),
+    ({"match_radius": float("nan")}, InputValueError, "match_radius must be a positive"),
+    ({"run_options": 5}, InputTypeError, "run_options"),
+])
+def test_bad_arguments_are_input_errors(kw, error, message):
+    with pytest.raises(error, match=message) as exc:
+        evaluate(_result("v.avi", 120), OBJ_GT, **kw)
+    assert isinstance(exc.value, InputError) and "\n" not in str(exc.value)
+
+
+# ---------------------------------------------------------------------------
+# inputs given twice, incomplete results, inputs that are not results
+# ---------------------------------------------------------------------------
+def test_overlapping_inputs_are_scored_once(scene, tmp_path):
+    """A results folder reached twice (a parent folder and the folder itself, or the
+    same folder twice) is scored once, with a warning."""
+    once = evaluate(scene["dir"], scene["gt"])
+    assert once.warnings == []
+    for inputs, message in (([scene["dir"], scene["dir"] / "two_out"], "two_out: its results are already given by"),
+                            ([scene["dir"] / "two_out", scene["dir"]], "1 of its 1 result folders|already given"),
+                            ([scene["dir"], scene["dir"]], "given more than once"),
+                            ([scene["result"], scene["result"]], "given more than once")):
+        with pytest.warns(EvaluationWarning, match=message):
+            ev = evaluate(inputs, scene["gt"])
+        assert ev.models == once.models and ev.objects == once.objects and len(ev.warnings) == 1
+        assert ev.models["mlplc2"]["videos"] == 1 and ev.models["mlplc2"]["objects"] == 2
+
+
+def test_two_result_folders_for_one_video_are_an_error(scene, tmp_path):
+    shutil.copytree(scene["dir"] / "two_out", tmp_path / "copy")
+    with pytest.raises(InputValueError, match="two_out and .*copy both hold mlplc2 results for .*two.avi"):
+        evaluate([scene["dir"] / "two_out", tmp_path / "copy"], scene["gt"], models=["mlplc2"])
+    # the same for two results in memory, and for a results folder and its video
+    with pytest.raises(InputValueError, match="a RunResult of .*two.avi and another RunResult .* both hold"):
+        evaluate([scene["result"], copy.copy(scene["result"])], scene["gt"], models=["mlplc2"])
+    with pytest.raises(InputValueError, match=r"two_out and .*two.avi \(run now\) both hold mlplc2"):
+        evaluate([scene["dir"] / "two_out", scene["video"]], scene["gt"], models=["mlplc2"])
+
+
+def _cut_folder(src, dst, n, **flags):
+    """Copy of results folder ``src`` as if the run had stopped after ``n`` frames."""
+    dst.mkdir()
+    info = json.loads((src / "fields.json").read_text())
+    info.update(n_frames=n, **flags)
+    (dst / "fields.json").write_text(json.dumps(info))
+    with open(src / "responses.csv", newline="") as f, open(dst / "responses.csv", "w", newline="") as g:
+        rows = list(csv.reader(f))
+        csv.writer(g).writerows([rows[0]] + [r for r in rows[1:] if int(r[0]) < n])
+
+
+def test_incomplete_results_warn(scene, tmp_path):
+    """An interrupted run is scored, with a warning and the count of approaching
+    objects after its last frame (object 2 approaches from frame 20)."""
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "cut", 18, complete=False, interrupted=True)
+    with pytest.warns(EvaluationWarning, match=r"cut: incomplete results \(the run was interrupted after 18 "
+                                               r"frames\).* 1 approaching object\(s\) outside"):
+        ev = evaluate(tmp_path / "cut", scene["gt"], models=["mlplc2"])
+    s = ev.models["mlplc2"]
+    assert (s["objects"], s["objects_outside"], s["incomplete_videos"]) == (1, 1, 1)
+    assert ev.videos[0]["complete"] is False and ev.videos[0]["objects_outside"] == 1
+    assert "1 approaching object(s) outside the processed frames" in ev.to_markdown()
+    files = ev.write(tmp_path / "ev")
+    assert "incomplete results" in files["evaluation.md"].read_text()
+    assert json.loads(files["evaluation.json"].read_text())["warnings"] == ev.warnings
+    # a truncated video (fields.json) and a truncated RunResult say so
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "trunc", 18, complete=False, truncated=True)
+    with pytest.warns(EvaluationWarning, match="stopped decoding after 18 frames"):
+        evaluate(tmp_path / "trunc", scene["gt"], models=["mlplc2"])
+    res = copy.copy(scene["result"])
+    res.truncated, res.message = True, "frame 30 could not be decoded"
+    with pytest.warns(EvaluationWarning, match="could not be decoded.* 0 approaching"):
+        evaluate(res, scene["gt"], models=["mlplc2"])
+    # a complete run gives no warning
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert evaluate(scene["dir"] / "two_out", scene["gt"]).warnings == []
+
+
+def test_cli_evaluate_warns_on_incomplete_results(scene, tmp_path, capsys):
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "cut", 18, complete=False, interrupted=True)
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps(scene["gt"]))
+    with warnings.catch_warnings():   # as outside pytest: a Python warning would reach stderr
+        warnings.simplefilter("always", EvaluationWarning)
+        warnings.showwarning = lambda msg, cat, *a, **k: print(f"{cat.__name__}: {msg}", file=sys.stderr)
+        assert main(["evaluate", str(tmp_path / "cut"), "--gt", str(gt), "-m", "mlplc2"]) == 0
+    cap = capsys.readouterr()
+    lines = [ln for ln in cap.err.splitlines() if "incomplete results" in ln]
+    assert len(lines) == 1 and lines[0].startswith("mlplc2: warning: "), cap.err   # one line, not Python's
+    assert "(the run was interrupted after 18 frames)" in lines[0] and "EvaluationWarning" not in cap.err
+    assert "1 approaching object(s) outside the processed frames" in cap.out
+
+
+def test_inputs_that_are_not_results(scene, tmp_path):
+    """Say what is wrong instead of 'no ground truth'."""
+    text = tmp_path / "afile"
+    text.write_text("hello\n")
+    empty = tmp_path / "emptydir"
+    empty.mkdir()
+    partial = tmp_path / "partial"
+    partial.mkdir()
+    shutil.copy(scene["dir"] / "two_out" / "responses.csv", partial)
+    for item, message in ((text, "afile: not a results folder .* nor a video"),
+                          (empty, "emptydir: no results in this folder .* and no images"),
+                          (partial, "partial: no fields.json next to responses.csv, the run did not finish")):
+        with pytest.raises(InputValueError, match="nothing to evaluate: .*" + message) as exc:
+            evaluate(item, scene["gt"])
+        assert "no ground truth" not in str(exc.value)
+    # next to good results, they are warnings and the rest is scored
+    with pytest.warns(EvaluationWarning) as rec:
+        ev = evaluate([scene["dir"] / "two_out", text, partial], scene["gt"])
+    msgs = [str(w.message) for w in rec]
+    assert any("afile: not a results folder" in m for m in msgs) and any("partial: no fields.json" in m for m in msgs)
+    assert ev.models["mlplc2"]["videos"] == 1 and ev.skipped == []
+    # a video without ground truth is still 'skipped' (no ground truth)
+    video = tmp_path / "other.avi"
+    shutil.copy(scene["video"], video)
+    with pytest.raises(InputValueError, match="no ground truth .* for .*other.avi"):
+        evaluate(video, scene["gt"])
+
+
+def test_cli_evaluate_gt_folder(scene, tmp_path, capsys):
+    assert main(["evaluate", str(scene["dir"] / "two_out"), "--gt", str(tmp_path)]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("mlplc2: error:") and "is a folder, not a ground truth JSON file" in err
 
 
 # ---------------------------------------------------------------------------

@@ -127,7 +127,7 @@ def test_image_size_mismatch_stops_like_a_damaged_image(tmp_path):
     src = open_source(tmp_path)
     assert len(list(src)) == 2
     assert src.truncated and src.truncated_at == 2
-    assert "a3.png (30x22, not 30x20 like the first image)" in src.message
+    assert "a3.png is 30x22, not 30x20 like the first image (frame 2); stopped there" in src.message
 
 
 # -- errors ---------------------------------------------------------------------

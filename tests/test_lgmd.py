@@ -245,6 +245,53 @@ def test_params_validation_and_replace():
         LGMD2(params=LGMD1Params())
 
 
+def test_params_errors_are_input_errors():
+    """One-line InputValueError / InputTypeError (still ValueError / TypeError) for every bad value."""
+    from mlplc2._validation import InputTypeError, InputValueError
+
+    with pytest.raises(InputValueError, match="unknown parameter"):
+        LGMD2Params().replace(foo=1)                       # was a plain ValueError
+    with pytest.raises(InputValueError, match="unknown parameter"):
+        LGMD1Params().replace(nope=1)
+    for kwargs in (dict(on_kernel=5), dict(on_kernel="abc"), dict(tau_off=None), dict(c_sig="1"),
+                   dict(recursive_delay="no"), dict(recursive_delay=1), dict(t_sp=np.array([0.78]))):
+        with pytest.raises(InputTypeError) as info:        # on_kernel=5: raw "'int' object is not iterable"
+            LGMD2Params(**kwargs)
+        assert str(info.value).startswith("LGMD2Params.") and "\n" not in str(info.value)
+    for kwargs in (dict(on_kernel=(1.0, 2.0)), dict(tau_on=(15.0, 0.0, 45.0)), dict(off_kernel=(1, -1, 0)),
+                   dict(n_ts=True), dict(n_ts=8.0), dict(dc=1.0), dict(c_w=1e39), dict(delta_c=1e-45),
+                   dict(t_pm=1e-38), dict(a_off=3.4e38), dict(t_sp=float("nan"))):
+        with pytest.raises(InputValueError) as info:
+            LGMD2Params(**kwargs)
+        assert str(info.value).startswith("LGMD2Params.") and "\n" not in str(info.value)
+    with pytest.raises(InputTypeError, match="LGMD1Params.w_i_kernel"):
+        LGMD1Params(w_i_kernel=0.25)
+    with pytest.raises(InputValueError, match="LGMD1Params.w_i"):
+        LGMD1Params(w_i=float("inf"))
+
+
+def test_params_numpy_values_stored_as_python_values():
+    p = LGMD2Params(n_ts=np.int64(4), c_sig=np.float32(0.5), on_kernel=np.array([2, 0.5, 0.25]),
+                    recursive_delay=np.bool_(True))
+    assert (type(p.n_ts), type(p.c_sig), type(p.recursive_delay)) == (int, float, bool)
+    assert p.on_kernel == (2.0, 0.5, 0.25) and all(type(v) is float for v in p.on_kernel)
+    assert p == LGMD2Params(n_ts=4, c_sig=0.5, recursive_delay=True)
+    assert LGMD1Params(n_ts=np.int32(3)).n_ts == 3
+
+
+def test_params_at_the_bounds_run_finite():
+    """t_pm -> 0 made PM / T_PM infinite in float32 and a huge a_off an infinite S: NaN, then
+    "cannot convert float NaN to integer" in step(). The smallest / largest accepted values run."""
+    from mlplc2.models.lgmd import SUM_WEIGHT_MAX, T_PM_MIN
+
+    frames = square_approach(0, 200, n=25, size=60)
+    for params in (LGMD2Params(t_pm=T_PM_MIN), LGMD2Params(a_on=SUM_WEIGHT_MAX, a_off=SUM_WEIGHT_MAX,
+                                                           a_onoff=SUM_WEIGHT_MAX)):
+        with np.errstate(over="ignore"):
+            r = responses(LGMD2(params=params), frames)
+        assert np.isfinite(r).all() and RESTING_POTENTIAL <= r.min() <= r.max() < 1.0
+
+
 def test_stable_sigmoid():
     assert stable_sigmoid(0.0) == 0.5
     assert stable_sigmoid(1e6) == 1.0

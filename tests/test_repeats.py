@@ -132,3 +132,27 @@ def test_evaluate_passes_skip_repeats(tmp_path):
     (tmp_path / "gt.json").write_text(json.dumps(gt))
     assert cli.main(["evaluate", str(tmp_path / "v.avi"), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2",
                      "--skip-repeats", "-q"]) == 0
+
+
+def test_held_time_to_collision_counts_down():
+    """While frames are held, each field's time to collision falls by the time elapsed since
+    the processed frame (the object keeps approaching), and nothing else changes."""
+    st = stimuli.looming(contact_time=2.0, fps=30.0)
+    model = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
+    timed = None
+    for k, f in enumerate(st.frames):
+        out = model.step(f)
+        if k > 20 and any(fl.ttc_s is not None for fl in out.fields):
+            timed = (f, out)
+            break
+    assert timed is not None, "no time-to-collision estimate on the looming stimulus"
+    frame, last = timed
+    for n in range(1, 4):
+        held = model.step(frame)
+        assert held.repeated and held.response == last.response
+        for a, b in zip(held.fields, last.fields):
+            assert (a.id, a.x, a.y, a.response) == (b.id, b.x, b.y, b.response)
+            if b.ttc_s is None:
+                assert a.ttc_s is None
+            else:
+                assert a.ttc_s == pytest.approx(max(b.ttc_s - n / 30.0, 0.0))

@@ -4,6 +4,7 @@ known deviations (flagged in report.json only while they still fail)."""
 from __future__ import annotations
 
 import json
+import re
 
 import pytest
 
@@ -102,6 +103,71 @@ def test_bad_data_folder(tmp_path, capsys):
     assert err.startswith("mlplc2: error:") and "ground_truth.json" in err
     rc = cli.main(["reproduce", "--data", str(tmp_path / "missing"), "--quiet"])
     assert rc == 2
+
+
+GOOD_GT = {"videos": {
+    reproduce.FOUR_PHASE_FILE: {"objects": [{"id": 1, "center": [160, 120], "approach": [0, 40], "hold": [40, 60]}]},
+    reproduce.SIX_OBJECTS_FILE: {"objects": [{"id": 1, "center": [60, 60], "approach": [5, 45]}]}}}
+
+
+def _bad_gt(kind):
+    if kind == "invalid JSON":
+        return "{not json"
+    gt = json.loads(json.dumps(GOOD_GT))
+    obj = gt["videos"][reproduce.FOUR_PHASE_FILE]["objects"][0]
+    if kind == "no objects":
+        del gt["videos"][reproduce.FOUR_PHASE_FILE]["objects"]
+    elif kind == "no center":
+        del obj["center"]
+    elif kind == "track only":
+        del obj["center"]
+        obj["track"] = [[0, 160, 120]]
+    elif kind == "list kind":
+        obj["kind"] = ["approaching"]
+    elif kind == "label only":
+        gt["videos"][reproduce.SIX_OBJECTS_FILE] = {"label": "collision"}
+    elif kind == "no videos":
+        gt = {"about": "x"}
+    return json.dumps(gt)
+
+
+@pytest.mark.parametrize("kind, message", [
+    ("invalid JSON", "not valid JSON"),
+    ("no objects", "needs 'objects'"),
+    ("no center", r"objects\[0\]: an approaching object needs a 'center'"),
+    ("track only", r"objects\[0\]: needs a 'center'"),
+    ("list kind", r"objects\[0\].kind: expected one of"),
+    ("label only", "no 'objects'"),
+    ("no videos", "expected {\"videos\""),
+])
+def test_bad_ground_truth_is_one_line_error(tmp_path, capsys, kind, message):
+    """A malformed DATA/ground_truth.json is checked (as 'mlplc2 evaluate' does) before
+    any video is read or any output is written: one error line, exit 2."""
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "ground_truth.json").write_text(_bad_gt(kind))
+    rc = cli.main(["reproduce", "--quick", "--data", str(data), "--out", str(tmp_path / "o"), "--quiet"])
+    err = capsys.readouterr().err
+    assert rc == 2 and err.startswith("mlplc2: error:") and len(err.strip().splitlines()) == 1
+    assert "ground_truth.json" in err and re.search(message, err), err
+    assert not (tmp_path / "o").exists()
+
+
+def test_good_ground_truth_reaches_the_videos(tmp_path, capsys):
+    """The same check passes a well-formed file: the next error is the missing video."""
+    data = tmp_path / "data"
+    data.mkdir()
+    (data / "ground_truth.json").write_text(json.dumps(GOOD_GT))
+    assert cli.main(["reproduce", "--quick", "--data", str(data), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert "basic/test_black_approach.avi: missing" in capsys.readouterr().err
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.paper
+def test_paper_ground_truth_objects_unchanged(paper_dir, paper_truth):
+    """Checking the paper's file leaves its objects as they are (so the claims do not change)."""
+    objects = reproduce.load_paper_objects(paper_dir / "ground_truth.json")
+    assert objects == {k: v.get("objects", []) for k, v in paper_truth.items()}
 
 
 @pytest.mark.paper

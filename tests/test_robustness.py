@@ -363,9 +363,11 @@ def _console_script() -> list[str]:
     return [str(exe)] if exe.exists() else [sys.executable, "-m", "mlplc2.cli"]
 
 
-@pytest.mark.skipif(sys.platform == "win32", reason="SIGINT to a child process is POSIX")
-def test_real_sigint_leaves_valid_outputs(tmp_path):
-    """A real Ctrl-C (SIGINT) to the console script, mid-run with the decoder thread busy.
+@pytest.mark.skipif(sys.platform == "win32", reason="signals to a child process are POSIX")
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_real_signal_leaves_valid_outputs(tmp_path, sig):
+    """A real Ctrl-C (SIGINT), or SIGTERM as sent by `timeout` and batch schedulers, to the
+    console script mid-run with the decoder thread busy: the frames done are saved.
     (test_cli.py raises KeyboardInterrupt in-process; this sends the signal.)"""
     n = 900
     p = write_video(tmp_path / "long.avi", _noise_frames(n, 160, 120), 30.0)
@@ -382,7 +384,7 @@ def test_real_sigint_leaves_valid_outputs(tmp_path):
             if proc.poll() is not None:
                 pytest.fail(f"finished before the interrupt: {proc.communicate()}")
             time.sleep(0.02)
-        proc.send_signal(signal.SIGINT)
+        proc.send_signal(getattr(signal, sig))
         _, err = proc.communicate(timeout=60)
     finally:
         if proc.poll() is None:

@@ -149,8 +149,7 @@ def test_procedural_background_scrolls_left_1px_per_frame():
 
 def test_fractional_scroll_interpolates():
     bg = np.tile(np.arange(200, dtype=np.float32)[None, :], (10, 1))
-    stim = S.scene([S.SceneObject(center=(-50, -50), approach=1, hold=0, recede=0)], size=(20, 10),
-                   frames=5, background=bg, scroll=0.5)
+    stim = S.scene([], size=(20, 10), frames=5, background=bg, scroll=0.5)
     assert np.array_equal(stim.frames[2, 0], np.arange(1, 21))
     assert np.all(np.abs(stim.frames[1, 0].astype(float) - (np.arange(20) + 0.5)) <= 0.5)
 
@@ -333,13 +332,12 @@ def test_image_and_array_backgrounds(tmp_path):
     img = (np.arange(60)[None, :] * 4 + np.zeros((30, 1))).astype(np.uint8)
     path = tmp_path / "bg.png"
     cv2.imwrite(str(path), img)
-    obj = S.SceneObject(center=(-100, -100), approach=1, hold=0, recede=0)
-    a = S.scene([obj], size=(80, 60), frames=50, background=str(path), scroll=1.0)
-    b = S.scene([obj], size=(80, 60), frames=50, background=img, scroll=1.0)
+    a = S.scene([], size=(80, 60), frames=50, background=str(path), scroll=1.0)
+    b = S.scene([], size=(80, 60), frames=50, background=img, scroll=1.0)
     assert a.frames.shape == (50, 60, 80)
     assert np.array_equal(a.frames, b.frames)
     rgb = np.repeat(img[:, :, None], 3, axis=2)
-    c = S.scene([obj], size=(80, 60), frames=50, background=rgb, scroll=1.0)
+    c = S.scene([], size=(80, 60), frames=50, background=rgb, scroll=1.0)
     assert np.abs(c.frames.astype(int) - a.frames).max() <= 1
 
 
@@ -375,3 +373,38 @@ def test_errors_are_clear():
     with pytest.raises(InputError) as info:
         S.generate("grating", x=1)
     assert "\n" not in str(info.value)
+
+
+def test_physical_recede_without_approach_moves_away_at_its_speed():
+    """A physical object that only holds and recedes starts at peak_side and shrinks as a
+    square of half-size l moving away at v: side = 2 f l / (d0 + v t), d0 = 2 f l / peak."""
+    fps, l, v, peak = 30.0, 0.5, 5.0, 30.0
+    obj = S.SceneObject(center=(50, 40), onset=0, approach=0, hold=2, recede=10, looming="physical",
+                        peak_side=peak, half_size=l, speed=v)
+    st = S.scene([obj], size=(100, 80), frames=14, fps=fps, background="plain", hfov_deg=60.0)
+    truth = st.to_ground_truth()["objects"][0]
+    assert truth["recede"] == [2, 12]
+    f = S.focal_length_px(100, 60.0)
+    d0 = 2 * f * l / peak
+    expect = [peak, peak] + [2 * f * l / (d0 + v * k / fps) for k in range(10)] + [0, 0]
+    assert np.allclose(truth["sizes"], expect, atol=1e-6)
+    for k in (0, 5, 11):  # the drawn square has the reported side (+-1 px of rounding)
+        dark = (np.asarray(st.frames[k]) < 128)
+        dark = dark if dark.ndim == 2 else dark[..., 0]
+        assert abs(int(dark[40].sum()) - expect[k]) <= 1.5
+    assert not (np.asarray(st.frames[12]) < 128).any()
+
+
+def test_scene_refuses_huge_requests_and_warns_about_invisible_objects():
+    obj = S.SceneObject(center=(50, 40))
+    with pytest.raises(InputError, match="moves the background"):
+        S.scene([obj], size=(100, 80), scroll=1e6)
+    with pytest.raises(InputError, match="GiB"):
+        S.scene([obj], size=(100, 80), frames=10**6)
+    st = S.scene([S.SceneObject(center=(50, 40), approach=10**12)], size=(100, 80), frames=20)
+    sizes = st.to_ground_truth()["objects"][0]["sizes"]
+    assert sizes == [1 + 2 * k for k in range(20)]  # an approach longer than the video: its first frames
+    with pytest.warns(UserWarning, match=r"objects\[0\] at \(500, 500\) is never visible"):
+        S.scene([S.SceneObject(center=(500, 500))], size=(100, 80), frames=20)
+    with pytest.warns(UserWarning, match="its side is 0"):
+        S.scene([S.SceneObject(center=(50, 40), start_side=0, growth=0)], size=(100, 80), frames=20)

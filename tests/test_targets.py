@@ -20,7 +20,7 @@ import numpy as np
 import pytest
 
 from mlplc2 import stimuli
-from mlplc2._validation import InputValueError
+from mlplc2._validation import InputTypeError, InputValueError
 from mlplc2.attention import Field
 from mlplc2.cli import main
 from mlplc2.io import write_video
@@ -285,11 +285,42 @@ def test_target_params_and_hfov_validated():
         TargetParams(window=-1)
     with pytest.raises(ValueError):
         TargetParams(min_points=1)
-    for bad in (0, 180, -5, float("nan"), "wide"):
+    for bad in (0, 180, -5, float("nan")):
         with pytest.raises(InputValueError):
+            MLPLC2(fps=FPS, hfov_deg=bad)
+    for bad in ("wide", "60", True):
+        with pytest.raises(InputTypeError):
             MLPLC2(fps=FPS, hfov_deg=bad)
     with pytest.raises(TypeError):
         MLPLC2(FPS, None, 60.0)  # hfov_deg is keyword-only
+
+
+@pytest.mark.parametrize("kwargs", [
+    dict(window=0), dict(window=1), dict(rel_edge=1.01), dict(rel_start=1.5), dict(min_inliers=2.0),
+    dict(window=17), dict(min_points=7), dict(lag=float("inf")), dict(max_shift=float("nan")),
+    dict(edge_offset=1e39), dict(band=True), dict(window=6.0), dict(coast_frames=2**40)])
+def test_target_params_reject_values_that_crash_the_tracker(kwargs):
+    """window=0 (IndexError in _median) and rel_edge > 1 (IndexError in the edge scan) passed
+    validation and crashed in model.step(); now every bad value fails at construction."""
+    with pytest.raises(InputValueError) as info:
+        TargetParams(**kwargs)
+    assert str(info.value).startswith("TargetParams.") and "\n" not in str(info.value)
+
+
+@pytest.mark.parametrize("value", ["0.3", None, np.array([0.3]), [0.3]])
+def test_target_params_type_errors(value):
+    with pytest.raises(InputTypeError, match="TargetParams.rel_start must be a number"):
+        TargetParams(rel_start=value)
+    with pytest.raises(InputTypeError, match="TargetParams.window"):
+        TargetParams(window=value)
+
+
+def test_target_params_numpy_scalars_stored_as_python_numbers():
+    p = TargetParams(window=np.int64(8), band=np.int32(3), lag=np.float32(1.5), rel_edge=np.float64(0.25))
+    assert (type(p.window), type(p.band), type(p.lag), type(p.rel_edge)) == (int, int, float, float)
+    assert p == TargetParams(window=8, band=3, lag=1.5)
+    assert TargetParams(window=16, min_points=2, min_inliers=0.0).window == 16      # the bounds are valid
+    assert TargetParams(rel_edge=1.0, rel_start=0.0, min_inliers=1.0).rel_edge == 1.0
 
 
 def test_output_most_urgent_and_threats():
@@ -446,6 +477,32 @@ def test_bearing_of_an_approaching_object(center, hfov):
     for e in est:
         assert abs(e.azimuth_deg - want_az) < 1.0 and abs(e.elevation_deg - want_el) < 1.0
         assert e.expansion_rate > 0
+
+
+def test_bearing_only_with_time_to_collision():
+    """docs/targets.md: ttc_s, expansion_rate, azimuth_deg, elevation_deg and rank are set
+    together or all None. The bearing used to fall back to the field centre (born on an edge
+    or corner of the object, up to ~14 deg off) while no TTC existed."""
+    center = (230, 170)
+    stim = stimuli.looming(half_size=0.5, speed=5.0, contact_time=2.0, center=center, hfov_deg=HFOV)
+    f = stimuli.focal_length_px(320, HFOV)
+    want = (math.degrees(math.atan((center[0] - 159.5) / f)), math.degrees(math.atan((119.5 - center[1]) / f)))
+    names = ("ttc_s", "expansion_rate", "azimuth_deg", "elevation_deg", "rank")
+    with_ttc = without = 0
+    for out in _run_model(stim, MLPLC2(fps=FPS, hfov_deg=HFOV)):
+        for fl in out.fields:
+            vals = [getattr(fl, k) for k in names]
+            assert all(v is None for v in vals) or all(v is not None for v in vals), (out.frame, vals)
+            if fl.ttc_s is None:
+                without += 1
+            else:
+                with_ttc += 1
+                assert abs(fl.azimuth_deg - want[0]) < 1.0 and abs(fl.elevation_deg - want[1]) < 1.0
+    assert with_ttc >= 10 and without >= 5      # both cases occur
+    # an estimate longer than max_ttc_s ("no measurable approach") carries no rate or bearing either
+    outs = _run_model(stim, MLPLC2(fps=FPS, hfov_deg=HFOV, target_params=TargetParams(max_ttc_s=0.0)))
+    assert all(getattr(fl, k) is None for o in outs for fl in o.fields for k in names)
+    assert sum(len(o.fields) for o in outs) > 20
 
 
 def test_bearing_in_pixels_without_hfov():

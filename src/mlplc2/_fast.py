@@ -50,6 +50,7 @@ import cv2
 import numba
 import numpy as np
 
+from ._validation import InputValueError
 from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
 from .medulla import local_max
@@ -484,6 +485,12 @@ _POOL: ThreadPoolExecutor | None = None
 _POOL_SIZE = 0
 _POOL_LOCK = threading.Lock()
 
+#: Held while one frame's bands run on the shared pool. The bands of a frame wait for each
+#: other (spin barriers); without it, two streams stepping in two threads could interleave
+#: their band tasks in the pool's queue so that every worker waits for a sibling still
+#: queued behind the other stream's tasks: a deadlock (3 or more bands).
+_BANDS_LOCK = threading.Lock()
+
 
 def _pool(n: int) -> ThreadPoolExecutor:
     global _POOL, _POOL_SIZE
@@ -574,7 +581,14 @@ def _spin_wait(arrive: np.ndarray, stage: int) -> None:
 
 
 def set_threads(n: int) -> None:
-    """Use ``n`` threads for the fast front end (Numba's thread count) and OpenCV."""
+    """Use ``n`` threads for the fast front end (Numba's thread count) and OpenCV.
+
+    ``n`` must be between 1 and Numba's ``NUMBA_NUM_THREADS`` (by default the number of cores).
+    """
+    limit = int(numba.config.NUMBA_NUM_THREADS)
+    if not 1 <= int(n) <= limit:
+        raise InputValueError(f"threads must be between 1 and {limit} on this machine (the number of "
+                              f"cores, or NUMBA_NUM_THREADS), got {n}")
     numba.set_num_threads(int(n))
     cv2.setNumThreads(int(n))
 
@@ -763,14 +777,15 @@ class FastFrontEnd:
         """
         n = len(bands)
         arrive = np.zeros(n, np.int64)
-        futs = [_pool(n - 1).submit(self._band_task, k, bd, gray, p_prev, p_next, lm, arrive)
-                for k, bd in enumerate(bands) if k]
-        try:
-            self._band_task(0, bands[0], gray, p_prev, p_next, lm, arrive)
-        finally:
-            _spin_wait(arrive, _DONE)
-            for f in futs:
-                f.result()
+        with _BANDS_LOCK:  # one frame's bands at a time on the shared pool (see _BANDS_LOCK)
+            futs = [_pool(n - 1).submit(self._band_task, k, bd, gray, p_prev, p_next, lm, arrive)
+                    for k, bd in enumerate(bands) if k]
+            try:
+                self._band_task(0, bands[0], gray, p_prev, p_next, lm, arrive)
+            finally:
+                _spin_wait(arrive, _DONE)
+                for f in futs:
+                    f.result()
 
     def step(self, gray: np.ndarray) -> LocalMotion:
         gray = np.ascontiguousarray(gray, dtype=np.float32)
@@ -794,13 +809,14 @@ class FastFrontEnd:
         elif _spin_ok():
             self._run_bands(bands, gray, p_prev, p_next, lm)
         else:  # pragma: no cover - no spin barrier: one thread-pool round trip per phase
-            pool = _pool(len(bands) - 1)
-            for phase, args in ((self._phase1, (gray, p_prev, p_next)), (self._phase2, ()),
-                                (self._phase3, (lm,))):
-                futs = [pool.submit(phase, bd, *args) for bd in bands[1:]]
-                phase(bands[0], *args)
-                for f in futs:
-                    f.result()
+            with _BANDS_LOCK:
+                pool = _pool(len(bands) - 1)
+                for phase, args in ((self._phase1, (gray, p_prev, p_next)), (self._phase2, ()),
+                                    (self._phase3, (lm,))):
+                    futs = [pool.submit(phase, bd, *args) for bd in bands[1:]]
+                    phase(bands[0], *args)
+                    for f in futs:
+                        f.result()
         self._p = [p_next, p_prev]
         self._n, self._n_prev = self._n_prev, self._n
         self._first = False

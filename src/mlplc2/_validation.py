@@ -6,10 +6,22 @@ Every check raises a subclass of :class:`InputError` with a one-line message.
 from __future__ import annotations
 
 import math
+import numbers
 
 import numpy as np
 
-__all__ = ["InputError", "InputValueError", "InputTypeError", "as_gray", "check_fps"]
+__all__ = ["InputError", "InputValueError", "InputTypeError", "as_gray", "check_fps", "check_real",
+           "check_reals", "check_int", "check_bool", "FLOAT32_MAX", "FLOAT32_TINY", "INT_MAX"]
+
+#: Largest finite float32 (3.4028235e+38). A parameter that enters the models' float32 maths
+#: must not exceed it: ``np.float32`` would turn it into inf (and inf x 0 into NaN).
+FLOAT32_MAX = float(np.finfo(np.float32).max)
+#: Smallest positive normal float32 (1.1754944e-38). A parameter that must be > 0 must be at
+#: least this: smaller values become 0 or lose their precision in float32, where 0 / 0 = NaN
+#: and x ** 0 = 1 (and the reference and fast front ends then disagree).
+FLOAT32_TINY = float(np.finfo(np.float32).tiny)
+#: Largest integer parameter (2**31 - 1): sizes and counts stay within every index type used.
+INT_MAX = 2**31 - 1
 
 #: Rec. 601 luma weights for RGB -> grey (retina input, NOTES 2).
 LUMA_RGB = np.array([0.299, 0.587, 0.114], dtype=np.float32)
@@ -28,11 +40,14 @@ class InputTypeError(InputError, TypeError):
 
 
 def check_fps(fps) -> float:
-    """Return ``fps`` as a float, or raise if it is not a positive finite number."""
+    """Return ``fps`` as a float, or raise if it is not a positive finite number
+    (a bool, a string or None is an :class:`InputTypeError`)."""
+    if _is_bool(fps) or not isinstance(fps, numbers.Real):
+        raise InputTypeError(f"fps must be a number, got {_show(fps)}")
     try:
         value = float(fps)
-    except (TypeError, ValueError):
-        raise InputTypeError(f"fps must be a number, got {fps!r}") from None
+    except (OverflowError, ValueError):
+        value = math.inf
     if not math.isfinite(value) or value <= 0:
         raise InputValueError(f"fps must be a positive finite number, got {fps!r}")
     return value
@@ -114,3 +129,95 @@ def as_gray(frame, *, min_size: int = 1, name: str = "frame") -> np.ndarray:
     elif kind in "iu" and dtype != np.uint8:
         np.clip(gray, 0, 255, out=gray)
     return np.ascontiguousarray(gray)
+
+
+# ---------------------------------------------------------------------------
+# Parameters (Params, TargetParams, LGMD2Params, LGMD1Params)
+# ---------------------------------------------------------------------------
+def _show(value) -> str:
+    """A one-line, bounded repr of ``value`` for error messages (arrays by their shape)."""
+    if isinstance(value, np.ndarray):
+        return f"an array of shape {value.shape}"
+    text = " ".join(repr(value).split())
+    return text if len(text) <= 80 else text[:77] + "..."
+
+
+def _is_bool(value) -> bool:
+    return isinstance(value, (bool, np.bool_))
+
+
+def check_real(value, name: str, *, minimum: float | None = None, below: float | None = None,
+               positive: bool = False, maximum: float = FLOAT32_MAX) -> float:
+    """Return ``value`` as a Python float, or raise with a one-line message.
+
+    Accepted: a real number (``int``, ``float``, NumPy integer or floating scalar; not a
+    bool, string, None or array: :class:`InputTypeError`) that is finite, within float32's
+    range (``|value| <= FLOAT32_MAX``) and within the bounds (:class:`InputValueError`):
+    ``minimum`` (inclusive), ``below`` (exclusive upper bound), ``maximum`` (inclusive) and
+    ``positive`` (> 0 and at least ``FLOAT32_TINY``, float32's smallest normal number).
+    """
+    if _is_bool(value) or not isinstance(value, numbers.Real):
+        raise InputTypeError(f"{name} must be a number, got {_show(value)}")
+    try:
+        v = float(value)
+    except (OverflowError, ValueError, TypeError):   # an int too large for a float
+        v = 1e308 if value > 0 else -1e308           # out of float32's range below
+    if not math.isfinite(v):
+        raise InputValueError(f"{name} must be a finite number, got {_show(value)}")
+    if positive and not v > 0:
+        raise InputValueError(f"{name} must be > 0, got {_show(value)}")
+    if minimum is not None and v < minimum:
+        raise InputValueError(f"{name} must be >= {minimum:g}, got {_show(value)}")
+    if below is not None and not v < below:
+        raise InputValueError(f"{name} must be < {below:g}, got {_show(value)}")
+    if v > maximum or -v > FLOAT32_MAX:
+        if maximum >= FLOAT32_MAX:
+            raise InputValueError(f"{name} must lie within float32's range (magnitude <= {FLOAT32_MAX:.8g}), "
+                                  f"got {_show(value)}")
+        raise InputValueError(f"{name} must be <= {maximum:g}, got {_show(value)}")
+    if positive and v < FLOAT32_TINY:
+        raise InputValueError(f"{name} must be >= {FLOAT32_TINY:.8g} (float32's smallest normal number), "
+                              f"got {_show(value)}")
+    return v
+
+
+def check_reals(value, name: str, count: int, what: str = "", **bounds) -> tuple[float, ...]:
+    """Return a sequence of ``count`` numbers (tuple, list or 1-D array) as a tuple of Python
+    floats, each checked by :func:`check_real` with ``bounds``; ``what`` names the entries."""
+    if isinstance(value, (str, bytes)) or _is_bool(value) or isinstance(value, numbers.Number):
+        items = None
+    else:
+        try:
+            items = list(value)
+        except TypeError:
+            items = None
+    label = f" ({what})" if what else ""
+    if items is None:
+        raise InputTypeError(f"{name} must be a sequence of {count} numbers{label}, got {_show(value)}")
+    if len(items) != count:
+        raise InputValueError(f"{name} must have {count} values{label}, got {_show(value)}")
+    return tuple(check_real(x, f"{name}[{i}]", **bounds) for i, x in enumerate(items))
+
+
+def check_int(value, name: str, *, minimum: int = 0, maximum: int = INT_MAX) -> int:
+    """Return ``value`` as a Python int, or raise with a one-line message.
+
+    Accepted: a Python or NumPy integer (not a bool) in ``[minimum, maximum]``. Strings,
+    None, arrays and other non-numbers raise :class:`InputTypeError`; bools, floats (even
+    integral ones) and integers out of range :class:`InputValueError`.
+    """
+    if not _is_bool(value) and not isinstance(value, numbers.Number):
+        raise InputTypeError(f"{name} must be an integer >= {minimum}, got {_show(value)}")
+    if _is_bool(value) or not isinstance(value, numbers.Integral) or not minimum <= value <= maximum:
+        too_big = not _is_bool(value) and isinstance(value, numbers.Real) and value > maximum
+        bound = f"in [{minimum}, {maximum}]" if too_big else f">= {minimum}"
+        raise InputValueError(f"{name} must be an integer {bound}, got {_show(value)}")
+    return int(value)
+
+
+def check_bool(value, name: str) -> bool:
+    """Return ``value`` as a Python bool: only ``True``/``False`` (or NumPy bools) are accepted,
+    so that a string such as ``"no"`` is not silently taken as true."""
+    if not _is_bool(value):
+        raise InputTypeError(f"{name} must be True or False, got {_show(value)}")
+    return bool(value)

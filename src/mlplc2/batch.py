@@ -9,9 +9,11 @@ starts and stops itself; or an existing scheduler), shows progress as they
 finish, and writes one row per (video, model, parameter set) to
 ``OUT/results.csv`` (a model shares one task between parameter sets that
 differ only in parameters it does not use). A rerun skips the
-tasks whose ``done.json`` exists; a task that fails (corrupt video, ...) is
-reported with ``status = "error"`` and its one-line message, and is retried by
-the next run.
+tasks whose ``done.json`` exists (with ``plot=True`` it draws their missing
+``responses.png`` from the saved outputs); a task that fails (corrupt video,
+...) is reported with ``status = "error"`` and its one-line message, and is
+retried by the next run. Ctrl-C raises :class:`BatchInterrupted` after writing
+``results.csv`` for the tasks finished.
 
 Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
 cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
@@ -21,13 +23,18 @@ after the other in this process without it.
 from __future__ import annotations
 
 import csv
+import dataclasses
+import functools
 import glob
 import hashlib
 import itertools
 import json
+import logging
 import math
 import os
+import signal
 import sys
+import threading
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -35,10 +42,10 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ._validation import InputValueError
+from ._validation import InputTypeError, InputValueError
 
-__all__ = ["batch", "BatchResult", "param_sets", "parse_sweep", "expand_inputs", "start_local_cluster",
-           "RESULT_COLUMNS", "DONE_MARKER"]
+__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "parse_sweep", "expand_inputs",
+           "start_local_cluster", "RESULT_COLUMNS", "DONE_MARKER"]
 
 #: Columns of ``results.csv``, in order.
 RESULT_COLUMNS = ("video", "model", "param_set", "params", "n_frames", "fields", "alarms", "first_alarm_frame",
@@ -124,6 +131,7 @@ def parse_sweep(specs) -> dict[str, list]:
     return sweep
 
 
+@functools.lru_cache(maxsize=None)
 def _param_class(model: str):
     from .models.base import get_model
 
@@ -156,6 +164,57 @@ def _build_params(pset: Mapping, model: str):
         raise InputValueError(f"parameters for {model}: {exc}") from None
 
 
+def _is_number(value) -> bool:
+    return isinstance(value, (int, float)) and not isinstance(value, bool)
+
+
+def _check_types(cls, over: Mapping, prefix: str = "") -> None:
+    """A one-line error naming the parameter for an override of the wrong type
+    (``t_a="abc"``), before the parameter class's own range checks."""
+    defaults = {f.name: f.default for f in dataclasses.fields(cls)}
+    for name, value in over.items():
+        default = defaults.get(name, dataclasses.MISSING)
+        if isinstance(default, bool):
+            ok, want = isinstance(value, bool), "true or false"
+        elif _is_number(default):
+            ok, want = _is_number(value), "a number"
+        elif isinstance(default, str):
+            ok, want = isinstance(value, str), "a string"
+        elif isinstance(default, tuple):
+            ok = isinstance(value, (list, tuple)) and len(value) == len(default) and all(map(_is_number, value))
+            want = f"a list of {len(default)} numbers"
+        else:  # unknown names are reported by replace(); other types are left to the class
+            continue
+        if not ok:
+            raise InputTypeError(f"parameters: {prefix}{name} must be {want}, got {value!r}")
+
+
+def _is_default(value, default) -> bool:
+    if isinstance(default, tuple) and isinstance(value, (list, tuple)):
+        value, default = list(value), list(default)
+    return isinstance(value, bool) == isinstance(default, bool) and value == default
+
+
+def _drop_defaults(pset: Mapping) -> dict:
+    """``pset`` without the overrides equal to the default value (``t_a=10`` is no
+    override), so that a parameter set of default values has the id ``default``."""
+    from .params import Params
+
+    flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
+    base = Params().to_dict()
+    out = {k: v for k, v in flat.items() if not _is_default(v, base[k])}
+    for model, section in pset.items():
+        if not isinstance(section, Mapping):
+            continue
+        own = _param_class(model)().to_dict()
+        if _lplc2_family(model):  # its section overrides the flat values for it
+            own.update(flat)
+        keep = {k: v for k, v in section.items() if not _is_default(v, own[k])}
+        if keep:
+            out[model] = keep
+    return out
+
+
 def _restrict(pset: Mapping, model: str) -> dict:
     """The part of parameter set ``pset`` that ``model`` uses (flat Params fields
     for the LPLC2 family, plus its own section)."""
@@ -178,7 +237,10 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
     ``Params`` fields, with optional ``{"lgmd2": {...}}`` sections per model)
     combined with every point of the Cartesian product of ``sweep``.
 
-    Each is checked by building the parameters of every model in ``models``.
+    Every override is checked (name, type, value) against its parameter class,
+    whether or not its model is in ``models``; each set is also checked by
+    building the parameters of every model in ``models``. Overrides equal to
+    the default value are dropped (a set of defaults is ``{}``, id ``default``).
     """
     base: dict = {}
     if params is not None:
@@ -212,23 +274,35 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
             else:
                 pset[name] = value
         sets.append(pset)
+    from .models.base import available_models
     from .params import Params
 
     pnames = {f for f in Params().to_dict()}
     for pset in sets:
         for k, v in pset.items():
             if isinstance(v, Mapping):
-                from .models.base import available_models
-
                 if k not in available_models():
                     raise InputValueError(f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
             elif k not in pnames:
                 raise InputValueError(f"parameters: unknown parameter {k!r} (Params fields: see help(mlplc2.Params); "
                                       f"other models' parameters go in a section {{\"lgmd2\": {{...}}}} or "
                                       f"--sweep lgmd2.NAME=...)")
-        for m in models:
+        flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
+        _check_types(Params, flat)
+        if flat:  # Params fields are checked even when no LPLC2-family model runs
+            try:
+                Params().replace(**flat)
+            except (TypeError, ValueError) as exc:
+                raise InputValueError(f"parameters: {exc}") from None
+        sections = [k for k, v in pset.items() if isinstance(v, Mapping)]
+        for m in sections:
+            _check_types(_param_class(m), pset[m], f"{m}.")
+        for m in dict.fromkeys([*models, *sections]):  # every model given a section, run or not
             _build_params(pset, m)
-    return sets
+    unique = {}
+    for pset in map(_drop_defaults, sets):  # t_a=10,10.0 is one set
+        unique.setdefault(param_set_id(pset), pset)
+    return list(unique.values())
 
 
 # ---------------------------------------------------------------------------
@@ -275,7 +349,11 @@ def run_task(task: dict) -> dict:
     """Run one (video, model, parameter set) task; return its results row.
 
     Never raises for a bad video: the row then has ``status = "error"`` and
-    the one-line message. Writes ``done.json`` last (not for errors)."""
+    the one-line message. Writes ``done.json`` last (not for errors). A task
+    marked ``"replot"`` is finished: only its missing ``responses.png`` is
+    drawn from the saved outputs."""
+    if task.get("replot"):
+        return _plot_saved(task)
     out = Path(task["out"])
     row = {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
            "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
@@ -308,6 +386,25 @@ def run_task(task: dict) -> dict:
         return row
     row["seconds"] = round(time.perf_counter() - t0, 3)
     _write_json_atomic(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
+    return row
+
+
+def _plot_saved(task: dict) -> dict:
+    """Draw ``responses.png`` of a finished task from its ``responses.csv`` and
+    ``fields.json`` (as :func:`mlplc2.run` would have with ``plot=True``); return its saved row."""
+    out = Path(task["out"])
+    row = _done_row(task)
+    if row is None:  # its outputs changed meanwhile: run it
+        return run_task({**task, "replot": False})
+    try:
+        from .plots import plot_responses
+
+        summary = json.loads((out / "fields.json").read_text(encoding="utf-8"))
+        title = f"{Path(str(summary.get('video') or task['video'])).name}: {task['model']}"
+        plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"), title=title,
+                       fps=summary.get("fps"))
+    except Exception as exc:  # noqa: BLE001 - reported in the table, the batch goes on
+        row.update(status="error", error=_one_line(f"responses.png: {type(exc).__name__}: {exc}"))
     return row
 
 
@@ -344,8 +441,10 @@ class BatchResult:
     :data:`RESULT_COLUMNS`, in that order); ``table``: path of
     ``results.csv``; ``tasks``: distinct runs (a model shares one run between
     parameter sets that differ only in parameters it does not use);
-    ``ran`` / ``skipped``: tasks run now / already done; ``failed``: rows
-    with ``status == "error"``; ``seconds``: wall time; ``videos``: the inputs.
+    ``ran`` / ``skipped``: tasks run now / already done; ``plotted``: done
+    tasks whose missing ``responses.png`` was drawn now (``plot=True``);
+    ``failed``: rows with ``status == "error"``; ``seconds``: wall time;
+    ``videos``: the inputs.
     """
 
     rows: list[dict]
@@ -359,6 +458,7 @@ class BatchResult:
     seconds: float = 0.0
     scheduler: str = "sync"
     tasks: int = 0
+    plotted: int = 0
 
     @property
     def videos_per_min(self) -> float:
@@ -368,6 +468,18 @@ class BatchResult:
         import pandas as pd
 
         return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
+
+
+class BatchInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`batch`; ``results.csv`` was written for the tasks finished.
+
+    ``.result`` is the :class:`BatchResult` of those tasks; the message says
+    how many of all tasks they are and where their table is.
+    """
+
+    def __init__(self, message: str, result: BatchResult):
+        super().__init__(message)
+        self.result = result
 
 
 def _video_keys(videos: list[str]) -> dict[str, str]:
@@ -412,7 +524,11 @@ def start_local_cluster(workers: int, **kwargs):
     (no dashboard unless ``dashboard_address`` is given) and a Client on it: ``(cluster, client)``.
 
     The workers get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set) and not
-    Dask's ``MALLOC_TRIM_THRESHOLD_`` (see :func:`_tune_malloc`)."""
+    Dask's ``MALLOC_TRIM_THRESHOLD_`` (see :func:`_tune_malloc`). The cluster
+    logs errors only (``silence_logs=logging.ERROR`` unless given), and its
+    worker processes ignore Ctrl-C (SIGINT): this process handles it and shuts
+    them down, so an interrupt prints no worker tracebacks or cancelled-task
+    warnings."""
     try:
         from distributed import Client, LocalCluster
     except ImportError:
@@ -420,6 +536,7 @@ def start_local_cluster(workers: int, **kwargs):
     import dask
 
     kwargs.setdefault("dashboard_address", None)
+    kwargs.setdefault("silence_logs", logging.ERROR)
     # Dask's default MALLOC_TRIM_THRESHOLD_ makes the models ~5x slower (see _tune_malloc): not for ours.
     # Each worker's Numba threads (the fast front end's bands) share the cores with the other workers.
     environ = {"MALLOC_TRIM_THRESHOLD_": None}
@@ -428,10 +545,20 @@ def start_local_cluster(workers: int, **kwargs):
     # The nanny applies its pre-spawn environment in *this* process too; put ours back after,
     # or a later Numba compile here fails ("Cannot set NUMBA_NUM_THREADS ...").
     saved = {k: os.environ.get(k) for k in environ}
+    # A worker process inherits an ignored SIGINT (a handler would be reset by exec): started so,
+    # it leaves Ctrl-C to this process, which closes the cluster. Ctrl-C is ignored while it starts.
+    sigint = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
     try:
-        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}):
+        if sigint is not None:
+            signal.signal(signal.SIGINT, signal.SIG_IGN)
+        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}), \
+                warnings.catch_warnings():
+            # the scheduler's HTTP server (no dashboard) takes another port when 8787 is taken: not news
+            warnings.filterwarnings("ignore", r"Port \d+ is already in use", UserWarning)
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
     finally:
+        if sigint is not None:
+            signal.signal(signal.SIGINT, sigint)
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
@@ -445,11 +572,56 @@ def start_local_cluster(workers: int, **kwargs):
     return cluster, client
 
 
+def _check_scheduler(address) -> None:
+    """A one-line error unless ``address`` reads as a Dask scheduler address (before anything runs)."""
+    if not isinstance(address, str):
+        raise InputTypeError(f"scheduler must be an address such as tcp://HOST:8786, got {address!r}")
+    try:
+        from distributed.comm.addressing import parse_address, parse_host_port
+        from distributed.comm.registry import get_backend
+    except ImportError:
+        raise InputValueError(_DASK_MISSING) from None
+    try:
+        scheme, location = parse_address(address)
+        get_backend(scheme)  # unknown scheme
+        if scheme in ("tcp", "tls", "ws", "wss"):
+            host, port = parse_host_port(location)
+            if not host:
+                raise ValueError("missing host")
+            if not 0 < port < 65536:
+                raise ValueError(f"port {port} out of range 1-65535")
+    except (TypeError, ValueError) as exc:
+        raise InputValueError(f"scheduler address {address!r} is not valid ({_one_line(str(exc))}); "
+                              f"expected tcp://HOST:PORT") from None
+
+
+def _mute_dask_logs() -> list:
+    """Silence this process's ``distributed`` and ``tornado`` loggers while a cluster
+    shuts down after Ctrl-C (closing workers mid-task logs warnings, and an interrupted
+    ``distributed.utils.sync`` an error); :func:`_unmute` restores them."""
+    roots = ("distributed", "tornado")
+    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in roots]
+    saved = []
+    for name in dict.fromkeys([*roots, *names]):
+        logger = logging.getLogger(name)
+        saved.append((logger, logger.level))
+        logger.setLevel(logging.CRITICAL + 1)
+    return saved
+
+
+def _unmute(saved: list) -> None:
+    for logger, level in saved:
+        logger.setLevel(level)
+
+
 def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None, sweep=None,
           scheduler: str | None = None, workers: int | None = None, client=None,
           run_options: Mapping[str, Any] | None = None, plot: bool = False, progress: bool = True,
           force: bool = False, parquet: bool = False) -> BatchResult:
     """Run every (video, model, parameter set) as a task and tabulate the results.
+
+    Everything is checked (inputs, parameters, options, the scheduler address)
+    before anything is written or run.
 
     Parameters
     ----------
@@ -474,10 +646,12 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         default ``min(4, CPU count)``; ``0`` runs sequentially here without Dask.
     client : distributed.Client, optional
         Use this client (its cluster is left running).
+        At most one of ``scheduler``, ``workers`` and ``client`` may be given.
     run_options : dict, optional
         Extra keyword arguments of :func:`mlplc2.run` (``resize``, ``start``, ``end``, ...).
     plot : bool
-        Also write each task's ``responses.png``.
+        Also write each task's ``responses.png``; for a task already done
+        without it, it is drawn from the saved outputs (the task is not rerun).
     progress : bool
         Progress bar (tqdm on stderr) as tasks finish.
     force : bool
@@ -488,6 +662,12 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     Returns
     -------
     BatchResult
+
+    Raises
+    ------
+    BatchInterrupted
+        On Ctrl-C (a ``KeyboardInterrupt``), after writing ``results.csv``
+        for the tasks finished.
     """
     from .models.base import available_models
 
@@ -504,6 +684,19 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         raise InputValueError("no model given")
     if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
         raise InputValueError(f"workers must be an integer >= 0, got {workers!r}")
+    if client is not None and (scheduler is not None or workers is not None):
+        raise InputValueError("client cannot be combined with scheduler or workers: its cluster runs the tasks")
+    if scheduler is not None and workers is not None and not (scheduler == "sync" and workers == 0):
+        raise InputValueError("--scheduler and --workers cannot be combined: --workers N starts a local cluster "
+                              "(0: runs the tasks here without Dask), --scheduler ADDRESS uses a running one")
+    sequential = scheduler == "sync" or (workers == 0 and scheduler is None and client is None)
+    if scheduler is not None and scheduler != "sync":
+        _check_scheduler(scheduler)
+    elif not sequential and client is None:
+        try:
+            import distributed  # noqa: F401
+        except ImportError:
+            raise InputValueError(_DASK_MISSING) from None
     if parquet:
         try:
             import pandas  # noqa: F401
@@ -514,7 +707,6 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     sets = param_sets(params, sweep, names)
     ids = {param_set_id(s): s for s in sets}
     out = Path(out)
-    out.mkdir(parents=True, exist_ok=True)
     keys = _video_keys(videos)
     run_options = dict(run_options or {})
     # One row per (video, parameter set, model); one task per distinct (video, model, the
@@ -535,42 +727,68 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                                   "overrides": _model_overrides(own, m), "out": str((out / rel).resolve()),
                                   "rel_out": key, "plot": plot, "run_options": run_options})
                 slots.append((by_out[key], pid))
-    for pid, pset in ids.items():  # what each parameter set id stands for
-        _write_json_atomic(out / f"param_set_{pid}.json", pset)
 
     rows: dict[int, dict] = {}
-    todo = []
+    todo = []    # tasks to run
+    replot = []  # finished tasks that only lack responses.png
     for i, t in enumerate(tasks):
         saved = None if force else _done_row(t)
-        if saved is not None:
-            rows[i] = saved
-        else:
+        if saved is None:
             todo.append(i)
+            continue
+        rows[i] = saved
+        if plot and saved.get("n_frames") and not (Path(t["out"]) / "responses.png").is_file():
+            replot.append(i)
+    jobs = [(i, tasks[i]) for i in todo] + [(i, {**tasks[i], "replot": True}) for i in replot]
     skipped = len(tasks) - len(todo)
-    sequential = scheduler == "sync" or (workers == 0 and scheduler is None)
     t0 = time.perf_counter()
     from tqdm import tqdm
 
-    bar = tqdm(total=len(tasks), initial=skipped, disable=not progress, unit="task", file=sys.stderr,
-               desc="batch", dynamic_ncols=True)
+    bar = tqdm(total=len(tasks), initial=len(tasks) - len(jobs), disable=not progress, unit="task",
+               file=sys.stderr, desc="batch", dynamic_ncols=True)
     used = "sync"
+    finished: set[int] = set()  # jobs done in this call
+    prepared = False
+
+    def prepare() -> None:  # the output folder, once the cluster is up (nothing is written before)
+        nonlocal prepared
+        out.mkdir(parents=True, exist_ok=True)
+        for pid, pset in ids.items():  # what each parameter set id stands for
+            _write_json_atomic(out / f"param_set_{pid}.json", pset)
+        prepared = True
+
     try:
-        if sequential or not todo:
-            for i in todo:
-                rows[i] = run_task(tasks[i])
+        if sequential or not jobs:
+            prepare()
+            for i, t in jobs:
+                rows[i] = run_task(t)
+                finished.add(i)
                 bar.update()
         else:
-            try:
-                import distributed  # noqa: F401
-            except ImportError:
-                raise InputValueError(_DASK_MISSING) from None
             from distributed import Client, as_completed
 
             cluster = own = None
+            muted: list = []
+
+            def mute() -> None:
+                if not muted:
+                    muted.extend(_mute_dask_logs())
+
+            def on_sigint(signum, frame):  # mute first: the unwinding interrupt makes Dask log at once
+                mute()
+                previous(signum, frame)
+
+            previous = signal.getsignal(signal.SIGINT) \
+                if threading.current_thread() is threading.main_thread() else None
+            if callable(previous):
+                signal.signal(signal.SIGINT, on_sigint)
             try:
                 if client is None:
                     if scheduler:
-                        own = Client(scheduler)
+                        try:
+                            own = Client(scheduler)
+                        except (TypeError, ValueError) as exc:
+                            raise InputValueError(f"scheduler {scheduler}: {_one_line(str(exc))}") from None
                         used = scheduler
                     else:
                         n = workers if workers else min(4, os.cpu_count() or 1)
@@ -580,9 +798,9 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                 else:
                     c = client
                     used = str(getattr(client, "scheduler", None) and client.scheduler.address)
+                prepare()
                 futures = {}
-                for i in todo:
-                    t = tasks[i]
+                for i, t in jobs:
                     key = f"mlplc2-{Path(t['out']).relative_to(out.resolve()).as_posix()}-" \
                           f"{hashlib.sha1(t['out'].encode()).hexdigest()[:6]}-{time.time_ns()}"
                     futures[c.submit(run_task, t, key=key, pure=False)] = i
@@ -597,15 +815,37 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                                    "fields": None, "alarms": None, "first_alarm_frame": None, "seconds": None,
                                    "status": "error", "error": _one_line(f"{type(exc).__name__}: {exc}"),
                                    "out": t["rel_out"]}
+                    finished.add(i)
                     bar.update()
+            except KeyboardInterrupt:
+                mute()  # workers stopped mid-task make the cluster log warnings
+                raise
             finally:
-                if own is not None:
-                    own.close()
-                if cluster is not None:
-                    cluster.close()
+                try:
+                    if own is not None:
+                        own.close()
+                    if cluster is not None:
+                        cluster.close()
+                finally:
+                    if callable(previous):
+                        signal.signal(signal.SIGINT, previous)
+                    _unmute(muted)
     except KeyboardInterrupt:
-        _write_table([{**rows[i], "param_set": pid} for i, pid in slots if i in rows], out, parquet)
-        raise
+        done = list(rows)  # read back, or finished now
+        ordered = [{**rows[i], "param_set": pid} for i, pid in slots if i in done]
+        result = BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
+                             ran=sum(1 for i in todo if i in finished), skipped=skipped,
+                             failed=sum(1 for r in ordered if r["status"] == "error"),
+                             seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
+                             plotted=sum(1 for i in replot if i in finished))
+        if prepared:
+            _write_table(ordered, out, parquet)
+            message = f"interrupted with {len(done)} of {len(tasks)} task(s) done; their rows are in {result.table}"
+        else:
+            message = f"interrupted before any task ran; nothing written to {out}"
+        if progress:
+            bar.write(f"batch: {message}", file=sys.stderr)
+        raise BatchInterrupted(message, result) from None
     finally:
         bar.close()
     seconds = time.perf_counter() - t0
@@ -613,4 +853,5 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     table = _write_table(ordered, out, parquet)
     failed = sum(1 for r in ordered if r["status"] == "error")
     return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
-                       skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks))
+                       skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks),
+                       plotted=len(replot))

@@ -18,7 +18,9 @@ from __future__ import annotations
 import argparse
 import math
 import os
+import signal
 import sys
+import threading
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
@@ -208,7 +210,7 @@ def _add_stimulus(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", "-o", required=True, metavar="FILE.mp4", help="video to write (.mp4 or .avi)")
     p.add_argument("--gt", metavar="FILE.json", help="ground truth JSON (default: <stem>_gt.json beside it)")
     p.add_argument("--seed", type=int, help="seed of the procedural background")
-    p.add_argument("--background", metavar="procedural|PATH",
+    p.add_argument("--background", metavar="procedural|plain|PATH",
                    help="background: 'procedural', 'plain' or an image file")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing on success")
 
@@ -295,15 +297,19 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_evaluate(args) -> int:
-    from .evaluate import evaluate
+    from .evaluate import EvaluationWarning, evaluate
     from .io import parse_resize
 
     models = _model_names(args.model) if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if args.skip_repeats is not None:
         options["repeat_threshold"] = args.skip_repeats
-    ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
-                  run_options=options, progress=not args.quiet)
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
+        ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
+                      run_options=options, progress=not args.quiet)
+    for w in ev.warnings:
+        _warn(w)
     for s in ev.skipped:
         _warn(f"{s}: no ground truth for it in {args.gt}; not scored")
     _say(args, ev.to_markdown(details=args.details))
@@ -339,22 +345,28 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_batch(args) -> int:
-    from .batch import batch
+    from .batch import BatchInterrupted, batch
     from .io import parse_resize
 
     models = _model_names(args.model)
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if args.skip_repeats is not None:
         options["repeat_threshold"] = args.skip_repeats
-    res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
-                scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
-                progress=not args.quiet, force=args.force, parquet=args.parquet)
+    try:
+        res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
+                    scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
+                    progress=not args.quiet, force=args.force, parquet=args.parquet)
+    except BatchInterrupted as exc:
+        if args.quiet:  # with progress output batch() has already said it
+            print(f"{PROG}: {_one_line(str(exc))}", file=sys.stderr)
+        return EXIT_INTERRUPTED
     reported = set()
     for r in res.rows:
         if r["status"] == "error" and r["out"] not in reported:  # once per task
             reported.add(r["out"])
             _warn(f"{r['video']} ({r['model']}, {r['out']}): {r['error']}")
-    _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done, {res.failed} failed; "
+    plotted = f" ({res.plotted} of them plotted now)" if res.plotted else ""
+    _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done{plotted}, {res.failed} failed; "
                f"{len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
          f"results in {res.table}")
     return EXIT_INPUT if res.failed else EXIT_OK
@@ -457,8 +469,30 @@ def _quiet_decoders() -> None:
             pass
 
 
+def _terminate_as_interrupt(signum, frame):  # noqa: ARG001 - signal handler signature
+    raise KeyboardInterrupt
+
+
 def main(argv: list[str] | None = None) -> int:
-    """Entry point of the ``mlplc2`` console script; returns the exit code."""
+    """Entry point of the ``mlplc2`` console script; returns the exit code.
+
+    SIGTERM (what batch schedulers and ``timeout`` send) is handled like Ctrl-C: the
+    outputs of the frames done are written and the exit code is 130.
+    """
+    previous = None
+    if threading.current_thread() is threading.main_thread():
+        try:
+            previous = signal.signal(signal.SIGTERM, _terminate_as_interrupt)
+        except (ValueError, OSError):  # pragma: no cover - embedded interpreters
+            previous = None
+    try:
+        return _main(argv)
+    finally:
+        if previous is not None:
+            signal.signal(signal.SIGTERM, previous)
+
+
+def _main(argv: list[str] | None) -> int:
     _quiet_decoders()
     parser = build_parser()
     try:

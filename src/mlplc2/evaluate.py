@@ -27,15 +27,17 @@ from __future__ import annotations
 import csv
 import json
 import math
+import os
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any, Iterable
 
-from ._validation import InputValueError
+from ._validation import InputTypeError, InputValueError
 
-__all__ = ["evaluate", "Evaluation", "load_ground_truth", "GroundTruth", "VideoTruth", "ObjectTruth",
-           "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS"]
+__all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
+           "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS"]
 
 #: Phase intervals an object may have, ``[start, end)`` in frames.
 PHASES = ("approach", "hold", "recede", "translate")
@@ -48,6 +50,12 @@ DEFAULT_MATCH_RADIUS = 20.0
 _LABELS = ("collision", "no_collision")
 #: Row order of the comparison table (other registered models follow, alphabetically).
 MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1")
+
+
+class EvaluationWarning(UserWarning):
+    """Something :func:`evaluate` scored with a caveat or did not score (one line;
+    also in :attr:`Evaluation.warnings`): an input given twice, incomplete results,
+    an input that is neither results nor a video."""
 
 
 # ---------------------------------------------------------------------------
@@ -214,7 +222,7 @@ def _parse_object(obj, where: str, index: int) -> ObjectTruth:
     phases = {p: _interval(obj[p], f"{where}.{p}") for p in PHASES if obj.get(p) is not None}
     if obj.get("kind") is not None:
         kind = obj["kind"]
-        if kind not in KINDS:
+        if not isinstance(kind, str) or kind not in KINDS:
             raise _bad(f"{where}.kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")
         if obj.get("interval") is not None:
             phases.setdefault(KINDS[kind], _interval(obj["interval"], f"{where}.interval"))
@@ -273,16 +281,28 @@ def load_ground_truth(gt) -> GroundTruth:
         return gt
     source = "<dict>"
     if isinstance(gt, (str, Path)):
-        path = Path(gt)
-        source = str(path)
-        if not path.is_file():
-            raise InputValueError(f"{path}: ground truth file not found")
-        try:
-            data = json.loads(path.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputValueError(f"{path}: not valid JSON ({exc})") from None
+        source = str(gt)
+        data = _read_json(gt)
     else:
         data = gt
+    return _parse_ground_truth(data, source)
+
+
+def _read_json(path):
+    """The parsed content of the ground-truth file ``path`` (one-line errors)."""
+    path = Path(path)
+    if path.is_dir():
+        hint = " (did you mean its ground_truth.json?)" if (path / "ground_truth.json").is_file() else ""
+        raise InputValueError(f"{path}: is a folder, not a ground truth JSON file{hint}")
+    if not path.is_file():
+        raise InputValueError(f"{path}: ground truth file not found")
+    try:
+        return json.loads(path.read_text(encoding="utf-8"))
+    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
+        raise InputValueError(f"{path}: not valid JSON ({exc})") from None
+
+
+def _parse_ground_truth(data, source: str) -> GroundTruth:
     if not isinstance(data, Mapping):
         raise InputValueError(f"{source}: ground truth must be a JSON object, got {type(data).__name__}")
     if "videos" in data:
@@ -315,6 +335,13 @@ class _Run:
     frame_fields: dict[int, list[tuple[int, float, float, bool]]]
     frame_alarm: dict[int, bool]
     param_set: str | None = None
+    # where the run came from (results folder or input, for messages) and its identity (two runs of one
+    # label and video from different identities are an error); why it is incomplete (None: complete)
+    origin: str = ""
+    ident: Any = None
+    incomplete: str | None = None
+    # False when the folder does not say which video it is (no fields.json nor done.json)
+    video_known: bool = True
 
 
 def _localises(model: str) -> bool:
@@ -326,17 +353,22 @@ def _localises(model: str) -> bool:
     return cls is not None and issubclass(cls, _LPLC2Family) and not issubclass(cls, LPLC2)
 
 
-def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None):
+def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None,
+                    origin="", ident=None, incomplete=None, video_known=True):
     per: dict[str, _Run] = {}
+
+    def new(m, fields):
+        label = m if param_set in (None, "", "default") else f"{m}@{param_set}"
+        return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
+                    origin or str(source), ident, incomplete, video_known)
+
     for r in rows:
         m = r["model"]
         if models is not None and m not in models:
             continue
         run = per.get(m)
         if run is None:
-            label = m if param_set in (None, "", "default") else f"{m}@{param_set}"
-            run = per[m] = _Run(str(source), m, label, fps, size, start, n_frames, list(fields_by_model.get(m, [])),
-                                {}, {}, param_set)
+            run = per[m] = new(m, fields_by_model.get(m, []))
         f = int(r["frame"])
         coll = bool(int(r["collision"]))
         run.frame_alarm[f] = run.frame_alarm.get(f, False) or coll
@@ -344,15 +376,27 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
             run.frame_fields.setdefault(f, []).append((int(r["field_id"]), float(r["x"]), float(r["y"]), coll))
     for m in fields_by_model:
         if m not in per and (models is None or m in models):
-            label = m if param_set in (None, "", "default") else f"{m}@{param_set}"
-            per[m] = _Run(str(source), m, label, fps, size, start, n_frames, list(fields_by_model[m]), {}, {},
-                          param_set)
+            per[m] = new(m, fields_by_model[m])
     return list(per.values())
 
 
-def _runs_from_result(res, models) -> list["_Run"]:
+def _incomplete_reason(n_frames, interrupted, truncated, message=None, complete=True) -> str | None:
+    """Why a run's results are incomplete (``None``: they are complete)."""
+    if interrupted:
+        return f"the run was interrupted after {n_frames} frames"
+    if truncated:
+        return f"the video stopped decoding after {n_frames} frames" + (f" ({message})" if message else "")
+    if not complete:
+        return f"the run is marked incomplete after {n_frames} frames"
+    return None
+
+
+def _runs_from_result(res, models, origin=None) -> list["_Run"]:
+    reason = _incomplete_reason(res.n_frames, getattr(res, "interrupted", False), getattr(res, "truncated", False),
+                                getattr(res, "message", None))
     return _runs_from_rows(res.source, res.rows, res.fields, fps=res.fps, size=tuple(res.size), start=res.start,
-                           n_frames=res.n_frames, models=models)
+                           n_frames=res.n_frames, models=models, origin=origin or f"a RunResult of {res.source}",
+                           ident=("object", id(res)), incomplete=reason)
 
 
 def _read_folder(folder: Path, models) -> list["_Run"]:
@@ -373,44 +417,88 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
     if fj.is_file():
         try:
             info = json.loads(fj.read_text(encoding="utf-8"))
-        except json.JSONDecodeError as exc:
+        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
             raise InputValueError(f"{fj}: not valid JSON ({exc})") from None
+        if not isinstance(info, Mapping):
+            raise InputValueError(f"{fj}: not a fields.json of mlplc2 run (expected a JSON object)")
     done: dict = {}
     dj = folder / "done.json"
     if dj.is_file():
         try:
             done = json.loads(dj.read_text(encoding="utf-8"))
-        except json.JSONDecodeError:
+        except (json.JSONDecodeError, UnicodeDecodeError):
+            done = {}
+        if not isinstance(done, Mapping):
             done = {}
     frames = sorted({int(r["frame"]) for r in rows})
-    fps = info.get("fps")
-    if not fps:
-        times = [(int(r["frame"]), float(r["time_s"])) for r in rows if r.get("time_s") not in (None, "")]
-        pos = [(fr, t) for fr, t in times if fr > 0 and t > 0]
-        fps = pos[0][0] / pos[0][1] if pos else 30.0
-    start = int(info.get("start", frames[0] if frames else 0))
-    n_frames = int(info.get("n_frames", len(frames)))
-    size = tuple(info["size"]) if info.get("size") else None
+    try:
+        fps = info.get("fps")
+        if not fps:
+            times = [(int(r["frame"]), float(r["time_s"])) for r in rows if r.get("time_s") not in (None, "")]
+            pos = [(fr, t) for fr, t in times if fr > 0 and t > 0]
+            fps = pos[0][0] / pos[0][1] if pos else 30.0
+        fps = float(fps)
+        start = int(info.get("start", frames[0] if frames else 0))
+        n_frames = int(info.get("n_frames", len(frames)))
+        size = tuple(int(v) for v in info["size"]) if info.get("size") else None
+    except (TypeError, ValueError):
+        raise InputValueError(f"{fj if info else csv_path}: malformed fps, start, n_frames or size") from None
+    if not math.isfinite(fps) or fps <= 0:
+        raise InputValueError(f"{fj if info else csv_path}: fps must be a positive number, got {fps!r}")
     source = info.get("video") or done.get("video") or str(folder)
-    return _runs_from_rows(source, rows, info.get("models", {}), fps=float(fps), size=size, start=start,
-                           n_frames=n_frames, models=models, param_set=done.get("param_set"))
+    if not info:
+        incomplete = "no fields.json next to responses.csv, the run did not finish"
+    else:
+        incomplete = _incomplete_reason(n_frames, info.get("interrupted"), info.get("truncated"),
+                                        complete=info.get("complete") is not False)
+    return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
+                           n_frames=n_frames, models=models, param_set=done.get("param_set"), origin=str(folder),
+                           ident=("path", _path_key(folder)), incomplete=incomplete, video_known=bool(info.get("video") or done.get("video")))
 
 
-def _expand_inputs(results) -> list:
+def _path_key(path) -> str:
+    return os.path.normcase(os.path.realpath(os.fspath(path)))
+
+
+def _expand_inputs(results, notes: list[str]) -> list:
+    """The inputs, with folders holding results replaced by the result folders they
+    contain; an item given twice (the same folder, video or RunResult) is kept once,
+    with a note in ``notes``."""
+    from .runner import RunResult
+
     if results is None:
         raise InputValueError("no results to evaluate")
-    if isinstance(results, (str, Path)) or not isinstance(results, Iterable):
+    if isinstance(results, (str, Path, RunResult)) or not isinstance(results, Iterable):
         results = [results]
     items = []
+    seen: dict[Any, str] = {}  # key -> the input that gave it first
     for r in results:
         if isinstance(r, (str, Path)):
             p = Path(r)
+            cands: list = [r]
             if p.is_dir() and not (p / "responses.csv").is_file():
                 found = sorted(q.parent for q in p.rglob("responses.csv"))
                 if found:
-                    items.extend(found)
-                    continue
-        items.append(r)
+                    cands = found
+            keys = [("path", _path_key(c)) for c in cands]
+        else:
+            cands, keys = [r], [("object", id(r))]
+        name = str(r if isinstance(r, (str, Path)) else getattr(r, "source", type(r).__name__))
+        dup, earlier = 0, []
+        for c, k in zip(cands, keys):
+            if k in seen:
+                dup += 1
+                if seen[k] not in earlier:
+                    earlier.append(seen[k])
+                continue
+            seen[k] = name
+            items.append(c)
+        if dup == len(cands):
+            notes.append(f"{name}: given more than once; scored once" if earlier == [name] else
+                         f"{name}: its results are already given by {', '.join(earlier)}; scored once")
+        elif dup:
+            notes.append(f"{name}: {dup} of its {len(cands)} result folders are also given by "
+                         f"{', '.join(earlier)}; each is scored once")
     return items
 
 
@@ -443,10 +531,12 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
         return max(o.approach[0], first), min(o.approach[1] + tail, last)
 
     objects = []
+    outside = 0
     for o in approaching:
         w0, w1 = window(o)
         if w0 >= w1:
-            continue  # outside the processed frames
+            outside += 1  # outside the processed frames: not scored, counted
+            continue
         a0 = o.approach[0]
         rec = {"model": run.label, "video": truth.key, "object": o.id, "onset": a0,
                "approach": list(o.approach), "detected": None, "detect_frame": None, "latency_field": None,
@@ -528,10 +618,14 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                 if not prev_alarm:
                     fa_events += 1
             prev_alarm = a
+    if not truth.object_level:  # a clip-level label only: no object-level false alarms
+        fa_events = fa_frames = None
     video = {"model": run.label, "video": truth.key, "source": run.source, "frames": run.n_frames,
              "seconds": round(run.n_frames / run.fps, 6), "localises": localises,
+             "complete": run.incomplete is None, "object_level": truth.object_level,
              "fields": len(run.fields) if localises or run.fields else None,
-             "objects": len(objects), "detected": sum(1 for r in objects if r["detected"]),
+             "objects": len(objects), "objects_outside": outside,
+             "detected": sum(1 for r in objects if r["detected"]),
              "alarmed": sum(1 for r in objects if r["alarmed"]),
              "false_alarms": fa_events, "false_alarm_frames": fa_frames,
              "first_alarm_frame": alarm_frames[0] if alarm_frames else None,
@@ -557,8 +651,12 @@ def _summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
     objs = [o for o in objects if o["model"] == label]
     localises = any(v["localises"] for v in vids)
     minutes = sum(v["seconds"] for v in vids) / 60.0
+    obj_vids = [v for v in vids if v["object_level"]]  # false alarms: object-level truth only
+    obj_minutes = sum(v["seconds"] for v in obj_vids) / 60.0
     s: dict[str, Any] = {"model": label, "videos": len(vids), "minutes": round(minutes, 4),
-                         "localises": localises, "objects": len(objs)}
+                         "localises": localises, "objects": len(objs),
+                         "objects_outside": sum(v["objects_outside"] for v in vids),
+                         "incomplete_videos": sum(1 for v in vids if not v["complete"])}
     if localises:
         det = [o for o in objs if o["detected"]]
         s.update(detected=len(det), detection_rate=len(det) / len(objs) if objs else None,
@@ -570,13 +668,14 @@ def _summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
         s.update(detected=None, detection_rate=None, latency_field=None, error_detect=None, error_life=None,
                  fields_per_object=None)
     al = [o for o in objs if o["alarmed"]]
-    fa = sum(v["false_alarms"] for v in vids)
+    fa = sum(v["false_alarms"] for v in obj_vids) if obj_vids else None
     fields = [v["fields"] for v in vids if v["fields"] is not None]
     s.update(alarmed=len(al), alarm_rate=len(al) / len(objs) if objs else None,
              latency_alarm=_mean(o["latency_alarm"] for o in al),
              fields_total=sum(fields) if fields else None,
-             false_alarms=fa, false_alarm_frames=sum(v["false_alarm_frames"] for v in vids),
-             false_alarms_per_min=fa / minutes if minutes > 0 else None)
+             false_alarms=fa,
+             false_alarm_frames=sum(v["false_alarm_frames"] for v in obj_vids) if obj_vids else None,
+             false_alarms_per_min=fa / obj_minutes if obj_vids and obj_minutes > 0 else None)
     clips = [v for v in vids if v["outcome"] is not None]
     tp = sum(v["outcome"] == "TP" for v in clips)
     fp = sum(v["outcome"] == "FP" for v in clips)
@@ -625,6 +724,11 @@ class Evaluation:
         ``match_radius``, ``tail``, ground-truth source.
     skipped : list of str
         Inputs without ground truth (not scored).
+    warnings : list of str
+        One line per caveat, also issued as :class:`EvaluationWarning`: inputs
+        given more than once (scored once), incomplete results (interrupted or
+        truncated runs: approaching objects after the processed frames are not
+        scored), inputs that are neither results nor videos (not scored).
     """
 
     models: dict[str, dict]
@@ -632,10 +736,11 @@ class Evaluation:
     objects: list[dict]
     settings: dict
     skipped: list[str] = field(default_factory=list)
+    warnings: list[str] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"settings": self.settings, "models": self.models, "videos": self.videos,
-                "objects": self.objects, "skipped": self.skipped}
+                "objects": self.objects, "skipped": self.skipped, "warnings": self.warnings}
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), indent=kw.pop("indent", 1), **kw)
@@ -652,7 +757,7 @@ class Evaluation:
                 f"| {s['model']} | {s['videos']} | {s['objects']} | {det} | {_fmt(s['latency_field'])} "
                 f"| {_fmt(s['error_detect'])} | {_fmt(s['error_life'])} | {_fmt(s['fields_per_object'], 2)} "
                 f"| {_fmt(s['fields_total'])} | {s['alarmed']}/{s['objects']} | {_fmt(s['latency_alarm'])} "
-                f"| {s['false_alarms']} | {_fmt(s['false_alarms_per_min'], 2)} |")
+                f"| {_fmt(s['false_alarms'])} | {_fmt(s['false_alarms_per_min'], 2)} |")
         return "\n".join(lines)
 
     def clip_table(self) -> str:
@@ -674,8 +779,19 @@ class Evaluation:
         for v in self.videos:
             det = "-" if not v["localises"] else f"{v['detected']}/{v['objects']}"
             lines.append(f"| {v['model']} | {v['video']} | {v['frames']} | {v['objects']} | {det} "
-                         f"| {v['alarmed']}/{v['objects']} | {_fmt(v['fields'])} | {v['false_alarms']} "
+                         f"| {v['alarmed']}/{v['objects']} | {_fmt(v['fields'])} | {_fmt(v['false_alarms'])} "
                          f"| {_fmt(v['first_alarm_frame'])} | {v['outcome'] or '-'} |")
+        return "\n".join(lines)
+
+    def notes(self) -> str:
+        """Markdown: approaching objects not scored because they lie outside the
+        processed frames (incomplete or partial runs), per model; empty if none."""
+        lines = []
+        for s in self.models.values():
+            if s["objects_outside"]:
+                inc = s["incomplete_videos"]
+                lines.append(f"- {s['model']}: {s['objects_outside']} approaching object(s) outside the processed "
+                             f"frames, not scored" + (f" ({inc} incomplete result(s))" if inc else ""))
         return "\n".join(lines)
 
     def to_markdown(self, details: bool = False) -> str:
@@ -683,6 +799,9 @@ class Evaluation:
         parts = []
         if any(s["objects"] or not s["clips"] for s in self.models.values()):
             parts.append(self.object_table())
+        notes = self.notes()
+        if notes:
+            parts.append(notes)
         clip = self.clip_table()
         if clip:
             parts.append(clip)
@@ -699,6 +818,8 @@ class Evaluation:
         st = self.settings
         md = (f"# Evaluation\n\nGround truth: `{st['ground_truth']}`; match radius {st['match_radius']:g} px, "
               f"tail {st['tail']} frames.\n\n{self.to_markdown(details=True)}\n")
+        if self.warnings:
+            md += "\nWarnings:\n\n" + "".join(f"- {w}\n" for w in self.warnings)
         files = {}
         for name, text in (("evaluation.md", md), ("evaluation.json", self.to_json() + "\n")):
             path = out / name
@@ -741,60 +862,108 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     -------
     Evaluation
     """
+    from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
     from .models.base import available_models
     from .runner import RunResult, run
 
     if isinstance(models, str):
         models = [m.strip().lower() for m in models.split(",") if m.strip()]
     elif models is not None:
-        models = [str(m).strip().lower() for m in models]
+        if not isinstance(models, Iterable):
+            raise InputTypeError(f"models must be a model name or a list of names, got {type(models).__name__}")
+        models = list(models)
+        for m in models:
+            if not isinstance(m, str):
+                raise InputTypeError(f"models must be model names (str), got {m!r}")
+        models = [m.strip().lower() for m in models]
     if models is not None:
+        if not models:
+            raise InputValueError("models is empty: give at least one model name (or None for all)")
         known = available_models()
         for m in models:
             if m not in known:
                 raise InputValueError(f"unknown model {m!r}; choose from {', '.join(known)}")
+    if isinstance(match_radius, bool) or not isinstance(match_radius, (int, float)):
+        raise InputTypeError(f"match_radius must be a number (pixels), got {match_radius!r}")
     match_radius = float(match_radius)
     if not math.isfinite(match_radius) or match_radius <= 0:
         raise InputValueError(f"match_radius must be a positive number, got {match_radius!r}")
     if isinstance(tail, bool) or not isinstance(tail, int) or tail < 0:
         raise InputValueError(f"tail must be an integer >= 0 (frames), got {tail!r}")
+    if run_options is not None and not isinstance(run_options, Mapping):
+        raise InputTypeError(f"run_options must be a dict of mlplc2.run options, got {type(run_options).__name__}")
     truth = load_ground_truth(gt)
 
+    notes: list[str] = []     # warnings, in order
+    problems: list[str] = []  # inputs not scored for another reason than missing ground truth
     runs: list[_Run] = []
-    for item in _expand_inputs(results):
+    for item in _expand_inputs(results, notes):
         if isinstance(item, RunResult):
             runs.extend(_runs_from_result(item, models))
         elif isinstance(item, (str, Path)) and Path(item).is_dir() and (Path(item) / "responses.csv").is_file():
             runs.extend(_read_folder(Path(item), models))
         elif isinstance(item, (str, Path)):
-            if not Path(item).exists() and not any(ch in str(item) for ch in "*?["):
+            p = Path(item)
+            if not p.exists() and not any(ch in str(item) for ch in "*?["):
                 raise InputValueError(f"{item}: no such file or folder")
             if truth.match(item) is None:  # do not run models on a video that cannot be scored
-                runs.append(_Run(str(item), "", "", 30.0, None, 0, 0, [], {}, {}))
+                if p.is_dir() and not any(f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS for f in p.iterdir()):
+                    problems.append(f"{item}: no results in this folder (no responses.csv in it or below) "
+                                    f"and no images")
+                elif p.is_file() and p.suffix.lower() not in VIDEO_EXTENSIONS + IMAGE_EXTENSIONS:
+                    problems.append(f"{item}: not a results folder (responses.csv + fields.json) nor a video "
+                                    f"({', '.join(VIDEO_EXTENSIONS)}) or image")
+                else:
+                    runs.append(_Run(str(item), "", "", 30.0, None, 0, 0, [], {}, {}))
                 continue
             names = models or available_models()
             res = run(item, names, out=False, quiet=not progress, **dict(run_options or {}))
-            runs.extend(_runs_from_result(res, models))
+            runs.extend(_runs_from_result(res, models, origin=f"{item} (run now)"))
         else:
             raise InputValueError(f"cannot evaluate {type(item).__name__}: give a RunResult, a results folder "
                                   f"or a video path")
     videos: list[dict] = []
     objects: list[dict] = []
     skipped: list[str] = []
+    claimed: dict[tuple[str, str], _Run] = {}  # (model label, video) -> the run scored for it
+    incomplete: dict[str, tuple[str, int]] = {}  # origin -> (reason, approaching objects outside)
     for r in runs:
-        t = truth.match(r.source)
-        if t is None or not r.model:
+        t = truth.match(r.source) if r.model else None
+        if t is None and r.model and not r.video_known:
+            msg = f"{r.origin}: {r.incomplete}, so its video is unknown"
+            if msg not in problems:
+                problems.append(msg)
+            continue
+        if t is None:
             if r.source not in skipped:
                 skipped.append(r.source)
             continue
+        key = (r.label, _video_key(r.source))
+        prev = claimed.setdefault(key, r)
+        if prev is not r and prev.ident != r.ident:
+            other = r.origin if r.origin != prev.origin else f"another {r.origin.removeprefix('a ')}"
+            raise InputValueError(f"{prev.origin} and {other} both hold {r.label} results for {r.source}; "
+                                  f"evaluate one of them (or each separately)")
         v, o = _score_run(r, t, radius=match_radius, tail=tail)
         videos.append(v)
         objects.extend(o)
+        if r.incomplete is not None:
+            reason, n = incomplete.get(r.origin, (r.incomplete, 0))
+            incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
+    for origin, (reason, n) in incomplete.items():
+        notes.append(f"{origin}: incomplete results ({reason}); scored as they are, "
+                     f"{n} approaching object(s) outside the processed frames not scored")
     if not videos:
+        _issue(notes)
+        if problems:
+            raise InputValueError(f"nothing to evaluate: {'; '.join(problems[:3])}"
+                                  f"{' ...' if len(problems) > 3 else ''}")
         if skipped:
             raise InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
                                   f"{' ...' if len(skipped) > 3 else ''}")
         raise InputValueError("nothing to evaluate (no model output in the results)")
+    notes.extend(f"{p}; not scored" for p in problems)
+    _issue(notes)
     order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
     labels = sorted({v["model"] for v in videos},
                     key=lambda lb: (order.index(lb.split("@")[0]) if lb.split("@")[0] in order else 99, lb))
@@ -802,4 +971,15 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     videos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
     objects.sort(key=lambda o: (labels.index(o["model"]), o["video"], o["onset"], str(o["object"])))
     settings = {"ground_truth": truth.source, "match_radius": match_radius, "tail": tail}
-    return Evaluation(summary, videos, objects, settings, skipped)
+    return Evaluation(summary, videos, objects, settings, skipped, notes)
+
+
+def _video_key(source: str) -> str:
+    """A result's video, comparable across result folders (the path as recorded, resolved if it exists)."""
+    source = str(source)
+    return _path_key(source) if os.path.exists(source) else os.path.normcase(os.path.normpath(source))
+
+
+def _issue(notes: list[str]) -> None:
+    for note in notes:
+        warnings.warn(note, EvaluationWarning, stacklevel=3)

@@ -30,7 +30,7 @@ from pathlib import Path
 
 import numpy as np
 
-from ._validation import InputError, InputValueError, check_fps
+from ._validation import InputError, InputTypeError, InputValueError, check_fps
 
 __all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter", "atomic_path",
            "TruncatedInputWarning",
@@ -77,7 +77,20 @@ def parse_resize(text, *, name: str = "resize") -> tuple[int, int]:
             raise InputValueError(f"bad {name} {text!r}: expected (W, H) or 'WxH', e.g. 320x240") from None
     if w < 1 or h < 1:
         raise InputValueError(f"bad {name} {text!r}: width and height must be positive")
+    _check_model_size(w, h, f"{name} {w}x{h}")
     return w, h
+
+
+#: Largest frame (pixels) a resize or scale may ask for: 8K UHD, 7680 x 4320. The models keep
+#: ~26 float32 planes per stream (~3.5 GB at this size); a typo such as 20000x20000 would
+#: otherwise try to allocate tens of GB before failing.
+MAX_RESIZE_PIXELS = 7680 * 4320
+
+
+def _check_model_size(w: int, h: int, what: str) -> None:
+    if w * h > MAX_RESIZE_PIXELS:
+        raise InputValueError(f"{what} is too large: {w * h / 1e6:.0f} megapixels, at most "
+                              f"{MAX_RESIZE_PIXELS / 1e6:.1f} (7680x4320)")
 
 
 def _to_rgb(frame: np.ndarray) -> np.ndarray:
@@ -234,12 +247,12 @@ class _ImageDecoder(_Decoder):
         path = self.files[self._i]
         frame = self._cv2.imread(path, self._cv2.IMREAD_COLOR)
         if frame is None:
-            self.failed = path
+            self.failed = f"could not decode image {path}"
             return None
         if (frame.shape[1], frame.shape[0]) != self.size:
             # Like an undecodable image: stop here, keep the outputs for the frames before.
             w0, h0 = self.size
-            self.failed = f"{path} ({frame.shape[1]}x{frame.shape[0]}, not {w0}x{h0} like the first image)"
+            self.failed = f"image {path} is {frame.shape[1]}x{frame.shape[0]}, not {w0}x{h0} like the first image"
             return None
         self._i += 1
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
@@ -250,8 +263,11 @@ def _image_files(source: str) -> tuple[list[str], str]:
     if p.is_dir():
         files = [str(f) for f in p.iterdir() if f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS]
         if not files:
+            videos = any(f.suffix.lower() in VIDEO_EXTENSIONS for f in p.iterdir())
+            hint = "; it holds videos: run them all with `mlplc2 batch`" if videos else ""
             raise InputValueError(
-                f"{source}: directory has no images ({', '.join(e[1:] for e in IMAGE_EXTENSIONS[:5])}, ...)")
+                f"{source}: directory has no images ({', '.join(e[1:] for e in IMAGE_EXTENSIONS[:5])}, ...)"
+                + hint)
         return sorted(files, key=_natural_key), str(p)
     files = [f for f in _glob.glob(source) if os.path.isfile(f)]
     if not files:
@@ -272,7 +288,11 @@ def _open_decoder(source, backend: str) -> tuple[_Decoder, str]:
     if isinstance(source, os.PathLike):
         source = os.fspath(source)
     if not isinstance(source, str):
-        raise InputValueError(f"source must be a path, a glob pattern or a camera index, got {source!r}")
+        shape = getattr(source, "shape", None)
+        what = type(source).__name__ + (f" of shape {tuple(shape)}" if shape is not None else "")
+        hint = ("; to run on frames in memory, step the model: model.run(frames)"
+                if shape is not None or hasattr(source, "frames") else "")
+        raise InputTypeError(f"source must be a path, a glob pattern or a camera index, got a {what}{hint}")
     if os.path.isdir(source):
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"
@@ -357,7 +377,11 @@ class FrameSource:
             decoder.close()
             raise InputValueError("give either resize or scale, not both")
         if resize is not None:
-            self.out_size = parse_resize(resize)
+            try:
+                self.out_size = parse_resize(resize)
+            except InputValueError:
+                decoder.close()
+                raise
         elif scale is not None:
             try:
                 s = float(scale)
@@ -368,6 +392,11 @@ class FrameSource:
                 decoder.close()
                 raise InputValueError(f"bad scale {scale!r}: expected a positive number")
             self.out_size = (max(1, round(w * s)), max(1, round(h * s)))
+            try:
+                _check_model_size(*self.out_size, f"scale {scale!r} (frames of {self.out_size[0]}x{self.out_size[1]})")
+            except InputValueError:
+                decoder.close()
+                raise
         else:
             self.out_size = (int(w), int(h))
         self.scale_x = w / self.out_size[0]
@@ -458,7 +487,7 @@ class FrameSource:
         failed_image = getattr(self._dec, "failed", None)
         if failed_image is not None:
             self.truncated, self.truncated_at = True, index
-            self.message = f"{self.name}: could not decode image {failed_image} (frame {index}); stopped there"
+            self.message = f"{self.name}: {failed_image} (frame {index}); stopped there"
         elif self.kind == "video" and expected is not None and index < expected:
             self.truncated, self.truncated_at = True, index
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
@@ -581,10 +610,14 @@ def _have_pyav() -> bool:
     return True
 
 
+#: Suffixes :class:`VideoWriter` writes: MP4 (H.264) and AVI (MJPG).
+VIDEO_SUFFIXES_OUT = (".mp4", ".avi")
+
+
 class VideoWriter:
     """Write RGB frames to ``path`` one at a time; the file appears only on :meth:`close`.
 
-    ``.avi`` -> MJPG (OpenCV). Other suffixes -> MP4 H.264 (``libx264``,
+    ``.avi`` -> MJPG (OpenCV). ``.mp4`` -> MP4 H.264 (``libx264``,
     ``yuv420p``, moov atom first so a cut file still plays) via PyAV when it
     is installed, else OpenCV ``mp4v``. H.264 needs even dimensions: odd
     ones are padded by one black row/column on the bottom/right.
@@ -602,6 +635,10 @@ class VideoWriter:
             raise InputValueError(f"bad video size {size!r}")
         self.size = (w, h)
         suffix = self.path.suffix.lower()
+        if suffix not in VIDEO_SUFFIXES_OUT:
+            raise InputValueError(f"{self.path}: cannot write {suffix or 'a file without a suffix'}; "
+                                  f"name the video .mp4 (H.264) or .avi (MJPG)")
+        check_output_file(self.path, what="video")
         self.codec = "mjpg" if suffix == ".avi" else "h264"
         if backend is None:
             backend = "pyav" if (self.codec == "h264" and _have_pyav()) else "opencv"
@@ -677,7 +714,7 @@ class VideoWriter:
         if self.n_frames == 0 or not self.tmp.exists():
             self._remove_tmp()
             raise InputValueError(f"{self.path}: no frames to write")
-        os.replace(self.tmp, self.path)
+        _move_into_place(self.tmp, self.path)
         return self.path
 
     def abort(self) -> None:
@@ -742,6 +779,27 @@ def _chain_first(first, rest):
     yield from rest
 
 
+def _move_into_place(tmp: Path, path: Path) -> None:
+    """``os.replace(tmp, path)``; on failure delete ``tmp`` and raise an OSError that names
+    ``path`` (not the hidden temporary name)."""
+    try:
+        os.replace(tmp, path)
+    except OSError as exc:
+        try:
+            tmp.unlink()
+        except OSError:
+            pass
+        raise OSError(exc.errno, exc.strerror, str(path)) from None
+
+
+def check_output_file(path, *, what: str = "output") -> Path:
+    """Return ``path`` as a Path, or raise if it names an existing directory."""
+    path = Path(path)
+    if path.is_dir():
+        raise InputValueError(f"{path}: is a directory, expected a file name for the {what}")
+    return path
+
+
 class _AtomicPath:
     """Context manager yielding a hidden temporary path next to ``path``;
     renamed to ``path`` on success, deleted on failure."""
@@ -755,7 +813,7 @@ class _AtomicPath:
 
     def __exit__(self, exc_type, exc, tb) -> None:
         if exc_type is None:
-            os.replace(self.tmp, self.path)
+            _move_into_place(self.tmp, self.path)
         else:
             try:
                 self.tmp.unlink()

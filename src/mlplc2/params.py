@@ -12,9 +12,18 @@ import dataclasses
 from dataclasses import dataclass
 from typing import Literal
 
-from ._validation import InputValueError
+from ._validation import InputValueError, check_bool, check_int, check_real
 
-__all__ = ["Params"]
+__all__ = ["Params", "GAMMA_MIN", "LM_SCALE_MAX"]
+
+#: Smallest exponent gamma_on / gamma_off (Eq. 11). With tiny exponents T ** gamma lies within a
+#: few float32 steps of 1 for every T > 0, the opponent difference r - l is rounding noise and the
+#: reference and fast front ends disagree (measured on the looming stimuli: 6-17 % on the response
+#: at gamma = 1e-7 and 3e-6, ~1e-8 from 1e-4 up); 0.01 leaves a margin.
+GAMMA_MIN = 0.01
+#: Largest lm_gain x max(1, leaky_slope): LM = lm_gain x f(r - l) with |r - l| <= 2, and Eq. 12
+#: squares it, in float32 (largest 3.4e38): 1e15 leaves a wide margin.
+LM_SCALE_MAX = 1e15
 
 
 @dataclass(frozen=True)
@@ -25,6 +34,20 @@ class Params:
     value; the remaining fields are the extras ``docs/model.md`` documents.
     Time constants are in milliseconds and turned into filter coefficients
     from the frame rate the model is built with (``tau_i = 1000 / fps``).
+
+    Valid values (checked at construction and by :meth:`replace`; one-line
+    :class:`mlplc2.InputError` otherwise, a ``ValueError`` or ``TypeError``):
+
+    * numbers: finite Python or NumPy scalars (not bools, strings, None or arrays),
+      within float32's range (magnitude <= 3.4e38), stored as Python floats;
+      ``sigma_*``, ``tau_*`` and ``epsilon`` > 0 and at least 1.18e-38 (float32's
+      smallest normal number), ``gamma_on``/``gamma_off`` >= 0.01 (``GAMMA_MIN``),
+      the others >= 0; ``n_floor`` and ``after_image`` < 1; ``lm_gain x max(1,
+      leaky_slope)`` <= 1e15 (``LM_SCALE_MAX``: LM stays finite in float32);
+    * integers: Python or NumPy integers (not bools or floats) up to 2**31 - 1,
+      stored as Python ints; >= 1, except ``grace`` >= 0;
+    * ``normalise_kernels``, ``average_distances``: True or False (NumPy bools too);
+    * ``field_shape``: "square" or "disc".
 
     Examples
     --------
@@ -141,30 +164,33 @@ class Params:
     no new field is created while this many exist."""
 
     def __post_init__(self) -> None:
-        positive = ("sigma_e", "sigma_i", "sigma_c", "tau_1", "tau_nc", "epsilon",
-                    "gamma_on", "gamma_off")
-        for name in positive:
-            if not getattr(self, name) > 0:
-                raise InputValueError(f"Params.{name} must be > 0, got {getattr(self, name)!r}")
-        non_negative = ("exclusion", "w_i", "after_image", "beta", "leaky_slope", "lm_gain", "n_floor", "t_a",
-                        "t_d", "q_min", "alarm_threshold")
-        for name in non_negative:
-            if not getattr(self, name) >= 0:
-                raise InputValueError(f"Params.{name} must be >= 0, got {getattr(self, name)!r}")
-        at_least_one = ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields",
-                        "n_floor_radius")
-        for name in at_least_one:
-            value = getattr(self, name)
-            if not isinstance(value, int) or isinstance(value, bool) or value < 1:
-                raise InputValueError(f"Params.{name} must be an integer >= 1, got {value!r}")
-        if not isinstance(self.grace, int) or self.grace < 0:
-            raise InputValueError(f"Params.grace must be an integer >= 0, got {self.grace!r}")
-        if self.n_floor >= 1:
-            raise InputValueError(f"Params.n_floor must be < 1 (a fraction of the local maximum), got {self.n_floor!r}")
-        if self.after_image >= 1:
-            raise InputValueError(f"Params.after_image must be < 1, got {self.after_image!r}")
-        if self.field_shape not in ("square", "disc"):
+        def put(name, value):
+            object.__setattr__(self, name, value)
+
+        def real(name, **bounds):
+            put(name, check_real(getattr(self, name), f"Params.{name}", **bounds))
+
+        for name in ("sigma_e", "sigma_i", "sigma_c", "tau_1", "tau_nc", "epsilon"):
+            real(name, positive=True)
+        for name in ("gamma_on", "gamma_off"):
+            real(name, minimum=GAMMA_MIN)
+        for name in ("exclusion", "w_i", "beta", "leaky_slope", "lm_gain", "t_a", "t_d", "q_min",
+                     "alarm_threshold"):
+            real(name, minimum=0)
+        real("n_floor", minimum=0, below=1)
+        real("after_image", minimum=0, below=1)
+        for name in ("r_e", "r_i", "r_c", "n_c", "r_af", "d", "alarm_window", "max_fields", "n_floor_radius"):
+            put(name, check_int(getattr(self, name), f"Params.{name}", minimum=1))
+        put("grace", check_int(self.grace, "Params.grace", minimum=0))
+        for name in ("normalise_kernels", "average_distances"):
+            put(name, check_bool(getattr(self, name), f"Params.{name}"))
+        if not isinstance(self.field_shape, str) or self.field_shape not in ("square", "disc"):
             raise InputValueError(f"Params.field_shape must be 'square' or 'disc', got {self.field_shape!r}")
+        put("field_shape", str(self.field_shape))
+        scale = self.lm_gain * max(1.0, self.leaky_slope)
+        if scale > LM_SCALE_MAX:
+            raise InputValueError(f"Params.lm_gain x max(1, leaky_slope) must be <= {LM_SCALE_MAX:g} (LM stays "
+                                  f"finite in float32), got {scale:g}")
 
     def replace(self, **changes) -> "Params":
         """Return a copy with ``changes`` applied (validated like the constructor)."""

@@ -195,6 +195,52 @@ def _read(path: Path):
     return frames, float(fps)
 
 
+def load_paper_objects(gt_path: Path) -> dict[str, list]:
+    """The objects of every video of the paper's ``ground_truth.json`` (``{key: [object dict]}``),
+    checked first with the loader of ``mlplc2 evaluate`` (:func:`mlplc2.evaluate.load_ground_truth`):
+    a malformed file raises :class:`~mlplc2.InputValueError` naming the field. Each object is
+    its JSON dict with ``id`` and the phases filled in as that loader reads them; the two scenes
+    must have object-level entries whose objects have a ``center`` (the reproduction does not
+    follow tracks)."""
+    from collections.abc import Mapping
+
+    from .evaluate import PHASES, _parse_ground_truth, _read_json
+
+    raw = _read_json(gt_path)
+    if not isinstance(raw, Mapping) or not isinstance(raw.get("videos"), Mapping):
+        raise InputValueError(f"{gt_path}: expected {{\"videos\": {{name: entry}}}} (the paper's ground_truth.json)")
+    truth = _parse_ground_truth(raw, str(gt_path))
+    objects: dict[str, list] = {}
+    for key, vt in truth.items():
+        entry = raw["videos"][key] if key in raw["videos"] else {}
+        objs = []
+        for i, (ot, o) in enumerate(zip(vt.objects, entry.get("objects", []))):
+            where = f"{gt_path}: videos[{key!r}].objects[{i}]"
+            d = {k: v for k, v in o.items() if k not in ("kind", "interval")}
+            d["id"] = ot.id
+            if ot.center is not None:
+                d["center"] = list(ot.center)
+            for ph in PHASES:
+                if getattr(ot, ph) is not None:
+                    d[ph] = list(getattr(ot, ph))
+            sizes = o.get("sizes")
+            if sizes is not None and (not isinstance(sizes, list) or not all(
+                    isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in sizes)):
+                raise InputValueError(f"{where}.sizes: expected a list of numbers (side per frame), got {sizes!r}")
+            objs.append(d)
+        objects[key] = objs
+    for rel in (FOUR_PHASE_FILE, SIX_OBJECTS_FILE):
+        if rel not in objects:
+            raise InputValueError(f"{gt_path}: no entry for {rel}")
+        if not objects[rel]:
+            raise InputValueError(f"{gt_path}: videos[{rel!r}]: no 'objects' (the reproduction needs them)")
+        for i, d in enumerate(objects[rel]):
+            if d.get("center") is None and any(d.get(k) for k in ("approach", "hold", "recede", "sizes")):
+                raise InputValueError(f"{gt_path}: videos[{rel!r}].objects[{i}]: needs a 'center' [x, y] "
+                                      f"(mlplc2 reproduce does not follow a 'track')")
+    return objects
+
+
 def load_inputs(data: Path | None, *, quick: bool = False, seed: int = 0) -> dict:
     """The inputs of every experiment: ``{"basic": {name: Scene}, "four_phase": Scene,
     "six_objects": Scene, "clips": [Scene], "source": str}``."""
@@ -217,18 +263,15 @@ def load_inputs(data: Path | None, *, quick: bool = False, seed: int = 0) -> dic
     gt_path = data / "ground_truth.json"
     if not gt_path.is_file():
         raise InputValueError(f"--data {data}: no ground_truth.json (expected the paper's data folder)")
-    truth = json.loads(gt_path.read_text(encoding="utf-8"))
-    videos = truth.get("videos", {})
+    objects = load_paper_objects(gt_path)
     out["source"] = f"the paper's videos in {data}"
     for name, fname in PAPER_BASIC_FILES.items():
         rel = f"basic/{fname}"
         frames, fps = _read(data / rel)
-        out["basic"][name] = Scene(name, frames, fps, videos.get(rel, {}).get("objects", []), rel)
+        out["basic"][name] = Scene(name, frames, fps, objects.get(rel, []), rel)
     for key, rel in (("four_phase", FOUR_PHASE_FILE), ("six_objects", SIX_OBJECTS_FILE)):
-        if rel not in videos:
-            raise InputValueError(f"{gt_path}: no entry for {rel}")
         frames, fps = _read(data / rel)
-        out[key] = Scene(key, frames, fps, videos[rel]["objects"], rel)
+        out[key] = Scene(key, frames, fps, objects[rel], rel)
     if not quick:
         for path in sorted((data / "uav").glob("*.avi"), key=lambda p: p.name.lower()):
             frames, fps = _read(path)
@@ -620,8 +663,8 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
 
     t_start = time.perf_counter()
     out = Path(out)
+    inputs = load_inputs(None if data is None else Path(data), quick=quick, seed=seed)  # checked before any output
     out.mkdir(parents=True, exist_ok=True)
-    inputs = load_inputs(None if data is None else Path(data), quick=quick, seed=seed)
     skipped = []
     if data is None:
         skipped.append("no --data: Fig. 6 (real UAV clips) skipped and the real-clip claims not checked")

@@ -37,6 +37,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._validation import InputTypeError, InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, check_repeat_threshold, get_model
 
@@ -254,10 +255,24 @@ def default_out_dir(source) -> Path:
 def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=None) -> list[Model]:
     if isinstance(models, (str, Model)):
         models = [models]
+    names = [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
+    if isinstance(params, Mapping):
+        unknown = sorted(str(k) for k in params if str(k).strip().lower() not in names)
+        if unknown:
+            raise InputValueError(f"params: {', '.join(unknown)} is not a model of this run "
+                                  f"({', '.join(dict.fromkeys(names))}); give one Params for every "
+                                  f"model or a dict {{model name: params}}")
     built: list[Model] = []
     seen = set()
     for m in models:
         if isinstance(m, Model):
+            if m.name in seen or sum(isinstance(o, Model) and o.name == m.name for o in models) > 1:
+                raise InputValueError(f"two models named {m.name!r} in one run: results are kept per "
+                                      f"model name; run them separately")
+            if abs(m.fps - fps) > 1e-6 * fps:
+                warnings.warn(f"model {m.name!r} was built for {m.fps:g} fps but the input runs at "
+                              f"{fps:g} fps; its time constants and time-to-collision use {m.fps:g}",
+                              stacklevel=4)
             model = m
             model.reset()
             if hfov_deg is not None and hasattr(model, "hfov_deg"):
@@ -278,8 +293,6 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
         seen.add(model.name)
         built.append(model)
     if not built:
-        from ._validation import InputValueError
-
         raise InputValueError("no model given")
     return built
 
@@ -397,13 +410,33 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     if out is not False:
         out_dir = Path(out) if out is not None else default_out_dir(source)
         try:
+            if src.kind == "images" and out_dir.is_dir() and isinstance(source, (str, Path)) \
+                    and Path(source).is_dir() and out_dir.resolve() == Path(source).resolve():
+                raise InputValueError(f"{out_dir}: the output folder is the folder of input frames; "
+                                      f"choose another --out")
+            if out_dir.exists() and not out_dir.is_dir():
+                raise InputValueError(f"{out_dir}: is a file, expected a folder for the outputs")
             out_dir.mkdir(parents=True, exist_ok=True)
+            _remove_stale_outputs(out_dir)
         except BaseException:
             src.close()
             raise
         result.out = out_dir
     return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
                  keep_rows=keep_rows)
+
+
+#: The files a run writes into its output folder (all of them, whatever the options).
+RUN_OUTPUTS = ("responses.csv", "targets.csv", "fields.json", "responses.png", "annotated.mp4")
+
+
+def _remove_stale_outputs(out_dir: Path) -> None:
+    """Delete the outputs of an earlier run in ``out_dir`` (:data:`RUN_OUTPUTS` only), so that
+    the folder never mixes two runs (e.g. an old ``annotated.mp4`` beside new results)."""
+    for name in RUN_OUTPUTS:
+        p = out_dir / name
+        if p.is_file() or p.is_symlink():
+            p.unlink()
 
 
 def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
@@ -551,11 +584,18 @@ def write_stimulus(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     Returns ``(video_path, gt_path)``.
     """
     from . import stimuli
-    from .io import write_video
+    from .io import VIDEO_SUFFIXES_OUT, check_output_file, write_video
 
+    out = check_output_file(out, what="video")
+    if out.suffix.lower() not in VIDEO_SUFFIXES_OUT:
+        raise InputValueError(f"{out}: cannot write {out.suffix or 'a file without a suffix'}; "
+                              f"name the video .mp4 (H.264) or .avi (MJPG)")
+    gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),
+                                what="ground truth")
+    if gt_path.resolve() == out.resolve():
+        raise InputValueError(f"the video and its ground truth would both be written to {out}")
     stim = stimuli.generate(name, **options)
-    out = Path(out)
-    gt_path = Path(gt) if gt is not None else out.with_name(f"{out.stem}_gt.json")
+    gt_path.parent.mkdir(parents=True, exist_ok=True)
     write_video(out, stim.frames, stim.fps, stim.size)
     truth = dict(stim.to_ground_truth())
     truth = {"name": name, "video": out.name, **truth}

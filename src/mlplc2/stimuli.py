@@ -55,8 +55,10 @@ moves each edge by exactly 1 px per frame, and the centre stays exact.
 
 from __future__ import annotations
 
+import dataclasses
 import inspect
 import math
+import warnings
 import os
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
@@ -634,8 +636,14 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
     a0 = obj.onset
     a1 = a0 + obj.approach
     h1 = a1 + obj.hold
-    r1 = h1 + obj.recede
     contact = None
+    if obj.looming == "physical":
+        contact = float(a1 if obj.contact_frame is None else obj.contact_frame)
+    if a0 >= n:
+        return sides, contact  # starts after the last frame
+    # Phases past the last frame are never drawn: cut them there (they may be huge).
+    obj = dataclasses.replace(obj, approach=min(obj.approach, n - a0), hold=min(obj.hold, max(0, n - a1)),
+                              recede=min(obj.recede, max(0, n - h1)))
     if obj.looming == "linear":
         approach_sides = obj.start_side + obj.growth * np.arange(obj.approach)
         if obj.peak_side is not None:
@@ -646,8 +654,7 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
             peak = obj.start_side
         recede_sides = peak - obj.growth * np.arange(obj.recede)
     else:
-        contact = float(a1 if obj.contact_frame is None else obj.contact_frame)
-        approach_sides = _physical_sides(np.arange(a0, a1, dtype=np.float64), contact, fps,
+        approach_sides = _physical_sides(np.arange(a0, a0 + obj.approach, dtype=np.float64), contact, fps,
                                          obj.half_size, obj.speed, focal)
         if obj.peak_side is not None:
             peak = float(obj.peak_side)
@@ -655,15 +662,21 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
             peak = float(approach_sides[-1])
         else:
             raise _fail("a physical object with no approach needs peak_side")
-        recede_sides = approach_sides[::-1][:obj.recede] if obj.recede <= obj.approach else np.concatenate(
-            [approach_sides[::-1], np.full(obj.recede - obj.approach, approach_sides[0] if obj.approach else 0.0)])
-        if obj.peak_side is not None and obj.recede:
-            recede_sides = recede_sides * (peak / max(float(recede_sides[0]), 1e-12))
+        if obj.approach == 0:
+            # No approach to reverse: recede at ``speed`` from the distance at which the square
+            # spans ``peak_side`` (side = 2 f l / distance, as in _physical_sides).
+            start = obj.half_size * 2.0 * focal / peak
+            recede_sides = 2.0 * focal * obj.half_size / (start + obj.speed * np.arange(obj.recede) / fps)
+        else:
+            recede_sides = approach_sides[::-1][:obj.recede] if obj.recede <= obj.approach else np.concatenate(
+                [approach_sides[::-1], np.full(obj.recede - obj.approach, approach_sides[0])])
+            if obj.peak_side is not None and obj.recede:
+                recede_sides = recede_sides * (peak / max(float(recede_sides[0]), 1e-12))
     full = np.concatenate([approach_sides, np.full(obj.hold, peak), recede_sides])
     full = np.maximum(full, 0.0)
     if obj.max_side is not None:
         full = np.minimum(full, obj.max_side)
-    idx = np.arange(a0, r1)
+    idx = np.arange(a0, a0 + len(full))
     keep = (idx >= 0) & (idx < n)
     sides[idx[keep]] = full[keep]
     return sides, contact
@@ -713,6 +726,13 @@ def _interval(start: int, length: int, n: int) -> tuple[int, int] | None:
     if length <= 0 or start >= n:
         return None
     return (start, min(start + length, n))
+
+
+#: Largest generated video (bytes of uint8 grey frames) and background shift (px) ``scene``
+#: accepts: a typo (a million frames, a scroll of 1e6 px per frame) fails at once instead of
+#: trying to allocate many GiB.
+MAX_STIMULUS_BYTES = 4 * 2**30
+MAX_SCROLL_PX = 100_000
 
 
 def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240), frames: int = 100,
@@ -768,8 +788,14 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     if isinstance(background, str) and background == "plain":
         pols = {o.polarity for o in checked}
         background = 250.0 if pols == {"dark"} else 0.0 if pols == {"bright"} else 128.0
+    if n * w * h > MAX_STIMULUS_BYTES:
+        raise _fail(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
+                    f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
     offsets = np.arange(n, dtype=np.float64) * scroll
     offsets -= offsets.min()
+    if offsets.max() > MAX_SCROLL_PX:
+        raise _fail(f"scroll {scroll!r} px per frame over {n} frames moves the background "
+                    f"{offsets.max():.0f} px; at most {MAX_SCROLL_PX}")
     need = w + int(math.ceil(offsets.max())) + 1
     strip = _background_strip(background, w, h, need, seed)
     video = np.clip(np.rint(_scrolled(strip, offsets, w)), 0, 255).astype(np.uint8)
@@ -779,6 +805,12 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     for i, obj in enumerate(checked):
         sides, contact = _object_sides(obj, n, fps, focal)
         all_sides.append(sides)
+        half = 0.5 * float(sides.max())
+        cx, cy = obj.center
+        if half < 0.5 or cx + half < 0 or cy + half < 0 or cx - half > w - 1 or cy - half > h - 1:
+            warnings.warn(f"objects[{i}] at ({cx:g}, {cy:g}) is never visible in the {w}x{h} frames "
+                          f"{'(its side is 0)' if half < 0.5 else '(outside the frame)'}",
+                          stacklevel=2)
         a0, a1 = obj.onset, obj.onset + obj.approach
         h1 = a1 + obj.hold
         truths.append(ObjectTruth(

@@ -12,6 +12,10 @@ Every attention field gets, each frame, an estimate of
   (degrees from the optical axis given the field of view, else pixel offsets
   from the image centre).
 
+The four are reported together or not at all: all None until a confirmed fit
+gives a time to collision (the field's own centre, ``Field.x`` / ``Field.y``, is
+always there, but it is where the field was born, often a corner of the object).
+
 Method (see ``docs/targets.md`` for the measurements behind every choice)
 -------------------------------------------------------------------------
 1. *Edges* (:func:`measure_extent`). From the field centre, four strips of
@@ -67,12 +71,13 @@ import bisect
 import functools
 import itertools
 import math
+import numbers
 from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validation import InputValueError
+from ._validation import InputTypeError, InputValueError, check_int, check_real
 from .lobula_plate import LocalMotion
 
 __all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure_extent", "edge_distance",
@@ -80,6 +85,9 @@ __all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure
 
 _FAST = None    # the module mlplc2._fast_targets once imported, False without Numba (tests set False)
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
+#: Largest ``TargetParams.window``: the robust fit tries every subset of the window's sizes
+#: that keeps the newest one, up to 2 ** (window - 1) of them (32768 at 16; 16 at the default 6).
+WINDOW_MAX = 16
 
 
 def _fast_targets():
@@ -101,7 +109,16 @@ def _fast_targets():
 
 @dataclass(frozen=True)
 class TargetParams:
-    """Parameters of the target estimators (defaults measured on ``stimuli.looming``)."""
+    """Parameters of the target estimators (defaults measured on ``stimuli.looming``).
+
+    Valid values (checked at construction; one-line :class:`mlplc2.InputError`
+    otherwise, a ``ValueError`` or ``TypeError``): integers are Python or NumPy
+    integers (not bools), stored as Python ints, >= 0 and at most 2**31 - 1, with
+    ``2 <= min_points <= window <= 16`` (``WINDOW_MAX``); numbers are finite Python
+    or NumPy scalars (not bools, strings or arrays) >= 0 within float32's range,
+    stored as Python floats; the fractions ``rel_start``, ``rel_edge`` and
+    ``min_inliers`` lie in [0, 1].
+    """
 
     band: int = 2
     """Half-width (px) of the strips along the field's row and column."""
@@ -151,18 +168,21 @@ class TargetParams:
     """A size further than this (relative) from the fit's prediction contradicts the fit."""
 
     def __post_init__(self) -> None:
-        for name in ("band", "gap", "local", "window", "max_age", "min_points", "min_span", "coast_frames"):
-            v = getattr(self, name)
-            if isinstance(v, bool) or not isinstance(v, (int, np.integer)) or v < 0:
-                raise ValueError(f"TargetParams.{name} must be an integer >= 0, got {v!r}")
-        if self.min_points < 2:
-            raise ValueError(f"TargetParams.min_points must be >= 2, got {self.min_points!r}")
-        for name in ("min_peak", "noise_k", "rel_start", "rel_edge", "edge_offset", "lag", "max_edge_speed", "max_ttc_s",
-                     "max_residual", "max_deviation", "max_shift", "min_inliers",
-                     "confirm_frames", "confirm_rel"):
-            v = float(getattr(self, name))
-            if not math.isfinite(v) or v < 0:
-                raise ValueError(f"TargetParams.{name} must be a finite number >= 0, got {v!r}")
+        def put(name, value):
+            object.__setattr__(self, name, value)
+
+        for name in ("band", "gap", "local", "max_age", "min_span", "coast_frames"):
+            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=0))
+        for name in ("min_points", "window"):
+            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=2, maximum=WINDOW_MAX))
+        if self.window < self.min_points:
+            raise InputValueError(f"TargetParams.window must be >= min_points ({self.min_points}): a fit needs "
+                                  f"min_points of the last window sizes, got {self.window!r}")
+        for name in ("min_peak", "noise_k", "edge_offset", "lag", "max_edge_speed", "max_ttc_s", "max_residual",
+                     "max_deviation", "max_shift", "confirm_frames", "confirm_rel"):
+            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0))
+        for name in ("rel_start", "rel_edge", "min_inliers"):   # fractions
+            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0, maximum=1))
 
 
 @dataclass(frozen=True)
@@ -191,10 +211,17 @@ class Extent:
 class TargetEstimate:
     """The estimates of one field in one frame (None where not estimable).
 
+    ``ttc_s``, ``expansion_rate``, ``azimuth_deg`` and ``elevation_deg`` are all
+    set or all None: they need a confirmed fit of the object's growth (and
+    ``ttc_s <= max_ttc_s``). ``size_px`` (the fit's size, else this frame's
+    measured size, else None) and ``center`` (the expansion centre, or the field
+    centre while none is known) are diagnostics.
+
     ``status``: "tracking" (fit updated this frame), "coasting" (no usable
     measurement this frame; the last fit is extrapolated), "no_fit" (not yet
     enough measurements or no growth), "saturated" (edges too fast or out of
-    frame and nothing to coast on).
+    frame and nothing to coast on), "unconfirmed" (a fit not yet confirmed by
+    the next one), "passed" (the predicted contact is over).
     """
 
     ttc_s: float | None = None
@@ -217,9 +244,11 @@ def check_hfov(hfov_deg) -> float | None:
     """Validate a horizontal field of view in degrees (None allowed)."""
     if hfov_deg is None:
         return None
+    if isinstance(hfov_deg, (bool, np.bool_)) or not isinstance(hfov_deg, numbers.Real):
+        raise InputTypeError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}")
     try:
         v = float(hfov_deg)
-    except (TypeError, ValueError):
+    except (OverflowError, ValueError):
         raise InputValueError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}") from None
     if not math.isfinite(v) or not 0 < v < 180:
         raise InputValueError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}")
@@ -683,8 +712,7 @@ class TargetTracker:
                 self.misses = 0
             self.center = (_median([q[2] for q in self.history]), _median([q[3] for q in self.history]))
         est_center = self.center if self.center is not None and self.history else (float(x), float(y))
-        az, el = bearing(est_center[0], est_center[1], (h, w), focal)
-        ttc = rate = s_now = None
+        ttc = rate = s_now = az = el = None
         if self.contact is not None and frame - self.fit_frame > p.coast_frames:
             self.contact = self.slope = self.fit_frame = None
             self.confirmed = False
@@ -697,16 +725,23 @@ class TargetTracker:
                 status = "coasting"
             ttc_frames = self.contact - p.lag - frame
             ttc = ttc_frames / fps
-            if ttc > p.max_ttc_s:
-                ttc = None
             y_now = -self.slope * ttc_frames
             s_now = 1.0 / y_now
-            ds = -self.slope / (y_now * y_now) * fps          # px per second
-            if focal is None:
-                rate = ds
+            if ttc > p.max_ttc_s:
+                ttc = None                 # no measurable approach: no rate and no bearing either
             else:
-                half = s_now / (2.0 * focal)
-                rate = math.degrees(ds / focal / (1.0 + half * half))
+                ds = -self.slope / (y_now * y_now) * fps          # px per second
+                if focal is None:
+                    rate = ds
+                else:
+                    half = s_now / (2.0 * focal)
+                    rate = math.degrees(ds / focal / (1.0 + half * half))
+                # The bearing of the expansion centre, reported with the time to collision only:
+                # before a confirmed fit the centre may rest on junk first sizes, and before any
+                # size the only point known is the field centre, often a corner of the object
+                # (docs/targets.md, "Bearing").
+                c = self.center if self.center is not None else est_center
+                az, el = bearing(c[0], c[1], (h, w), focal)
         est = TargetEstimate(ttc_s=ttc, expansion_rate=rate, azimuth_deg=az, elevation_deg=el,
                              size_px=s_now if s_now is not None else size, center=est_center, status=status)
         self.last = (frame, est)

@@ -42,7 +42,8 @@ class Output:
         A spike this frame (LGMD models; the LPLC2 family spikes when it alarms).
     repeated : bool
         The frame repeated the last processed one (see ``Model.repeat_threshold``): the
-        model did not step, and this output is the previous one with this frame's index.
+        model did not step, and this output is the previous one with this frame's index
+        (each field's ``ttc_s`` counted down by the time since the processed frame).
     """
 
     frame: int
@@ -188,7 +189,7 @@ class Model(abc.ABC):
             if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= self.repeat_threshold:
                 self._repeats += 1
                 if self._repeats <= MAX_REPEATS:
-                    out = dataclasses.replace(self._last_out, frame=self._frame, repeated=True)
+                    out = self._held_output()
                     self._frame += 1
                     return out
                 # A longer run is a still scene, not a duplicated frame: step as usual.
@@ -202,6 +203,16 @@ class Model(abc.ABC):
         self._frame += 1
         self._last_out = out
         return out
+
+    def _held_output(self) -> Output:
+        """The last output for a repeated frame: same fields and response, this frame's index,
+        ``repeated`` set, and every time to collision counted down by the time elapsed since
+        the frame that was processed (the object keeps approaching while the picture holds)."""
+        last = self._last_out
+        elapsed = self._repeats / self.fps
+        fields = tuple(f if getattr(f, "ttc_s", None) is None
+                       else dataclasses.replace(f, ttc_s=max(f.ttc_s - elapsed, 0.0)) for f in last.fields)
+        return dataclasses.replace(last, frame=self._frame, repeated=True, fields=fields)
 
     def reset(self) -> None:
         """Forget all state: the next frame is frame 0 and may have a new size."""

@@ -28,7 +28,8 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._validation import InputTypeError, InputValueError
+from .._validation import (FLOAT32_MAX, InputTypeError, InputValueError, check_bool, check_int, check_real,
+                           check_reals)
 from ..retina import photoreceptors
 from .base import Model, Output, register
 
@@ -37,6 +38,12 @@ __all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "lowpass_alpha", "hig
 
 #: Sigmoid membrane potential with no input (sigmoid(0)); both models rest here.
 RESTING_POTENTIAL = 0.5
+#: Largest LGMD2 summation weight theta_1..3 (``a_on``, ``a_off``, ``a_onoff``; published 0.5-1):
+#: the grouping layer squares S (G = S Ce) in float32, and an infinite S makes G NaN.
+SUM_WEIGHT_MAX = 1e6
+#: Smallest ``LGMD2Params.t_pm``: the adaptive weight PM / T_PM (PM, a mean |frame difference|,
+#: is at most 255) must stay within float32's range (an infinite weight times 0 is NaN).
+T_PM_MIN = 255.0 / FLOAT32_MAX
 
 _BORDER = cv2.BORDER_REPLICATE
 
@@ -73,19 +80,17 @@ def _ring_kernels(centre: float, nearest: float, diagonal: float) -> tuple[np.nd
     return kc, kn, kd
 
 
-def _check(cls_name: str, obj, positive=(), non_negative=(), ints=()) -> None:
+def _check(cls_name: str, obj, positive=(), non_negative=(), ints=(), bools=()) -> None:
+    """Validate (and store as Python floats / ints / bools) the named fields of a frozen
+    parameter dataclass (``_validation.check_real`` / ``check_int`` / ``check_bool``)."""
     for name in positive:
-        v = getattr(obj, name)
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v > 0):
-            raise InputValueError(f"{cls_name}.{name} must be a finite number > 0, got {v!r}")
+        object.__setattr__(obj, name, check_real(getattr(obj, name), f"{cls_name}.{name}", positive=True))
     for name in non_negative:
-        v = getattr(obj, name)
-        if not (isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) and v >= 0):
-            raise InputValueError(f"{cls_name}.{name} must be a finite number >= 0, got {v!r}")
+        object.__setattr__(obj, name, check_real(getattr(obj, name), f"{cls_name}.{name}", minimum=0))
     for name in ints:
-        v = getattr(obj, name)
-        if not isinstance(v, int) or isinstance(v, bool) or v < 1:
-            raise InputValueError(f"{cls_name}.{name} must be an integer >= 1, got {v!r}")
+        object.__setattr__(obj, name, check_int(getattr(obj, name), f"{cls_name}.{name}", minimum=1))
+    for name in bools:
+        object.__setattr__(obj, name, check_bool(getattr(obj, name), f"{cls_name}.{name}"))
 
 
 class _ParamsMixin:
@@ -94,7 +99,7 @@ class _ParamsMixin:
         names = {f.name for f in dataclasses.fields(self)}
         unknown = sorted(set(changes) - names)
         if unknown:
-            raise ValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict:
@@ -126,6 +131,14 @@ class LGMD2Params(_ParamsMixin):
     TCYB paper) except where ``docs/model.md`` (Baselines) says otherwise (``a_on``, the
     biased-ON weight from the mLPLC2 authors' Python LGMD2). Time constants are
     in ms and become filter coefficients from the frame rate.
+
+    Valid values (one-line :class:`mlplc2.InputError` otherwise): numbers are finite
+    Python or NumPy scalars (not bools, strings or arrays) within float32's range,
+    stored as Python floats; those that must be > 0 are at least 1.18e-38 (float32's
+    smallest normal number), ``t_pm`` at least 7.5e-37 (``T_PM_MIN``); ``dc`` < 1;
+    ``a_on``, ``a_off``, ``a_onoff`` <= 1e6 (``SUM_WEIGHT_MAX``); the kernels and
+    delays are sequences of 3 such numbers; ``n_ts`` an integer >= 1;
+    ``recursive_delay`` True or False.
     """
 
     dc: float = 0.1
@@ -178,20 +191,21 @@ class LGMD2Params(_ParamsMixin):
 
     def __post_init__(self) -> None:
         for name in ("on_kernel", "off_kernel", "tau_on", "tau_off"):
-            v = getattr(self, name)
-            if len(tuple(v)) != 3:
-                raise ValueError(f"LGMD2Params.{name} must have 3 values (centre, nearest, diagonal), got {v!r}")
-            object.__setattr__(self, name, tuple(float(x) for x in v))
-            for x in getattr(self, name):
-                if not (math.isfinite(x) and (x > 0 if name.startswith("tau") else x >= 0)):
-                    raise ValueError(f"LGMD2Params.{name} has an invalid value {x!r}")
+            bound = {"positive": True} if name.startswith("tau") else {"minimum": 0}
+            object.__setattr__(self, name, check_reals(getattr(self, name), f"LGMD2Params.{name}", 3,
+                                                       "centre, nearest, diagonal", **bound))
         _check("LGMD2Params", self,
                positive=("tau_pm", "t_pm", "c_w", "delta_c", "c_sig", "tau_sfa", "c_spi"),
-               non_negative=("dc", "w_on_base", "w_off_base", "a_on", "a_off", "a_onoff", "c_de",
-                             "t_de", "t_sfa", "t_sp"),
-               ints=("n_ts",))
+               non_negative=("dc", "w_on_base", "w_off_base", "c_de", "t_de", "t_sfa", "t_sp"),
+               ints=("n_ts",), bools=("recursive_delay",))
+        for name in ("a_on", "a_off", "a_onoff"):
+            object.__setattr__(self, name, check_real(getattr(self, name), f"LGMD2Params.{name}", minimum=0,
+                                                      maximum=SUM_WEIGHT_MAX))
         if self.dc >= 1:
-            raise ValueError(f"LGMD2Params.dc must be < 1, got {self.dc!r}")
+            raise InputValueError(f"LGMD2Params.dc must be < 1, got {self.dc!r}")
+        if self.t_pm < T_PM_MIN:
+            raise InputValueError(f"LGMD2Params.t_pm must be >= {T_PM_MIN:.2g} (PM / t_pm, PM <= 255, must stay "
+                                  f"within float32's range), got {self.t_pm!r}")
 
 
 @register("lgmd2")
@@ -306,6 +320,8 @@ class LGMD1Params(_ParamsMixin):
     Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
     of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
     the shared grouping layer; ``docs/model.md`` (Baselines) lists the sources.
+
+    Valid values: as for :class:`LGMD2Params` (``w_i_kernel`` 2 numbers >= 0).
     """
 
     w_i_kernel: tuple[float, float] = (0.25, 0.125)
@@ -331,10 +347,8 @@ class LGMD1Params(_ParamsMixin):
     frame, reaches this."""
 
     def __post_init__(self) -> None:
-        v = tuple(float(x) for x in self.w_i_kernel)
-        if len(v) != 2 or not all(math.isfinite(x) and x >= 0 for x in v):
-            raise ValueError(f"LGMD1Params.w_i_kernel must be 2 finite values >= 0, got {self.w_i_kernel!r}")
-        object.__setattr__(self, "w_i_kernel", v)
+        object.__setattr__(self, "w_i_kernel", check_reals(self.w_i_kernel, "LGMD1Params.w_i_kernel", 2,
+                                                           "nearest, diagonal", minimum=0))
         _check("LGMD1Params", self, positive=("c_w", "delta_c", "c_sig", "t_ffi"),
                non_negative=("w_i", "c_de", "t_de", "t_sp"), ints=("n_ts",))
 
