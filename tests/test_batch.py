@@ -10,6 +10,7 @@ import signal
 import subprocess
 import sys
 import time
+from pathlib import Path
 
 import pytest
 
@@ -360,3 +361,17 @@ def test_default_values_are_no_override():
     # an LPLC2-family section entry is compared with the flat value it overrides
     assert param_sets({"t_a": 12, "mlplc2": {"t_a": 10}}) == [{"t_a": 12, "mlplc2": {"t_a": 10}}]
     assert param_sets({"t_a": 12, "mlplc2": {"t_a": 12}}) == [{"t_a": 12}]
+
+
+def test_cli_batch_warns_about_truncated_inputs(videos, tmp_path, capsys):
+    """A damaged video that decodes in part: its rows say "truncated" and the CLI prints one
+    warning line per task (the results cover the frames decoded)."""
+    data = Path(videos["paths"][0]).read_bytes()
+    cut = tmp_path / "cut.avi"
+    cut.write_bytes(data[: len(data) * 6 // 10])
+    out = tmp_path / "o"
+    assert main(["batch", str(cut), "--out", str(out), "-m", "lgmd2", "--workers", "0", "-q"]) == 0
+    rows = _read_table(out / "results.csv")
+    assert [r["status"] for r in rows] == ["truncated"] and 0 < int(rows[0]["n_frames"]) < 24
+    err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
+    assert len(err) == 1 and err[0].startswith("mlplc2: warning: ") and "cut.avi" in err[0], err

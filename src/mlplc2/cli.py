@@ -249,9 +249,15 @@ def _add_demo(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_demo(args) -> int:
-    from .runner import demo
+    from .runner import RunInterrupted, demo
 
-    d = demo(args.out, scene=args.scene, quiet=args.quiet)
+    try:
+        d = demo(args.out, scene=args.scene, quiet=args.quiet)
+    except RunInterrupted as exc:
+        res = exc.result
+        print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
+              file=sys.stderr)
+        return EXIT_INTERRUPTED
     lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)}",
              "  object  centre        frames    mlplc2 field  centre        error   first alarm"]
     for m in d.matches:
@@ -362,7 +368,7 @@ def _cmd_batch(args) -> int:
         return EXIT_INTERRUPTED
     reported = set()
     for r in res.rows:
-        if r["status"] == "error" and r["out"] not in reported:  # once per task
+        if r["status"] in ("error", "truncated") and r["out"] not in reported:  # once per task
             reported.add(r["out"])
             _warn(f"{r['video']} ({r['model']}, {r['out']}): {r['error']}")
     plotted = f" ({res.plotted} of them plotted now)" if res.plotted else ""

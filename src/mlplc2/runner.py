@@ -566,6 +566,9 @@ def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool
 
         path = out_dir / "responses.png"
         title = f"{Path(result.source).name}: {', '.join(result.models)}"
+        if result.interrupted or result.truncated:
+            why = "interrupted" if result.interrupted else "input truncated"
+            title += f" ({why} after {result.n_frames} frames)"
         rows = result.rows or result.files.get("responses.csv")
         if rows is not None:
             plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps)
