@@ -448,3 +448,15 @@ def test_run_api_on_an_array_says_what_to_do():
         run(frames, ["mlplc2"], out=False)
     msg = str(exc.value)
     assert "\n" not in msg and len(msg) < 200 and "ndarray of shape (10, 40, 40)" in msg and "model.run(frames)" in msg
+
+
+def test_run_backend_option_reaches_the_decoder(data, tmp_path, monkeypatch, capsys):
+    """--backend pyav decodes with PyAV: without PyAV importable it is a one-line error (it used
+    to be ignored, and the run decoded with OpenCV)."""
+    pytest.importorskip("av")
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "6", "--backend", "pyav", "-q"]) == 0
+    assert json.loads((out / "fields.json").read_text())["n_frames"] == 6
+    monkeypatch.setitem(sys.modules, "av", None)   # import av now fails
+    assert main(["run", str(data["avi"]), "--out", str(tmp_path / "p"), "--backend", "pyav", "-q"]) == 2
+    assert "needs PyAV" in _one_error_line(capsys.readouterr().err)

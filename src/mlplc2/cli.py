@@ -165,7 +165,8 @@ def _cmd_run(args) -> int:
         try:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats)
+                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats,
+                         backend=args.backend)
         except RunInterrupted as exc:
             res = exc.result
             print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
