@@ -284,6 +284,43 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     for name in ("mlplc2", "lgmd2"):
         frames = sorted({r["frame"] for r in kept.rows if r["model"] == name and r["collision"]})
         assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
+    # the summaries of dead fields wait on disk, and come back complete and in order
+    assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
+    assert (tmp_path / "a" / "fields.json").read_text() == (tmp_path / "b" / "fields.json").read_text()
+    # the table is read back from responses.csv
+    pytest.importorskip("pandas")
+    a, b = kept.to_dataframe(), lean.to_dataframe()
+    assert a.equals(b), (a.dtypes, b.dtypes)
+
+
+def test_field_summaries_keep_only_live_fields_in_memory():
+    """keep_rows=False: a field that died leaves memory (it is spilled to a temporary file)."""
+    from mlplc2.attention import Field
+    from mlplc2.runner import _FieldTracker
+
+    tracker = _FieldTracker(0, spill=True)
+    for k in range(200):   # a new field every frame, each living 3 frames
+        fields = tuple(Field(i, 10.0, 10.0, 40.0, 1.0, False, i) for i in range(max(0, k - 2), k + 1))
+        tracker.update(k, mlplc2.Output(frame=k, response=1.0, fields=fields), lambda x, y: (x, y))
+    assert len(tracker.fields) == 3
+    summaries = tracker.summaries()
+    assert [s["id"] for s in summaries] == list(range(200))
+    assert all(s["died"] == s["id"] + 3 for s in summaries[:-3])
+    tracker.close()
+
+
+def test_peak_frame_is_the_first_frame_of_a_plateau():
+    """A response held on later frames (duplicates) leaves the peak at its first frame, also when
+    the stored value is rounded (it used to move to the last frame of the plateau)."""
+    from mlplc2.attention import Field
+    from mlplc2.runner import _FieldTracker
+
+    tracker = _FieldTracker(0)
+    for k, r in enumerate((5.0, 12058.344999, 12058.344999, 12058.344999, 100.0)):
+        f = Field(1, 10.0, 10.0, 40.0, r, False, 0)
+        tracker.update(k, mlplc2.Output(frame=k, response=r, fields=(f,)), lambda x, y: (x, y))
+    (s,) = tracker.summaries()
+    assert s["peak_frame"] == 1 and s["peak_response"] == pytest.approx(12058.34, abs=0.01)
 
 
 def test_to_dataframe_without_pandas(data, monkeypatch):

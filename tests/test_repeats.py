@@ -152,7 +152,29 @@ def test_held_time_to_collision_counts_down():
         assert held.repeated and held.response == last.response
         for a, b in zip(held.fields, last.fields):
             assert (a.id, a.x, a.y, a.response) == (b.id, b.x, b.y, b.response)
-            if b.ttc_s is None:
-                assert a.ttc_s is None
+            if b.ttc_s is None or b.ttc_s - n / 30.0 <= 0:   # no estimate once the contact is over
+                assert a.ttc_s is None and a.rank is None and a.azimuth_deg is None
             else:
-                assert a.ttc_s == pytest.approx(max(b.ttc_s - n / 30.0, 0.0))
+                assert a.ttc_s == pytest.approx(b.ttc_s - n / 30.0) and a.rank is not None
+
+
+def test_held_time_to_collision_ends_at_contact():
+    """A held estimate whose contact time has passed becomes None (as on a stepped frame), and
+    the remaining estimates are ranked again."""
+    from mlplc2.attention import Field
+    from mlplc2.models.base import Output
+
+    model = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
+    frame = np.full((60, 80), 128, np.uint8)
+    model.step(frame)
+    soon = Field(1, 10.0, 10.0, 40.0, 900.0, True, 0, ttc_s=0.02, expansion_rate=50.0, azimuth_deg=-3.0,
+                 elevation_deg=2.0, rank=1)
+    later = Field(2, 50.0, 30.0, 40.0, 100.0, False, 0, ttc_s=0.5, expansion_rate=5.0, azimuth_deg=1.0,
+                  elevation_deg=0.0, rank=2)
+    model._last_out = Output(frame=0, response=900.0, fields=(soon, later), collision=True)
+    held = model.step(frame)                       # one frame (1/30 s) later: past the first contact
+    assert held.repeated and held.response == 900.0 and held.collision
+    a, b = held.fields
+    assert (a.ttc_s, a.expansion_rate, a.azimuth_deg, a.elevation_deg, a.rank) == (None,) * 5
+    assert b.ttc_s == pytest.approx(0.5 - 1 / 30.0) and b.rank == 1 and b.azimuth_deg == 1.0
+    assert held.most_urgent is b

@@ -176,3 +176,55 @@ def test_quick_reproduction_on_paper_videos(paper_dir, tmp_path):
     rc = cli.main(["reproduce", "--quick", "--data", str(paper_dir), "--out", str(tmp_path), "--quiet"])
     assert rc == 0
     check_report(json.loads((tmp_path / "report.json").read_text()))
+
+
+def _paper_copy(paper_dir, root):
+    """A data folder of symlinks to the paper's basic tests, scenes and ground truth."""
+    root.mkdir()
+    (root / "ground_truth.json").symlink_to(paper_dir / "ground_truth.json")
+    for sub in ("basic", "scenes"):
+        (root / sub).mkdir()
+        for f in (paper_dir / sub).glob("*.avi"):
+            (root / sub / f.name).symlink_to(f)
+    return root
+
+
+@pytest.mark.paper
+def test_truncated_scene_is_an_error_before_any_output(paper_dir, tmp_path, capsys):
+    """The claims need every frame: a cut scene stops the run with one line (it used to give
+    PASS lines computed on the frames that decoded, and exit 0)."""
+    data = _paper_copy(paper_dir, tmp_path / "data")
+    scene = data / "scenes" / "outdoor_2_black_4_period.avi"
+    blob = scene.resolve().read_bytes()
+    scene.unlink()
+    scene.write_bytes(blob[:200_000])
+    rc = cli.main(["reproduce", "--quick", "--data", str(data), "--out", str(tmp_path / "o"), "--quiet"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and "outdoor_2_black_4_period.avi: decoding stopped at frame" in err[0], err
+    assert "the reproduction needs the complete video" in err[0]
+    assert not (tmp_path / "o").exists()
+
+
+@pytest.mark.paper
+@pytest.mark.slow
+def test_damaged_clip_is_skipped_and_the_rest_written(paper_dir, tmp_path, capsys):
+    """An unreadable clip in uav/ is skipped with a warning line (exit 2); every figure and the
+    report are still written, the report says what was skipped, and an earlier run's files in
+    the output folder do not survive."""
+    data = _paper_copy(paper_dir, tmp_path / "data")
+    (data / "uav").mkdir()
+    (data / "uav" / "bird_attack_2.avi").symlink_to(paper_dir / "uav" / "bird_attack_2.avi")
+    (data / "uav" / "bogus.avi").write_text("not a video\n")
+    out = tmp_path / "o"
+    out.mkdir()
+    (out / "fig6_real_clips.png").write_bytes(b"stale")
+    rc = cli.main(["reproduce", "--data", str(data), "--out", str(out), "--quiet"])
+    assert rc == 2
+    err = capsys.readouterr().err.strip().splitlines()
+    assert len(err) == 1 and err[0].startswith("mlplc2: warning: uav/bogus.avi skipped: "), err
+    assert (out / "fig6_real_clips.png").read_bytes()[:4] == b"\x89PNG"   # drawn anew (one clip)
+    report = json.loads((out / "report.json").read_text())
+    assert any(s.startswith("uav/bogus.avi skipped") for s in report["skipped"])
+    assert "uav/bogus.avi skipped" in (out / "report.md").read_text()
+    assert not any("bogus" in c["id"] for c in report["claims"])

@@ -29,6 +29,7 @@ import json
 import math
 import sys
 import time
+import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -187,11 +188,19 @@ class Scene:
 
 
 def _read(path: Path):
-    from .io import read_video
+    """(frames, fps) of a complete video; a missing, unreadable or truncated file raises
+    :class:`~mlplc2.InputValueError` (the claims need every frame of the paper's videos)."""
+    from .io import TruncatedInputWarning, read_video
 
     if not path.is_file():
         raise InputValueError(f"{path}: missing (expected the paper's data layout, see docs/reproduce.md)")
-    frames, fps = read_video(path)
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always", TruncatedInputWarning)
+        frames, fps = read_video(path)
+    for w in caught:
+        if issubclass(w.category, TruncatedInputWarning):
+            raise InputValueError(str(w.message).split("; results cover")[0] + "; the reproduction needs the complete video")
+        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     return frames, float(fps)
 
 
@@ -272,11 +281,21 @@ def load_inputs(data: Path | None, *, quick: bool = False, seed: int = 0) -> dic
     for key, rel in (("four_phase", FOUR_PHASE_FILE), ("six_objects", SIX_OBJECTS_FILE)):
         frames, fps = _read(data / rel)
         out[key] = Scene(key, frames, fps, objects[rel], rel)
+    out["damaged"] = []
     if not quick:
         for path in sorted((data / "uav").glob("*.avi"), key=lambda p: p.name.lower()):
-            frames, fps = _read(path)
+            try:
+                frames, fps = _read(path)
+            except InputValueError as exc:   # an optional clip: skipped, said in the report
+                out["damaged"].append(f"uav/{path.name} skipped: {exc}")
+                continue
             out["clips"].append(Scene(path.stem, frames, fps, [], f"uav/{path.name}"))
     return out
+
+
+#: The files :func:`reproduce` writes (an earlier run's are deleted first).
+OUTPUTS = ("fig3_selectivity.png", "fig4_four_phases.png", "fig5_six_objects.png", "fig6_real_clips.png",
+           "report.json", "report.md")
 
 
 # ---------------------------------------------------------------------------
@@ -665,13 +684,15 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
     out = Path(out)
     inputs = load_inputs(None if data is None else Path(data), quick=quick, seed=seed)  # checked before any output
     out.mkdir(parents=True, exist_ok=True)
-    skipped = []
+    for name in OUTPUTS:   # never leave an earlier run's figure beside this report
+        (out / name).unlink(missing_ok=True)
+    skipped = list(inputs.get("damaged", []))
     if data is None:
         skipped.append("no --data: Fig. 6 (real UAV clips) skipped and the real-clip claims not checked")
     elif quick:
         skipped.append("--quick: Fig. 6 (real UAV clips) skipped")
     elif not inputs["clips"]:
-        skipped.append(f"no uav/*.avi in {data}: Fig. 6 skipped")
+        skipped.append(f"no readable uav/*.avi in {data}: Fig. 6 skipped")
 
     basic = inputs["basic"]
     total = (sum(s.n for s in basic.values()) * len(MODELS) + inputs["four_phase"].n * len(MODELS)
@@ -798,6 +819,9 @@ def cli_handler(args) -> int:
     if args.data is not None and not Path(args.data).is_dir():
         raise InputValueError(f"--data {args.data}: not a folder")
     res = reproduce(args.data, args.out, quick=args.quick, quiet=args.quiet)
+    damaged = [s for s in res.skipped if s.startswith("uav/")]
+    for s in damaged:   # one line each, also under --quiet
+        print(f"mlplc2: warning: {s}", file=sys.stderr)
     if not args.quiet:
         print(f"{len(res.claims)} claims: {res.n_pass} PASS, {res.n_fail} FAIL "
               f"({res.n_known} known deviations, {res.n_fail - res.n_known} unexpected)")
@@ -807,4 +831,4 @@ def cli_handler(args) -> int:
         for s in res.skipped:
             print(f"  note: {s}")
         print(f"outputs in {res.out}: {', '.join(sorted(res.files))}")
-    return 0
+    return 2 if damaged else 0

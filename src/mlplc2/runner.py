@@ -31,6 +31,7 @@ import json
 import logging
 import math
 import sys
+import tempfile
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
@@ -111,12 +112,19 @@ class RunResult:
     hfov_deg: float | None = None
 
     def to_dataframe(self):
-        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``)."""
+        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
+        run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
         try:
             import pandas as pd
         except ImportError:
             raise ImportError("RunResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
-        df = pd.DataFrame(self.rows, columns=list(COLUMNS))
+        if not self.rows and self.n_frames:
+            path = self.files.get("responses.csv")
+            if path is None or not Path(path).is_file():
+                raise InputValueError("this run kept no rows (keep_rows=False) and wrote no responses.csv")
+            df = pd.read_csv(path)
+        else:
+            df = pd.DataFrame(self.rows, columns=list(COLUMNS))
         df["field_id"] = df["field_id"].astype("Int64")
         df["x"] = df["x"].astype("float64")
         df["y"] = df["y"].astype("float64")
@@ -141,13 +149,20 @@ class RunResult:
 
 
 class _FieldTracker:
-    """Follows the fields of one model across frames to build their summaries."""
+    """Follows the fields of one model across frames to build their summaries.
 
-    def __init__(self, offset: int, to_target=None):
+    With ``spill`` the summary of a field that died goes to an anonymous temporary file
+    instead of staying in memory (long or live runs with ``keep_rows=False``): memory then
+    holds only the live fields, whatever the length of the run.
+    """
+
+    def __init__(self, offset: int, to_target=None, spill: bool = False):
         self.offset = offset  # source index of model frame 0
         self.fields: dict[int, dict] = {}
         self.alive: set[int] = set()
         self.to_target = to_target  # Field -> dict of target estimates (None: no estimates)
+        self._peak: dict[int, float] = {}  # unrounded peak response per field
+        self._spill = tempfile.TemporaryFile("w+", encoding="utf-8") if spill else None
 
     def update(self, index: int, out: Output, to_input) -> None:
         present = set()
@@ -160,10 +175,12 @@ class _FieldTracker:
                     "id": f.id, "x": _r(x), "y": _r(y), "born": f.born + self.offset, "died": None,
                     "peak_response": _num(f.response), "peak_frame": index, "first_alarm_frame": None,
                 }
+                self._peak[f.id] = f.response
                 if self.to_target is not None:
                     s["at_peak"] = self.to_target(f)
                     s["last_estimate"] = None
-            elif f.response > s["peak_response"]:
+            elif f.response > self._peak[f.id]:  # the first frame of a plateau stays the peak
+                self._peak[f.id] = f.response
                 s.update(x=_r(x), y=_r(y), peak_response=_num(f.response), peak_frame=index)
                 if self.to_target is not None:
                     s["at_peak"] = self.to_target(f)
@@ -173,10 +190,22 @@ class _FieldTracker:
                 s["first_alarm_frame"] = index
         for fid in self.alive - present:
             self.fields[fid]["died"] = index
+            if self._spill is not None:
+                self._spill.write(json.dumps(self.fields.pop(fid)) + "\n")
+                del self._peak[fid]
         self.alive = present
 
+    def close(self) -> None:
+        if self._spill is not None:
+            self._spill.close()
+
     def summaries(self) -> list[dict]:
-        return [self.fields[k] for k in sorted(self.fields)]
+        out = list(self.fields.values())
+        if self._spill is not None:
+            self._spill.seek(0)
+            out += [json.loads(line) for line in self._spill]
+            self._spill.seek(0, 2)
+        return sorted(out, key=lambda d: d["id"])
 
 
 def _r(v: float) -> float:
@@ -361,7 +390,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     keep_rows : bool
         Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
         ``.targets`` (default). Set False for long or live runs: memory then stays
-        flat whatever the length (the rows are in the CSV files; the CLI does this).
+        flat whatever the length (the rows are in the CSV files, and the summaries of fields
+        that have died wait in a temporary file until ``fields.json`` is written; the CLI does
+        this). ``RunResult.to_dataframe()`` then reads ``responses.csv``.
     repeat_threshold : float, optional
         Treat a frame in which no pixel differs from the last processed one by more than
         this many grey levels as a duplicate: the models hold their last output for it
@@ -444,7 +475,7 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
     from tqdm import tqdm
 
     converters = [_target_converter(m, src.scale_x, src.scale_y) for m in built]
-    trackers = [_FieldTracker(src.start, conv) for conv in converters]
+    trackers = [_FieldTracker(src.start, conv, spill=not keep_rows) for conv in converters]
     primary = _primary(built)
     csv_file = writer = vw = None
     tcsv_file = twriter = None
@@ -535,6 +566,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
     result.message = src.message
     # Fields still alive at the end keep died = None.
     result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
+    for t in trackers:
+        t.close()
     if out_dir is not None:
         try:
             _finish(result, out_dir, vw, plot)

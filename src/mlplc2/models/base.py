@@ -210,8 +210,19 @@ class Model(abc.ABC):
         the frame that was processed (the object keeps approaching while the picture holds)."""
         last = self._last_out
         elapsed = self._repeats / self.fps
-        fields = tuple(f if getattr(f, "ttc_s", None) is None
-                       else dataclasses.replace(f, ttc_s=max(f.ttc_s - elapsed, 0.0)) for f in last.fields)
+        fields = []
+        for f in last.fields:
+            ttc = getattr(f, "ttc_s", None)
+            if ttc is not None and ttc - elapsed > 0:
+                f = dataclasses.replace(f, ttc_s=ttc - elapsed)
+            elif ttc is not None:  # the predicted contact is over: no estimate (as a stepped frame)
+                f = dataclasses.replace(f, ttc_s=None, expansion_rate=None, azimuth_deg=None,
+                                        elevation_deg=None, rank=None)
+            fields.append(f)
+        timed = sorted((f for f in fields if f.ttc_s is not None), key=lambda f: (f.ttc_s, -f.response, f.id))
+        ranks = {f.id: k for k, f in enumerate(timed, 1)}
+        fields = tuple(dataclasses.replace(f, rank=ranks[f.id]) if f.id in ranks and f.rank != ranks[f.id] else f
+                       for f in fields)
         return dataclasses.replace(last, frame=self._frame, repeated=True, fields=fields)
 
     def reset(self) -> None:
