@@ -525,7 +525,9 @@ def start_local_cluster(workers: int, **kwargs):
 
     The workers get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set) and not
     Dask's ``MALLOC_TRIM_THRESHOLD_`` (see :func:`_tune_malloc`). The cluster
-    logs errors only (``silence_logs=logging.ERROR`` unless given), and its
+    logs critical messages only (``silence_logs=logging.CRITICAL`` unless given: a task's
+    failure is reported in its row; the workers' own errors, such as a heartbeat that fails
+    while the cluster shuts down, are noise here), and its
     worker processes ignore Ctrl-C (SIGINT): this process handles it and shuts
     them down, so an interrupt prints no worker tracebacks or cancelled-task
     warnings."""
@@ -536,7 +538,7 @@ def start_local_cluster(workers: int, **kwargs):
     import dask
 
     kwargs.setdefault("dashboard_address", None)
-    kwargs.setdefault("silence_logs", logging.ERROR)
+    kwargs.setdefault("silence_logs", logging.CRITICAL)
     # Dask's default MALLOC_TRIM_THRESHOLD_ makes the models ~5x slower (see _tune_malloc): not for ours.
     # Each worker's Numba threads (the fast front end's bands) share the cores with the other workers.
     environ = {"MALLOC_TRIM_THRESHOLD_": None}
