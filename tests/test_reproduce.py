@@ -228,3 +228,13 @@ def test_damaged_clip_is_skipped_and_the_rest_written(paper_dir, tmp_path, capsy
     assert any(s.startswith("uav/bogus.avi skipped") for s in report["skipped"])
     assert "uav/bogus.avi skipped" in (out / "report.md").read_text()
     assert not any("bogus" in c["id"] for c in report["claims"])
+
+
+def test_interrupt_before_any_output_leaves_no_folder(tmp_path, monkeypatch, capsys):
+    def interrupted(*args, **kwargs):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(reproduce, "run_model", interrupted)
+    assert cli.main(["reproduce", "--quick", "--out", str(tmp_path / "o"), "--quiet"]) == 130
+    assert capsys.readouterr().err.strip() == "mlplc2: interrupted"
+    assert not (tmp_path / "o").exists()

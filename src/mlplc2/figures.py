@@ -237,7 +237,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
             else:
                 ax.axhline(0.05 * dark, color="tab:red", lw=0.8, ls="--")
                 ax.set_ylim(ymin - 0.03 * max(ymax, 1), max(ymax, 1) * 1.3)  # headroom for the peak label
-            ax.set_xlim(0, r.size - 1)
+            ax.set_xlim(0, max(r.size - 1, 1))
             ax.grid(alpha=0.3)
             ax.tick_params(labelsize=7)
             if j == 0:
@@ -310,7 +310,7 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
         axes[0].text(100 * k + 50, 1.02, f"phase {k + 1}", transform=axes[0].get_xaxis_transform(),
                      ha="center", va="bottom", fontsize=8)
     axes[-1].set_xlabel("frame (30 fps); dotted lines: phase boundaries")
-    axes[-1].set_xlim(0, n - 1)
+    axes[-1].set_xlim(0, max(n - 1, 1))
     fig.suptitle("Fig. 4 - four phases: dark objects approach (40 frames), hold (20), recede (40) "
                  "on a background scrolling left" + (f" [{note}]" if note else "")
                  + (f"\ninput: {source}" if source else ""), fontsize=11)
@@ -342,7 +342,7 @@ def fig5_six_objects(scene, trace, path, *, source: str = "", dpi: int = 110) ->
                   "on the same object)", fontsize=9, loc="left")
     ax1.grid(alpha=0.3)
     ax1.set_xlabel("frame (30 fps)")
-    ax1.set_xlim(0, n - 1)
+    ax1.set_xlim(0, max(n - 1, 1))
     fig.suptitle("Fig. 5 - six dark objects appear at frames 5, 15, 25, 45, 55, 65 and expand"
                  + (f"\ninput: {source}" if source else ""), fontsize=11)
     return _save(fig, path, dpi)
@@ -375,7 +375,7 @@ def fig6_real_clips(clips: list, traces: dict, path, *, dpi: int = 110) -> Path:
         peak = max((f.peak for f in tr.fields.values()), default=0.0)
         _field_lines(axr, tr, cols, normalise=peak if peak > 0 else None, top=10)
         axr.axvline(t, color="0.4", lw=0.8, ls=":")
-        axr.set_xlim(0, sc.n - 1)
+        axr.set_xlim(0, max(sc.n - 1, 1))
         axr.set_ylabel("normalised response\n(field / clip peak)", fontsize=8)
         axr.set_xlabel("frame (%g fps); dotted: key frame" % sc.fps, fontsize=8)
         axr.grid(alpha=0.3)

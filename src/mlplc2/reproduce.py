@@ -683,6 +683,7 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
     t_start = time.perf_counter()
     out = Path(out)
     inputs = load_inputs(None if data is None else Path(data), quick=quick, seed=seed)  # checked before any output
+    created = not out.exists()
     out.mkdir(parents=True, exist_ok=True)
     for name in OUTPUTS:   # never leave an earlier run's figure beside this report
         (out / name).unlink(missing_ok=True)
@@ -706,6 +707,10 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
         six = inputs["six_objects"]
         six_trace = run_model("mlplc2", six.frames, six.fps, bar)
         clip_traces = {sc.name: run_model("mlplc2", sc.frames, sc.fps, bar) for sc in inputs["clips"]}
+    except KeyboardInterrupt:
+        if created and not any(out.iterdir()):
+            out.rmdir()   # nothing was written yet: leave no empty folder behind
+        raise
     finally:
         bar.close()
 
