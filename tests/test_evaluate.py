@@ -328,7 +328,7 @@ def test_evaluate_errors(scene):
     ({"match_radius": "x"}, InputTypeError, "match_radius must be a number"),
     ({"match_radius": None}, InputTypeError, "match_radius must be a number"),
     ({"match_radius": True}, InputTypeError, "match_radius must be a number"),
-    ({"match_radius": float("nan")}, InputValueError, "match_radius must be a positive"),
+    ({"match_radius": float("nan")}, InputValueError, "match_radius must be a finite number"),
     ({"run_options": 5}, InputTypeError, "run_options"),
 ])
 def test_bad_arguments_are_input_errors(kw, error, message):

@@ -50,7 +50,7 @@ import cv2
 import numba
 import numpy as np
 
-from ._validation import InputValueError
+from ._validation import check_int
 from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
 from .medulla import local_max
@@ -586,10 +586,9 @@ def set_threads(n: int) -> None:
     ``n`` must be between 1 and Numba's ``NUMBA_NUM_THREADS`` (by default the number of cores).
     """
     limit = int(numba.config.NUMBA_NUM_THREADS)
-    if not 1 <= int(n) <= limit:
-        raise InputValueError(f"threads must be between 1 and {limit} on this machine (the number of "
-                              f"cores, or NUMBA_NUM_THREADS), got {n}")
-    numba.set_num_threads(int(n))
+    n = check_int(n, f"threads (1 to {limit} on this machine: the number of cores, or NUMBA_NUM_THREADS)",
+                  minimum=1, maximum=limit)
+    numba.set_num_threads(n)
     cv2.setNumThreads(int(n))
 
 

@@ -42,15 +42,7 @@ class InputTypeError(InputError, TypeError):
 def check_fps(fps) -> float:
     """Return ``fps`` as a float, or raise if it is not a positive finite number
     (a bool, a string or None is an :class:`InputTypeError`)."""
-    if _is_bool(fps) or not isinstance(fps, numbers.Real):
-        raise InputTypeError(f"fps must be a number, got {_show(fps)}")
-    try:
-        value = float(fps)
-    except (OverflowError, ValueError):
-        value = math.inf
-    if not math.isfinite(value) or value <= 0:
-        raise InputValueError(f"fps must be a positive finite number, got {fps!r}")
-    return value
+    return check_real(fps, "fps", positive=True)
 
 
 def as_gray(frame, *, min_size: int = 1, name: str = "frame") -> np.ndarray:

@@ -42,7 +42,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
-from ._validation import InputTypeError, InputValueError
+from ._validation import InputTypeError, InputValueError, check_int
 
 __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "parse_sweep", "expand_inputs",
            "start_local_cluster", "RESULT_COLUMNS", "DONE_MARKER"]
@@ -684,8 +684,8 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
             names.append(m)
     if not names:
         raise InputValueError("no model given")
-    if workers is not None and (isinstance(workers, bool) or not isinstance(workers, int) or workers < 0):
-        raise InputValueError(f"workers must be an integer >= 0, got {workers!r}")
+    if workers is not None:
+        workers = check_int(workers, "workers", minimum=0)
     if client is not None and (scheduler is not None or workers is not None):
         raise InputValueError("client cannot be combined with scheduler or workers: its cluster runs the tasks")
     if scheduler is not None and workers is not None and not (scheduler == "sync" and workers == 0):

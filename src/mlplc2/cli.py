@@ -168,15 +168,19 @@ def _cmd_run(args) -> int:
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats,
                          backend=args.backend)
         except RunInterrupted as exc:
-            res = exc.result
-            print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
-                  file=sys.stderr)
-            return EXIT_INTERRUPTED
+            return _report_interrupt(exc)
     _print_run_summary(args, result)
     if result.truncated:
         _warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
+
+
+def _report_interrupt(exc) -> int:
+    """One line for a run stopped by Ctrl-C or SIGTERM (``runner.RunInterrupted``)."""
+    res = exc.result
+    print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}", file=sys.stderr)
+    return EXIT_INTERRUPTED
 
 
 def _print_run_summary(args, result) -> None:
@@ -255,10 +259,7 @@ def _cmd_demo(args) -> int:
     try:
         d = demo(args.out, scene=args.scene, quiet=args.quiet)
     except RunInterrupted as exc:
-        res = exc.result
-        print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}",
-              file=sys.stderr)
-        return EXIT_INTERRUPTED
+        return _report_interrupt(exc)
     lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)}",
              "  object  centre        frames    mlplc2 field  centre        error   first alarm"]
     for m in d.matches:

@@ -34,7 +34,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any, Iterable
 
-from ._validation import InputTypeError, InputValueError
+from ._validation import InputTypeError, InputValueError, check_int, check_real
 
 __all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
            "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS"]
@@ -883,13 +883,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
         for m in models:
             if m not in known:
                 raise InputValueError(f"unknown model {m!r}; choose from {', '.join(known)}")
-    if isinstance(match_radius, bool) or not isinstance(match_radius, (int, float)):
-        raise InputTypeError(f"match_radius must be a number (pixels), got {match_radius!r}")
-    match_radius = float(match_radius)
-    if not math.isfinite(match_radius) or match_radius <= 0:
-        raise InputValueError(f"match_radius must be a positive number, got {match_radius!r}")
-    if isinstance(tail, bool) or not isinstance(tail, int) or tail < 0:
-        raise InputValueError(f"tail must be an integer >= 0 (frames), got {tail!r}")
+    match_radius = check_real(match_radius, "match_radius", positive=True)
+    tail = check_int(tail, "tail", minimum=0)
     if run_options is not None and not isinstance(run_options, Mapping):
         raise InputTypeError(f"run_options must be a dict of mlplc2.run options, got {type(run_options).__name__}")
     truth = load_ground_truth(gt)

@@ -87,7 +87,25 @@ def parse_resize(text, *, name: str = "resize") -> tuple[int, int]:
 MAX_RESIZE_PIXELS = 7680 * 4320
 
 
-def _check_model_size(w: int, h: int, what: str) -> None:
+def _out_size(w: int, h: int, resize, scale) -> tuple[int, int]:
+    """(W, H) the models see: the frame size, ``resize`` or the size times ``scale``."""
+    if resize is not None and scale is not None:
+        raise InputValueError("give either resize or scale, not both")
+    if resize is not None:
+        return parse_resize(resize)
+    if scale is None:
+        return int(w), int(h)
+    try:
+        s = float(scale)
+    except (TypeError, ValueError, OverflowError):
+        s = math.nan
+    if isinstance(scale, bool) or not math.isfinite(s) or s <= 0:
+        raise InputValueError(f"bad scale {scale!r}: expected a positive number")
+    _check_model_size(w * s, h * s, f"scale {scale!r} (frames of {w * s:.0f}x{h * s:.0f})")
+    return max(1, round(w * s)), max(1, round(h * s))
+
+
+def _check_model_size(w: float, h: float, what: str) -> None:
     if w * h > MAX_RESIZE_PIXELS:
         raise InputValueError(f"{what} is too large: {w * h / 1e6:.0f} megapixels, at most "
                               f"{MAX_RESIZE_PIXELS / 1e6:.1f} (7680x4320)")
@@ -373,32 +391,11 @@ class FrameSource:
             raise InputValueError(f"{self.name}: video has no frames (empty or undecodable)")
         h, w = first.shape[:2]
         self.size = (int(w), int(h))
-        if resize is not None and scale is not None:
+        try:
+            self.out_size = _out_size(w, h, resize, scale)
+        except BaseException:
             decoder.close()
-            raise InputValueError("give either resize or scale, not both")
-        if resize is not None:
-            try:
-                self.out_size = parse_resize(resize)
-            except InputValueError:
-                decoder.close()
-                raise
-        elif scale is not None:
-            try:
-                s = float(scale)
-            except (TypeError, ValueError):
-                decoder.close()
-                raise InputValueError(f"bad scale {scale!r}: expected a positive number") from None
-            if not math.isfinite(s) or s <= 0:
-                decoder.close()
-                raise InputValueError(f"bad scale {scale!r}: expected a positive number")
-            self.out_size = (max(1, round(w * s)), max(1, round(h * s)))
-            try:
-                _check_model_size(*self.out_size, f"scale {scale!r} (frames of {self.out_size[0]}x{self.out_size[1]})")
-            except InputValueError:
-                decoder.close()
-                raise
-        else:
-            self.out_size = (int(w), int(h))
+            raise
         self.scale_x = w / self.out_size[0]
         self.scale_y = h / self.out_size[1]
         if self.frame_count is not None:
@@ -634,11 +631,8 @@ class VideoWriter:
         if w < 1 or h < 1:
             raise InputValueError(f"bad video size {size!r}")
         self.size = (w, h)
+        check_video_output(self.path)
         suffix = self.path.suffix.lower()
-        if suffix not in VIDEO_SUFFIXES_OUT:
-            raise InputValueError(f"{self.path}: cannot write {suffix or 'a file without a suffix'}; "
-                                  f"name the video .mp4 (H.264) or .avi (MJPG)")
-        check_output_file(self.path, what="video")
         self.codec = "mjpg" if suffix == ".avi" else "h264"
         if backend is None:
             backend = "pyav" if (self.codec == "h264" and _have_pyav()) else "opencv"
@@ -797,6 +791,15 @@ def check_output_file(path, *, what: str = "output") -> Path:
     path = Path(path)
     if path.is_dir():
         raise InputValueError(f"{path}: is a directory, expected a file name for the {what}")
+    return path
+
+
+def check_video_output(path) -> Path:
+    """Return ``path`` as a Path, or raise unless it can name a video :class:`VideoWriter` writes."""
+    path = check_output_file(path, what="video")
+    if path.suffix.lower() not in VIDEO_SUFFIXES_OUT:
+        raise InputValueError(f"{path}: cannot write {path.suffix or 'a file without a suffix'}; "
+                              f"name the video .mp4 (H.264) or .avi (MJPG)")
     return path
 
 

@@ -642,6 +642,8 @@ class ReproduceResult:
     quick: bool
     skipped: list
     seconds: float
+    damaged: list = field(default_factory=list)
+    """The inputs skipped because they could not be read to their end (also in ``skipped``)."""
 
     @property
     def n_pass(self) -> int:
@@ -736,7 +738,8 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
             files["fig6_real_clips.png"] = str(figs.fig6_real_clips(inputs["clips"], clip_traces,
                                                                     out / "fig6_real_clips.png", dpi=dpi))
     seconds = time.perf_counter() - t_start
-    result = ReproduceResult(out, list(claims), files, inputs["source"], quick, skipped, seconds)
+    result = ReproduceResult(out, list(claims), files, inputs["source"], quick, skipped, seconds,
+                             list(inputs.get("damaged", [])))
     files["report.json"] = str(write_json(result, out / "report.json"))
     files["report.md"] = str(write_markdown(result, out / "report.md"))
     return result
@@ -823,10 +826,11 @@ def add_arguments(p) -> None:
 def cli_handler(args) -> int:
     if args.data is not None and not Path(args.data).is_dir():
         raise InputValueError(f"--data {args.data}: not a folder")
+    from .cli import EXIT_OK, EXIT_TRUNCATED, _warn
+
     res = reproduce(args.data, args.out, quick=args.quick, quiet=args.quiet)
-    damaged = [s for s in res.skipped if s.startswith("uav/")]
-    for s in damaged:   # one line each, also under --quiet
-        print(f"mlplc2: warning: {s}", file=sys.stderr)
+    for s in res.damaged:   # one line each, also under --quiet
+        _warn(s)
     if not args.quiet:
         print(f"{len(res.claims)} claims: {res.n_pass} PASS, {res.n_fail} FAIL "
               f"({res.n_known} known deviations, {res.n_fail - res.n_known} unexpected)")
@@ -834,6 +838,7 @@ def cli_handler(args) -> int:
             if not c.passed:
                 print(f"  FAIL{' (known)' if c.known_deviation else ''}  {c.claim}: {c.measured}")
         for s in res.skipped:
-            print(f"  note: {s}")
+            if s not in res.damaged:
+                print(f"  note: {s}")
         print(f"outputs in {res.out}: {', '.join(sorted(res.files))}")
-    return 2 if damaged else 0
+    return EXIT_TRUNCATED if res.damaged else EXIT_OK

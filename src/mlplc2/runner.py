@@ -38,7 +38,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._validation import InputTypeError, InputValueError
+from ._validation import InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, check_repeat_threshold, get_model
 
@@ -286,7 +286,8 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
         models = [models]
     names = [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
     if isinstance(params, Mapping):
-        unknown = sorted(str(k) for k in params if str(k).strip().lower() not in names)
+        params = {str(k).strip().lower(): v for k, v in params.items()}
+        unknown = sorted(k for k in params if k not in names)
         if unknown:
             raise InputValueError(f"params: {', '.join(unknown)} is not a model of this run "
                                   f"({', '.join(dict.fromkeys(names))}); give one Params for every "
@@ -565,9 +566,11 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
     result.truncated = src.truncated
     result.message = src.message
     # Fields still alive at the end keep died = None.
-    result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
-    for t in trackers:
-        t.close()
+    try:
+        result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
+    finally:
+        for t in trackers:
+            t.close()
     if out_dir is not None:
         try:
             _finish(result, out_dir, vw, plot)
@@ -620,12 +623,9 @@ def write_stimulus(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     Returns ``(video_path, gt_path)``.
     """
     from . import stimuli
-    from .io import VIDEO_SUFFIXES_OUT, check_output_file, write_video
+    from .io import check_output_file, check_video_output, write_video
 
-    out = check_output_file(out, what="video")
-    if out.suffix.lower() not in VIDEO_SUFFIXES_OUT:
-        raise InputValueError(f"{out}: cannot write {out.suffix or 'a file without a suffix'}; "
-                              f"name the video .mp4 (H.264) or .avi (MJPG)")
+    out = check_video_output(out)
     gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),
                                 what="ground truth")
     if gt_path.resolve() == out.resolve():

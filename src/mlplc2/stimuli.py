@@ -58,8 +58,8 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import math
-import warnings
 import os
+import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
 
@@ -665,6 +665,8 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
         if obj.approach == 0:
             # No approach to reverse: recede at ``speed`` from the distance at which the square
             # spans ``peak_side`` (side = 2 f l / distance, as in _physical_sides).
+            if not peak > 0:
+                raise _fail("a physical object with no approach needs peak_side > 0")
             start = obj.half_size * 2.0 * focal / peak
             recede_sides = 2.0 * focal * obj.half_size / (start + obj.speed * np.arange(obj.recede) / fps)
         else:

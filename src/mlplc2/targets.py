@@ -71,13 +71,12 @@ import bisect
 import functools
 import itertools
 import math
-import numbers
 from collections import deque
 from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validation import InputTypeError, InputValueError, check_int, check_real
+from ._validation import InputValueError, check_int, check_real
 from .lobula_plate import LocalMotion
 
 __all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure_extent", "edge_distance",
@@ -244,15 +243,7 @@ def check_hfov(hfov_deg) -> float | None:
     """Validate a horizontal field of view in degrees (None allowed)."""
     if hfov_deg is None:
         return None
-    if isinstance(hfov_deg, (bool, np.bool_)) or not isinstance(hfov_deg, numbers.Real):
-        raise InputTypeError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}")
-    try:
-        v = float(hfov_deg)
-    except (OverflowError, ValueError):
-        raise InputValueError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}") from None
-    if not math.isfinite(v) or not 0 < v < 180:
-        raise InputValueError(f"hfov_deg must be a number in (0, 180), got {hfov_deg!r}")
-    return v
+    return check_real(hfov_deg, "hfov_deg", positive=True, below=180)
 
 
 def bearing(x: float, y: float, shape: tuple[int, int], focal: float | None) -> tuple[float, float]:

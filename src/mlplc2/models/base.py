@@ -219,11 +219,10 @@ class Model(abc.ABC):
                 f = dataclasses.replace(f, ttc_s=None, expansion_rate=None, azimuth_deg=None,
                                         elevation_deg=None, rank=None)
             fields.append(f)
-        timed = sorted((f for f in fields if f.ttc_s is not None), key=lambda f: (f.ttc_s, -f.response, f.id))
-        ranks = {f.id: k for k, f in enumerate(timed, 1)}
-        fields = tuple(dataclasses.replace(f, rank=ranks[f.id]) if f.id in ranks and f.rank != ranks[f.id] else f
-                       for f in fields)
-        return dataclasses.replace(last, frame=self._frame, repeated=True, fields=fields)
+        held = dataclasses.replace(last, frame=self._frame, repeated=True, fields=tuple(fields))
+        ranks = {f.id: k for k, f in enumerate(held.threats, 1)}
+        return dataclasses.replace(held, fields=tuple(dataclasses.replace(f, rank=ranks.get(f.id))
+                                                      for f in held.fields))
 
     def reset(self) -> None:
         """Forget all state: the next frame is frame 0 and may have a new size."""
