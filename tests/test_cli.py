@@ -171,7 +171,7 @@ def test_run_image_folder_default_out_and_fps(data, capsys):
 # -- bad input: exit 2 and one line ------------------------------------------------
 @pytest.mark.parametrize("case", ["missing", "empty_dir", "text_mp4", "unknown_model", "bad_resize",
                                   "bad_resize_zero", "resize_and_scale", "end_before_start", "no_source",
-                                  "bad_fps", "huge_resize", "huge_scale"])
+                                  "bad_fps", "huge_resize", "huge_scale", "overflow_scale"])
 def test_bad_input_exit_2(case, data, tmp_path, capsys):
     video = str(data["avi"])
     argv = {
@@ -187,6 +187,7 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
         "bad_fps": ["run", video, "--fps", "-3"],
         "huge_resize": ["run", video, "--resize", "20000x20000"],
         "huge_scale": ["run", video, "--scale", "100"],
+        "overflow_scale": ["run", video, "--scale", "1e308"],
     }[case]
     if case == "text_mp4":
         (tmp_path / "fake.mp4").write_text("not a video\n")
@@ -197,7 +198,8 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
               "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "bad --resize 'big'",
               "bad_resize_zero": "bad --resize", "resize_and_scale": "not allowed with",
               "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps",
-              "huge_resize": "--resize 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large"}[case]
+              "huge_resize": "--resize 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large",
+              "overflow_scale": "is too large"}[case]
     assert expect in line
     assert not (tmp_path / "o" / "fields.json").exists()
 
@@ -475,6 +477,20 @@ def test_run_api_rejects_ambiguous_models_and_params(data):
         run(data["avi"], [mlplc2.MLPLC2(fps=60.0)], out=False, end=3)
     res = run(data["avi"], ["mlplc2", "lgmd2"], out=False, end=5, params={"mlplc2": mlplc2.Params(t_a=20.0)})
     assert res.models == ["mlplc2", "lgmd2"]
+    # keys are model names in any case or spacing, and they are applied (not only accepted)
+    from mlplc2.models.lgmd import LGMD2Params
+
+    calls = []
+    real = mlplc2.models.lgmd.LGMD2.__init__
+
+    def spy(self, *a, **k):
+        calls.append(k.get("params"))
+        real(self, *a, **k)
+
+    import unittest.mock
+    with unittest.mock.patch.object(mlplc2.models.lgmd.LGMD2, "__init__", spy):
+        run(data["avi"], ["lgmd2"], out=False, end=3, params={" LGMD2": LGMD2Params(dc=0.5)})
+    assert calls and calls[0].dc == 0.5
 
 
 def test_run_api_on_an_array_says_what_to_do():

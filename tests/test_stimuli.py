@@ -393,6 +393,9 @@ def test_physical_recede_without_approach_moves_away_at_its_speed():
         dark = dark if dark.ndim == 2 else dark[..., 0]
         assert abs(int(dark[40].sum()) - expect[k]) <= 1.5
     assert not (np.asarray(st.frames[12]) < 128).any()
+    with pytest.raises(InputError, match="needs peak_side > 0"):
+        S.scene([S.SceneObject(center=(50, 40), approach=0, hold=2, recede=10, looming="physical",
+                               peak_side=0.0)], size=(100, 80), frames=14)
 
 
 def test_scene_refuses_huge_requests_and_warns_about_invisible_objects():
