@@ -313,9 +313,10 @@ def _one_line(text: str) -> str:
 
 
 def _write_json_atomic(path: Path, data) -> None:
-    tmp = path.with_name(f".{path.name}.partial-{os.getpid()}")
-    tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
-    os.replace(tmp, path)
+    from .io import atomic_path
+
+    with atomic_path(path) as tmp:
+        tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
 
 
 _MALLOC_TUNED = False
@@ -497,14 +498,14 @@ def _video_keys(videos: list[str]) -> dict[str, str]:
 
 def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
     """``results.csv`` (and ``results.parquet``), atomically."""
+    from .io import atomic_path
+
     table = out / "results.csv"
-    tmp = table.with_name(f".results.partial-{os.getpid()}.csv")
-    with open(tmp, "w", newline="", encoding="utf-8") as f:
+    with atomic_path(table) as tmp, open(tmp, "w", newline="", encoding="utf-8") as f:
         w = csv.DictWriter(f, fieldnames=RESULT_COLUMNS, lineterminator="\n", extrasaction="ignore")
         w.writeheader()
         for r in rows:
             w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS})
-    os.replace(tmp, table)
     if parquet:
         import pandas as pd
 
@@ -512,10 +513,8 @@ def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
         for col in ("n_frames", "fields", "alarms", "first_alarm_frame"):
             df[col] = df[col].astype("Int64")
         df["seconds"] = df["seconds"].astype("float64")
-        path = out / "results.parquet"
-        tmp = path.with_name(f".results.partial-{os.getpid()}.parquet")
-        df.to_parquet(tmp, index=False)
-        os.replace(tmp, path)
+        with atomic_path(out / "results.parquet") as tmp:
+            df.to_parquet(tmp, index=False)
     return table
 
 

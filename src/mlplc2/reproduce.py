@@ -29,7 +29,6 @@ import json
 import math
 import sys
 import time
-import warnings
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
 from typing import Any
@@ -190,18 +189,16 @@ class Scene:
 def _read(path: Path):
     """(frames, fps) of a complete video; a missing, unreadable or truncated file raises
     :class:`~mlplc2.InputValueError` (the claims need every frame of the paper's videos)."""
-    from .io import TruncatedInputWarning, read_video
+    from .io import open_source
 
     if not path.is_file():
         raise InputValueError(f"{path}: missing (expected the paper's data layout, see docs/reproduce.md)")
-    with warnings.catch_warnings(record=True) as caught:
-        warnings.simplefilter("always", TruncatedInputWarning)
-        frames, fps = read_video(path)
-    for w in caught:
-        if issubclass(w.category, TruncatedInputWarning):
-            raise InputValueError(str(w.message).split("; results cover")[0] + "; the reproduction needs the complete video")
-        warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
-    return frames, float(fps)
+    src = open_source(path)
+    frames = [f for _, f in src]
+    if src.truncated:
+        raise InputValueError(f"{path}: decoding stopped at frame {src.truncated_at} (file truncated or damaged); "
+                              f"the reproduction needs the complete video")
+    return np.stack(frames), float(src.fps)
 
 
 def load_paper_objects(gt_path: Path) -> dict[str, list]:
@@ -593,7 +590,7 @@ def six_objects_claims(claims: _Claims, tr: Trace, scene: Scene) -> None:
             vals.append(p)
     med = float(np.median(vals)) if vals else math.nan
     claims.add("IV-B5.persistence", sec, "a field persists about 20 frames after its object disappears",
-               f"frames from disappearance to removal of the object's last field (negative = removed before): "
+               "frames from disappearance to removal of the object's last field (negative = removed before): "
                + "; ".join(parts) + f"; median {med:+.0f}",
                f"median in [{PERSIST_RANGE[0]}, {PERSIST_RANGE[1]}] frames",
                bool(vals) and PERSIST_RANGE[0] <= med <= PERSIST_RANGE[1],
