@@ -129,3 +129,16 @@ def test_argmax_outside_matches_masking_the_map(shape):
             continue
         y, x = divmod(int(np.argmax(masked)), 50)
         assert argmax_outside(lm, zones, shape) == (x, y, float(lm[y, x]))
+
+
+def test_disc_quadrant_areas_count_the_disc():
+    """The arbour gate scales with the pixels a quadrant integrates: for a disc field, the disc's
+    pixels (it used the square's, a 32 % stricter gate per pixel at R_AF = 40)."""
+    from mlplc2.attention import field_mask, quadrant_areas
+
+    m = field_mask(40)
+    want = int(m[:40, 41:].sum())
+    assert quadrant_areas(100, 100, 40, (240, 320), "disc") == (want,) * 4
+    assert quadrant_areas(100, 100, 40, (240, 320)) == (1600,) * 4
+    clipped = quadrant_areas(10, 10, 40, (240, 320), "disc")   # the frame cuts the upper-left quadrant
+    assert clipped[1] == int(m[30:40, 30:40].sum()) and clipped[3] == want

@@ -131,8 +131,13 @@ def quadrant_sums(lm: LocalMotion, cx: int, cy: int, r: int, shape: str = "squar
     return tuple(out)
 
 
-def quadrant_areas(cx: int, cy: int, r: int, frame_shape: tuple[int, int]) -> tuple[int, ...]:
-    """Number of pixels of each quadrant Q1..Q4 inside the frame."""
+def quadrant_areas(cx: int, cy: int, r: int, frame_shape: tuple[int, int], shape: str = "square"
+                   ) -> tuple[int, ...]:
+    """Number of pixels of each quadrant Q1..Q4 inside the frame (of the disc with ``shape='disc'``)."""
+    if shape == "disc":
+        return tuple(int(np.count_nonzero(field_mask(r)[rows.start - cy + r:rows.stop - cy + r,
+                                                        cols.start - cx + r:cols.stop - cx + r]))
+                     for rows, cols in _window(cx, cy, r, frame_shape))
     return tuple((rows.stop - rows.start) * (cols.stop - cols.start)
                  for rows, cols in _window(cx, cy, r, frame_shape))
 

@@ -70,10 +70,12 @@ class Params:
     sigma_i: float = 20.0
     """sigma_i (px): standard deviation of the inhibitory Gaussian K_i (Table I)."""
     w_i: float = 1.2
-    """Extra. Weight of the inhibition in the vDoG, L_vDoG = E - w_i I (authors' code: 1.2)."""
+    """Extra. Weight of the inhibition in the vDoG with polarity selectivity (Eq. 4),
+    L_vDoG = sign(E) max(|E| - w_i |I|, 0) (authors' code: 1.2; docs/model.md)."""
     normalise_kernels: bool = True
     """Extra. Scale K_e, K_i, K_c to unit sum on their truncated windows (authors' code).
-    Eq. 3 taken literally sums to ~0.18 on these windows (NOTES 3)."""
+    Eq. 3 taken literally sums to ~0.17 (K_e), ~0.19 (K_i) and ~0.05 (K_c) on these windows
+    (NOTES 3)."""
     after_image: float = 0.0
     """Extra. Fraction of the previous ON/OFF value added to the current one (Eq. 5).
     The paper has none (0); the authors' code uses 0.1."""
@@ -134,8 +136,9 @@ class Params:
     """Extra. Shape of an attention field: a 2 R_AF square or a disc of radius R_AF."""
     exclusion: float = 1.25
     """Extra. Eq. 13 searches for a new field outside every existing field; the excluded zone
-    around a field that responds this frame is this many times R_AF, so that the blurred edges of an object that has
-    outgrown its field do not seed a second field beside it (1.0 = the paper's literal rule)."""
+    around a field that answered in the previous frame (the search comes before this frame's
+    Eq. 14-15, Algorithm 1) is this many times R_AF, so that the blurred edges of an object that
+    has outgrown its field do not seed a second field beside it (1.0 = the paper's literal rule)."""
     t_a: float = 10.0
     """T_a: LM must exceed this to create an attention field, Eq. 13 (Table I)."""
     t_d: float = 5000.0
@@ -145,15 +148,16 @@ class Params:
     """d (frames): window of the removal rule, Eq. 16 ("10 tau_i" in Table I)."""
     grace: int = 15
     """Extra. Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5).
-    A field is created when the expansion starts (3-5 frames after onset) but answers only
-    once the expansion is wider than the lamina filters (~5 frames later); 15 frames give it
-    a full window of d responses before it is judged."""
+    A field is created when the expansion starts (2-3 frames after onset with the default
+    gain) but answers only once the expansion is wider than the lamina filters (several frames
+    later); 15 frames give it a full window of d responses before it is judged."""
     q_min: float = 0.05
     """Extra. Arbour threshold: the all-four-arbours gate of Eq. 15 opens when every quadrant
     sum Q_i exceeds q_min times the quadrant's area in pixels (the paper's bool(prod Q_i),
     which with a leaky f would open on any faint net outward motion). 0.05 = 80 over a
-    40 x 40 quadrant. Quadrants larger than R_AF^2 (the frame-wide LPLC2) count as
-    sqrt(area * R_AF^2) pixels (``attention.gate_area``)."""
+    40 x 40 quadrant; the area is that of the pixels the quadrant integrates (inside the frame,
+    and inside the disc with ``field_shape="disc"``). Quadrants larger than R_AF^2 (the
+    frame-wide LPLC2) count as sqrt(area * R_AF^2) pixels (``attention.gate_area``)."""
     alarm_threshold: float = 10000.0
     """Extra. A field is in collision alarm when its responses summed over the last
     ``alarm_window`` frames reach this (the paper's "fatal" fields; NOTES 17)."""

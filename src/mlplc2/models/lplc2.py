@@ -74,7 +74,7 @@ class _LPLC2Family(Model):
         """Eq. 14-15 for one field, plus its alarm state."""
         p = self.params
         f.quadrants = self._quadrant_sums(lm, f.x, f.y, f.radius, p.field_shape)
-        areas = quadrant_areas(f.x, f.y, f.radius, lm.magnitude.shape)
+        areas = quadrant_areas(f.x, f.y, f.radius, lm.magnitude.shape, p.field_shape)
         f.response = lplc2_response(f.quadrants, [p.q_min * gate_area(a, p.r_af) for a in areas])
         f.history.append(f.response)
         recent = list(f.history)[-p.alarm_window:]
