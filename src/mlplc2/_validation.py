@@ -113,7 +113,13 @@ def as_gray(frame, *, min_size: int = 1, name: str = "frame") -> np.ndarray:
         if frame.min() < 0 or frame.max() > 255:
             frame = np.clip(frame, 0, 255)  # in the input's own dtype: no overflow, input untouched
     if frame.ndim == 3:
-        gray = frame.astype(np.float32) @ LUMA_RGB
+        # Element-wise in a C-ordered float32 copy, never ``@``: the matrix product's rounding
+        # depends on the memory layout (NumPy 2.4 keeps a Fortran layout and rounds otherwise),
+        # and a frame must give the same grey image however it is stored.
+        rgb = np.ascontiguousarray(frame, dtype=np.float32)
+        gray = rgb[:, :, 0] * LUMA_RGB[0]
+        gray += rgb[:, :, 1] * LUMA_RGB[1]
+        gray += rgb[:, :, 2] * LUMA_RGB[2]
     else:
         gray = frame.astype(np.float32, order="C", copy=True)
     if dtype == np.uint16:
