@@ -335,3 +335,21 @@ def test_rejected_frame_leaves_state_untouched(name, bad, frames):
         first.step(BAD[bad]())
     first.step(np.zeros((20, 30), np.uint8))
     assert first.frame_index == 1
+
+
+# --- a 0-1 float frame warns once (issue 14) -----------------------------------------------------
+@pytest.mark.parametrize("name", ["mlplc2", "lgmd2"])
+def test_unit_scale_float_frames_warn_once(name):
+    import warnings
+
+    model = mlplc2.get_model(name)(fps=30.0)
+    frame = np.random.default_rng(0).random((60, 80)).astype(np.float32)   # a 0-1 image
+    with pytest.warns(mlplc2.InputWarning, match="0-255"):
+        model.step(frame)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        model.step(frame)                                                # once per model
+        fresh = mlplc2.get_model(name)(fps=30.0)
+        fresh.step(np.zeros((60, 80), np.float32))                        # black: no warning
+        fresh.step(frame * 255)                                           # 0-255 floats: none
+        fresh.step((frame * 255).astype(np.uint8) // 255)                 # integers: none

@@ -10,7 +10,7 @@ import numbers
 
 import numpy as np
 
-__all__ = ["InputError", "InputValueError", "InputTypeError", "as_gray", "check_fps", "check_real",
+__all__ = ["InputError", "InputValueError", "InputTypeError", "InputWarning", "as_gray", "check_unit_scale", "check_fps", "check_real",
            "check_reals", "check_int", "check_bool", "FLOAT32_MAX", "FLOAT32_TINY", "INT_MAX"]
 
 #: Largest finite float32 (3.4028235e+38). A parameter that enters the models' float32 maths
@@ -37,6 +37,30 @@ class InputValueError(InputError, ValueError):
 
 class InputTypeError(InputError, TypeError):
     """An input of the wrong type (non-numeric dtype, not an array, ...)."""
+
+
+class InputWarning(UserWarning):
+    """An input that is valid but probably not what was meant (e.g. a float frame on a 0-1 scale)."""
+
+
+def check_unit_scale(frame, gray: np.ndarray, name: str = "frame") -> bool:
+    """Warn (:class:`InputWarning`, one line) when a float ``frame`` looks like a 0-1 image.
+
+    Float frames are taken on the 0-255 scale (:func:`as_gray`); a frame whose brightest pixel
+    is above 0 but at most 1 is then almost black, and the models answer nothing. ``gray`` is
+    the converted frame. Returns True when it warned (callers warn once).
+    """
+    if not (isinstance(frame, np.ndarray) and frame.dtype.kind == "f"):
+        return False
+    top = float(gray.max())
+    if 0.0 < top <= 1.0:
+        import warnings
+
+        warnings.warn(f"{name} is a float image whose maximum is {top:.3g}: frames are read on the 0-255 "
+                      f"scale, so a 0-1 image gives (almost) no response; multiply it by 255",
+                      InputWarning, stacklevel=3)
+        return True
+    return False
 
 
 def check_fps(fps) -> float:

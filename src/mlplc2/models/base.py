@@ -16,7 +16,7 @@ from typing import Any, ClassVar
 import cv2
 import numpy as np
 
-from .._validation import InputValueError, as_gray, check_fps
+from .._validation import InputValueError, as_gray, check_fps, check_unit_scale
 from ..attention import Field
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "register", "get_model",
@@ -160,6 +160,7 @@ class Model(abc.ABC):
         self._last_gray: np.ndarray | None = None
         self._last_out: Output | None = None
         self._repeats = 0
+        self._scale_warned = False
 
     @property
     def frame_index(self) -> int:
@@ -169,6 +170,11 @@ class Model(abc.ABC):
     def step(self, frame: np.ndarray) -> Output:
         """Process one frame: (H, W) grey, (H, W, 1), (H, W, 3) RGB or (H, W, 4) RGBA, 0-255.
 
+        Colour frames are RGB: OpenCV's ``VideoCapture``/``imread`` give BGR, so convert them
+        first (``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``, or pass ``COLOR_BGR2GRAY``'s grey image).
+        A float frame whose maximum lies in (0, 1] is most likely a 0-1 image: the model
+        warns once (:class:`mlplc2.InputWarning`); multiply it by 255.
+
         Scaling and rejected inputs are those of :func:`mlplc2._validation.as_gray`
         (uint16 / 257; floats and other integers clipped to 0-255; bool, non-numeric
         dtypes and NaN/inf rejected). Every frame after the first must have the
@@ -177,6 +183,8 @@ class Model(abc.ABC):
         ``TypeError``) before any state changes, so the model can go on.
         """
         gray = as_gray(frame, min_size=self.min_size)
+        if not self._scale_warned:
+            self._scale_warned = check_unit_scale(frame, gray)
         if self._shape is None:
             self._shape = gray.shape
         elif gray.shape != self._shape:
