@@ -1,18 +1,10 @@
-"""Numba kernels of the target estimators (:mod:`mlplc2.targets`), used when Numba imports.
+"""Numba kernel of the target layer (:mod:`mlplc2.targets`), chosen by :mod:`mlplc2.backend`.
 
 * :func:`edges4` is :func:`mlplc2.targets._strip_profiles` followed by
   :func:`mlplc2.targets._edge_distances` in one compiled pass: the same strip sums (float64,
   rows / columns added in the same order as ``np.add.reduce``), the same order statistic for
   the noise floor (the 75th percentile as ``np.partition``), the same threshold and the same
   scan over the samples above it, so the four distances are bit-identical to the NumPy path.
-* :func:`subset_fit` is the subset search of :meth:`mlplc2.targets.TargetTracker._robust_fit`
-  (every subset of ``_subsets``, one at a time instead of NumPy's masked arrays). It takes the
-  two sums that are not exact in any order (``mask @ y``, ``mask @ (t * y)``: BLAS, whose
-  order is its own) from NumPy, so it gives the NumPy path's fits bit for bit. This matters:
-  a nearly constant size gives a slope near 0 whose sign a rounding decides. (The full-set
-  fit stays in Python: its ``** 2`` is libm's ``pow``, which differs from ``x * x`` in the
-  last bit for ~0.1 % of the values.)
-
 Every kernel is ``nogil`` and cached on disk where possible; nothing here is public API.
 """
 
@@ -24,7 +16,7 @@ import numpy as np
 
 from ._fast import _jit  # the same njit options and on-disk cache fallback as the front end
 
-__all__ = ["edges4", "subset_fit"]
+__all__ = ["edges4"]
 
 
 @_jit()
@@ -153,51 +145,3 @@ def edges4(r, l, u, d, x, y, band, min_peak, noise_k, rel_start, rel_edge, gap, 
         prof[k] = s
     out[3] = _edge_of(prof, n, nc, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
     return out[0], out[1], out[2], out[3]
-
-
-@_jit()
-def subset_fit(t, y, mask, first, sy, sty, min_span, max_edge_speed, max_residual):
-    """The subset search of :meth:`mlplc2.targets.TargetTracker._robust_fit`: (row, a, b), row -1
-    when no subset is accepted.
-
-    ``t``: frames minus the newest frame (float64, exact integers); ``y``: 1 / size (sizes > 0);
-    ``mask`` / ``first``: ``_subsets(n, need)``; ``sy`` / ``sty``: ``mask @ y`` and
-    ``mask @ (t * y)`` from NumPy (BLAS sums in its own order: passing them in keeps the fits
-    bit-identical to the NumPy path). The other sums are of small integers (exact in any
-    order); the rest is the NumPy path's elementwise arithmetic, one subset at a time.
-    """
-    n = t.size
-    best = -1
-    best_k = 0.0
-    best_rms = 0.0
-    best_a = 0.0
-    best_b = 0.0
-    for j in range(mask.shape[0]):
-        k = 0.0
-        st = 0.0
-        stt = 0.0
-        for i in range(n):
-            if mask[j, i] != 0.0:
-                k += 1.0
-                st += t[i]
-                stt += t[i] * t[i]
-        if best >= 0 and k != best_k:
-            break                   # subsets come largest first: a smaller one never wins
-        den = k * stt - st * st
-        if not den > 0:
-            continue
-        b = (k * sty[j] - st * sy[j]) / den
-        a = (sy[j] - b * st) / k
-        if not (-t[first[j]] >= min_span and b < 0 and a > 0):
-            continue
-        ss = 0.0
-        for i in range(n):
-            if mask[j, i] != 0.0:
-                e = (y[i] - a - b * t[i]) / y[i]
-                ss += e * e
-        rms = math.sqrt(ss / k)
-        if not (rms <= max_residual and -b / (a * a) / 2.0 <= max_edge_speed):
-            continue
-        if best < 0 or rms < best_rms:
-            best, best_k, best_rms, best_a, best_b = j, k, rms, a, b
-    return best, best_a, best_b

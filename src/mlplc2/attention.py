@@ -19,7 +19,6 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import dataclass, field
-from typing import Any
 
 import numpy as np
 
@@ -35,17 +34,13 @@ class Field:
     """Snapshot of one attention field in one frame (what models return).
 
     ``x`` is the column and ``y`` the row of the centre in the pixels of the
-    frames given to the model; ``born`` is the frame index at creation.
-
-    Target estimates (:mod:`mlplc2.targets`, ``docs/targets.md``; None while not
-    estimable): ``ttc_s`` time to collision in seconds; ``expansion_rate``
-    d(theta)/dt of the object's angular size in degrees per second when the model
-    was given ``hfov_deg``, else d(size)/dt in pixels per second;
-    ``azimuth_deg`` / ``elevation_deg`` the bearing of the expansion centre in
-    degrees from the optical axis (azimuth positive right, elevation positive up)
-    when ``hfov_deg`` was given, else its offsets in pixels from the image centre
-    (same signs); ``rank`` 1 = most urgent field of the frame (smallest
-    ``ttc_s``), None without ``ttc_s``.
+    frames given to the model; ``radius`` the half-side (R_AF); ``response`` the
+    LPLC2 output of Eq. 15; ``collision`` the field's alarm (the paper's "fatal"
+    field: its responses over the last ``alarm_window`` frames reach
+    ``alarm_threshold``); ``born`` the frame index at creation; ``quadrants``
+    the four arbour integrals Q1..Q4 of Eq. 14. What the field's object will do
+    (time to contact, course, warning) is in ``Output.targets``
+    (:mod:`mlplc2.targets`).
     """
 
     id: int
@@ -56,11 +51,6 @@ class Field:
     collision: bool
     born: int
     quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
-    ttc_s: float | None = None
-    expansion_rate: float | None = None
-    azimuth_deg: float | None = None
-    elevation_deg: float | None = None
-    rank: int | None = None
 
 
 @dataclass
@@ -76,21 +66,10 @@ class AttentionField:
     response: float = 0.0
     quadrants: tuple[float, float, float, float] = (0.0, 0.0, 0.0, 0.0)
     collision: bool = False
-    target: Any = None
-    """Per-field state of the target estimators (:class:`mlplc2.targets.TargetTracker`)."""
-    estimate: Any = None
-    """This frame's :class:`mlplc2.targets.TargetEstimate` (None before the first)."""
-    rank: int | None = None
 
     def snapshot(self) -> Field:
-        e = self.estimate
-        if e is None:
-            return Field(self.id, float(self.x), float(self.y), float(self.radius), self.response,
-                         self.collision, self.born, self.quadrants, rank=self.rank)
         return Field(self.id, float(self.x), float(self.y), float(self.radius), self.response,
-                     self.collision, self.born, self.quadrants, ttc_s=e.ttc_s,
-                     expansion_rate=e.expansion_rate, azimuth_deg=e.azimuth_deg,
-                     elevation_deg=e.elevation_deg, rank=self.rank)
+                     self.collision, self.born, self.quadrants)
 
 
 def _window(cx: int, cy: int, r: int, shape: tuple[int, int]):

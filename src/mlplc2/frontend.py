@@ -6,12 +6,11 @@ All state between frames is held explicitly in :class:`FrontEndState`.
 
 :class:`FrontEnd` is the plain reference implementation (the tests' oracle);
 :func:`make_frontend` picks the fast one (:class:`mlplc2._fast.FastFrontEnd`:
-OpenCV + fused Numba kernels, same results to ~1e-6) by default.
+OpenCV + fused Numba kernels, same results to ~1e-6) by default (:mod:`mlplc2.backend`).
 """
 
 from __future__ import annotations
 
-import logging
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -22,52 +21,18 @@ from .medulla import DIRECTIONS, contrast_normalise, motion_detectors
 from .params import Params
 from .retina import photoreceptors
 
-__all__ = ["FrontEnd", "FrontEndState", "BACKENDS", "make_frontend", "fast_available"]
-
-#: Front-end implementations: "auto" (fast when Numba imports, else reference),
-#: "numba" (fast, error without Numba) and "reference" (:class:`FrontEnd`).
-BACKENDS = ("auto", "numba", "reference")
-
-_log = logging.getLogger("mlplc2")
-_FAST_ERROR: str | None = None
-_WARNED = False
-
-
-def fast_available() -> bool:
-    """True when the fast front end (Numba) can be imported."""
-    global _FAST_ERROR
-    try:
-        from . import _fast  # noqa: F401
-    except Exception as exc:  # noqa: BLE001 - ImportError, or numba failing to initialise
-        _FAST_ERROR = f"{type(exc).__name__}: {exc}"
-        return False
-    return True
+__all__ = ["FrontEnd", "FrontEndState", "make_frontend"]
 
 
 def make_frontend(params: Params, fps: float, backend: str = "auto"):
-    """The front end for ``backend`` (one of :data:`BACKENDS`), built as ``(params, fps)``.
+    """The front end of ``backend`` (:data:`mlplc2.backend.BACKENDS`), built as ``(params, fps)``.
 
     "auto" gives the fast front end, or the reference with a logged warning (once per
     process) when Numba is unavailable; "numba" raises ImportError then.
     """
-    if backend not in BACKENDS:
-        from ._validation import InputValueError
+    from .backend import resolve
 
-        raise InputValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
-    if backend == "reference":
-        return FrontEnd(params, fps)
-    if fast_available():
-        from ._fast import FastFrontEnd
-
-        return FastFrontEnd(params, fps)
-    if backend == "numba":
-        raise ImportError(f"the numba front end is unavailable ({_FAST_ERROR})")
-    global _WARNED
-    if not _WARNED:
-        _log.warning("mlplc2: Numba is unavailable (%s); using the slower reference front end",
-                     _FAST_ERROR)
-        _WARNED = True
-    return FrontEnd(params, fps)
+    return resolve(backend).frontend(params, fps)
 
 
 @dataclass

@@ -10,10 +10,10 @@ steps every model on each frame, writing as it goes:
     one summary per attention field (centre, birth, death, peak, first alarm,
     and the target estimates at the peak and the last one, see ``docs/targets.md``).
 ``targets.csv``
-    (models with attention fields) one row per field per frame:
-    ``frame,model,field_id,ttc_s,expansion_rate,azimuth_deg,elevation_deg,rank``
-    (time to collision, expansion rate, bearing and TTC rank; empty cells while
-    not estimable; degrees with ``hfov_deg``, else input pixels).
+    (models with targets) one row per target per frame:
+    ``frame,model,target_id,x,y,width,height,ttc_s,miss,warning,fields,azimuth_deg,elevation_deg``
+    (input pixels; time to contact in s, miss in object widths, empty while not estimable;
+    the bearing only with ``hfov_deg``; ``fields`` the ids of its attention fields, space-separated).
 ``responses.png``
     response against frame, one panel per model (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
@@ -51,7 +51,8 @@ log = logging.getLogger(__name__)
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
 #: Columns of ``targets.csv``, in order (``docs/targets.md``).
-TARGET_COLUMNS = ("frame", "model", "field_id", "ttc_s", "expansion_rate", "azimuth_deg", "elevation_deg", "rank")
+TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
+                  "azimuth_deg", "elevation_deg")
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -110,6 +111,8 @@ class RunResult:
     """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
     alarms: dict[str, dict] = field(default_factory=dict)
     hfov_deg: float | None = None
+    target_summaries: dict[str, list[dict]] = field(default_factory=dict)
+    """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
 
     def to_dataframe(self):
         """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
@@ -145,22 +148,23 @@ class RunResult:
             "interrupted": self.interrupted,
             "hfov_deg": self.hfov_deg,
             "models": self.fields,
+            "targets": self.target_summaries,
         }
 
 
 class _FieldTracker:
-    """Follows the fields of one model across frames to build their summaries.
+    """Follows the fields and targets of one model across frames to build their summaries.
 
     With ``spill`` the summary of a field that died goes to an anonymous temporary file
     instead of staying in memory (long or live runs with ``keep_rows=False``): memory then
     holds only the live fields, whatever the length of the run.
     """
 
-    def __init__(self, offset: int, to_target=None, spill: bool = False):
+    def __init__(self, offset: int, targets: bool = False, spill: bool = False):
         self.offset = offset  # source index of model frame 0
         self.fields: dict[int, dict] = {}
         self.alive: set[int] = set()
-        self.to_target = to_target  # Field -> dict of target estimates (None: no estimates)
+        self.targets: dict[int, dict] | None = {} if targets else None
         self._peak: dict[int, float] = {}  # unrounded peak response per field
         self._spill = tempfile.TemporaryFile("w+", encoding="utf-8") if spill else None
 
@@ -176,16 +180,9 @@ class _FieldTracker:
                     "peak_response": _num(f.response), "peak_frame": index, "first_alarm_frame": None,
                 }
                 self._peak[f.id] = f.response
-                if self.to_target is not None:
-                    s["at_peak"] = self.to_target(f)
-                    s["last_estimate"] = None
             elif f.response > self._peak[f.id]:  # the first frame of a plateau stays the peak
                 self._peak[f.id] = f.response
                 s.update(x=_r(x), y=_r(y), peak_response=_num(f.response), peak_frame=index)
-                if self.to_target is not None:
-                    s["at_peak"] = self.to_target(f)
-            if self.to_target is not None and getattr(f, "ttc_s", None) is not None:
-                s["last_estimate"] = {"frame": index, **self.to_target(f)}
             if f.collision and s["first_alarm_frame"] is None:
                 s["first_alarm_frame"] = index
         for fid in self.alive - present:
@@ -194,6 +191,32 @@ class _FieldTracker:
                 self._spill.write(json.dumps(self.fields.pop(fid)) + "\n")
                 del self._peak[fid]
         self.alive = present
+        if self.targets is not None:
+            self._update_targets(index, out, to_input)
+
+    def _update_targets(self, index: int, out: Output, to_input) -> None:
+        """Per target: life, frames, first estimate and first warning (with the estimate then)."""
+        seen = set()
+        for t in out.targets:
+            seen.add(t.id)
+            s = self.targets.get(t.id)
+            if s is None:
+                s = self.targets[t.id] = {"id": t.id, "born": index, "died": None, "frames": 0,
+                                          "first_ttc_frame": None, "first_warning_frame": None,
+                                          "warning_frames": 0, "at_first_warning": None, "fields": []}
+            s["frames"] += 1
+            s["fields"] = sorted(set(s["fields"]) | set(t.fields))
+            if t.ttc_s is not None and s["first_ttc_frame"] is None:
+                s["first_ttc_frame"] = index
+            if t.warning:
+                s["warning_frames"] += 1
+                if s["first_warning_frame"] is None:
+                    s["first_warning_frame"] = index
+                    s["at_first_warning"] = _target_values(t, to_input)
+            s["last"] = {"frame": index, **_target_values(t, to_input)}
+        for tid, s in self.targets.items():
+            if s["died"] is None and tid not in seen:
+                s["died"] = index
 
     def close(self) -> None:
         if self._spill is not None:
@@ -206,6 +229,9 @@ class _FieldTracker:
             out += [json.loads(line) for line in self._spill]
             self._spill.seek(0, 2)
         return sorted(out, key=lambda d: d["id"])
+
+    def target_summaries(self) -> list[dict] | None:
+        return None if self.targets is None else [self.targets[k] for k in sorted(self.targets)]
 
 
 def _r(v: float) -> float:
@@ -233,33 +259,17 @@ def _opt(v, digits: int = 4):
     return None if v is None else round(float(v), digits) + 0.0  # + 0.0: no "-0.0"
 
 
-def _target_converter(model: Model, scale_x: float, scale_y: float):
-    """Field -> dict of its target estimates in output units, or None for models without fields.
-
-    With a field of view (the model's ``hfov_deg``) bearings are degrees and the
-    expansion rate deg/s; without one, the model's pixel offsets and px/s are
-    turned into input pixels (``--resize``).
-    """
-    if not model.localises:
-        return None
-    degrees = getattr(model, "hfov_deg", None) is not None
-    sx, sy = (1.0, 1.0) if degrees else (scale_x, scale_y)
-
-    def convert(f) -> dict:
-        az, el, rate = (getattr(f, k, None) for k in ("azimuth_deg", "elevation_deg", "expansion_rate"))
-        return {"ttc_s": _opt(getattr(f, "ttc_s", None)),
-                "expansion_rate": _opt(None if rate is None else rate * sx),
-                "azimuth_deg": _opt(None if az is None else az * sx),
-                "elevation_deg": _opt(None if el is None else el * sy),
-                "rank": getattr(f, "rank", None)}
-
-    return convert
+def _target_values(t, to_input) -> dict:
+    """A target's position, size and estimates in input pixels (``targets.csv`` units)."""
+    x, y = to_input(t.x, t.y)
+    x1, y1 = to_input(t.x + t.width, t.y + t.height)
+    return {"x": _r(x), "y": _r(y), "width": _r(x1 - x), "height": _r(y1 - y), "ttc_s": _opt(t.ttc_s),
+            "miss": _opt(t.miss), "warning": int(bool(t.warning)), "fields": " ".join(map(str, t.fields)),
+            "azimuth_deg": _opt(t.azimuth_deg), "elevation_deg": _opt(t.elevation_deg)}
 
 
-def _target_rows(index: int, name: str, out: Output, convert) -> list[dict]:
-    if convert is None:
-        return []
-    return [{"frame": index, "model": name, "field_id": f.id, **convert(f)} for f in out.fields]
+def _target_rows(index: int, name: str, out: Output, to_input) -> list[dict]:
+    return [{"frame": index, "model": name, "target_id": t.id, **_target_values(t, to_input)} for t in out.targets]
 
 
 def default_out_dir(source) -> Path:
@@ -315,7 +325,7 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
             name = str(m).strip().lower()
             cls = get_model(name)
             p = params.get(name) if isinstance(params, Mapping) else params
-            kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.localises) else {}
+            kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.has_targets) else {}
             kw["repeat_threshold"] = repeat_threshold
             model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
         if model.name in seen:
@@ -340,8 +350,8 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
 
 
 def _primary(models: Sequence[Model]) -> int | None:
-    """Index of the first model that localises (the one drawn on the video)."""
-    return next((i for i, m in enumerate(models) if m.localises), None)
+    """Index of the first model with fields (the one drawn on the video)."""
+    return next((i for i, m in enumerate(models) if m.has_fields), None)
 
 
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, fps=None, resize=None,
@@ -475,8 +485,7 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
           keep_rows=True) -> RunResult:
     from tqdm import tqdm
 
-    converters = [_target_converter(m, src.scale_x, src.scale_y) for m in built]
-    trackers = [_FieldTracker(src.start, conv, spill=not keep_rows) for conv in converters]
+    trackers = [_FieldTracker(src.start, targets=m.has_targets, spill=not keep_rows) for m in built]
     primary = _primary(built)
     csv_file = writer = vw = None
     tcsv_file = twriter = None
@@ -492,7 +501,7 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             csv_file.write(buf.getvalue())
             csv_file.flush()
             result.files["responses.csv"] = csv_path
-            if any(c is not None for c in converters):
+            if any(m.has_targets for m in built):
                 tpath = out_dir / "targets.csv"
                 tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
                 tbuf = io.StringIO()
@@ -513,9 +522,9 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             time_s = round(index / fps, 6)
             frame_rows = []
             target_rows = []
-            for name, out, tracker, conv in zip(names, outputs, trackers, converters):
+            for name, out, tracker in zip(names, outputs, trackers):
                 frame_rows.extend(_rows(index, time_s, name, out, to_input))
-                target_rows.extend(_target_rows(index, name, out, conv))
+                target_rows.extend(_target_rows(index, name, out, to_input))
                 tracker.update(index, out, to_input)
             if twriter is not None and target_rows:
                 tbuf.seek(0)
@@ -568,6 +577,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
     # Fields still alive at the end keep died = None.
     try:
         result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
+        result.target_summaries = {name: t.target_summaries() for name, t in zip(names, trackers)
+                                   if t.targets is not None}
     finally:
         for t in trackers:
             t.close()

@@ -1,126 +1,86 @@
-"""Actionable targets: time to collision, expansion rate and bearing per attention field.
+"""Targets: one per approaching object, with its time to contact, course and a collision warning.
 
-Every attention field gets, each frame, an estimate of
+The attention fields of the LPLC2 family (:mod:`mlplc2.attention`, Eq. 13-16) say *where* the
+local motion looms. A :class:`TargetLayer` turns them into what a robot acts on: one
+:class:`Target` per object, with a stable id, its apparent size, the time to contact
+``ttc_s``, the predicted ``miss`` distance at contact and a ``warning``. Nothing here changes
+the fields: the paper's model is untouched (``docs/targets.md`` has the measurements behind
+every choice, ``docs/benchmark.md`` the figures).
 
-* the **time to collision** ``ttc_s`` (seconds), from the optical expansion of
-  the edges around the field centre: ``tau = s / (ds/dt)`` where ``s`` is the
-  size of the expanding object on the image plane;
-* the **expansion rate** ``expansion_rate``: d(theta)/dt of the object's
-  angular size theta (full width), in degrees per second when the camera's
-  horizontal field of view is known, else d(s)/dt in pixels per second;
-* the **bearing** ``azimuth_deg`` / ``elevation_deg`` of the expansion centre
-  (degrees from the optical axis given the field of view, else pixel offsets
-  from the image centre).
-
-The four are reported together or not at all: all None until a confirmed fit
-gives a time to collision (the field's own centre, ``Field.x`` / ``Field.y``, is
-always there, but it is where the field was born, often a corner of the object).
-
-Method (see ``docs/targets.md`` for the measurements behind every choice)
--------------------------------------------------------------------------
-1. *Edges* (:func:`measure_extent`). From the field centre, four strips of
-   ``2 band + 1`` px run along the field's row and column to the frame border.
-   In each, the outward component of the lobula-plate local motion (LM_r to the
-   right, LM_l to the left, LM_u upwards, LM_d downwards; positive part) gives a
-   1-D profile. The *nearest outward edge complex* (lobes closer than ``gap`` px
-   merged) is located and its **outer boundary** (where the profile falls below
-   ``rel_edge`` x its peak, sub-pixel) is taken. The local-motion lobes trail the
-   true edge by a nearly constant ``edge_offset`` px (6-7 px for edge speeds
-   0.5-8 px/frame with the default front end), which is added back. The object's
-   width is ``d_right + d_left`` and its height ``d_up + d_down``: both are
-   independent of where the field centre lies inside the object, and the
-   midpoints give the expansion centre. ``s`` = mean of width and height.
-2. *Filter* (:class:`TargetTracker`). The last ``window`` valid sizes
-   (frames at most ``max_age`` old) are fitted by least squares with
-   ``1 / s = a + b t``: for an object approaching at constant speed the image
-   size is ``s = f L / Z`` with ``Z`` linear in time, so ``1/s`` is exactly
-   linear and its zero crossing ``t_c = -a / b`` is the contact frame.
-   ``ttc_s = (t_c - lag - t) / fps``. A fit needs ``min_points`` sizes spanning
-   at least ``min_span`` frames, a negative slope (growth), a small residual and
-   an implied edge speed the front end can follow; it is robust (the largest
-   subset of >= ``min_inliers`` of the sizes that passes wins, outliers are
-   forgotten; every subset keeps the newest size, so a fit never outlives the
-   data that contradict it) and reported only once two successive fits agree on
-   ``t_c`` (``confirm_frames`` / ``confirm_rel``). After a field has measured
-   once, its strips start from the estimated expansion centre; a new field
-   inside an object already tracked continues that track, and the fields of one
-   object share the frame's measurement and fit (``cache`` of
-   :meth:`TargetTracker.update`).
-3. *Saturation / coasting.* When the edges move faster than ``max_edge_speed``
-   px/frame (as predicted by a confirmed fit) the correlators alias and the lobes fall far behind the edge; when an
-   edge leaves the frame it cannot be located. Such frames add no measurement
-   and the estimate *coasts* on the last fit (``t_c`` unchanged, so ``ttc_s``
-   keeps counting down) for at most ``coast_frames`` frames, then becomes None.
-
-Because ``s = f tan(theta)`` (image-plane size), ``s / (ds/dt)`` is the exact
-time to collision of a fronto-parallel object approaching at constant speed, at
-any angle and anywhere in the image; the classic ``theta / (dtheta/dt)`` is its
-small-angle approximation. No field of view is needed for ``ttc_s``.
+Method, per frame (``docs/targets.md``)
+---------------------------------------
+1. *Candidates.* Every attention field whose centre lies in no target, and (``seed_lm``) the
+   strongest local motion outside all targets and fields, is a candidate: the edges of the
+   outward motion around it (:func:`measure_extent`, the LM maps of Eq. 11-12) give the
+   object's box. A candidate whose box does not contain its seed point within ``max_shift``
+   px is dropped (two things taken for one).
+2. *Size change, measured in the image* (:func:`align`). The object's patch (its box and a
+   margin, resampled to ``patch`` x ``patch`` px from an image pyramid, so the cost does not
+   grow with the object) is aligned between the previous frame and this one by Gauss-Newton
+   on a similarity (scale ``k`` and shift), with the weights on the box: a sub-pixel measure of
+   the growth d(log size)/dt long before the edges move a pixel per frame. The box moves and
+   grows with the alignment.
+3. *Time to contact* (:func:`fit_contact`). For an object approaching at constant speed its
+   image size ``s = f W / Z`` with ``Z`` linear in time, so ``1 / s`` is linear in time and
+   vanishes at contact. A least-squares line through ``1 / S`` (S the accumulated scale) over
+   the last ``window`` frames gives the contact frame, its standard error, and the t-statistic
+   of the slope; ``ttc_s`` is reported when the growth is significant (``min_tstat``) and the
+   contact within ``max_ttc_s``. Holding and receding objects have no significant growth:
+   no estimate.
+4. *Course* (:func:`fit_course`). For constant velocity, the offset of the object's centre
+   from the heading point divided by its width, ``(x - x_h) / w`` (and the same for ``y``),
+   is ``X / W``: linear in time. Its value at the contact frame is the lateral miss in object
+   widths, ``miss`` (0 = dead centre). The heading is the optical axis (the principal point)
+   unless ``TargetParams.heading`` gives it.
+5. *Warning.* ``warning`` is set when the target shows looming evidence (one of its attention
+   fields answered within ``evidence_frames`` frames, or its growth has been significant for
+   ``confirm_frames`` frames in a row), ``miss <= max_miss``, ``ttc_s <= horizon_s`` and the
+   contact time is known to ``max_ttc_sigma`` (relative). The paper's field alarm
+   (``Field.collision``, the "fatal" field) is a separate signal and stays as it is.
+6. *Bookkeeping.* Fields inside a target's box belong to it (``Target.fields``); two targets
+   that cover one another merge (the older id stays); a target is dropped when it leaves the
+   frame, when the alignment fails ``max_fails`` frames in a row, or after ``idle_frames``
+   frames without an estimate or an answering field.
 
 Bearing convention: azimuth positive to the right, elevation positive up,
 ``azimuth = atan((x - cx) / f)``, ``elevation = atan((cy - y) / f)`` with
 ``(cx, cy) = ((W - 1) / 2, (H - 1) / 2)`` in pixel-index coordinates (the centre
 of pixel column ``i`` is at ``x = i``) and ``f = (W / 2) / tan(hfov / 2)``.
-Without a field of view the same two attributes hold ``x - cx`` and ``cy - y``
-in pixels.
 """
 
 from __future__ import annotations
 
 import bisect
-import functools
-import itertools
 import math
 from collections import deque
 from dataclasses import dataclass, field
 
+import cv2
 import numpy as np
 
 from ._validation import InputValueError, check_int, check_real
 from .lobula_plate import LocalMotion
 
-__all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure_extent", "edge_distance",
-           "fit_contact", "bearing", "focal_length", "rank_by_ttc"]
+__all__ = ["TargetParams", "Target", "TargetLayer", "Extent", "Alignment", "measure_extent", "edge_distance",
+           "align", "fit_contact", "fit_course", "bearing", "focal_length", "check_hfov"]
 
-_FAST = None    # the module mlplc2._fast_targets once imported, False without Numba (tests set False)
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
-#: Largest ``TargetParams.window``: the robust fit tries every subset of the window's sizes
-#: that keeps the newest one, up to 2 ** (window - 1) of them (32768 at 16; 16 at the default 6).
-WINDOW_MAX = 16
-
-
-def _fast_targets():
-    """The Numba kernels (:mod:`mlplc2._fast_targets`), imported on first use; None without Numba.
-
-    They compute what the NumPy code below computes (which stays the fallback and the oracle
-    of ``tests/test_targets.py``), bit for bit: the edge distances of :func:`measure_extent`
-    and the subset search of :meth:`TargetTracker._robust_fit`.
-    """
-    global _FAST
-    if _FAST is None:
-        try:
-            from . import _fast_targets as mod
-        except Exception:  # noqa: BLE001 - ImportError, or numba failing to initialise
-            mod = False
-        _FAST = mod
-    return _FAST or None
 
 
 @dataclass(frozen=True)
 class TargetParams:
-    """Parameters of the target estimators (defaults measured on ``stimuli.looming``).
+    """Parameters of the target layer (one set for every input; ``docs/targets.md``).
 
     Valid values (checked at construction; one-line :class:`mlplc2.InputError`
-    otherwise, a ``ValueError`` or ``TypeError``): integers are Python or NumPy
-    integers (not bools), stored as Python ints, >= 0 and at most 2**31 - 1, with
-    ``2 <= min_points <= window <= 16`` (``WINDOW_MAX``); numbers are finite Python
-    or NumPy scalars (not bools, strings or arrays) >= 0 within float32's range,
-    stored as Python floats; the fractions ``rel_start``, ``rel_edge`` and
-    ``min_inliers`` lie in [0, 1].
+    otherwise): integers are Python or NumPy integers (not bools) >= 0, stored as Python ints
+    (``patch`` >= 8, ``window`` >= 3, ``min_frames`` in [3, ``window``]); numbers are finite
+    Python or NumPy scalars >= 0, stored as Python floats; the fractions ``rel_start`` and
+    ``rel_edge`` lie in [0, 1]; ``heading`` is None or a pair of numbers (px).
     """
 
+    # --- candidates and their box (the LM edges around a seed point) -------------------
     band: int = 2
-    """Half-width (px) of the strips along the field's row and column."""
+    """Half-width (px) of the strips along the seed's row and column (:func:`measure_extent`)."""
     min_peak: float = 0.08
     """Smallest outward LM (profile mean, after the gain) that counts as an edge."""
     noise_k: float = 3.0
@@ -135,57 +95,133 @@ class TargetParams:
     """Lobes closer than this (px) belong to one edge complex (fast edges make 2-3 lobes)."""
     edge_offset: float = 6.5
     """Px the outer boundary of the LM lobes trails the true edge (added back)."""
-    window: int = 6
-    """Sizes used in the ``1/s`` regression."""
-    max_age: int = 10
-    """Sizes older than this (frames) are dropped."""
-    min_points: int = 4
-    """Fewest sizes for a fit."""
-    min_span: int = 3
-    """Fewest frames between the first and last size of a fit."""
-    lag: float = 0.0
-    """Frames the measured size lags the true one (subtracted from the contact frame)."""
-    max_edge_speed: float = 8.0
-    """Px/frame (per edge) above which the front end aliases: measurements stop, the fit coasts."""
-    coast_frames: int = 10
-    """Frames an estimate may coast on its last fit without a new measurement."""
-    max_ttc_s: float = 60.0
-    """Longer estimates are reported as None (no measurable approach)."""
-    max_residual: float = 0.07
-    """Largest rms relative residual of the ``1/s`` fit that is accepted (0.1 until session 3:
-    fits to sizes that jump, on static or receding objects over a moving background, passed;
-    docs/targets.md, "Where it fails")."""
-    confirm_frames: float = 1.5
-    confirm_rel: float = 0.15
-    """A fit is reported once the next fit's contact frame agrees within
-    ``max(confirm_frames, confirm_rel x ttc)`` frames (a fit to junk is unstable)."""
-    min_inliers: float = 0.6
-    """Outlier rejection may drop at most this complement: a fit keeps >= 60 % of the sizes."""
     max_shift: float = 40.0
-    """Px: while a track has no size yet, a measured expansion centre further than this (in x
-    or y) from the field centre is rejected: it lies outside the field (R_AF = 40), so the
-    edges found are most likely two things taken for one (or background)."""
-    max_deviation: float = 0.2
-    """A size further than this (relative) from the fit's prediction contradicts the fit."""
+    """Px: a candidate box whose centre lies further than this (in x or y) from its seed point
+    is dropped (it encloses two things, or background); 40 = R_AF."""
+    seed_lm: float = 0.5
+    """Local motion (LM, Eq. 12) above which the strongest point outside every target and
+    attention field also seeds a candidate (one per frame), well below the field threshold
+    T_a = 10: objects far away grow by a fraction of a pixel per frame. 0 = attention fields only."""
+    max_targets: int = 12
+    """Upper bound on simultaneous targets (no new candidate while this many exist)."""
+    # --- the image measurement ----------------------------------------------------------
+    patch: int = 32
+    """Side (samples) of the resampled patch the alignment works on."""
+    margin: float = 1.5
+    """Patch half-side = ``margin`` x half the box's larger side + 3 px."""
+    iterations: int = 10
+    """Most Gauss-Newton iterations per alignment."""
+    max_residual: float = 25.0
+    """Largest rms grey-level residual of an accepted alignment (0-255 scale)."""
+    max_fails: int = 3
+    """Consecutive failed alignments after which a target is dropped."""
+    # --- time to contact and course -----------------------------------------------------
+    window: int = 12
+    """Frames of the ``1 / S`` line fit."""
+    min_frames: int = 5
+    """Fewest frames a fit needs."""
+    min_tstat: float = 3.0
+    """The growth (the fit's slope) must be this many standard errors from 0."""
+    max_ttc_s: float = 10.0
+    """Longer times to contact are reported as None (no measurable approach)."""
+    heading: tuple[float, float] | None = None
+    """(x, y) px of the heading point in the model's frames; None = the principal point
+    ((W - 1) / 2, (H - 1) / 2): the camera moves along its optical axis (or stands still)."""
+    # --- the warning --------------------------------------------------------------------
+    horizon_s: float = 1.0
+    """A target warns only when its ``ttc_s`` is at most this (s)."""
+    max_miss: float = 1.0
+    """... its predicted miss at contact at most this many object widths ..."""
+    max_ttc_sigma: float = 0.3
+    """... its contact time known to this fraction (standard error / ttc) ..."""
+    evidence_frames: int = 15
+    """... and it shows looming evidence: one of its fields answered within this many frames,"""
+    confirm_frames: int = 6
+    """... or its growth has been significant for this many frames in a row."""
+    idle_frames: int = 30
+    """Frames without an estimate or an answering field after which a target is dropped."""
 
     def __post_init__(self) -> None:
         def put(name, value):
             object.__setattr__(self, name, value)
 
-        for name in ("band", "gap", "local", "max_age", "min_span", "coast_frames"):
+        for name in ("band", "gap", "local", "max_targets", "iterations", "max_fails", "evidence_frames",
+                     "confirm_frames", "idle_frames"):
             put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        for name in ("min_points", "window"):
-            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=2, maximum=WINDOW_MAX))
-        if self.window < self.min_points:
-            raise InputValueError(f"TargetParams.window must be >= min_points ({self.min_points}): a fit needs "
-                                  f"min_points of the last window sizes, got {self.window!r}")
-        for name in ("min_peak", "noise_k", "edge_offset", "lag", "max_edge_speed", "max_ttc_s", "max_residual",
-                     "max_deviation", "max_shift", "confirm_frames", "confirm_rel"):
+        put("patch", check_int(self.patch, "TargetParams.patch", minimum=8, maximum=256))
+        put("window", check_int(self.window, "TargetParams.window", minimum=3, maximum=1000))
+        put("min_frames", check_int(self.min_frames, "TargetParams.min_frames", minimum=3, maximum=self.window))
+        for name in ("min_peak", "noise_k", "edge_offset", "max_shift", "seed_lm", "margin", "max_residual",
+                     "min_tstat", "max_ttc_s", "horizon_s", "max_miss", "max_ttc_sigma"):
             put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        for name in ("rel_start", "rel_edge", "min_inliers"):   # fractions
+        for name in ("rel_start", "rel_edge"):
             put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0, maximum=1))
+        if self.heading is not None:
+            from ._validation import check_reals
+
+            put("heading", check_reals(self.heading, "TargetParams.heading", 2, "x, y in px"))
 
 
+@dataclass(frozen=True)
+class Target:
+    """One approaching object in one frame (what models return in ``Output.targets``).
+
+    Attributes
+    ----------
+    id : int
+        Stable id (1, 2, ...), kept while the object is tracked.
+    x, y : float
+        Centre of the object's box (its expansion centre), in the pixels of the model's frames.
+    width, height : float
+        Apparent size (px).
+    ttc_s : float or None
+        Time to contact in seconds; None while the growth is not significant.
+    miss : float or None
+        Predicted lateral miss distance at contact, in object widths (0 = dead centre); None
+        without ``ttc_s``.
+    warning : bool
+        On a collision course (``miss <= max_miss``) with ``ttc_s <= horizon_s``, contact time
+        known, and looming evidence (see :class:`TargetParams`).
+    fields : tuple of int
+        Ids of the attention fields inside the target.
+    born : int
+        Frame of the target's creation.
+    looming : bool
+        Looming evidence this frame (an answering field recently, or sustained growth).
+    expansion : float or None
+        Measured growth rate d(log size)/dt in 1/s (None before two frames).
+    ttc_sigma_s : float or None
+        Standard error of ``ttc_s`` (s).
+    azimuth_deg, elevation_deg : float or None
+        Bearing of the centre in degrees (azimuth positive right, elevation positive up)
+        when the model was given the camera's field of view; None otherwise.
+    """
+
+    id: int
+    x: float
+    y: float
+    width: float
+    height: float
+    ttc_s: float | None = None
+    miss: float | None = None
+    warning: bool = False
+    fields: tuple[int, ...] = ()
+    born: int = 0
+    looming: bool = False
+    expansion: float | None = None
+    ttc_sigma_s: float | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+
+    def urgency(self) -> tuple:
+        """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""
+        return (not self.warning, math.inf if self.ttc_s is None else self.ttc_s,
+                -(self.width * self.height), self.id)
+
+
+# ---------------------------------------------------------------------------
+# the box of a candidate: the edges of the outward local motion around a point
+# ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Extent:
     """One frame's measurement of the expanding object around a field centre (pixels).
@@ -208,30 +244,6 @@ class Extent:
         return float(sum(vals) / len(vals)) if vals else None
 
 
-@dataclass(frozen=True)
-class TargetEstimate:
-    """The estimates of one field in one frame (None where not estimable).
-
-    ``ttc_s``, ``expansion_rate``, ``azimuth_deg`` and ``elevation_deg`` are all
-    set or all None: they need a confirmed fit of the object's growth (and
-    ``ttc_s <= max_ttc_s``). ``size_px`` (the fit's size, else this frame's
-    measured size, else None) and ``center`` (the expansion centre, or the field
-    centre while none is known) are diagnostics.
-
-    ``status``: "tracking" (fit updated this frame), "coasting" (no usable
-    measurement this frame; the last fit is extrapolated), "no_fit" (not yet
-    enough measurements or no growth), "saturated" (edges too fast or out of
-    frame and nothing to coast on), "unconfirmed" (a fit not yet confirmed by
-    the next one), "passed" (the predicted contact is over).
-    """
-
-    ttc_s: float | None = None
-    expansion_rate: float | None = None
-    azimuth_deg: float | None = None
-    elevation_deg: float | None = None
-    size_px: float | None = None
-    center: tuple[float, float] | None = None
-    status: str = "no_fit"
 
 
 def focal_length(width: int, hfov_deg: float | None) -> float | None:
@@ -377,21 +389,26 @@ def _strip_profiles(lm: LocalMotion, x: int, y: int, band: int):
     return prof, lens, [nr, nr, nc, nc]
 
 
-def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = TargetParams()) -> Extent:
+def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = TargetParams(), *,
+                   kernel=None) -> Extent:
     """Width, height and centre of the outward-expanding edges around (x, y).
 
-    Cost: four strips of ``2 band + 1`` px from the centre to the frame border, summed,
-    sorted and thresholded together; then a short scan (:func:`_edge_distances`). With Numba,
-    all of it in one compiled pass (:func:`mlplc2._fast_targets.edges4`, same results).
+    From (x, y), four strips of ``2 band + 1`` px run along the row and the column to the frame
+    border; in each, the outward component of the local motion (LM_r to the right, LM_l to the
+    left, LM_u upwards, LM_d downwards; positive part) is a profile whose nearest edge complex
+    (lobes closer than ``gap`` px merged, above a noise floor) is the object's edge; its outer
+    boundary, plus ``edge_offset`` (the lobes trail the true edge), is the edge position.
+
+    ``kernel``: the compiled version of the four scans (:func:`mlplc2._fast_targets.edges4`,
+    bit-identical; :mod:`mlplc2.backend` chooses it), or None for the NumPy code.
     """
     h, w = lm.magnitude.shape
     x = int(min(max(x, 0), w - 1))
     y = int(min(max(y, 0), h - 1))
-    fast = _FAST if _FAST is not None else _fast_targets()
     r, l, u, d = lm.r, lm.l, lm.u, lm.d  # noqa: E741
-    if fast and params.rel_edge <= 1.0 and r.dtype in _FLOATS and r.dtype == l.dtype == u.dtype == d.dtype \
+    if kernel is not None and params.rel_edge <= 1.0 and r.dtype in _FLOATS and r.dtype == l.dtype == u.dtype == d.dtype \
             and r.shape == l.shape == u.shape == d.shape == (h, w):
-        dist = fast.edges4(r, l, u, d, x, y, int(params.band), float(params.min_peak), float(params.noise_k),
+        dist = kernel(r, l, u, d, x, y, int(params.band), float(params.min_peak), float(params.noise_k),
                            float(params.rel_start), float(params.rel_edge), int(params.gap), int(params.local))
         dr, dl, du, dd = [None if v < 0 else v for v in dist]
     else:
@@ -411,340 +428,362 @@ def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = Targe
     return Extent(width, height, cx, cy, edges)
 
 
-def _line_fit(frames, sizes):
-    """Least squares ``1/s = a + b t``: (a, b, relative residuals) or None if degenerate."""
-    t = np.asarray(frames, dtype=np.float64)
-    s = np.asarray(sizes, dtype=np.float64)
-    if t.size < 2 or np.ptp(t) == 0 or np.any(s <= 0):
+
+
+# ---------------------------------------------------------------------------
+# the image measurement: scale and shift of a patch between two frames
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Alignment:
+    """Similarity between a patch of the previous frame and this one (:func:`align`).
+
+    ``scale``: k = size now / size before; ``dx``, ``dy``: shift (px) of the patch centre;
+    ``residual``: rms grey-level difference left (weighted); ``sigma``: standard error of
+    ``log k`` from the Gauss-Newton normal equations.
+    """
+
+    scale: float
+    dx: float
+    dy: float
+    residual: float
+    sigma: float
+
+
+def pyramid(gray: np.ndarray, smallest: int = 16) -> list[np.ndarray]:
+    """The frame and its successive halvings (``cv2.pyrDown``) down to ``smallest`` px."""
+    levels = [gray]
+    while min(levels[-1].shape) >= 2 * smallest:
+        levels.append(cv2.pyrDown(levels[-1]))
+    return levels
+
+
+_GRIDS: dict[int, tuple[np.ndarray, np.ndarray, np.ndarray]] = {}
+
+
+def _grid(n: int):
+    """Patch coordinates (u, v) centred on the patch centre, and the index vector (cached)."""
+    if n not in _GRIDS:
+        u = np.arange(n, dtype=np.float32) - (n - 1) / 2.0
+        uu, vv = np.meshgrid(u, u)
+        _GRIDS[n] = (uu, vv, np.arange(n, dtype=np.float32))
+    return _GRIDS[n]
+
+
+def _sample(levels, level: int, cx: float, cy: float, step: float, n: int):
+    """``n`` x ``n`` bilinear samples of pyramid ``level`` around (cx, cy) (level-0 px) every
+    ``step`` level-0 px, and the mask of the samples that fall inside the frame."""
+    img = levels[level]
+    f = float(1 << level)
+    s = step / f
+    ox = (cx + 0.5) / f - 0.5 - (n - 1) / 2.0 * s
+    oy = (cy + 0.5) / f - 0.5 - (n - 1) / 2.0 * s
+    m = np.array([[s, 0.0, ox], [0.0, s, oy]], np.float32)
+    patch = cv2.warpAffine(img, m, (n, n), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                           borderMode=cv2.BORDER_REPLICATE)
+    idx = _grid(n)[2]
+    h, w = img.shape
+    xs, ys = ox + idx * s, oy + idx * s
+    inside = ((ys >= 0) & (ys <= h - 1))[:, None] & ((xs >= 0) & (xs <= w - 1))[None, :]
+    return patch, inside
+
+
+def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
+          box: tuple[float, float], *, n: int = 32, iterations: int = 10) -> Alignment | None:
+    """Scale and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
+    ``cur`` (two :func:`pyramid` s), weighted on the object's box (half-width, half-height px).
+
+    Gauss-Newton on ``cur(c + d + k (x - c)) = prev(x)`` with the previous patch's gradients
+    (forward-additive with a fixed Hessian), ``n`` x ``n`` samples taken from the pyramid level
+    whose pixel is at most 1.5 samples (so the cost does not depend on the object's size);
+    samples outside the frame get no weight. None when the patch has too little texture or
+    the iteration does not settle.
+    """
+    uu, vv, _ = _grid(n)
+    step = 2.0 * half / n
+    level = 0 if step <= 1.5 else min(int(math.ceil(math.log2(step / 1.5))), len(prev) - 1)
+    a, inside = _sample(prev, level, cx, cy, step, n)
+    a = cv2.GaussianBlur(a, (0, 0), 0.8)
+    gx = cv2.Sobel(a, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
+    gy = cv2.Sobel(a, cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
+    # weights: 1 on the box, falling to 0 over a fifth of its half-size beyond it
+    hw, hh = max(box[0], 1.0) / step, max(box[1], 1.0) / step
+    wgt = (np.clip((1.2 * hw - np.abs(uu)) / (0.2 * hw), 0, 1) * np.clip((1.2 * hh - np.abs(vv)) / (0.2 * hh), 0, 1)
+           * inside).astype(np.float32).ravel()
+    jac = np.stack([(gx * uu + gy * vv).ravel(), gx.ravel(), gy.ravel()], 1)
+    jw = jac * wgt[:, None]
+    hess = jw.T @ jac
+    try:
+        hinv = np.linalg.inv(hess.astype(np.float64))
+    except np.linalg.LinAlgError:
         return None
-    yv = 1.0 / s
+    if not np.all(np.isfinite(hinv)) or np.linalg.cond(hess) > 1e7:
+        return None
+    p0 = p1 = p2 = 0.0
+    r = None
+    for _ in range(max(iterations, 1)):
+        k = math.exp(p0)
+        b, inside_b = _sample(cur, level, cx + p1 * step, cy + p2 * step, step * k, n)
+        b = cv2.GaussianBlur(b, (0, 0), 0.8)
+        r = (b - a).ravel()
+        w_it = jw if inside_b.all() else jw * inside_b.ravel()[:, None]
+        d0, d1, d2 = hinv @ (w_it.T @ r)
+        p0 -= d0
+        p1 -= d1 * k
+        p2 -= d2 * k
+        if not (abs(p0) < 1.0 and abs(p1) < n and abs(p2) < n):
+            return None
+        if abs(d0) < 1e-5 and abs(d1) < 1e-3 and abs(d2) < 1e-3:
+            break
+    wsum = float(wgt.sum())
+    res = math.sqrt(float(wgt @ (r * r)) / wsum) if wsum > 0 else math.inf
+    return Alignment(math.exp(p0), p1 * step, p2 * step, res, res * math.sqrt(max(float(hinv[0, 0]), 0.0)))
+
+
+# ---------------------------------------------------------------------------
+# time to contact and course from a track
+# ---------------------------------------------------------------------------
+@dataclass(frozen=True)
+class ContactFit:
+    """The ``1 / S`` line of :func:`fit_contact`: the contact ``ttc`` (frames after the newest
+    frame; None without significant growth), its standard error, the t-statistic of the growth
+    (positive = growing) and the growth rate d(log S)/dt (1/frame) at the newest frame."""
+
+    ttc: float | None
+    sigma: float | None
+    tstat: float
+    rate: float
+
+
+def fit_contact(frames, log_scale) -> ContactFit | None:
+    """Least-squares line ``1 / S = a + b t`` through the accumulated scale ``S = exp(log_scale)``.
+
+    For an object approaching at constant speed ``1 / S`` falls linearly to 0 at contact, so
+    the contact lies ``-a / b`` frames after the newest frame (t = 0 there, ``1 / S = 1``).
+    None with fewer than 3 frames.
+    """
+    t = np.asarray(frames, dtype=np.float64)
+    if t.size < 3:
+        return None
+    t = t - t[-1]
+    ls = np.asarray(log_scale, dtype=np.float64)
+    y = np.exp(ls[-1] - ls)
     tm = t.mean()
     dt = t - tm
-    b = float(np.dot(dt, yv - yv.mean()) / np.dot(dt, dt))
-    a = float(yv.mean() - b * tm)
-    return a, b, (yv - (a + b * t)) / yv
-
-
-def fit_contact(frames, sizes) -> tuple[float, float, float] | None:
-    """Least-squares ``1/s = a + b t``; returns (contact_frame, slope b, rms relative residual).
-
-    For a constant-speed approach ``1/s`` is linear in time and vanishes at
-    contact, so the contact frame is ``-a / b``. None when the sizes do not
-    grow (b >= 0) or are degenerate.
-    """
-    res = _line_fit(frames, sizes)
-    if res is None or not res[1] < 0:
+    sxx = float(dt @ dt)
+    if sxx <= 0:
         return None
-    a, b, rel = res
-    return -a / b, b, float(np.sqrt(np.mean(rel ** 2)))
+    b = float(dt @ (y - y.mean())) / sxx
+    a = float(y.mean()) - b * tm
+    res = y - (a + b * t)
+    s2 = float(res @ res) / max(t.size - 2, 1)
+    sb = math.sqrt(s2 / sxx) if s2 > 0 else 1e-12
+    tstat = -b / sb
+    rate = -b / a if a > 0 else 0.0
+    if not b < 0 or not a > 0:
+        return ContactFit(None, None, tstat, rate)
+    ttc = -a / b
+    # delta method: var(a) = s2 (1/n + tm^2/sxx), cov(a, b) = -tm s2 / sxx
+    va = s2 * (1.0 / t.size + tm * tm / sxx)
+    cab = -tm * s2 / sxx
+    ga, gb = -1.0 / b, a / (b * b)
+    sigma = math.sqrt(max(ga * ga * va + 2 * ga * gb * cab + gb * gb * s2 / sxx, 0.0))
+    return ContactFit(ttc, sigma, tstat, rate)
 
 
-@functools.lru_cache(maxsize=64)
-def _subsets(n: int, need: int):
-    """The subsets of ``n`` sizes a robust fit tries: each keeps the newest one (index ``n - 1``).
+def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float) -> float | None:
+    """Predicted miss at contact (object widths): the lines through ``(x - x_h) / w`` and
+    ``(y - y_h) / w`` over ``frames``, evaluated ``ttc`` frames after the newest one."""
+    t = np.asarray(frames, dtype=np.float64)
+    w = np.asarray(widths, dtype=np.float64)
+    if t.size < 2 or np.any(w <= 0):
+        return None
+    t = t - t[-1]
+    u = (np.asarray(xs, dtype=np.float64) - heading[0]) / w
+    v = (np.asarray(ys, dtype=np.float64) - heading[1]) / w
+    tm = t.mean()
+    dt = t - tm
+    sxx = float(dt @ dt)
+    if sxx <= 0:
+        return None
 
-    Returns (mask (m, n) of 0/1 floats, subset sizes (m,), index of each subset's first size
-    (m,)), largest subsets first, each size in lexicographic order.
-    """
-    rows = []
-    for k in range(n, need - 1, -1):
-        for keep in itertools.combinations(range(n - 1), k - 1):
-            row = [0.0] * n
-            for i in keep:
-                row[i] = 1.0
-            row[n - 1] = 1.0
-            rows.append(row)
-    mask = np.array(rows, dtype=np.float64).reshape(len(rows), n)
-    sizes, first = mask.sum(axis=1), mask.argmax(axis=1)
-    for arr in (mask, sizes, first):
-        arr.flags.writeable = False     # shared by every tracker (lru_cache)
-    return mask, sizes, first
+    def at(z):
+        b = float(dt @ (z - z.mean())) / sxx
+        return float(z.mean()) + b * (ttc - tm)
 
-
-@functools.lru_cache(maxsize=64)
-def _subset_keeps(n: int, need: int) -> tuple:
-    """The kept indices of each row of ``_subsets(n, need)`` (tuples)."""
-    return tuple(tuple(np.flatnonzero(row).tolist()) for row in _subsets(n, need)[0])
+    return math.hypot(at(u), at(v))
 
 
-def _median(values) -> float:
-    v = sorted(values)
-    m = len(v) // 2
-    return float(v[m]) if len(v) % 2 else (v[m - 1] + v[m]) / 2.0
-
-
+# ---------------------------------------------------------------------------
+# the layer
+# ---------------------------------------------------------------------------
 @dataclass
-class TargetTracker:
-    """Per-field state of the estimators: recent sizes and the last fit."""
+class _Track:
+    """Mutable state of one target."""
 
-    params: TargetParams = field(default_factory=TargetParams)
-    history: deque = field(default_factory=deque)   # (frame, size, cx, cy)
-    contact: float | None = None     # estimated contact frame of the last fit
-    slope: float | None = None       # d(1/s)/dt of the last fit (1/px per frame)
-    fit_frame: int | None = None     # frame of the last fit
-    center: tuple[float, float] | None = None
-    misses: int = 0                  # consecutive measurements that contradict the fit
-    confirmed: bool = False          # the fit agrees with the previous one (estimates reported)
-    last: tuple | None = None        # (frame, TargetEstimate) of the last update
+    id: int
+    born: int
+    cx: float
+    cy: float
+    w: float
+    h: float
+    log_s: float = 0.0
+    history: deque = field(default_factory=deque)   # (frame, log_s, cx, cy, w)
+    fails: int = 0
+    last_answer: int = -(10 ** 9)
+    last_estimate: int = -(10 ** 9)
+    streak: int = 0
+    fields: set = field(default_factory=set)
+    rate: float | None = None
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
+
+    @property
+    def size(self) -> float:
+        return max(self.w, self.h)
+
+
+class TargetLayer:
+    """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
+
+    Parameters
+    ----------
+    params : TargetParams
+    fps : float
+        Frame rate (frames -> seconds).
+    kernel : callable, optional
+        Compiled edge scan for :func:`measure_extent` (:mod:`mlplc2.backend`); None = NumPy.
+    focal : float, optional
+        Focal length in px (from the camera's field of view): targets then carry bearings.
+    """
+
+    def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
+                 focal: float | None = None):
+        self.params = TargetParams() if params is None else params
+        self.fps = float(fps)
+        self.kernel = kernel
+        self.focal = focal
+        self.reset()
 
     def reset(self) -> None:
-        self.history.clear()
-        self.contact = self.slope = self.fit_frame = None
-        self.center = None
-        self.misses = 0
-        self.confirmed = False
-        self.last = None
+        self._tracks: list[_Track] = []
+        self._next = 1
+        self._prev: list[np.ndarray] | None = None
 
-    def _robust_fit(self, frame: int):
-        """The accepted robust fit of the history: (contact frame, slope, kept indices) or None.
-
-        Every subset that keeps the newest size and drops at most ``1 - min_inliers`` of the
-        sizes is fitted at once (one small matrix product: at most 16 subsets of <= 6
-        sizes); the accepted fit keeps the most sizes, then has the smallest residual.
-        The newest size must be kept: a fit that disowns the current measurement is not a
-        new fit, and "confirming" an old fit on the same old sizes is no confirmation.
-        """
+    # -- one frame -----------------------------------------------------------------------
+    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
+        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps;
+        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``)."""
         p = self.params
-        pts = self.history
-        n = len(pts)
-        need = max(p.min_points, math.ceil(p.min_inliers * n))
-        if n < need or n < 2:
-            return None
-        t_new = pts[-1][0]
-        tl = [q[0] - t_new for q in pts]                     # <= 0, newest at 0
-        if min(q[1] for q in pts) <= 0:
-            return None
-        yl = [1.0 / q[1] for q in pts]
-        # The full set first, in plain floats: when it passes (steady tracking) it is the
-        # answer (the largest subset), and the subset search below is not needed.
-        if -tl[0] >= p.min_span:
-            st, sy = sum(tl), sum(yl)
-            stt = sum(v * v for v in tl)
-            sty = sum(u * v for u, v in zip(tl, yl))
-            den = n * stt - st * st
-            if den > 0:
-                b = (n * sty - st * sy) / den
-                a = (sy - b * st) / n
-                if b < 0 < a and -b / (a * a) / 2.0 <= p.max_edge_speed:
-                    ss = sum(((v - a - b * u) / v) ** 2 for u, v in zip(tl, yl))
-                    if math.sqrt(ss / n) <= p.max_residual:
-                        return t_new - a / b, b, tuple(range(n))
-        if need >= n:
-            return None
-        fast = _FAST if _FAST is not None else _fast_targets()
-        if fast:
-            # The same search compiled (mlplc2._fast_targets.subset_fit), one subset at a time;
-            # the two sums that are not exact in any order still come from NumPy (BLAS), so
-            # the fits are bit-identical.
-            t = np.array(tl, dtype=np.float64)
-            yv = np.array(yl)
-            mask, _, first = _subsets(n, need)
-            j, a, b = fast.subset_fit(t, yv, mask, first, mask @ yv, mask @ (t * yv), float(p.min_span),
-                                      float(p.max_edge_speed), float(p.max_residual))
-            if j < 0:
-                return None
-            return t_new - a / b, b, _subset_keeps(n, need)[j]
-        t = np.array(tl)
-        yv = np.array(yl)
-        mask, k, first = _subsets(n, need)
-        st, sy = mask @ t, mask @ yv
-        stt, sty = mask @ (t * t), mask @ (t * yv)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            den = k * stt - st * st
-            b = (k * sty - st * sy) / den
-            a = (sy - b * st) / k                    # 1/s at the newest frame
-            rel = (yv - a[:, None] - b[:, None] * t) / yv
-            rel2 = mask * (rel * rel)
-            rms = np.sqrt(rel2.sum(axis=1) / k)
-            speed = -b / (a * a) / 2.0               # px/frame per edge at the newest frame
-            # Accept: growing, contact ahead, small residual, and edges no faster than the
-            # front end can follow (a fit claiming faster edges was fitted to something else).
-            ok = ((-t[first] >= p.min_span) & (den > 0) & (b < 0) & (a > 0)
-                  & (rms <= p.max_residual) & (speed <= p.max_edge_speed))
-        idx = np.flatnonzero(ok)
-        if idx.size == 0:
-            return None
-        best = idx[k[idx] == k[idx[0]]]
-        j = int(best[np.argmin(rms[best])])
-        return t_new - float(a[j]) / float(b[j]), float(b[j]), tuple(np.flatnonzero(mask[j]).tolist())
-
-    def _refit(self, frame: int, cache: dict | None = None) -> bool:
-        """Fit the history robustly (:meth:`_robust_fit`); True if a fit was accepted.
-
-        The sizes the accepted fit leaves out (outliers, e.g. a field born on the
-        object's edge first measures the wrong thing) are forgotten.
-        """
-        p = self.params
-        if cache is not None:
-            key = ("fit", frame, tuple((q[0], q[1]) for q in self.history))
-            res = cache.get(key, _MISSING)
-            if res is _MISSING:
-                res = cache[key] = self._robust_fit(frame)
-        else:
-            res = self._robust_fit(frame)
-        if res is None:
-            return False
-        contact, b, keep = res
-        # Confirmed when two successive fits agree on the contact frame.
-        tol = max(p.confirm_frames, p.confirm_rel * (contact - frame))
-        if self.contact is not None and abs(contact - self.contact) <= tol:
-            self.confirmed = True
-        elif not (self.confirmed and self.contact is not None and abs(contact - self.contact) <= 2 * tol):
-            self.confirmed = False
-        self.contact, self.slope, self.fit_frame = contact, b, frame
-        if len(keep) < len(self.history):
-            pts = self.history
-            self.history = deque(pts[i] for i in keep)
-        return True
-
-    def _predicted_size(self, frame: float) -> float | None:
-        if self.contact is None or self.slope is None:
-            return None
-        y = -self.slope * (self.contact - frame)   # 1/s at frame (measurement time base)
-        return 1.0 / y if y > 0 else math.inf
-
-    def covers(self, x: float, y: float, frame: int) -> bool:
-        """Whether (x, y) lies inside the object this tracker measured within ``max_age`` frames."""
-        if not self.history or self.center is None or frame - self.history[-1][0] > self.params.max_age:
-            return False
-        size = self.history[-1][1]
-        pred = self._predicted_size(frame)
-        if pred is not None and math.isfinite(pred) and self.fit_frame is not None \
-                and frame - self.fit_frame <= self.params.coast_frames:
-            size = max(size, pred)
-        half = size / 2.0
-        return abs(x - self.center[0]) <= half and abs(y - self.center[1]) <= half
-
-    def adopt(self, other: "TargetTracker") -> None:
-        """Start from another tracker's measurements (a new field inside an object already tracked)."""
-        self.history = deque(other.history)
-        self.contact, self.slope, self.fit_frame = other.contact, other.slope, other.fit_frame
-        self.center = other.center
-        self.confirmed = other.confirmed
-        self.misses = other.misses
-        self.last = other.last
-
-    def update(self, lm: LocalMotion, x: int, y: int, frame: int, fps: float,
-               focal: float | None = None, cache: dict | None = None) -> TargetEstimate:
-        """Measure around field centre (x, y) in this frame's maps and return the estimates.
-
-        Once an expansion centre is known the strips start from it instead of
-        the field centre (the field centre is where the edge was when the field
-        was born, often a corner of the object).
-
-        ``cache``: an optional dict shared by the trackers of *one* frame (same ``lm``,
-        ``frame`` and ``params``; start a new one every frame). Trackers measuring from the
-        same point or fitting the same sizes (fields on one object) then do that work once.
-        """
-        if self.last is not None and self.last[0] == frame:
-            # Adopted from a tracker that has already measured this frame: same track, same
-            # estimate (measuring again would count this frame's size twice).
-            return self.last[1]
-        p = self.params
-        h, w = lm.magnitude.shape
-        if self.center is not None and self.history:
-            mx, my = int(round(self.center[0])), int(round(self.center[1]))
-            if not (0 <= mx < w and 0 <= my < h):
-                mx, my = x, y
-        else:
-            mx, my = x, y
-        if cache is not None:
-            key = ("extent", mx, my)
-            ext = cache.get(key)
-            if ext is None:
-                ext = cache[key] = measure_extent(lm, mx, my, p)
-        else:
-            ext = measure_extent(lm, mx, my, p)
-        size = ext.size
-        cx, cy = ext.cx, ext.cy
-        if size is not None and not self.history and max(abs(cx - mx), abs(cy - my)) > p.max_shift:
-            # A new track's first edges enclose a point far from the field centre they were
-            # sought from: two objects (or an object and background) taken for one.
-            size = None
-        if size is None and self.center is not None and self.history:
-            # Edges beyond the frame border (object partly out of view): half-sizes of the
-            # edges still found, measured from the known expansion centre (at least two).
-            c = self.center
-            e = ext.edges
-            halves = [v for v in (None if e[0] is None else e[0] - c[0], None if e[1] is None else c[0] - e[1],
-                                  None if e[2] is None else c[1] - e[2], None if e[3] is None else e[3] - c[1])
-                      if v is not None]
-            if len(halves) >= 2 and min(halves) > 0:
-                size = 2.0 * sum(halves) / len(halves)
-                cx, cy = c
-        while self.history and frame - self.history[0][0] > p.max_age:
-            self.history.popleft()
-        status = "no_fit"
-        if size is not None and self.contact is not None:
-            s_pred = self._predicted_size(frame)
-            if self.confirmed and s_pred is not None and math.isfinite(s_pred) \
-                    and -self.slope * s_pred * s_pred / 2.0 > p.max_edge_speed:
-                # Aliasing: edges faster than max_edge_speed px/frame leave lobes far behind
-                # the edge. Such sizes are neither fitted nor held against a confirmed fit;
-                # the estimate coasts. (An unconfirmed fit vetoes nothing: a fit to junk
-                # predicting fast edges would otherwise block every correction.)
-                size = None
-                status = "saturated"
-            elif s_pred is None or not math.isfinite(s_pred) or abs(size - s_pred) > p.max_deviation * s_pred:
-                # A size the fit does not predict; two in a row and the fit is dropped.
-                self.misses += 1
-                if self.misses >= 2:
-                    self.contact = self.slope = self.fit_frame = None
-                    self.misses = 0
-                    self.confirmed = False
+        levels = pyramid(gray)
+        h, w = gray.shape
+        if self._prev is not None:
+            self._follow(levels, index, w, h)
+        self._merge()
+        seeds = []
+        for f in fields:
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, 0.25 * t.size + 4.0)]
+            if owners:
+                t = min(owners, key=lambda t: t.size)
+                t.fields.add(f.id)
+                if f.response > 0:
+                    t.last_answer = index
             else:
-                self.misses = 0
-        if size is not None:
-            self.history.append((frame, size, cx, cy))
-            while len(self.history) > p.window:
-                self.history.popleft()
-            # Fit, rejecting outliers (e.g. a field born on the object's edge first measures
-            # the wrong thing).
-            if self._refit(frame, cache):
-                status = "tracking"
-                self.misses = 0
-            self.center = (_median([q[2] for q in self.history]), _median([q[3] for q in self.history]))
-        est_center = self.center if self.center is not None and self.history else (float(x), float(y))
-        ttc = rate = s_now = az = el = None
-        if self.contact is not None and frame - self.fit_frame > p.coast_frames:
-            self.contact = self.slope = self.fit_frame = None
-            self.confirmed = False
-        if self.contact is not None and self.contact - p.lag - frame <= 0:
-            status = "passed"              # the predicted contact is over: no estimate
-        elif self.contact is not None and not self.confirmed:
-            status = "unconfirmed"
-        elif self.contact is not None:
-            if status == "no_fit":
-                status = "coasting"
-            ttc_frames = self.contact - p.lag - frame
-            ttc = ttc_frames / fps
-            y_now = -self.slope * ttc_frames
-            s_now = 1.0 / y_now
-            if ttc > p.max_ttc_s:
-                ttc = None                 # no measurable approach: no rate and no bearing either
+                seeds.append((int(f.x), int(f.y), f))
+        if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+            from .attention import argmax_outside
+
+            zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + 4)) for t in self._tracks]
+            zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
+            cand = argmax_outside(lm.magnitude, zones)
+            if cand is not None and cand[2] > p.seed_lm:
+                seeds.append((cand[0], cand[1], None))
+        for x, y, f in seeds:
+            if len(self._tracks) >= p.max_targets:
+                break
+            if any(t.contains(x, y) for t in self._tracks):
+                continue
+            ext = measure_extent(lm, x, y, p, kernel=self.kernel)
+            if ext.width is None or ext.height is None or max(abs(ext.cx - x), abs(ext.cy - y)) > p.max_shift:
+                continue
+            t = _Track(self._next, index, ext.cx, ext.cy, ext.width, ext.height)
+            t.history = deque([(index, 0.0, t.cx, t.cy, t.w)], maxlen=p.window)
+            self._next += 1
+            if f is not None:
+                t.fields.add(f.id)
+                if f.response > 0:
+                    t.last_answer = index
+            self._tracks.append(t)
+        self._prev = levels
+        alive = {f.id for f in fields}
+        out = []
+        for t in self._tracks:
+            t.fields &= alive
+            out.append(self._estimate(t, index, w, h))
+        self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
+        keep = {t.id for t in self._tracks}
+        return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    def _follow(self, levels, index: int, w: int, h: int) -> None:
+        """Move and grow every track with the image alignment; drop the lost ones."""
+        p = self.params
+        kept = []
+        for t in self._tracks:
+            half = p.margin * t.size / 2.0 + 3.0
+            al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                       iterations=p.iterations)
+            if al is None or al.residual > p.max_residual:
+                t.fails += 1
+                if t.fails < p.max_fails:
+                    kept.append(t)
+                continue
+            t.fails = 0
+            t.cx += al.dx
+            t.cy += al.dy
+            t.w *= al.scale
+            t.h *= al.scale
+            t.log_s += math.log(al.scale)
+            t.rate = math.log(al.scale) * self.fps
+            t.history.append((index, t.log_s, t.cx, t.cy, t.w))
+            big = max(w, h)
+            if t.size < 2.0 or t.size > 4.0 * big or not (-t.w / 2 < t.cx < w + t.w / 2 and -t.h / 2 < t.cy < h + t.h / 2):
+                continue
+            kept.append(t)
+        self._tracks = kept
+
+    def _merge(self) -> None:
+        """Two tracks whose centres lie in each other's box are one object: keep the older."""
+        tracks = sorted(self._tracks, key=lambda t: t.id)
+        out: list[_Track] = []
+        for t in tracks:
+            host = next((o for o in out if o.contains(t.cx, t.cy) and t.contains(o.cx, o.cy)), None)
+            if host is None:
+                out.append(t)
             else:
-                ds = -self.slope / (y_now * y_now) * fps          # px per second
-                if focal is None:
-                    rate = ds
-                else:
-                    half = s_now / (2.0 * focal)
-                    rate = math.degrees(ds / focal / (1.0 + half * half))
-                # The bearing of the expansion centre, reported with the time to collision only:
-                # before a confirmed fit the centre may rest on junk first sizes, and before any
-                # size the only point known is the field centre, often a corner of the object
-                # (docs/targets.md, "Bearing").
-                c = self.center if self.center is not None else est_center
-                az, el = bearing(c[0], c[1], (h, w), focal)
-        est = TargetEstimate(ttc_s=ttc, expansion_rate=rate, azimuth_deg=az, elevation_deg=el,
-                             size_px=s_now if s_now is not None else size, center=est_center, status=status)
-        self.last = (frame, est)
-        return est
+                host.fields |= t.fields
+                host.last_answer = max(host.last_answer, t.last_answer)
+        self._tracks = out
 
-
-_MISSING = object()
-
-
-def rank_by_ttc(items, key=lambda f: f.ttc_s):
-    """``items`` ordered by time to collision (smallest first); those without one keep their order, last."""
-    with_ttc = sorted((i for i in items if key(i) is not None), key=key)
-    return with_ttc + [i for i in items if key(i) is None]
+    def _estimate(self, t: _Track, index: int, w: int, h: int) -> Target:
+        p = self.params
+        frames = [q[0] for q in t.history]
+        ttc = sigma = miss = None
+        fit = fit_contact(frames, [q[1] for q in t.history]) if len(frames) >= p.min_frames else None
+        if fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat and fit.ttc / self.fps <= p.max_ttc_s:
+            ttc, sigma = fit.ttc / self.fps, fit.sigma / self.fps
+            heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+            miss = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
+                              [q[4] for q in t.history], heading, fit.ttc)
+            t.streak += 1
+            t.last_estimate = index
+        else:
+            t.streak = 0
+        looming = index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames
+        warning = bool(looming and ttc is not None and miss is not None and ttc <= p.horizon_s
+                       and miss <= p.max_miss and sigma <= p.max_ttc_sigma * ttc)
+        az = el = None
+        if self.focal is not None:
+            az, el = bearing(t.cx, t.cy, (h, w), self.focal)
+        return Target(t.id, t.cx, t.cy, t.w, t.h, ttc_s=ttc, miss=miss, warning=warning,
+                      fields=tuple(sorted(t.fields)), born=t.born, looming=looming, expansion=t.rate,
+                      ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el)

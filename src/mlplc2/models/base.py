@@ -37,13 +37,17 @@ class Output:
     fields : tuple of Field
         Active attention fields (empty for models that do not localise).
     collision : bool
-        Collision alarm this frame (LPLC2 family: any field in alarm).
+        Collision alarm this frame (LPLC2 family: any field in alarm, the paper's "fatal"
+        field; LGMD: the global spike rule).
     spike : bool
         A spike this frame (LGMD models; the LPLC2 family spikes when it alarms).
     repeated : bool
         The frame repeated the last processed one (see ``Model.repeat_threshold``): the
         model did not step, and this output is the previous one with this frame's index
-        (each field's ``ttc_s`` counted down by the time since the processed frame).
+        (each target's ``ttc_s`` counted down by the time since the processed frame).
+    targets : tuple of Target
+        The approaching objects (:class:`mlplc2.targets.Target`: size, time to contact,
+        miss, warning), most urgent first; empty for models without targets (LGMD).
     """
 
     frame: int
@@ -52,26 +56,17 @@ class Output:
     collision: bool = False
     spike: bool = False
     repeated: bool = False
+    targets: tuple = ()
 
     @property
-    def most_urgent(self) -> Field | None:
-        """The field with the smallest time to collision (``Field.ttc_s``).
-
-        Ties go to the larger response, then the smaller id. Without any TTC
-        estimate this frame: the field with the largest response. None without fields.
-        """
-        if not self.fields:
-            return None
-        timed = [f for f in self.fields if getattr(f, "ttc_s", None) is not None]
-        if timed:
-            return min(timed, key=lambda f: (f.ttc_s, -f.response, f.id))
-        return max(self.fields, key=lambda f: f.response)
+    def warning(self) -> bool:
+        """Any target warns (a collision course within the horizon; ``docs/targets.md``)."""
+        return any(t.warning for t in self.targets)
 
     @property
-    def threats(self) -> tuple[Field, ...]:
-        """Fields with a time-to-collision estimate, most urgent first (the ``Field.rank`` order)."""
-        timed = [f for f in self.fields if getattr(f, "ttc_s", None) is not None]
-        return tuple(sorted(timed, key=lambda f: (f.ttc_s, -f.response, f.id)))
+    def most_urgent(self):
+        """The most urgent target (warning first, then the shortest ``ttc_s``), or None."""
+        return self.targets[0] if self.targets else None
 
 
 #: Suggested ``Model.repeat_threshold`` (grey levels, 0-255; the default is None, off):
@@ -142,8 +137,14 @@ class Model(abc.ABC):
     #: (2 R_AF + 1 = 81 px) are numerically safe (zero borders; every output
     #: finite, tested), but the default parameters are meant for about 320x240.
     min_size: ClassVar[int] = 3
-    #: True for models whose output has attention fields (positions); False for whole-field neurons.
+    #: True for models whose fields have meaningful positions (mLPLC2, sLPLC2); False for whole-field
+    #: neurons (LGMD) and the frame-wide LPLC2 cell.
     localises: ClassVar[bool] = False
+    #: True for models whose outputs carry attention fields (``Output.fields``).
+    has_fields: ClassVar[bool] = False
+    #: True for models whose outputs carry targets (``Output.targets``): their warning is the
+    #: targets' warning; models without targets warn with their alarm (``Output.collision``).
+    has_targets: ClassVar[bool] = False
 
     def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | None = None):
         self.fps = check_fps(fps)
@@ -213,24 +214,14 @@ class Model(abc.ABC):
         return out
 
     def _held_output(self) -> Output:
-        """The last output for a repeated frame: same fields and response, this frame's index,
-        ``repeated`` set, and every time to collision counted down by the time elapsed since
-        the frame that was processed (the object keeps approaching while the picture holds)."""
-        last = self._last_out
-        elapsed = self._repeats / self.fps
-        fields = []
-        for f in last.fields:
-            ttc = getattr(f, "ttc_s", None)
-            if ttc is not None and ttc - elapsed > 0:
-                f = dataclasses.replace(f, ttc_s=ttc - elapsed)
-            elif ttc is not None:  # the predicted contact is over: no estimate (as a stepped frame)
-                f = dataclasses.replace(f, ttc_s=None, expansion_rate=None, azimuth_deg=None,
-                                        elevation_deg=None, rank=None)
-            fields.append(f)
-        held = dataclasses.replace(last, frame=self._frame, repeated=True, fields=tuple(fields))
-        ranks = {f.id: k for k, f in enumerate(held.threats, 1)}
-        return dataclasses.replace(held, fields=tuple(dataclasses.replace(f, rank=ranks.get(f.id))
-                                                      for f in held.fields))
+        """The last output for a repeated frame: this frame's index, ``repeated`` set, and what
+        the model's :meth:`_hold` makes of the time elapsed since the processed frame."""
+        held = self._hold(self._last_out, self._repeats / self.fps)
+        return dataclasses.replace(held, frame=self._frame, repeated=True)
+
+    def _hold(self, last: Output, elapsed: float) -> Output:
+        """The output held ``elapsed`` seconds after ``last`` (models with clocks override it)."""
+        return last
 
     def reset(self) -> None:
         """Forget all state: the next frame is frame 0 and may have a new size."""

@@ -3,26 +3,28 @@ field) and LPLC2 (one fixed cell spanning the frame), sharing one front end."""
 
 from __future__ import annotations
 
+import dataclasses
 from collections import deque
 
 import numpy as np
 
 from .._validation import InputTypeError
-from ..attention import (AttentionField, IdCounter, argmax_outside, gate_area, lplc2_response, quadrant_areas,
-                         quadrant_sums)
-from ..frontend import make_frontend
+from ..attention import AttentionField, IdCounter, argmax_outside, gate_area, lplc2_response, quadrant_areas
+from ..backend import resolve
 from ..lobula_plate import LocalMotion
 from ..params import Params
-from ..targets import TargetParams, TargetTracker, check_hfov, focal_length
+from ..targets import Target, TargetLayer, TargetParams, check_hfov, focal_length
 from .base import Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
 
 
 class _LPLC2Family(Model):
-    """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping."""
+    """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping + the target layer."""
 
     localises = True
+    has_fields = True
+    has_targets = True
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, backend: str = "auto",
@@ -35,32 +37,27 @@ class _LPLC2Family(Model):
             raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
         self.hfov_deg = check_hfov(hfov_deg)
-        """Horizontal field of view (degrees) of the camera, or None. Given: bearings in degrees
-        and expansion rates in deg/s; None: pixel offsets and px/s (``docs/targets.md``)."""
+        """Horizontal field of view (degrees) of the camera, or None. Given: targets carry their
+        bearing (``Target.azimuth_deg`` / ``elevation_deg``); time to contact and course need none."""
         self.target_params = target_params
-        self.frontend = make_frontend(params, self.fps, backend)
-        self.backend = self.frontend.backend
-        """Front end in use: "numba" (fast, the default) or "reference" (``frontend.BACKENDS``)."""
-        if self.backend == "numba":  # Eq. 14 in one compiled pass (4x faster per field)
-            from .. import _fast
-
-            self._quadrant_sums = _fast.quadrant_sums
-        else:
-            self._quadrant_sums = quadrant_sums
+        impl = resolve(backend)
+        self.backend = impl.name
+        """Implementation in use: "numba" (fast, the default) or "reference" (:mod:`mlplc2.backend`)."""
+        self.frontend = impl.frontend(params, self.fps)
+        self._quadrant_sums = impl.quadrant_sums
+        self._edge_kernel = impl.edge_kernel
         self._fields: list[AttentionField] = []
         self._ids = IdCounter()
         self.maps: LocalMotion | None = None
         """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
-        self._trackers: dict[int, TargetTracker] = {}
-        self._orphans: list[tuple[int, TargetTracker]] = []
+        self._layer: TargetLayer | None = None
 
     def _reset(self) -> None:
         self.frontend.reset()
         self._fields = []
         self._ids = IdCounter()
         self.maps = None
-        self._trackers = {}
-        self._orphans = []
+        self._layer = None
 
     # -- field bookkeeping ---------------------------------------------------
     def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
@@ -80,45 +77,29 @@ class _LPLC2Family(Model):
         recent = list(f.history)[-p.alarm_window:]
         f.collision = sum(recent) >= p.alarm_threshold
 
-    def _estimate_targets(self, index: int) -> None:
-        """Time to collision, expansion rate and bearing of every field, then the TTC ranking.
-
-        Per field: four thin strips of the last LM maps (``targets.measure_extent``)
-        and a regression over a few numbers; see ``docs/targets.md``.
-        """
-        lm = self.maps
-        if lm is None:
-            return
-        focal = focal_length(lm.magnitude.shape[1], self.hfov_deg)
-        alive = {f.id for f in self._fields}
-        # Trackers of fields removed in the last few frames stay available for adoption.
-        self._orphans = [(i, t) for i, t in self._orphans if index - i <= self.target_params.coast_frames]
-        self._orphans += [(index, t) for fid, t in self._trackers.items() if fid not in alive]
-        known = [f.target for f in self._fields if f.target is not None] + [t for _, t in self._orphans[::-1]]
-        cache: dict = {}  # this frame's strips and fits, shared by the fields of one object
-        for f in self._fields:
-            if f.target is None:
-                f.target = TargetTracker(self.target_params)
-                # A field born inside an object already measured continues that object's track.
-                parent = next((t for t in known if t.covers(f.x, f.y, index)), None)
-                if parent is not None:
-                    f.target.adopt(parent)
-            f.estimate = f.target.update(lm, f.x, f.y, index, self.fps, focal, cache=cache)
-        self._trackers = {f.id: f.target for f in self._fields}
-        timed = sorted((f for f in self._fields if f.estimate.ttc_s is not None),
-                       key=lambda f: (f.estimate.ttc_s, -f.response, f.id))
-        for f in self._fields:
-            f.rank = None
-        for rank, f in enumerate(timed, 1):
-            f.rank = rank
-
-    def _output(self, index: int) -> Output:
-        self._estimate_targets(index)
+    def _output(self, gray, index: int) -> Output:
+        """This frame's fields, and the targets the target layer makes of them."""
+        if self._layer is None:
+            self._layer = TargetLayer(self.target_params, self.fps, kernel=self._edge_kernel,
+                                      focal=focal_length(gray.shape[1], self.hfov_deg))
+        targets = self._layer.step(gray, self.maps, self._fields, index)
         fields = tuple(f.snapshot() for f in self._fields)
         response = max((f.response for f in fields), default=0.0)
         collision = any(f.collision for f in fields)
         return Output(frame=index, response=response, fields=fields, collision=collision,
-                      spike=collision)
+                      spike=collision, targets=targets)
+
+    def _hold(self, last: Output, elapsed: float) -> Output:
+        """A repeated frame: the targets' times to contact count down by ``elapsed`` seconds (an
+        estimate whose contact has passed becomes None and loses its warning)."""
+        targets = []
+        for t in last.targets:
+            if t.ttc_s is not None:
+                left = t.ttc_s - elapsed
+                t = dataclasses.replace(t, ttc_s=left) if left > 0 else dataclasses.replace(
+                    t, ttc_s=None, miss=None, warning=False, ttc_sigma_s=None)
+            targets.append(t)
+        return dataclasses.replace(last, targets=tuple(sorted(targets, key=Target.urgency)))
 
 
 @register("mlplc2")
@@ -132,23 +113,22 @@ class MLPLC2(_LPLC2Family):
     params : Params, optional
         Model parameters; Table I defaults.
     hfov_deg : float, optional, keyword-only
-        Horizontal field of view of the camera: field bearings (``azimuth_deg``,
-        ``elevation_deg``) in degrees and expansion rates in deg/s; without it, pixel
-        offsets from the image centre and px/s. Time to collision needs no field of view.
+        Horizontal field of view of the camera in degrees: targets then carry their bearing
+        (``Target.azimuth_deg``, ``elevation_deg``). Time to contact and miss need none.
     target_params : mlplc2.targets.TargetParams, optional, keyword-only
-        Settings of the time-to-collision estimator (``docs/targets.md``).
+        Settings of the target layer: time to contact, course, warning (``docs/targets.md``).
     backend : {"auto", "numba", "reference"}, keyword-only
-        Front-end implementation (:func:`mlplc2.frontend.make_frontend`): the fast
-        OpenCV + Numba one by default, the plain reference one on request or when Numba
-        is unavailable. Both give the same fields; the LM maps agree to ~1e-6.
+        Implementation (:mod:`mlplc2.backend`): the fast OpenCV + Numba one by default, the
+        plain reference one on request or when Numba is unavailable (it never imports
+        Numba). Both give the same fields; the LM maps agree to ~1e-6.
 
     Examples
     --------
     >>> import numpy as np, mlplc2
     >>> model = mlplc2.MLPLC2(fps=30.0)
     >>> out = model.step(np.zeros((120, 160), np.uint8))
-    >>> out.response, out.fields
-    (0.0, ())
+    >>> out.response, out.fields, out.targets
+    (0.0, (), ())
     """
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
@@ -176,7 +156,7 @@ class MLPLC2(_LPLC2Family):
         if not keep and self._fields:
             keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
         self._fields = keep
-        return self._output(index)
+        return self._output(gray, index)
 
 
 @register("slplc2")
@@ -203,13 +183,19 @@ class SLPLC2(_LPLC2Family):
                 f.x = int(round(float(salient.sum(axis=0, dtype=np.float64) @ np.arange(w)) / total))
                 f.y = int(round(float(salient.sum(axis=1, dtype=np.float64) @ np.arange(h)) / total))
             self._integrate(f, lm)
-        return self._output(index)
+        return self._output(gray, index)
 
 
 @register("lplc2")
 class LPLC2(_LPLC2Family):
     """LPLC2 (Hua et al. 2022 as used in the paper): one cell at the frame centre
-    whose four quadrants span the whole frame; same front end and output rule."""
+    whose four quadrants span the whole frame; same front end and output rule.
+
+    Its one field sits at the frame centre whatever moves, so it does not localise
+    (``localises`` False); the target layer still measures the object its cell answers to.
+    """
+
+    localises = False
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         lm = self.frontend.step(gray)
@@ -218,4 +204,4 @@ class LPLC2(_LPLC2Family):
             h, w = gray.shape
             self._new_field(w // 2, h // 2, 0, max(h, w))
         self._integrate(self._fields[0], lm)
-        return self._output(index)
+        return self._output(gray, index)

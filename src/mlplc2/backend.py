@@ -1,0 +1,73 @@
+"""One switch between the reference NumPy code and the compiled (Numba) kernels.
+
+A model picks its :class:`Backend` once, at construction (``backend="auto" | "numba" |
+"reference"``), and every per-frame stage that has a compiled version takes it from there:
+the front end (Eq. 1-12, :class:`mlplc2._fast.FastFrontEnd`), the quadrant sums of Eq. 14
+(:func:`mlplc2._fast.quadrant_sums`) and the edge scans of the target layer
+(:func:`mlplc2._fast_targets.edges4`). ``"reference"`` never imports Numba. Both give the
+same fields; the LM maps agree to ~1e-6, the edge scans bit for bit.
+"""
+
+from __future__ import annotations
+
+import logging
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from ._validation import InputValueError
+
+__all__ = ["BACKENDS", "Backend", "resolve", "fast_available"]
+
+#: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
+#: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
+BACKENDS = ("auto", "numba", "reference")
+
+_log = logging.getLogger("mlplc2")
+_FAST_ERROR: str | None = None
+_WARNED = False
+
+
+def fast_available() -> bool:
+    """True when the compiled kernels (Numba) can be imported."""
+    global _FAST_ERROR
+    try:
+        from . import _fast, _fast_targets  # noqa: F401
+    except Exception as exc:  # noqa: BLE001 - ImportError, or numba failing to initialise
+        _FAST_ERROR = f"{type(exc).__name__}: {exc}"
+        return False
+    return True
+
+
+@dataclass(frozen=True)
+class Backend:
+    """The implementation of each stage that has two: ``name`` is "numba" or "reference"."""
+
+    name: str
+    frontend_class: type
+    quadrant_sums: Callable
+    edge_kernel: Callable | None
+
+    def frontend(self, params, fps: float):
+        """A new front end (Eq. 1-12) for ``params`` at ``fps``."""
+        return self.frontend_class(params, fps)
+
+
+def resolve(backend: str = "auto") -> Backend:
+    """The :class:`Backend` for ``backend`` (one of :data:`BACKENDS`)."""
+    global _WARNED
+    if backend not in BACKENDS:
+        raise InputValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
+    if backend != "reference":
+        if fast_available():
+            from . import _fast, _fast_targets
+
+            return Backend("numba", _fast.FastFrontEnd, _fast.quadrant_sums, _fast_targets.edges4)
+        if backend == "numba":
+            raise ImportError(f"the numba backend is unavailable ({_FAST_ERROR})")
+        if not _WARNED:
+            _log.warning("mlplc2: Numba is unavailable (%s); using the slower reference front end", _FAST_ERROR)
+            _WARNED = True
+    from .attention import quadrant_sums
+    from .frontend import FrontEnd
+
+    return Backend("reference", FrontEnd, quadrant_sums, None)
