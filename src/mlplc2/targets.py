@@ -102,6 +102,14 @@ class TargetParams:
     """Local motion (LM, Eq. 12) above which the strongest point outside every target and
     attention field also seeds a candidate (one per frame), well below the field threshold
     T_a = 10: objects far away grow by a fraction of a pixel per frame. 0 = attention fields only."""
+    seed_contrast: float = 20.0
+    """... and above this many times the frame's mean LM (a salient point, not a moving background)."""
+    claim: float = 12.0
+    """Px around a target's box that belong to it: no new candidate is sought there (the front
+    end's local motion spreads about r_Di = 11 px beyond a moving edge)."""
+    change_frames: int = 4
+    """A faint candidate's box is the region that changed over this many frames
+    (:func:`change_box`): a slow edge moves a fraction of a pixel per frame."""
     max_targets: int = 12
     """Upper bound on simultaneous targets (no new candidate while this many exist)."""
     # --- the image measurement ----------------------------------------------------------
@@ -145,13 +153,13 @@ class TargetParams:
         def put(name, value):
             object.__setattr__(self, name, value)
 
-        for name in ("band", "gap", "local", "max_targets", "iterations", "max_fails", "evidence_frames",
+        for name in ("band", "gap", "local", "change_frames", "max_targets", "iterations", "max_fails", "evidence_frames",
                      "confirm_frames", "idle_frames"):
             put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=0))
         put("patch", check_int(self.patch, "TargetParams.patch", minimum=8, maximum=256))
         put("window", check_int(self.window, "TargetParams.window", minimum=3, maximum=1000))
         put("min_frames", check_int(self.min_frames, "TargetParams.min_frames", minimum=3, maximum=self.window))
-        for name in ("min_peak", "noise_k", "edge_offset", "max_shift", "seed_lm", "margin", "max_residual",
+        for name in ("min_peak", "noise_k", "edge_offset", "max_shift", "claim", "seed_lm", "seed_contrast", "margin", "max_residual",
                      "min_tstat", "max_ttc_s", "horizon_s", "max_miss", "max_ttc_sigma"):
             put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0))
         for name in ("rel_start", "rel_edge"):
@@ -613,6 +621,47 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
     return math.hypot(at(u), at(v))
 
 
+def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
+               rel: float = 0.2) -> tuple[float, float, float, float] | None:
+    """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y).
+
+    Within ``radius`` px of (x, y), the pixels whose grey level changed by at least
+    ``max(min_change, rel x`` the largest change``)`` are joined (3 x 3 dilation) and the
+    connected region nearest to (x, y) is taken: for a small object growing on a still
+    background, the ring of its edge, hence its size to a pixel, long before its edges move a
+    pixel per frame. None when nothing changed or the region reaches the window's border (a
+    moving background: no compact object to box).
+    """
+    h, w = cur.shape
+    x0, x1 = max(x - radius, 0), min(x + radius + 1, w)
+    y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
+    if x1 - x0 < 3 or y1 - y0 < 3:
+        return None
+    d = cv2.absdiff(cur[y0:y1, x0:x1], prev[y0:y1, x0:x1])
+    top = float(d.max())
+    if top < min_change:
+        return None
+    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), np.ones((3, 3), np.uint8))
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    best, best_d = None, math.inf
+    for k in range(1, n):
+        bx, by, bw, bh = (int(v) for v in stats[k, :4])
+        dx = max(bx - (x - x0), 0, (x - x0) - (bx + bw - 1))
+        dy = max(by - (y - y0), 0, (y - y0) - (by + bh - 1))
+        dist = math.hypot(dx, dy)
+        if dist < best_d:
+            best, best_d = (bx, by, bw, bh), dist
+    if best is None or best_d > radius / 4.0:
+        return None
+    bx, by, bw, bh = best
+    inner_x = (x0 > 0 and bx == 0) or (x1 < w and bx + bw == x1 - x0)
+    inner_y = (y0 > 0 and by == 0) or (y1 < h and by + bh == y1 - y0)
+    if inner_x or inner_y:
+        return None
+    # the dilation added a pixel on each side
+    return x0 + bx + bw / 2.0 - 0.5, y0 + by + bh / 2.0 - 0.5, max(bw - 2.0, 1.0), max(bh - 2.0, 1.0)
+
+
 # ---------------------------------------------------------------------------
 # the layer
 # ---------------------------------------------------------------------------
@@ -643,6 +692,15 @@ class _Track:
         return max(self.w, self.h)
 
 
+def _overlap(a: _Track, b: _Track) -> float:
+    """Area of the intersection of two boxes over the area of the smaller."""
+    ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
+    iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
+    if ix <= 0 or iy <= 0:
+        return 0.0
+    return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+
+
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
 
@@ -669,6 +727,7 @@ class TargetLayer:
         self._tracks: list[_Track] = []
         self._next = 1
         self._prev: list[np.ndarray] | None = None
+        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # the last grey frames
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
@@ -693,20 +752,29 @@ class TargetLayer:
         if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
             from .attention import argmax_outside
 
-            zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + 4)) for t in self._tracks]
+            # a track claims its box and the blur of the front end around it (the lamina's
+            # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
+            zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + p.claim)) for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             cand = argmax_outside(lm.magnitude, zones)
-            if cand is not None and cand[2] > p.seed_lm:
+            if cand is not None and cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                 seeds.append((cand[0], cand[1], None))
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
             if any(t.contains(x, y) for t in self._tracks):
                 continue
-            ext = measure_extent(lm, x, y, p, kernel=self.kernel)
-            if ext.width is None or ext.height is None or max(abs(ext.cx - x), abs(ext.cy - y)) > p.max_shift:
+            box = self._box(lm, gray, x, y, field_seed=f is not None)
+            if box is None:
                 continue
-            t = _Track(self._next, index, ext.cx, ext.cy, ext.width, ext.height)
+            t = _Track(self._next, index, *box)
+            host = next((o for o in self._tracks if _overlap(o, t) >= 0.5), None)
+            if host is not None:          # a part of an object already tracked
+                if f is not None:
+                    host.fields.add(f.id)
+                    if f.response > 0:
+                        host.last_answer = index
+                continue
             t.history = deque([(index, 0.0, t.cx, t.cy, t.w)], maxlen=p.window)
             self._next += 1
             if f is not None:
@@ -715,6 +783,7 @@ class TargetLayer:
                     t.last_answer = index
             self._tracks.append(t)
         self._prev = levels
+        self._past.append(gray)
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
@@ -723,6 +792,29 @@ class TargetLayer:
         self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
+        """The box of a candidate at (x, y): the LM edges (:func:`measure_extent`) for a field's
+        seed, the changed region (:func:`change_box`) for a faint one; each falls back on the
+        other. None when neither finds a box holding the seed within ``max_shift``."""
+        p = self.params
+
+        def edges():
+            ext = measure_extent(lm, x, y, p, kernel=self.kernel)
+            if ext.width is None or ext.height is None:
+                return None
+            return ext.cx, ext.cy, ext.width, ext.height
+
+        def change():
+            if not self._past:
+                return None
+            return change_box(self._past[0], gray, x, y, int(p.max_shift))
+
+        for find in ((edges, change) if field_seed else (change, edges)):
+            box = find()
+            if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
+                return box
+        return None
 
     def _follow(self, levels, index: int, w: int, h: int) -> None:
         """Move and grow every track with the image alignment; drop the lost ones."""
@@ -745,18 +837,18 @@ class TargetLayer:
             t.log_s += math.log(al.scale)
             t.rate = math.log(al.scale) * self.fps
             t.history.append((index, t.log_s, t.cx, t.cy, t.w))
-            big = max(w, h)
-            if t.size < 2.0 or t.size > 4.0 * big or not (-t.w / 2 < t.cx < w + t.w / 2 and -t.h / 2 < t.cy < h + t.h / 2):
+            # The object's centre has left the frame (a pass-by leaving the view) or it is tiny: lost.
+            if t.size < 2.0 or t.size > 4.0 * max(w, h) or not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1):
                 continue
             kept.append(t)
         self._tracks = kept
 
     def _merge(self) -> None:
-        """Two tracks whose centres lie in each other's box are one object: keep the older."""
+        """Two tracks are one object when most of the smaller box lies in the larger: keep the older."""
         tracks = sorted(self._tracks, key=lambda t: t.id)
         out: list[_Track] = []
         for t in tracks:
-            host = next((o for o in out if o.contains(t.cx, t.cy) and t.contains(o.cx, o.cy)), None)
+            host = next((o for o in out if _overlap(o, t) >= 0.5), None)
             if host is None:
                 out.append(t)
             else:
