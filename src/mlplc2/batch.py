@@ -44,7 +44,7 @@ from typing import Any
 
 from ._validation import InputTypeError, InputValueError, check_int
 
-__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "parse_sweep", "expand_inputs",
+__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep", "expand_inputs",
            "start_local_cluster", "RESULT_COLUMNS", "DONE_MARKER"]
 
 #: Columns of ``results.csv``, in order.
@@ -153,7 +153,9 @@ def _model_overrides(pset: Mapping, model: str) -> dict:
     return {**(flat if _lplc2_family(model) else {}), **section}
 
 
-def _build_params(pset: Mapping, model: str):
+def model_params(pset: Mapping, model: str):
+    """The parameter object of ``model`` for parameter set ``pset`` (one of :func:`param_sets`),
+    or None where ``pset`` changes none of its parameters (the model's defaults)."""
     over = _model_overrides(pset, model)
     if not over:
         return None
@@ -298,7 +300,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
         for m in sections:
             _check_types(_param_class(m), pset[m], f"{m}.")
         for m in dict.fromkeys([*models, *sections]):  # every model given a section, run or not
-            _build_params(pset, m)
+            model_params(pset, m)
     unique = {}
     for pset in map(_drop_defaults, sets):  # t_a=10,10.0 is one set
         unique.setdefault(param_set_id(pset), pset)
@@ -366,7 +368,7 @@ def run_task(task: dict) -> dict:
         from .io import TruncatedInputWarning
         from .runner import run
 
-        params = _build_params(task["pset"], task["model"])
+        params = model_params(task["pset"], task["model"])
         marker = out / DONE_MARKER
         if marker.exists():
             marker.unlink()  # the outputs are about to change

@@ -396,6 +396,24 @@ def _cmd_reproduce(args) -> int:
 
 
 # ---------------------------------------------------------------------------
+# params: the parameter tables (one source: the fields' metadata, mlplc2.params)
+# ---------------------------------------------------------------------------
+def _add_params(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--targets", action="store_true",
+                   help="the target estimators' TargetParams instead of the model's Params")
+    p.add_argument("--markdown", action="store_true",
+                   help="as the Markdown table of docs/model.md (docs/targets.md with --targets)")
+
+
+def _cmd_params(args) -> int:
+    from .params import Params, parameter_table
+    from .targets import TargetParams
+
+    print(parameter_table(TargetParams if args.targets else Params, markdown=args.markdown), end="")
+    return EXIT_OK
+
+
+# ---------------------------------------------------------------------------
 # bench (implemented in mlplc2.bench; benchmarks/README.md)
 # ---------------------------------------------------------------------------
 def _add_bench(p: argparse.ArgumentParser) -> None:
@@ -427,6 +445,8 @@ SUBCOMMANDS: list[Subcommand] = [
                _add_batch, _cmd_batch),
     Subcommand("reproduce", "run the paper's Sec. IV experiments; write Fig. 3-6 and a PASS/FAIL report",
                _add_reproduce, _cmd_reproduce),
+    Subcommand("params", "print the parameters: Table I symbol, unit, default, valid values, description",
+               _add_params, _cmd_params),
     Subcommand("bench", "time the LPLC2 models per frame size: ms/frame, reference, bandwidth probe, memory",
                _add_bench, _cmd_bench),
 ]

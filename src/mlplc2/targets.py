@@ -76,8 +76,9 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
-from ._validation import InputValueError, check_int, check_real
+from ._validation import InputValueError, Valid, check_fields, check_real
 from .lobula_plate import LocalMotion
+from .params import document_parameters, param
 
 __all__ = ["TargetParams", "Extent", "TargetEstimate", "TargetTracker", "measure_extent", "edge_distance",
            "fit_contact", "bearing", "focal_length", "rank_by_ttc"]
@@ -106,84 +107,76 @@ def _fast_targets():
     return _FAST or None
 
 
+@document_parameters("Parameters")
 @dataclass(frozen=True)
 class TargetParams:
     """Parameters of the target estimators (defaults measured on ``stimuli.looming``).
 
-    Valid values (checked at construction; one-line :class:`mlplc2.InputError`
-    otherwise, a ``ValueError`` or ``TypeError``): integers are Python or NumPy
-    integers (not bools), stored as Python ints, >= 0 and at most 2**31 - 1, with
-    ``2 <= min_points <= window <= 16`` (``WINDOW_MAX``); numbers are finite Python
-    or NumPy scalars (not bools, strings or arrays) >= 0 within float32's range,
-    stored as Python floats; the fractions ``rel_start``, ``rel_edge`` and
-    ``min_inliers`` lie in [0, 1].
+    Valid values (the table below; checked at construction; one-line
+    :class:`mlplc2.InputError` otherwise, a ``ValueError`` or ``TypeError``):
+    integers are Python or NumPy integers (not bools) up to 2**31 - 1, stored as
+    Python ints, with ``min_points <= window`` (``WINDOW_MAX`` = 16: the robust fit
+    tries up to ``2 ** (window - 1)`` subsets); numbers are finite Python or NumPy
+    scalars (not bools, strings or arrays) within float32's range, stored as Python
+    floats.
     """
 
-    band: int = 2
-    """Half-width (px) of the strips along the field's row and column."""
-    min_peak: float = 0.08
-    """Smallest outward LM (profile mean, after the gain) that counts as an edge."""
-    noise_k: float = 3.0
-    """An edge complex must exceed ``noise_k`` x the 75th percentile of its profile (noise floor)."""
-    rel_start: float = 0.3
-    """An edge complex must reach ``rel_start`` x the largest value within ``local`` px of its start."""
-    local: int = 20
-    """Px beyond the start of a complex searched for a stronger edge (see ``rel_start``)."""
-    rel_edge: float = 0.25
-    """Outer boundary of the edge complex: where it falls below ``rel_edge`` x its peak."""
-    gap: int = 6
-    """Lobes closer than this (px) belong to one edge complex (fast edges make 2-3 lobes)."""
-    edge_offset: float = 6.5
-    """Px the outer boundary of the LM lobes trails the true edge (added back)."""
-    window: int = 6
-    """Sizes used in the ``1/s`` regression."""
-    max_age: int = 10
-    """Sizes older than this (frames) are dropped."""
-    min_points: int = 4
-    """Fewest sizes for a fit."""
-    min_span: int = 3
-    """Fewest frames between the first and last size of a fit."""
-    lag: float = 0.0
-    """Frames the measured size lags the true one (subtracted from the contact frame)."""
-    max_edge_speed: float = 8.0
-    """Px/frame (per edge) above which the front end aliases: measurements stop, the fit coasts."""
-    coast_frames: int = 10
-    """Frames an estimate may coast on its last fit without a new measurement."""
-    max_ttc_s: float = 60.0
-    """Longer estimates are reported as None (no measurable approach)."""
-    max_residual: float = 0.07
-    """Largest rms relative residual of the ``1/s`` fit that is accepted (0.1 until session 3:
-    fits to sizes that jump, on static or receding objects over a moving background, passed;
-    docs/targets.md, "Where it fails")."""
-    confirm_frames: float = 1.5
-    confirm_rel: float = 0.15
-    """A fit is reported once the next fit's contact frame agrees within
-    ``max(confirm_frames, confirm_rel x ttc)`` frames (a fit to junk is unstable)."""
-    min_inliers: float = 0.6
-    """Outlier rejection may drop at most this complement: a fit keeps >= 60 % of the sizes."""
-    max_shift: float = 40.0
-    """Px: while a track has no size yet, a measured expansion centre further than this (in x
-    or y) from the field centre is rejected: it lies outside the field (R_AF = 40), so the
-    edges found are most likely two things taken for one (or background)."""
-    max_deviation: float = 0.2
-    """A size further than this (relative) from the fit's prediction contradicts the fit."""
+    band: int = param(2, "Half-width of the strips along the field's row and column.", unit="px",
+                      valid=Valid.integer(0))
+    min_peak: float = param(0.08, "Smallest outward LM (profile mean, after the gain) that counts as an edge.",
+                            valid=Valid.real(minimum=0))
+    noise_k: float = param(3.0, """An edge complex must exceed ``noise_k`` x the 75th percentile of its
+                           profile (noise floor).""", valid=Valid.real(minimum=0))
+    rel_start: float = param(0.3, """An edge complex must reach ``rel_start`` x the largest value within
+                             ``local`` px of its start.""", valid=Valid.real(minimum=0, maximum=1))
+    local: int = param(20, "How far beyond the start of a complex a stronger edge is searched for (see ``rel_start``).",
+                       unit="px", valid=Valid.integer(0))
+    rel_edge: float = param(0.25, "Outer boundary of the edge complex: where it falls below ``rel_edge`` x its peak.",
+                            valid=Valid.real(minimum=0, maximum=1))
+    gap: int = param(6, "Lobes closer than this belong to one edge complex (fast edges make 2-3 lobes).",
+                     unit="px", valid=Valid.integer(0))
+    edge_offset: float = param(6.5, "How far the outer boundary of the LM lobes trails the true edge (added back).",
+                               unit="px", valid=Valid.real(minimum=0))
+    window: int = param(6, "Sizes used in the ``1/s`` regression.", unit="sizes",
+                        valid=Valid.integer(2, WINDOW_MAX, also=">= min_points"))
+    max_age: int = param(10, "Sizes older than this are dropped.", unit="frames", valid=Valid.integer(0))
+    min_points: int = param(4, "Fewest sizes for a fit.", unit="sizes",
+                            valid=Valid.integer(2, WINDOW_MAX, also="<= window"))
+    min_span: int = param(3, "Fewest frames between the first and last size of a fit.", unit="frames",
+                          valid=Valid.integer(0))
+    lag: float = param(0.0, "Frames the measured size lags the true one (subtracted from the contact frame).",
+                       unit="frames", valid=Valid.real(minimum=0))
+    max_edge_speed: float = param(8.0, """Edge speed (per edge) above which the front end aliases:
+                                  measurements stop, the fit coasts.""", unit="px/frame",
+                                  valid=Valid.real(minimum=0))
+    coast_frames: int = param(10, "Frames an estimate may coast on its last fit without a new measurement.",
+                              unit="frames", valid=Valid.integer(0))
+    max_ttc_s: float = param(60.0, "Longer estimates are reported as None (no measurable approach).",
+                             unit="s", valid=Valid.real(minimum=0))
+    max_residual: float = param(0.07, """Largest rms relative residual of the ``1/s`` fit that is accepted
+                                (0.1 until session 3: fits to sizes that jump, on static or receding objects
+                                over a moving background, passed; docs/targets.md, "Where it fails").""",
+                                valid=Valid.real(minimum=0))
+    confirm_frames: float = param(1.5, """A fit is reported once the next fit's contact frame agrees within
+                                  ``max(confirm_frames, confirm_rel x ttc)`` frames (a fit to junk is
+                                  unstable): the absolute part.""", unit="frames", valid=Valid.real(minimum=0))
+    confirm_rel: float = param(0.15, """The relative part of the agreement ``max(confirm_frames, confirm_rel
+                               x ttc)`` that confirms a fit (see ``confirm_frames``).""",
+                               valid=Valid.real(minimum=0))
+    min_inliers: float = param(0.6, """Outlier rejection may drop at most this complement: a fit keeps
+                               >= 60 % of the sizes.""", valid=Valid.real(minimum=0, maximum=1))
+    max_shift: float = param(40.0, """While a track has no size yet, a measured expansion centre further
+                             than this (in x or y) from the field centre is rejected: it lies outside the
+                             field (R_AF = 40), so the edges found are most likely two things taken for one
+                             (or background).""", unit="px", valid=Valid.real(minimum=0))
+    max_deviation: float = param(0.2, "A size further than this (relative) from the fit's prediction contradicts the fit.",
+                                 valid=Valid.real(minimum=0))
 
     def __post_init__(self) -> None:
-        def put(name, value):
-            object.__setattr__(self, name, value)
-
-        for name in ("band", "gap", "local", "max_age", "min_span", "coast_frames"):
-            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        for name in ("min_points", "window"):
-            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=2, maximum=WINDOW_MAX))
+        check_fields(self, "TargetParams")
         if self.window < self.min_points:
             raise InputValueError(f"TargetParams.window must be >= min_points ({self.min_points}): a fit needs "
                                   f"min_points of the last window sizes, got {self.window!r}")
-        for name in ("min_peak", "noise_k", "edge_offset", "lag", "max_edge_speed", "max_ttc_s", "max_residual",
-                     "max_deviation", "max_shift", "confirm_frames", "confirm_rel"):
-            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        for name in ("rel_start", "rel_edge", "min_inliers"):   # fractions
-            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0, maximum=1))
 
 
 @dataclass(frozen=True)
