@@ -353,6 +353,17 @@ def test_console_script_help():
         assert word in proc.stdout
 
 
+def test_python_dash_m_mlplc2():
+    """``python -m mlplc2`` is the command line, with its exit codes."""
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "--version"], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"mlplc2 {mlplc2.__version__}"
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "/no/such/clip.avi"], capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 2 and _one_error_line(proc.stderr)
+
+
 # -- stimulus and demo (need mlplc2.stimuli) ------------------------------------------------
 def test_stimulus_command(tmp_path, capsys):
     stimuli = pytest.importorskip("mlplc2.stimuli")
