@@ -119,6 +119,22 @@ _hfov = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees 
 _nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
+def _add_repeat_options(p: argparse.ArgumentParser, help: str) -> None:
+    """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``) and ``--repeat-level N``
+    (that threshold instead; implies skipping), read back by :func:`_repeat_threshold`."""
+    p.add_argument("--skip-repeats", action="store_true", help=help)
+    p.add_argument("--repeat-level", type=_nonneg_float, metavar="N",
+                   help=f"grey-level change up to which a frame counts as a repeat (default "
+                        f"{REPEAT_THRESHOLD:g}); implies --skip-repeats")
+
+
+def _repeat_threshold(args) -> float | None:
+    """``Model.repeat_threshold`` asked for by :func:`_add_repeat_options` (``None``: off)."""
+    if args.repeat_level is not None:
+        return args.repeat_level
+    return REPEAT_THRESHOLD if args.skip_repeats else None
+
+
 def _add_run(p: argparse.ArgumentParser) -> None:
     from .models.base import available_models
 
@@ -144,11 +160,10 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
     p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv; pyav needs mlplc2[video])")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help=f"hold the models' output on duplicated frames: frames in which no pixel changed "
-                        f"by more than LEVEL grey levels (default LEVEL {REPEAT_THRESHOLD:g}) since the last "
-                        f"processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
-                        f"repeated to raise the frame rate (docs/model.md)")
+    _add_repeat_options(p, f"hold the models' output on duplicated frames: frames in which no pixel "
+                          f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
+                          f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
+                          f"repeated to raise the frame rate (docs/model.md)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
@@ -165,7 +180,7 @@ def _cmd_run(args) -> int:
         try:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats,
+                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
                          backend=args.backend)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
@@ -297,9 +312,8 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tail", type=_nonneg_int, default=25, metavar="FRAMES",
                    help="frames after an approach during which its fields/alarms still count (default 25)")
     p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help="for video inputs: hold the models' output on duplicated frames "
-                        "(as in 'mlplc2 run --skip-repeats')")
+    _add_repeat_options(p, "for video inputs: hold the models' output on duplicated frames "
+                          "(as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--details", action="store_true", help="also print the per-video table")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -310,8 +324,8 @@ def _cmd_evaluate(args) -> int:
 
     models = _model_names(args.model) if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if args.skip_repeats is not None:
-        options["repeat_threshold"] = args.skip_repeats
+    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+        options["repeat_threshold"] = _repeat_threshold(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
         ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
@@ -344,8 +358,7 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=_nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help="hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
+    _add_repeat_options(p, "hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pandas, pyarrow)")
@@ -358,8 +371,8 @@ def _cmd_batch(args) -> int:
 
     models = _model_names(args.model)
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if args.skip_repeats is not None:
-        options["repeat_threshold"] = args.skip_repeats
+    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+        options["repeat_threshold"] = _repeat_threshold(args)
     try:
         res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
                     scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
