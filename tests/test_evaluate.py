@@ -470,6 +470,26 @@ def test_cli_evaluate(scene, tmp_path, capsys):
     assert list(ev["models"]) == ["mlplc2"]
 
 
+def test_cli_evaluate_folder_of_videos(tmp_path, capsys):
+    """A folder of videos is read as batch reads it: each video is run and scored."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    truth = {}
+    for name, center in (("a.avi", (30, 30)), ("b.avi", (60, 40))):
+        st = stimuli.scene([stimuli.SceneObject(center=center, onset=2, approach=16, hold=4, recede=0)],
+                           size=(96, 72), frames=24, background="plain", scroll=0.0)
+        write_video(clips / name, st.frames, FPS)
+        truth[name] = st.to_ground_truth()
+    (tmp_path / "gt.json").write_text(json.dumps({"videos": truth}))
+    assert main(["evaluate", str(clips), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2,lgmd2",
+                 "--out", str(tmp_path / "ev"), "-q"]) == 0
+    assert capsys.readouterr().err == ""
+    ev = json.loads((tmp_path / "ev" / "evaluation.json").read_text())
+    assert sorted(ev["models"]) == ["lgmd2", "mlplc2"]
+    assert sorted(v["video"] for v in ev["videos"] if v["model"] == "mlplc2") == ["a.avi", "b.avi"]
+    assert ev["models"]["mlplc2"]["objects"] == 2
+
+
 def test_cli_evaluate_bad_gt(scene, tmp_path, capsys):
     gt = tmp_path / "gt.json"
     gt.write_text('{"videos": {"x.avi": {"size": [1, 1]}}}')

@@ -462,8 +462,9 @@ def _path_key(path) -> str:
 
 def _expand_inputs(results, notes: list[str]) -> list:
     """The inputs, with folders holding results replaced by the result folders they
-    contain; an item given twice (the same folder, video or RunResult) is kept once,
-    with a note in ``notes``."""
+    contain, and other folders by the videos in them (:func:`mlplc2.batch.expand_inputs`:
+    a folder of images stays one input); an item given twice (the same folder, video or
+    RunResult) is kept once, with a note in ``notes``."""
     from .runner import RunResult
 
     if results is None:
@@ -480,6 +481,13 @@ def _expand_inputs(results, notes: list[str]) -> list:
                 found = sorted(q.parent for q in p.rglob("responses.csv"))
                 if found:
                     cands = found
+                else:  # no results: its videos (or the folder, of images), as mlplc2 batch reads it
+                    from .batch import expand_inputs
+
+                    try:
+                        cands = expand_inputs([r])
+                    except InputValueError:
+                        pass  # neither videos nor images: reported by evaluate()
             keys = [("path", _path_key(c)) for c in cands]
         else:
             cands, keys = [r], [("object", id(r))]
@@ -840,8 +848,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
         Each item is a :class:`~mlplc2.runner.RunResult`, an output folder of
         ``mlplc2 run`` / ``mlplc2 batch`` (``responses.csv`` + ``fields.json``;
         a folder without ``responses.csv`` is searched recursively for them),
-        or a video / image folder (the models are then run first, nothing is
-        written).
+        or a video, a folder of videos (each of them) or an image folder (the
+        models are then run first, nothing is written).
     gt : path, dict or GroundTruth
         Ground truth (see :func:`load_ground_truth`). A result's video is
         matched to a key by relative-path suffix, else by basename.
@@ -903,8 +911,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                 raise InputValueError(f"{item}: no such file or folder")
             if truth.match(item) is None:  # do not run models on a video that cannot be scored
                 if p.is_dir() and not any(f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS for f in p.iterdir()):
-                    problems.append(f"{item}: no results in this folder (no responses.csv in it or below) "
-                                    f"and no images")
+                    problems.append(f"{item}: no results in this folder (no responses.csv in it or below), "
+                                    f"no videos and no images")
                 elif p.is_file() and p.suffix.lower() not in VIDEO_EXTENSIONS + IMAGE_EXTENSIONS:
                     problems.append(f"{item}: not a results folder (responses.csv + fields.json) nor a video "
                                     f"({', '.join(VIDEO_EXTENSIONS)}) or image")
