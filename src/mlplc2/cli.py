@@ -590,7 +590,7 @@ def _cmd_batch(args) -> int:
     for r in res.rows:
         if r["status"] in ("error", "truncated") and r["out"] not in reported:  # once per task
             reported.add(r["out"])
-            _warn(f"{r['video']} ({r['model']}, {r['out']}): {r['error']}")
+            _warn(f"{r['video']} ({r['label']}, {r['out']}): {r['error']}")
     plotted = f" ({res.plotted} of them plotted now)" if res.plotted else ""
     _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done{plotted}, {res.failed} failed; "
                f"{len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
