@@ -215,6 +215,9 @@ def test_dask_is_optional(videos, tmp_path, monkeypatch):
         batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=1, progress=False)
     res = batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
     assert res.rows[0]["status"] == "ok"
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"BatchResult.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):
+        res.to_dataframe()
 
 
 def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):

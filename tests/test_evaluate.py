@@ -223,6 +223,28 @@ def test_markdown_and_json_round_trip(scene, tmp_path):
     assert "| model |" in files["evaluation.md"].read_text()
 
 
+def test_to_dataframe_tables(scene, monkeypatch):
+    pd = pytest.importorskip("pandas")
+    ev = evaluate(scene["result"], scene["gt"])
+    objs = ev.to_dataframe()
+    assert isinstance(objs, pd.DataFrame) and len(objs) == len(ev.objects) == 4
+    assert list(objs.columns) == list(ev.objects[0])  # the keys of evaluation.json's objects
+    assert list(objs[objs.model == "mlplc2"].latency_field) == \
+        [o["latency_field"] for o in ev.objects if o["model"] == "mlplc2"]
+    assert list(objs[objs.model == "mlplc2"]["object"]) == [1, 2]
+    assert bool(objs[objs.model == "mlplc2"]["detected"].all())
+    videos = ev.to_dataframe("videos")
+    assert sorted(videos.model) == ["lgmd2", "mlplc2"] and set(videos.video) == {"clips/two.avi"}
+    models = ev.to_dataframe("models").set_index("model")
+    assert models.loc["mlplc2", "detected"] == 2 and models.loc["mlplc2", "model_name"] == "mlplc2"
+    assert models.loc["mlplc2", "detection_rate"] == ev.models["mlplc2"]["detection_rate"]
+    with pytest.raises(InputValueError, match="kind must be one of objects, videos, models, got 'fields'"):
+        ev.to_dataframe("fields")
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"Evaluation.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):
+        ev.to_dataframe()
+
+
 # ---------------------------------------------------------------------------
 # ground-truth loading and matching
 # ---------------------------------------------------------------------------

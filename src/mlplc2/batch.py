@@ -517,8 +517,12 @@ class BatchResult:
         return len(self.videos) / self.seconds * 60.0 if self.seconds > 0 else math.inf
 
     def to_dataframe(self):
-        import pandas as pd
-
+        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS` (needs pandas:
+        ``pip install 'mlplc2[pandas]'``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("BatchResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
         return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
 
 

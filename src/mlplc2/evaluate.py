@@ -773,6 +773,29 @@ class Evaluation:
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), indent=kw.pop("indent", 1), **kw)
 
+    def to_dataframe(self, kind: str = "objects"):
+        """One of the tables as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``),
+        one row per dict, its keys the columns (as in ``evaluation.json``; docs/evaluation.md):
+
+        ``"objects"`` (default)
+            :attr:`objects`: one row per (model label, video, approaching object).
+        ``"videos"``
+            :attr:`videos`: one row per (model label, video).
+        ``"models"``
+            :attr:`models`: one row per model label (column ``model``), the summary.
+
+        The ``model`` column holds the label (``mlplc2[t_a=8]`` for a batch parameter set);
+        ``model_name`` and ``params`` of the ``"models"`` table give the model and its overrides.
+        """
+        tables = {"objects": self.objects, "videos": self.videos, "models": list(self.models.values())}
+        if kind not in tables:
+            raise InputValueError(f"kind must be one of {', '.join(tables)}, got {kind!r}")
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Evaluation.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        return pd.DataFrame(tables[kind])
+
     def _shown(self) -> tuple[dict[str, str], list[str]]:
         """Label -> what the Markdown tables show, and one note per model whose labels are
         shortened: a model with a label longer than :data:`LABEL_WIDTH` shows its labels
