@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -246,6 +247,39 @@ def test_cli_batch_failure_exit_code(videos, tmp_path, capsys):
     assert "mlplc2: warning:" in err and "bad.avi" in err
     rows = _read_table(tmp_path / "o" / "results.csv")
     assert [r["status"] for r in rows] == ["ok", "error"]
+
+
+_SUMMARY = re.compile(r"^(\d+) task\(s\)(?: in (\d+) run\(s\))?: (\d+) ran, (\d+) already done, (\d+) failed;", re.M)
+
+
+def _summary_counts(text):
+    m = _SUMMARY.search(text)
+    assert m, text
+    tasks, runs, ran, done, failed = (int(g) if g else None for g in m.groups())
+    return tasks, runs or tasks, ran, done, failed
+
+
+def test_cli_batch_summary_adds_up(videos, tmp_path, capsys):
+    """Tasks that share a run (LGMD2 does not use t_a) are counted once: ran + already done +
+    failed = runs, and the line says how many runs the tasks took."""
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"not a video")
+    argv = ["batch", videos["paths"][0], str(bad), "--out", str(tmp_path / "o"), "-m", "lgmd2",
+            "--sweep", "t_a=8,12", "--workers", "0"]
+    for rerun in (False, True):
+        assert main(argv) == 2
+        cap = capsys.readouterr()
+        tasks, runs, ran, done, failed = _summary_counts(cap.out)
+        assert (tasks, runs) == (4, 2) and ran + done + failed == runs
+        assert (ran, done, failed) == ((0, 1, 1) if rerun else (1, 0, 1))
+        assert len(_read_table(tmp_path / "o" / "results.csv")) == tasks
+        assert cap.err.count("mlplc2: warning:") == 1  # the failed run, once
+    # without shared runs the line counts tasks only, and they add up too
+    assert main(["batch", *videos["paths"][:2], "--out", str(tmp_path / "p"), "-m", "lgmd2", "--workers", "0"]) == 0
+    assert _summary_counts(capsys.readouterr().out) == (2, 2, 2, 0, 0)
+    res = batch([videos["paths"][0], str(bad)], tmp_path / "q", models=["lgmd2"], sweep=["t_a=8,12"], workers=0,
+                progress=False)
+    assert (len(res.rows), res.tasks, res.ran, res.skipped, res.failed_runs, res.failed) == (4, 2, 2, 0, 1, 2)
 
 
 def test_parquet_table(videos, tmp_path):

@@ -492,11 +492,13 @@ class BatchResult:
     ``rows``: one dict per (video, parameter set, model) (keys
     :data:`RESULT_COLUMNS`, in that order); ``table``: path of
     ``results.csv``; ``tasks``: distinct runs (a model shares one run between
-    parameter sets that differ only in parameters it does not use);
-    ``ran`` / ``skipped``: tasks run now / already done; ``plotted``: done
-    tasks whose missing ``responses.png`` was drawn now (``plot=True``);
-    ``failed``: rows with ``status == "error"``; ``seconds``: wall time;
-    ``videos``: the inputs.
+    parameter sets that differ only in parameters it does not use), so
+    ``len(rows) >= tasks``; ``ran`` / ``skipped``: runs run now / already done
+    (``ran + skipped == tasks`` unless interrupted); ``failed_runs``: those of
+    the ``ran`` that failed; ``plotted``: done runs whose missing
+    ``responses.png`` was drawn now (``plot=True``); ``failed``: rows with
+    ``status == "error"`` (a failed run shared by several rows counts once in
+    ``failed_runs``, once per row here); ``seconds``: wall time; ``videos``: the inputs.
     """
 
     rows: list[dict]
@@ -511,6 +513,7 @@ class BatchResult:
     scheduler: str = "sync"
     tasks: int = 0
     plotted: int = 0
+    failed_runs: int = 0
 
     @property
     def videos_per_min(self) -> float:
@@ -895,7 +898,8 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                              ran=sum(1 for i in todo if i in finished), skipped=skipped,
                              failed=sum(1 for r in ordered if r["status"] == "error"),
                              seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
-                             plotted=sum(1 for i in replot if i in finished))
+                             plotted=sum(1 for i in replot if i in finished),
+                             failed_runs=sum(1 for i in todo if i in finished and rows[i]["status"] == "error"))
         if prepared:
             _write_table(ordered, out, parquet)
             message = f"interrupted with {len(done)} of {len(tasks)} task(s) done; their rows are in {result.table}"
@@ -912,4 +916,4 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     failed = sum(1 for r in ordered if r["status"] == "error")
     return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
                        skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks),
-                       plotted=len(replot))
+                       plotted=len(replot), failed_runs=sum(1 for i in todo if rows[i]["status"] == "error"))

@@ -592,8 +592,10 @@ def _cmd_batch(args) -> int:
             reported.add(r["out"])
             _warn(f"{r['video']} ({r['label']}, {r['out']}): {r['error']}")
     plotted = f" ({res.plotted} of them plotted now)" if res.plotted else ""
-    _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done{plotted}, {res.failed} failed; "
-               f"{len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
+    # counted in runs, which add up: tasks that differ only in parameters a model does not use share its run
+    runs = f" in {res.tasks} run(s)" if res.tasks != len(res.rows) else ""
+    _say(args, f"{len(res.rows)} task(s){runs}: {res.ran - res.failed_runs} ran, {res.skipped} already done{plotted}, "
+               f"{res.failed_runs} failed; {len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
          f"results in {res.table}")
     return EXIT_INPUT if res.failed else EXIT_OK
 
