@@ -460,20 +460,22 @@ def test_stimulus_options_of_a_new_generator(monkeypatch, tmp_path, capsys):
     seen = {}
 
     def approach3d(*, size: tuple[int, int] = (64, 48), start: tuple[float, float, float] = (0.0, 0.0, 5.0),
-                   mode: str = "linear", invert: bool = False, speed: float | None = None, frames: int = 4):
+                   mode: str = "linear", invert: bool = False, speed: float | None = None, frames: int = 4,
+                   scale: float | tuple[float, float] = 1.0):
         seen.clear()
-        seen.update(size=size, start=start, mode=mode, invert=invert, speed=speed, frames=frames)
+        seen.update(size=size, start=start, mode=mode, invert=invert, speed=speed, frames=frames, scale=scale)
         return stimuli.scene([], size=size, frames=frames, background="plain", scroll=0.0, name="approach3d")
 
     monkeypatch.setitem(stimuli._GENERATORS, "approach3d", approach3d)
     monkeypatch.setattr(stimuli, "NAMES", stimuli.NAMES + ("approach3d",))
     out = str(tmp_path / "a.avi")
     assert main(["stimulus", "approach3d", "--start", "1,-2,7.5", "--mode", "ballistic", "--invert",
-                 "--speed", "2.5", "--size", "32x24", "--out", out, "-q"]) == 0
+                 "--speed", "2.5", "--size", "32x24", "--scale", "2,3", "--out", out, "-q"]) == 0
     assert seen == {"size": (32, 24), "start": (1.0, -2.0, 7.5), "mode": "ballistic", "invert": True,
-                    "speed": 2.5, "frames": 4}
-    assert main(["stimulus", "approach3d", "--no-invert", "--speed", "none", "--out", out, "-q"]) == 0
-    assert seen["invert"] is False and seen["speed"] is None and seen["size"] == (64, 48)
+                    "speed": 2.5, "frames": 4, "scale": (2.0, 3.0)}
+    assert main(["stimulus", "approach3d", "--no-invert", "--speed", "none", "--scale", "0.5", "--out", out,
+                 "-q"]) == 0
+    assert seen["invert"] is False and seen["speed"] is None and seen["size"] == (64, 48) and seen["scale"] == 0.5
     assert main(["stimulus", "approach3d", "--start", "1,2", "--out", out]) == 2
     assert "--start: expected X,Y,Z" in _one_error_line(capsys.readouterr().err)
     assert main(["stimulus", "approach3d", "--contact-time", "1", "--out", out]) == 2

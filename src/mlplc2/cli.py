@@ -311,7 +311,20 @@ def _option_kind(param) -> _OptionKind:
         args = typing.get_args(ann)
         rest = [a for a in args if a is not type(None)]
         optional = optional or len(rest) < len(args)
-        ann = rest[0] if len(rest) == 1 else typing.Any
+        if len(rest) > 1:  # float | tuple[float, float], ...: the first that reads the text
+            kinds = [_option_kind(param.replace(annotation=a, default=inspect.Parameter.empty)) for a in rest]
+
+            def first(text: str, kinds=kinds):
+                for k in kinds:
+                    try:
+                        return k.parse(text)
+                    except ValueError:
+                        pass
+                raise ValueError(text)
+
+            kind = _OptionKind("|".join(k.metavar for k in kinds), " or ".join(k.expected for k in kinds), first)
+            return _optional(kind) if optional else kind
+        ann = rest[0]
     if ann is inspect.Parameter.empty or isinstance(ann, str):  # unannotated or unresolved
         if isinstance(default, tuple) and default:
             ann = tuple[tuple(type(v) for v in default)]
@@ -330,14 +343,15 @@ def _option_kind(param) -> _OptionKind:
         kind = _tuple_kind(param.name, typing.get_args(ann))
     if kind is None:
         kind = _OptionKind("VALUE", "a number or text", _number_or_text)
-    if optional:
-        inner = kind.parse
+    return _optional(kind) if optional else kind
 
-        def parse(text: str, inner=inner):
-            return None if text.strip().lower() == "none" else inner(text)
 
-        kind = _OptionKind(kind.metavar, f"{kind.expected}, or none", parse, kind.flag)
-    return kind
+def _optional(kind: _OptionKind) -> _OptionKind:
+    """``kind`` that also reads ``none`` (as None)."""
+    def parse(text: str, inner=kind.parse):
+        return None if text.strip().lower() == "none" else inner(text)
+
+    return _OptionKind(kind.metavar, f"{kind.expected}, or none", parse, kind.flag)
 
 
 def _show_default(value, kind: _OptionKind) -> str:
