@@ -49,8 +49,7 @@ __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "parse_swee
 
 #: Columns of ``results.csv``, in order.
 RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", "fields", "alarms",
-                  "first_alarm_frame",
-                  "seconds", "status", "error", "out")
+                  "first_alarm_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
 _DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"

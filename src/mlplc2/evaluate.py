@@ -1047,8 +1047,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
 
     def rank(lb):  # model order, then parameter values (numbers as numbers: t_a=8 before t_a=12)
         r = by_label[lb]
-        values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool) else (1, 0, json.dumps(v)))
-                  for k, v in sorted(r.params.items())]
+        values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)
+                   else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(r.params.items())]
         return order.index(r.model) if r.model in order else 99, r.model, values, lb
 
     labels = sorted(by_label, key=rank)
