@@ -520,7 +520,7 @@ def _cmd_demo(args) -> int:
 def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("inputs", nargs="+", metavar="RESULTS_OR_VIDEOS",
                    help="output folders of 'mlplc2 run' / 'mlplc2 batch' (responses.csv + fields.json), "
-                        "or videos (the models are run first)")
+                        "or videos, folders of videos or of images (the models are run first)")
     p.add_argument("--gt", required=True, metavar="GT.json", help="ground truth (see docs/evaluation.md)")
     p.add_argument("--model", "-m", action="append", metavar="NAME",
                    help="model(s) to score, repeatable or comma-separated (default: all in the results; "
