@@ -5,6 +5,7 @@ from __future__ import annotations
 import csv
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
@@ -16,8 +17,8 @@ import pytest
 
 from mlplc2 import stimuli
 from mlplc2._validation import InputTypeError, InputValueError
-from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, expand_inputs, param_set_id,
-                          param_sets, parse_sweep, start_local_cluster)
+from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, expand_inputs, param_label,
+                          param_set_id, param_sets, parse_sweep, start_local_cluster)
 from mlplc2.cli import main
 from mlplc2.evaluate import evaluate
 from mlplc2.io import write_video
@@ -118,7 +119,47 @@ def test_sweep_gives_two_result_sets(videos, client, tmp_path):
     lg = [r for r in res.rows if r["model"] == "lgmd2"]
     assert {r["out"] for r in lg} == {"clip0/default/lgmd2", "clip1/default/lgmd2"} and res.tasks == 6
     ev = evaluate(tmp_path / "sw", videos["gt"], models=["mlplc2"])
-    assert sorted(ev.models) == sorted(f"mlplc2@{pid}" for pid in ids)
+    assert sorted(ev.models) == ["mlplc2[t_a=12]", "mlplc2[t_a=8]"]
+    assert sorted(ev.models[lb]["param_set"] for lb in ev.models) == ids
+
+
+def test_param_label():
+    assert param_label("mlplc2") == param_label("mlplc2", {}) == "mlplc2"
+    assert param_label("mlplc2", {"t_a": 8, "r_af": 30}) == "mlplc2[r_af=30,t_a=8]"
+    assert param_label("lgmd2", {"lgmd2": {"a_on": 0.5}}) == "lgmd2[lgmd2.a_on=0.5]"
+    assert param_label("mlplc2", {"field_shape": "disc", "normalise_kernels": False}) == \
+        "mlplc2[field_shape=disc,normalise_kernels=false]"
+    assert param_label("mlplc2", {"t_a": 8, "r_af": 30, "d": 5}, shared={"r_af": 30, "d": 5}) == "mlplc2[…,t_a=8]"
+    many = {f"p{i}": i for i in range(20)}
+    cut = param_label("mlplc2", many, width=30, tag="p12345678")
+    assert cut.startswith("mlplc2[p0=0,p1=1,") and cut.endswith(",…] p12345678") and len(cut) <= 30 + 10
+
+
+def test_sweep_labels_name_the_parameters(videos, tmp_path, monkeypatch):
+    """results.csv, the plot titles and evaluate's tables and JSON name the overridden
+    parameters (folder names keep the ids); long labels are shortened in the Markdown tables only."""
+    import mlplc2.plots
+
+    titles = []
+    monkeypatch.setattr(mlplc2.plots, "plot_responses", lambda *a, title=None, **k: titles.append(title))
+    base = {"r_af": 30, "alarm_window": 4, "max_fields": 12}
+    res = batch(videos["paths"][:1], tmp_path / "o", models=MODELS, params=base, sweep=["t_a=8,12"], workers=0,
+                progress=False, plot=True)
+    full = {t: f"mlplc2[alarm_window=4,max_fields=12,r_af=30,t_a={t}]" for t in (8, 12)}
+    table = _read_table(res.table)
+    assert list(table[0]) == list(RESULT_COLUMNS)
+    assert [(r["model"], r["label"]) for r in table] == [("mlplc2", full[8]), ("lgmd2", "lgmd2"),
+                                                          ("mlplc2", full[12]), ("lgmd2", "lgmd2")]
+    assert sorted(titles) == sorted([f"clip0.avi: {full[8]}", f"clip0.avi: {full[12]}", "clip0.avi: lgmd2"])
+    ev = evaluate(tmp_path / "o", videos["gt"])
+    assert list(ev.models) == [full[8], full[12], "lgmd2"]  # t_a=8 before t_a=12
+    assert ev.models[full[8]]["params"] == {**base, "t_a": 8} and ev.models[full[8]]["model_name"] == "mlplc2"
+    assert ev.models["lgmd2"]["params"] == {} and ev.models["lgmd2"]["param_set"] == "default"
+    assert {v["model"] for v in ev.to_dict()["videos"]} == {full[8], full[12], "lgmd2"}
+    md = ev.to_markdown(details=True)
+    assert "| mlplc2[…,t_a=8] | 1 |" in md and "| mlplc2[…,t_a=12] | clip0.avi |" in md
+    assert "- mlplc2: `…` stands for alarm_window=4,max_fields=12,r_af=30, common to its 2 parameter sets" in md
+    assert "@p" not in md and "@p" not in ev.to_json()
 
 
 def test_rerun_skips_finished_tasks(videos, tmp_path):
@@ -175,6 +216,9 @@ def test_dask_is_optional(videos, tmp_path, monkeypatch):
         batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=1, progress=False)
     res = batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
     assert res.rows[0]["status"] == "ok"
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"BatchResult.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):
+        res.to_dataframe()
 
 
 def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
@@ -203,6 +247,39 @@ def test_cli_batch_failure_exit_code(videos, tmp_path, capsys):
     assert "mlplc2: warning:" in err and "bad.avi" in err
     rows = _read_table(tmp_path / "o" / "results.csv")
     assert [r["status"] for r in rows] == ["ok", "error"]
+
+
+_SUMMARY = re.compile(r"^(\d+) task\(s\)(?: in (\d+) run\(s\))?: (\d+) ran, (\d+) already done, (\d+) failed;", re.M)
+
+
+def _summary_counts(text):
+    m = _SUMMARY.search(text)
+    assert m, text
+    tasks, runs, ran, done, failed = (int(g) if g else None for g in m.groups())
+    return tasks, runs or tasks, ran, done, failed
+
+
+def test_cli_batch_summary_adds_up(videos, tmp_path, capsys):
+    """Tasks that share a run (LGMD2 does not use t_a) are counted once: ran + already done +
+    failed = runs, and the line says how many runs the tasks took."""
+    bad = tmp_path / "bad.avi"
+    bad.write_bytes(b"not a video")
+    argv = ["batch", videos["paths"][0], str(bad), "--out", str(tmp_path / "o"), "-m", "lgmd2",
+            "--sweep", "t_a=8,12", "--workers", "0"]
+    for rerun in (False, True):
+        assert main(argv) == 2
+        cap = capsys.readouterr()
+        tasks, runs, ran, done, failed = _summary_counts(cap.out)
+        assert (tasks, runs) == (4, 2) and ran + done + failed == runs
+        assert (ran, done, failed) == ((0, 1, 1) if rerun else (1, 0, 1))
+        assert len(_read_table(tmp_path / "o" / "results.csv")) == tasks
+        assert cap.err.count("mlplc2: warning:") == 1  # the failed run, once
+    # without shared runs the line counts tasks only, and they add up too
+    assert main(["batch", *videos["paths"][:2], "--out", str(tmp_path / "p"), "-m", "lgmd2", "--workers", "0"]) == 0
+    assert _summary_counts(capsys.readouterr().out) == (2, 2, 2, 0, 0)
+    res = batch([videos["paths"][0], str(bad)], tmp_path / "q", models=["lgmd2"], sweep=["t_a=8,12"], workers=0,
+                progress=False)
+    assert (len(res.rows), res.tasks, res.ran, res.skipped, res.failed_runs, res.failed) == (4, 2, 2, 0, 1, 2)
 
 
 def test_parquet_table(videos, tmp_path):

@@ -6,6 +6,7 @@ import csv
 import json
 import math
 import os
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -353,6 +354,17 @@ def test_console_script_help():
         assert word in proc.stdout
 
 
+def test_python_dash_m_mlplc2():
+    """``python -m mlplc2`` is the command line, with its exit codes."""
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "--version"], capture_output=True, text=True,
+                          timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout.strip() == f"mlplc2 {mlplc2.__version__}"
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "/no/such/clip.avi"], capture_output=True,
+                          text=True, timeout=60)
+    assert proc.returncode == 2 and _one_error_line(proc.stderr)
+
+
 # -- stimulus and demo (need mlplc2.stimuli) ------------------------------------------------
 def test_stimulus_command(tmp_path, capsys):
     stimuli = pytest.importorskip("mlplc2.stimuli")
@@ -366,6 +378,119 @@ def test_stimulus_command(tmp_path, capsys):
     assert "unknown stimulus" in _one_error_line(capsys.readouterr().err)
     assert main(["stimulus", "test_black_approach", "--out", str(out), "--seed", "1"]) == 2
     _one_error_line(capsys.readouterr().err)
+
+
+def _truth(stim):
+    return json.loads(json.dumps(stim.to_ground_truth()))
+
+
+def test_stimulus_options_reach_the_generator(tmp_path, capsys):
+    """Every generator parameter is an option (dashes for underscores; WxH sizes, X,Y points)."""
+    from mlplc2 import stimuli
+
+    out = tmp_path / "loom.avi"
+    assert main(["stimulus", "looming", "--size", "96x72", "--center", "30,40", "--contact-time", "0.5",
+                 "--fps", "20", "--half-size", "0.25", "--polarity", "bright", "--out", str(out), "-q"]) == 0
+    gt = json.loads((tmp_path / "loom_gt.json").read_text())
+    want = _truth(stimuli.looming(size=(96, 72), center=(30.0, 40.0), contact_time=0.5, fps=20.0, half_size=0.25,
+                                  polarity="bright"))
+    assert {k: gt[k] for k in want} == want
+    assert gt["size"] == [96, 72] and gt["objects"][0]["center"] == [30, 40] and gt["fps"] == 20
+    assert _frame_count(out) == (want["frames"], (96, 72))
+    # a basic test: --size is its square side, --frames its length
+    assert main(["stimulus", "grating", "--size", "40", "--frames", "6", "--out", str(tmp_path / "g.avi"), "-q"]) == 0
+    assert json.loads((tmp_path / "g_gt.json").read_text()) == \
+        {"name": "grating", "video": "g.avi", **_truth(stimuli.generate("grating", size=40, frames=6))}
+    # 'none' for an Optional parameter, a number for a background that takes a grey level
+    assert main(["stimulus", "looming", "--size", "64x48", "--center", "none", "--duration", "none",
+                 "--background", "128", "--contact-time", "0.3", "--out", str(tmp_path / "n.avi"), "-q"]) == 0
+    assert json.loads((tmp_path / "n_gt.json").read_text())["objects"][0]["center"] == [32, 24]
+    assert capsys.readouterr().err == ""
+    # the generator's warnings are one line each
+    assert main(["stimulus", "looming", "--size", "64x48", "--center", "900,900", "--contact-time", "0.3",
+                 "--out", str(tmp_path / "w.avi"), "-q"]) == 0
+    assert capsys.readouterr().err.splitlines() == [
+        "mlplc2: warning: objects[0] at (900, 900) is never visible in the 64x48 frames (outside the frame)"]
+
+
+@pytest.mark.parametrize("args, expect", [
+    (["dark_approach", "--seed", "3"], "--seed: stimulus 'dark_approach' has no such option (its options: "
+                                       "--size, --frames, --fps; see 'mlplc2 stimulus --help')"),
+    (["looming", "--size", "100"], "--size: expected WxH (e.g. 320x240), got '100' (see 'mlplc2 stimulus --help')"),
+    (["looming", "--center", "3"], "--center: expected X,Y"),
+    (["looming", "--contact-time", "soon"], "--contact-time: expected a number, got 'soon'"),
+    (["four_phase", "--hold", "2.5"], "--hold: expected an integer, got '2.5'"),
+    (["looming", "--half-size", "-1"], "--half-size must be > 0, got -1.0 (see 'mlplc2 stimulus --help')"),
+    (["grating", "--colour", "red"], "unrecognized arguments: --colour red (see 'mlplc2 stimulus --help')"),
+])
+def test_stimulus_option_errors_name_the_option(args, expect, tmp_path, capsys):
+    assert main(["stimulus", *args, "--out", str(tmp_path / "v.avi")]) == 2
+    assert expect in _one_error_line(capsys.readouterr().err)
+    assert list(tmp_path.iterdir()) == []
+
+
+def test_stimulus_help_lists_each_stimulus_and_its_options(capsys):
+    from mlplc2 import stimuli
+
+    assert main(["stimulus", "--help"]) == 0
+    text = capsys.readouterr().out
+    listing = text[text.index("stimuli and the options each takes"):]
+    groups = []  # [names text, options text]: names indented 2, their options 6
+    for line in listing.split("\n\n")[0].splitlines()[1:]:
+        if line.startswith("      "):
+            groups[-1][1] += " " + line.strip()
+        elif groups and not groups[-1][1]:
+            groups[-1][0] += " " + line.strip()
+        else:
+            groups.append([line.strip(), ""])
+    blocks = {name: opts for names, opts in groups for name in names.rstrip(":").split(", ")}
+    assert set(blocks) == set(stimuli.NAMES)
+    for name in stimuli.NAMES:
+        flags = re.findall(r"(--[a-z][a-z0-9-]*)", blocks[name])
+        assert flags == ["--" + p.replace("_", "-") for p in stimuli.parameters(name)], name
+    assert "--contact-time F [2]" in blocks["looming"] and "--size WxH [320x240]" in blocks["looming"]
+    assert "--size N [100]" in blocks["grating"]
+
+
+def test_stimulus_options_of_a_new_generator(monkeypatch, tmp_path, capsys):
+    """A generator added to mlplc2.stimuli gets its options without CLI code: tuples, str, bool
+    (a --flag / --no-flag), Optional."""
+    from mlplc2 import stimuli
+
+    seen = {}
+
+    def approach3d(*, size: tuple[int, int] = (64, 48), start: tuple[float, float, float] = (0.0, 0.0, 5.0),
+                   mode: str = "linear", invert: bool = False, speed: float | None = None, frames: int = 4,
+                   scale: float | tuple[float, float] = 1.0):
+        seen.clear()
+        seen.update(size=size, start=start, mode=mode, invert=invert, speed=speed, frames=frames, scale=scale)
+        return stimuli.scene([], size=size, frames=frames, background="plain", scroll=0.0, name="approach3d")
+
+    monkeypatch.setitem(stimuli._GENERATORS, "approach3d", approach3d)
+    monkeypatch.setattr(stimuli, "NAMES", stimuli.NAMES + ("approach3d",))
+    out = str(tmp_path / "a.avi")
+    assert main(["stimulus", "approach3d", "--start", "1,-2,7.5", "--mode", "ballistic", "--invert",
+                 "--speed", "2.5", "--size", "32x24", "--scale", "2,3", "--out", out, "-q"]) == 0
+    assert seen == {"size": (32, 24), "start": (1.0, -2.0, 7.5), "mode": "ballistic", "invert": True,
+                    "speed": 2.5, "frames": 4, "scale": (2.0, 3.0)}
+    assert main(["stimulus", "approach3d", "--no-invert", "--speed", "none", "--scale", "0.5", "--out", out,
+                 "-q"]) == 0
+    assert seen["invert"] is False and seen["speed"] is None and seen["size"] == (64, 48) and seen["scale"] == 0.5
+    assert main(["stimulus", "approach3d", "--start", "1,2", "--out", out]) == 2
+    assert "--start: expected X,Y,Z" in _one_error_line(capsys.readouterr().err)
+    assert main(["stimulus", "approach3d", "--contact-time", "1", "--out", out]) == 2
+    assert "--contact-time: stimulus 'approach3d' has no such option" in _one_error_line(capsys.readouterr().err)
+    assert main(["stimulus", "--help"]) == 0
+    text = capsys.readouterr().out
+    assert "--start X,Y,Z" in text and "--invert, --no-invert" in text and "approach3d:" in text
+
+
+def test_no_generator_parameter_shadows_a_stimulus_command_option():
+    from mlplc2 import stimuli
+    from mlplc2.cli import STIMULUS_OWN_OPTIONS
+
+    for name in stimuli.NAMES:
+        assert not set(stimuli.parameters(name)) & set(STIMULUS_OWN_OPTIONS), name
 
 
 @pytest.mark.slow

@@ -223,6 +223,28 @@ def test_markdown_and_json_round_trip(scene, tmp_path):
     assert "| model |" in files["evaluation.md"].read_text()
 
 
+def test_to_dataframe_tables(scene, monkeypatch):
+    pd = pytest.importorskip("pandas")
+    ev = evaluate(scene["result"], scene["gt"])
+    objs = ev.to_dataframe()
+    assert isinstance(objs, pd.DataFrame) and len(objs) == len(ev.objects) == 4
+    assert list(objs.columns) == list(ev.objects[0])  # the keys of evaluation.json's objects
+    assert list(objs[objs.model == "mlplc2"].latency_field) == \
+        [o["latency_field"] for o in ev.objects if o["model"] == "mlplc2"]
+    assert list(objs[objs.model == "mlplc2"]["object"]) == [1, 2]
+    assert bool(objs[objs.model == "mlplc2"]["detected"].all())
+    videos = ev.to_dataframe("videos")
+    assert sorted(videos.model) == ["lgmd2", "mlplc2"] and set(videos.video) == {"clips/two.avi"}
+    models = ev.to_dataframe("models").set_index("model")
+    assert models.loc["mlplc2", "detected"] == 2 and models.loc["mlplc2", "model_name"] == "mlplc2"
+    assert models.loc["mlplc2", "detection_rate"] == ev.models["mlplc2"]["detection_rate"]
+    with pytest.raises(InputValueError, match="kind must be one of objects, videos, models, got 'fields'"):
+        ev.to_dataframe("fields")
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"Evaluation.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):
+        ev.to_dataframe()
+
+
 # ---------------------------------------------------------------------------
 # ground-truth loading and matching
 # ---------------------------------------------------------------------------
@@ -468,6 +490,26 @@ def test_cli_evaluate(scene, tmp_path, capsys):
     assert (tmp_path / "ev" / "evaluation.md").is_file() and (tmp_path / "ev" / "evaluation.json").is_file()
     ev = json.loads((tmp_path / "ev" / "evaluation.json").read_text())
     assert list(ev["models"]) == ["mlplc2"]
+
+
+def test_cli_evaluate_folder_of_videos(tmp_path, capsys):
+    """A folder of videos is read as batch reads it: each video is run and scored."""
+    clips = tmp_path / "clips"
+    clips.mkdir()
+    truth = {}
+    for name, center in (("a.avi", (30, 30)), ("b.avi", (60, 40))):
+        st = stimuli.scene([stimuli.SceneObject(center=center, onset=2, approach=16, hold=4, recede=0)],
+                           size=(96, 72), frames=24, background="plain", scroll=0.0)
+        write_video(clips / name, st.frames, FPS)
+        truth[name] = st.to_ground_truth()
+    (tmp_path / "gt.json").write_text(json.dumps({"videos": truth}))
+    assert main(["evaluate", str(clips), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2,lgmd2",
+                 "--out", str(tmp_path / "ev"), "-q"]) == 0
+    assert capsys.readouterr().err == ""
+    ev = json.loads((tmp_path / "ev" / "evaluation.json").read_text())
+    assert sorted(ev["models"]) == ["lgmd2", "mlplc2"]
+    assert sorted(v["video"] for v in ev["videos"] if v["model"] == "mlplc2") == ["a.avi", "b.avi"]
+    assert ev["models"]["mlplc2"]["objects"] == 2
 
 
 def test_cli_evaluate_bad_gt(scene, tmp_path, capsys):

@@ -193,6 +193,82 @@ def test_lgmd1_ffi_suppresses_grating():
     assert max(o.response for o in run(m2, basic("grating"))) > 0.9
 
 
+def test_lgmd1_signed_layers():
+    """LGMD1Params(signed=True) is Yue & Rind's signed S = P - W_I I: a cell brightening where its
+    neighbours darkened the frame before is *excited* by their (negative) inhibition. The default
+    (magnitudes) inhibits it: S = [|P| - W_I |I|]+."""
+    flat = np.full((40, 40), 100, np.uint8)
+    dark = flat.copy()
+    dark[15:25, 15:25] = 0               # FFI 100 * 100 / 1600 = 6.25 < T_FFI
+    frames = [flat, dark, flat]          # the block darkens, then brightens back
+    sums = {}
+    for signed in (False, True):
+        m = LGMD1(params=LGMD1Params(signed=signed))
+        run(m, frames)
+        assert not m.state["suppressed"]
+        sums[signed] = m.state["sum_g"]
+    assert LGMD1Params().signed is False
+    from mlplc2._validation import InputTypeError
+
+    with pytest.raises(InputTypeError, match="LGMD1Params.signed"):
+        LGMD1Params(signed="yes")
+    # block interior at t = 2: P = +100, I = -150; signed S = 100 + 0.6 * 150 = 190, magnitude 10
+    assert sums[True] > 10 * sums[False] > 0
+
+
+# --------------------------------------------------------------------------- published operating point
+def _physical(polarity: str, size=(320, 240)):
+    from mlplc2 import stimuli
+
+    return stimuli.looming(size=size, polarity=polarity, speed=5.0, contact_time=2.0)
+
+
+def _first_alarm(model, frames):
+    alarms = [o.collision for o in run(model, frames)]
+    return alarms.index(True) if any(alarms) else None
+
+
+@pytest.mark.parametrize("cls", [LGMD2, LGMD1])
+def test_alarm_before_contact_on_physical_dark_approach(cls):
+    """A 1 m dark square at 5 m/s (contact at frame 60, 320x240): both models alarm at their
+    default (published) parameters, half a second or more before contact (measured: LGMD2 at
+    frame 44, LGMD1 at 38; benchmarks/lgmd_operating_point.py)."""
+    st = _physical("dark")
+    contact = st.objects[0].contact_frame
+    first = _first_alarm(cls(fps=st.fps), st.frames)
+    assert first is not None and first <= contact - 10
+
+
+def test_lgmd2_silent_to_physical_bright_approach():
+    st = _physical("bright")
+    outs = run(LGMD2(fps=st.fps), st.frames)
+    assert not any(o.spike or o.collision for o in outs)
+
+
+def test_lgmd2_onset_spikes_without_alarm():
+    """The published SFA and spike count: an abrupt onset followed by steady motion (the
+    translating bar) spikes, but the SFA brings K-hat back below T_sp before N_ts = 8 spikes
+    accumulate, so LGMD2 never alarms on it; K-hat <= h = tau_SFA / (tau_SFA + tau_i) < 1."""
+    m = LGMD2()
+    outs = run(m, basic("translating"))
+    assert any(o.spike for o in outs)
+    assert not any(o.collision for o in outs)
+    assert max(o.response for o in outs) <= m.hp_sfa
+
+
+@pytest.mark.parametrize("cls", [LGMD2, LGMD1])
+def test_alarm_timing_independent_of_frame_size(cls):
+    """The membrane potential is normalised by N_cells = H W: the same physical approach filmed
+    at 160x120 and 320x240 alarms within a few frames of each other (measured: LGMD2 44 / 44,
+    LGMD1 41 / 38)."""
+    firsts = []
+    for size in ((160, 120), (320, 240)):
+        st = _physical("dark", size)
+        firsts.append(_first_alarm(cls(fps=st.fps), st.frames))
+    assert None not in firsts
+    assert abs(firsts[0] - firsts[1]) <= 4
+
+
 # --------------------------------------------------------------------------- numerics / state
 @pytest.mark.parametrize("cls", [LGMD2, LGMD1])
 def test_finite_on_extreme_input(cls):

@@ -3,6 +3,7 @@ raises a one-line ``mlplc2.InputError`` at construction (and in ``replace``)."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -12,6 +13,7 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2._validation import FLOAT32_TINY, InputError, InputTypeError, InputValueError
 from mlplc2.params import GAMMA_MIN, LM_SCALE_MAX
+from mlplc2.targets import TargetParams
 
 
 def _raises(exc, **kwargs):
@@ -110,3 +112,39 @@ def test_every_error_is_an_input_error():
         with pytest.raises(InputError):
             mlplc2.Params(**kwargs)
     assert issubclass(InputValueError, ValueError) and issubclass(InputTypeError, TypeError)
+
+
+def _bounds_cases(cls):
+    """(field, value, passes) at the edges of every numeric field's valid range as the table
+    states it (``Valid`` in the field metadata)."""
+    for f in dataclasses.fields(cls):
+        v = f.metadata["valid"]
+        step = 1 if v.kind == "int" else 1e-6
+        if v.kind not in ("int", "real"):
+            continue
+        if v.positive:
+            yield f.name, 0.0, False
+            yield f.name, FLOAT32_TINY, True
+        if v.minimum is not None:
+            yield f.name, v.minimum, True
+            yield f.name, v.minimum - step, False
+        if v.below is not None:
+            yield f.name, v.below, False
+            yield f.name, v.below - step, True
+        if v.maximum is not None:
+            yield f.name, v.maximum, True
+            yield f.name, v.maximum + step, False
+
+
+@pytest.mark.parametrize("cls, prefix", [(mlplc2.Params, "Params"), (TargetParams, "TargetParams")])
+def test_the_ranges_shown_are_the_ranges_enforced(cls, prefix):
+    """The valid values of help() and the docs' tables are the metadata the checks use."""
+    cases = list(_bounds_cases(cls))
+    assert len(cases) >= 2 * len(dataclasses.fields(cls)) - 8
+    for name, value, passes in cases:
+        extra = {"min_points": {"window": 16}, "window": {"min_points": 2}}.get(name, {}) if cls is TargetParams else {}
+        if passes:
+            assert getattr(cls(**{name: value, **extra}), name) == value, (name, value)
+        else:
+            with pytest.raises(InputValueError, match=f"^{prefix}.{name} must be"):
+                cls(**{name: value, **extra})

@@ -88,8 +88,42 @@ def test_cli_skip_repeats(tmp_path, capsys):
     write_video(video, np.stack(frames), 30.0)
     assert cli.main(["run", str(video), "--skip-repeats", "--out", str(tmp_path / "o"), "-q"]) == 0
     assert (tmp_path / "o" / "responses.csv").exists()
-    assert cli.main(["run", str(video), "--skip-repeats", "-1", "--out", str(tmp_path / "p"), "-q"]) == 2
-    assert "--skip-repeats" in capsys.readouterr().err
+    # a plain flag: the file after it is the source, not a level
+    assert cli.main(["run", "--skip-repeats", str(video), "--out", str(tmp_path / "q"), "-q"]) == 0
+    held = (tmp_path / "q" / "responses.csv").read_text()
+    assert held == (tmp_path / "o" / "responses.csv").read_text()
+    assert cli.main(["run", str(video), "--out", str(tmp_path / "r"), "-q"]) == 0
+    assert held != (tmp_path / "r" / "responses.csv").read_text()  # holding changed the responses
+    assert cli.main(["run", str(video), "--repeat-level", "-1", "--out", str(tmp_path / "p"), "-q"]) == 2
+    assert "--repeat-level" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
+@pytest.mark.parametrize("argv, level", [([], None), (["--skip-repeats"], REPEAT_THRESHOLD),
+                                         (["--repeat-level", "4"], 4.0),
+                                         (["--skip-repeats", "--repeat-level", "0"], 0.0)])
+def test_repeat_options_reach_the_run(command, argv, level, monkeypatch):
+    """--skip-repeats is a flag (threshold REPEAT_THRESHOLD), --repeat-level N sets the level
+    and implies it, on run, evaluate and batch."""
+    import importlib
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake(*args, **kw):
+        opts = kw if command == "run" else kw.get("run_options") or {}
+        seen.append(opts.get("repeat_threshold"))
+        raise Stop
+
+    module, name = {"run": ("mlplc2.runner", "run"), "evaluate": ("mlplc2.evaluate", "evaluate"),
+                    "batch": ("mlplc2.batch", "batch")}[command]
+    monkeypatch.setattr(importlib.import_module(module), name, fake)
+    extra = {"run": [], "evaluate": ["--gt", "gt.json"], "batch": ["--out", "b"]}[command]
+    with pytest.raises(Stop):
+        cli.main([command, *argv, "clip.avi", *extra])
+    assert seen == [level]
 
 
 @pytest.mark.paper

@@ -375,6 +375,16 @@ def test_errors_are_clear():
     assert "\n" not in str(info.value)
 
 
+def test_unknown_option_error_gives_both_spellings_and_the_help():
+    with pytest.raises(InputError) as info:
+        S.generate("looming", contact=1.0)
+    msg = str(info.value)
+    assert "valid options: size, center, half_size" in msg and "contact_time" in msg
+    assert "--half-size" in msg and "--contact-time" in msg and "see 'mlplc2 stimulus --help'" in msg
+    assert list(S.parameters("looming"))[:3] == ["size", "center", "half_size"]
+    assert S.parameters("grating")["size"].annotation is int  # annotations resolved to types
+
+
 def test_physical_recede_without_approach_moves_away_at_its_speed():
     """A physical object that only holds and recedes starts at peak_side and shrinks as a
     square of half-size l moving away at v: side = 2 f l / (d0 + v t), d0 = 2 f l / peak."""

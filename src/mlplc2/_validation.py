@@ -5,13 +5,16 @@ Every check raises a subclass of :class:`InputError` with a one-line message.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import numbers
+from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["InputError", "InputValueError", "InputTypeError", "InputWarning", "as_gray", "check_unit_scale", "check_fps", "check_real",
-           "check_reals", "check_int", "check_bool", "FLOAT32_MAX", "FLOAT32_TINY", "INT_MAX"]
+__all__ = ["InputError", "InputValueError", "InputTypeError", "InputWarning", "as_gray", "check_unit_scale",
+           "check_fps", "check_real", "check_reals", "check_int", "check_bool", "Valid", "check_fields",
+           "FLOAT32_MAX", "FLOAT32_TINY", "INT_MAX"]
 
 #: Largest finite float32 (3.4028235e+38). A parameter that enters the models' float32 maths
 #: must not exceed it: ``np.float32`` would turn it into inf (and inf x 0 into NaN).
@@ -243,3 +246,95 @@ def check_bool(value, name: str) -> bool:
     if not _is_bool(value):
         raise InputTypeError(f"{name} must be True or False, got {_show(value)}")
     return bool(value)
+
+
+@dataclass(frozen=True)
+class Valid:
+    """The values a parameter accepts, kept in its dataclass field's metadata (``"valid"``):
+    :func:`check_fields` enforces it with the checks above, and ``str()`` describes it in
+    the parameter tables (``help(mlplc2.Params)``, docs/model.md), so the range shown is the
+    range enforced.
+
+    ``kind`` is ``"real"`` (:func:`check_real` with ``minimum``, ``below``, ``maximum``,
+    ``positive``), ``"int"`` (:func:`check_int` with ``minimum``, ``maximum``), ``"bool"``
+    (:func:`check_bool`) or ``"choice"`` (one of the strings ``choices``). ``also`` states a
+    constraint between fields, checked by the class itself, for the tables.
+    """
+
+    kind: str
+    minimum: float | None = None
+    below: float | None = None
+    maximum: float | None = None
+    positive: bool = False
+    choices: tuple[str, ...] = ()
+    also: str = ""
+
+    @classmethod
+    def real(cls, *, minimum=None, below=None, maximum=None, positive=False, also="") -> "Valid":
+        return cls("real", minimum, below, maximum, positive, also=also)
+
+    @classmethod
+    def integer(cls, minimum: int = 0, maximum: int | None = None, *, also="") -> "Valid":
+        return cls("int", minimum, None, maximum, also=also)
+
+    @classmethod
+    def boolean(cls) -> "Valid":
+        return cls("bool")
+
+    @classmethod
+    def choice(cls, *choices: str) -> "Valid":
+        return cls("choice", choices=tuple(choices))
+
+    @classmethod
+    def point(cls) -> "Valid":
+        """None or a pair of numbers (x, y)."""
+        return cls("point")
+
+    def check(self, value, name: str):
+        """``value`` converted (Python float, int, bool or str), or a one-line InputError naming ``name``."""
+        if self.kind == "real":
+            bounds = {} if self.maximum is None else {"maximum": self.maximum}
+            return check_real(value, name, minimum=self.minimum, below=self.below, positive=self.positive, **bounds)
+        if self.kind == "int":
+            return check_int(value, name, minimum=self.minimum, maximum=INT_MAX if self.maximum is None else self.maximum)
+        if self.kind == "bool":
+            return check_bool(value, name)
+        if self.kind == "point":
+            return None if value is None else check_reals(value, name, 2, "x, y")
+        if not isinstance(value, str) or value not in self.choices:
+            raise InputValueError(f"{name} must be {' or '.join(map(repr, self.choices))}, got {_show(value)}")
+        return str(value)
+
+    def __str__(self) -> str:
+        if self.kind == "bool":
+            text = "True or False"
+        elif self.kind == "point":
+            text = "None or (x, y)"
+        elif self.kind == "choice":
+            text = " or ".join(f'"{c}"' for c in self.choices)
+        else:
+            low = "(0" if self.positive else None if self.minimum is None else f"[{self.minimum:g}"
+            high = (f"{self.below:g})" if self.below is not None
+                    else None if self.maximum is None else f"{self.maximum:g}]")
+            if low and high:
+                text = f"in {low}, {high}"
+            elif low:
+                text = ("> " if low[0] == "(" else ">= ") + low[1:]
+            elif high:
+                text = ("< " if high[-1] == ")" else "<= ") + high[:-1]
+            else:
+                text = "any number"
+            if self.kind == "int":
+                text = f"integer {text}"
+            elif text.startswith("in "):
+                text = text[3:]
+        return f"{text}; {self.also}" if self.also else text
+
+
+def check_fields(obj, prefix: str) -> None:
+    """Check (and convert in place) every field of the frozen dataclass ``obj`` whose metadata
+    holds a :class:`Valid`, in the order of the fields; errors are named ``prefix.field``."""
+    for f in dataclasses.fields(obj):
+        valid = f.metadata.get("valid")
+        if valid is not None:
+            object.__setattr__(obj, f.name, valid.check(getattr(obj, f.name), f"{prefix}.{f.name}"))

@@ -44,12 +44,12 @@ from typing import Any
 
 from ._validation import InputTypeError, InputValueError, check_int
 
-__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "parse_sweep", "expand_inputs",
-           "start_local_cluster", "RESULT_COLUMNS", "DONE_MARKER"]
+__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep", "expand_inputs",
+           "start_local_cluster", "param_label", "RESULT_COLUMNS", "DONE_MARKER"]
 
 #: Columns of ``results.csv``, in order.
-RESULT_COLUMNS = ("video", "model", "param_set", "params", "n_frames", "fields", "alarms", "first_alarm_frame",
-                  "seconds", "status", "error", "out")
+RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", "fields", "alarms",
+                  "first_alarm_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
 _DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"
@@ -153,7 +153,9 @@ def _model_overrides(pset: Mapping, model: str) -> dict:
     return {**(flat if _lplc2_family(model) else {}), **section}
 
 
-def _build_params(pset: Mapping, model: str):
+def model_params(pset: Mapping, model: str):
+    """The parameter object of ``model`` for parameter set ``pset`` (one of :func:`param_sets`),
+    or None where ``pset`` changes none of its parameters (the model's defaults)."""
     over = _model_overrides(pset, model)
     if not over:
         return None
@@ -232,6 +234,41 @@ def param_set_id(pset: Mapping) -> str:
     return "p" + hashlib.sha1(text.encode()).hexdigest()[:8]
 
 
+def param_label(model: str, overrides: Mapping | None = None, *, shared: Mapping | None = None,
+                width: int | None = None, tag: str = "") -> str:
+    """What people read for ``model`` run with parameter ``overrides``: ``mlplc2`` without
+    overrides, else ``mlplc2[r_af=30,t_a=8]`` (names sorted; values as JSON, text bare; a
+    section ``{"lgmd2": {...}}`` as ``lgmd2.NAME=...``). Unlike the id of :func:`param_set_id`
+    (the folder names), it names the parameters.
+
+    For tables: the overrides in ``shared`` (common to every label shown next to this one) are
+    left out, as a leading ``…``; with ``width``, a label still longer is cut at a parameter
+    boundary, ``…`` for the rest, and ends with `` tag`` (a parameter set id keeps cut labels apart).
+    """
+    def items(over) -> list[str]:
+        out = []
+        for name, value in sorted((over or {}).items()):
+            pairs = sorted(value.items()) if isinstance(value, Mapping) else [(None, value)]
+            for sub, v in pairs:
+                text = v if isinstance(v, str) else json.dumps(v, separators=(",", ":"))
+                out.append(f"{name if sub is None else f'{name}.{sub}'}={text}")
+        return out
+
+    left_out = set(items(shared))
+    kept = [i for i in items(overrides) if i not in left_out]
+    if left_out and len(kept) < len(items(overrides)):
+        kept.insert(0, "…")
+    label = f"{model}[{','.join(kept)}]" if kept else model
+    if width is None or len(label) <= width:
+        return label
+    cut: list[str] = []
+    for item in kept:
+        if cut and len(model) + sum(len(c) + 1 for c in cut) + len(item) + 4 > width:
+            break
+        cut.append(item)
+    return f"{model}[{','.join(cut)},…]" + (f" {tag}" if tag else "")
+
+
 def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> list[dict]:
     """Parameter sets: the overrides in ``params`` (a dict, or a JSON file of
     ``Params`` fields, with optional ``{"lgmd2": {...}}`` sections per model)
@@ -298,7 +335,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
         for m in sections:
             _check_types(_param_class(m), pset[m], f"{m}.")
         for m in dict.fromkeys([*models, *sections]):  # every model given a section, run or not
-            _build_params(pset, m)
+            model_params(pset, m)
     unique = {}
     for pset in map(_drop_defaults, sets):  # t_a=10,10.0 is one set
         unique.setdefault(param_set_id(pset), pset)
@@ -366,14 +403,16 @@ def run_task(task: dict) -> dict:
         from .io import TruncatedInputWarning
         from .runner import run
 
-        params = _build_params(task["pset"], task["model"])
+        params = model_params(task["pset"], task["model"])
         marker = out / DONE_MARKER
         if marker.exists():
             marker.unlink()  # the outputs are about to change
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", TruncatedInputWarning)
             res = run(task["video"], [task["model"]], out=out, quiet=True, progress=False, params=params,
-                      plot=task.get("plot", False), keep_rows=False, **task.get("run_options", {}))
+                      plot=False, keep_rows=False, **task.get("run_options", {}))
+        if task.get("plot") and res.n_frames:
+            _plot(task, f" (input truncated after {res.n_frames} frames)" if res.truncated else "")
         alarms = res.alarms[task["model"]]
         row.update(n_frames=res.n_frames, fields=len(res.fields.get(task["model"], [])),
                    alarms=alarms["count"], first_alarm_frame=alarms["first"],
@@ -398,15 +437,28 @@ def _plot_saved(task: dict) -> dict:
     if row is None:  # its outputs changed meanwhile: run it
         return run_task({**task, "replot": False})
     try:
-        from .plots import plot_responses
-
-        summary = json.loads((out / "fields.json").read_text(encoding="utf-8"))
-        title = f"{Path(str(summary.get('video') or task['video'])).name}: {task['model']}"
-        plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"), title=title,
-                       fps=summary.get("fps"))
+        _plot(task)
     except Exception as exc:  # noqa: BLE001 - reported in the table, the batch goes on
         row.update(status="error", error=_one_line(f"responses.png: {type(exc).__name__}: {exc}"))
     return row
+
+
+#: Plot titles longer than this are cut (:func:`param_label`; done.json holds the whole set).
+TITLE_WIDTH = 90
+
+
+def _plot(task: dict, note: str = "") -> None:
+    """``responses.png`` of a task from its saved ``responses.csv`` and ``fields.json``, titled
+    with its video and :func:`param_label` (as :func:`mlplc2.run` draws it, which names no parameters)."""
+    from .plots import plot_responses
+
+    out = Path(task["out"])
+    summary = json.loads((out / "fields.json").read_text(encoding="utf-8"))
+    video = Path(str(summary.get("video") or task["video"])).name
+    label = param_label(task["model"], task["overrides"], width=TITLE_WIDTH - len(video) - len(note),
+                        tag=task["param_set"])
+    plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"),
+                   title=f"{video}: {label}{note}", fps=summary.get("fps"))
 
 
 def _is_input_error(exc) -> bool:
@@ -441,11 +493,13 @@ class BatchResult:
     ``rows``: one dict per (video, parameter set, model) (keys
     :data:`RESULT_COLUMNS`, in that order); ``table``: path of
     ``results.csv``; ``tasks``: distinct runs (a model shares one run between
-    parameter sets that differ only in parameters it does not use);
-    ``ran`` / ``skipped``: tasks run now / already done; ``plotted``: done
-    tasks whose missing ``responses.png`` was drawn now (``plot=True``);
-    ``failed``: rows with ``status == "error"``; ``seconds``: wall time;
-    ``videos``: the inputs.
+    parameter sets that differ only in parameters it does not use), so
+    ``len(rows) >= tasks``; ``ran`` / ``skipped``: runs run now / already done
+    (``ran + skipped == tasks`` unless interrupted); ``failed_runs``: those of
+    the ``ran`` that failed; ``plotted``: done runs whose missing
+    ``responses.png`` was drawn now (``plot=True``); ``failed``: rows with
+    ``status == "error"`` (a failed run shared by several rows counts once in
+    ``failed_runs``, once per row here); ``seconds``: wall time; ``videos``: the inputs.
     """
 
     rows: list[dict]
@@ -460,14 +514,19 @@ class BatchResult:
     scheduler: str = "sync"
     tasks: int = 0
     plotted: int = 0
+    failed_runs: int = 0
 
     @property
     def videos_per_min(self) -> float:
         return len(self.videos) / self.seconds * 60.0 if self.seconds > 0 else math.inf
 
     def to_dataframe(self):
-        import pandas as pd
-
+        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS` (needs pandas:
+        ``pip install 'mlplc2[pandas]'``)."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("BatchResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
         return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
 
 
@@ -724,9 +783,11 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                 key = rel.as_posix()
                 if key not in by_out:
                     by_out[key] = len(tasks)
-                    tasks.append({"video": v, "model": m, "param_set": param_set_id(own), "pset": own,
-                                  "overrides": _model_overrides(own, m), "out": str((out / rel).resolve()),
-                                  "rel_out": key, "plot": plot, "run_options": run_options})
+                    over = _model_overrides(own, m)
+                    tasks.append({"video": v, "model": m, "label": param_label(m, over),
+                                  "param_set": param_set_id(own), "pset": own, "overrides": over,
+                                  "out": str((out / rel).resolve()), "rel_out": key, "plot": plot,
+                                  "run_options": run_options})
                 slots.append((by_out[key], pid))
 
     rows: dict[int, dict] = {}
@@ -833,12 +894,13 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                     _unmute(muted)
     except KeyboardInterrupt:
         done = list(rows)  # read back, or finished now
-        ordered = [{**rows[i], "param_set": pid} for i, pid in slots if i in done]
+        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in done]
         result = BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
                              ran=sum(1 for i in todo if i in finished), skipped=skipped,
                              failed=sum(1 for r in ordered if r["status"] == "error"),
                              seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
-                             plotted=sum(1 for i in replot if i in finished))
+                             plotted=sum(1 for i in replot if i in finished),
+                             failed_runs=sum(1 for i in todo if i in finished and rows[i]["status"] == "error"))
         if prepared:
             _write_table(ordered, out, parquet)
             message = f"interrupted with {len(done)} of {len(tasks)} task(s) done; their rows are in {result.table}"
@@ -850,9 +912,9 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     finally:
         bar.close()
     seconds = time.perf_counter() - t0
-    ordered = [{**rows[i], "param_set": pid} for i, pid in slots if i in rows]
+    ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
     table = _write_table(ordered, out, parquet)
     failed = sum(1 for r in ordered if r["status"] == "error")
     return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
                        skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks),
-                       plotted=len(replot))
+                       plotted=len(replot), failed_runs=sum(1 for i in todo if rows[i]["status"] == "error"))

@@ -119,6 +119,22 @@ _hfov = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees 
 _nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
+def _add_repeat_options(p: argparse.ArgumentParser, help: str) -> None:
+    """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``) and ``--repeat-level N``
+    (that threshold instead; implies skipping), read back by :func:`_repeat_threshold`."""
+    p.add_argument("--skip-repeats", action="store_true", help=help)
+    p.add_argument("--repeat-level", type=_nonneg_float, metavar="N",
+                   help=f"grey-level change up to which a frame counts as a repeat (default "
+                        f"{REPEAT_THRESHOLD:g}); implies --skip-repeats")
+
+
+def _repeat_threshold(args) -> float | None:
+    """``Model.repeat_threshold`` asked for by :func:`_add_repeat_options` (``None``: off)."""
+    if args.repeat_level is not None:
+        return args.repeat_level
+    return REPEAT_THRESHOLD if args.skip_repeats else None
+
+
 def _add_run(p: argparse.ArgumentParser) -> None:
     from .models.base import available_models
 
@@ -144,11 +160,10 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
     p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv; pyav needs mlplc2[video])")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help=f"hold the models' output on duplicated frames: frames in which no pixel changed "
-                        f"by more than LEVEL grey levels (default LEVEL {REPEAT_THRESHOLD:g}) since the last "
-                        f"processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
-                        f"repeated to raise the frame rate (docs/model.md)")
+    _add_repeat_options(p, f"hold the models' output on duplicated frames: frames in which no pixel "
+                          f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
+                          f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
+                          f"repeated to raise the frame rate (docs/model.md)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
@@ -165,7 +180,7 @@ def _cmd_run(args) -> int:
         try:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=args.skip_repeats,
+                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
                          backend=args.backend)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
@@ -210,34 +225,253 @@ def _print_run_summary(args, result) -> None:
 # ---------------------------------------------------------------------------
 # stimulus
 # ---------------------------------------------------------------------------
+#: ``mlplc2 stimulus``'s own options: a generator parameter of one of these names cannot be set
+#: from the command line (none has one; tests/test_cli.py checks).
+STIMULUS_OWN_OPTIONS = ("name", "out", "gt", "quiet", "help")
+_STIM = "stimulus_option__"  # argparse dest prefix of the generators' options
+
+
+def _flag(name: str) -> str:
+    """A Python parameter name as a command-line option: ``contact_time`` -> ``--contact-time``."""
+    return "--" + name.replace("_", "-")
+
+
+@dataclass(frozen=True)
+class _OptionKind:
+    """How ``mlplc2 stimulus`` reads one generator parameter: its metavar, what it expects
+    (for help and errors), ``parse(text)`` (raises ValueError) and whether it is an on/off flag."""
+
+    metavar: str
+    expected: str
+    parse: Callable[[str], object]
+    flag: bool = False
+
+
+def _parse_bool(text: str) -> bool:
+    t = text.strip().lower()
+    if t in ("1", "true", "yes", "on"):
+        return True
+    if t in ("0", "false", "no", "off"):
+        return False
+    raise ValueError(text)
+
+
+def _parse_float(text: str) -> float:
+    value = float(text)
+    if not math.isfinite(value):
+        raise ValueError(text)
+    return value
+
+
+def _number_or_text(text: str):
+    try:
+        return _parse_float(text)
+    except ValueError:
+        return text
+
+
+def _tuple_kind(name: str, args: tuple) -> _OptionKind | None:
+    """Tuples of numbers: ``WxH`` for a 2-tuple named ``size`` / ``*_size``, else ``X,Y`` (``X,Y,Z``, ...)."""
+    variable = len(args) == 2 and args[1] is Ellipsis
+    elems = args[:1] if variable else args
+    if not elems or any(e not in (int, float) for e in elems):
+        return None
+    sizes = len(args) == 2 and not variable and (name == "size" or name.endswith("_size"))
+    sep = "x" if sizes else ","
+    what = "integers" if all(e is int for e in elems) else "numbers"
+    if sizes:
+        metavar, expected = "WxH", "WxH (e.g. 320x240)"
+    elif variable:
+        metavar, expected = "V1,V2,...", f"comma-separated {what}"
+    else:
+        metavar = ",".join("XYZ"[i] if len(elems) <= 3 else f"V{i + 1}" for i in range(len(elems)))
+        expected = f"{metavar} ({len(elems)} {what})"
+
+    def parse(text: str) -> tuple:
+        parts = text.lower().split(sep) if sizes else text.split(sep)
+        if not variable and len(parts) != len(elems):
+            raise ValueError(text)
+        types_ = [elems[0]] * len(parts) if variable else list(elems)
+        return tuple(int(p) if t is int else _parse_float(p) for t, p in zip(types_, parts))
+
+    return _OptionKind(metavar, expected, parse)
+
+
+def _option_kind(param) -> _OptionKind:
+    """The :class:`_OptionKind` of a generator parameter, from its annotation (int, float, str,
+    bool, Optional, tuples of numbers; unannotated: the default's type; anything else, such as
+    Any: a number if it reads as one, else text). An Optional parameter also takes ``none``."""
+    import inspect
+    import types
+    import typing
+
+    ann, default = param.annotation, param.default
+    optional = default is None
+    if typing.get_origin(ann) in (typing.Union, types.UnionType):
+        args = typing.get_args(ann)
+        rest = [a for a in args if a is not type(None)]
+        optional = optional or len(rest) < len(args)
+        if len(rest) > 1:  # float | tuple[float, float], ...: the first that reads the text
+            kinds = [_option_kind(param.replace(annotation=a, default=inspect.Parameter.empty)) for a in rest]
+
+            def first(text: str, kinds=kinds):
+                for k in kinds:
+                    try:
+                        return k.parse(text)
+                    except ValueError:
+                        pass
+                raise ValueError(text)
+
+            kind = _OptionKind("|".join(k.metavar for k in kinds), " or ".join(k.expected for k in kinds), first)
+            return _optional(kind) if optional else kind
+        ann = rest[0]
+    if ann is inspect.Parameter.empty or isinstance(ann, str):  # unannotated or unresolved
+        if isinstance(default, tuple) and default:
+            ann = tuple[tuple(type(v) for v in default)]
+        else:
+            ann = type(default) if isinstance(default, (bool, int, float, str)) else typing.Any
+    kind = None
+    if ann is bool:
+        kind = _OptionKind("", "true or false", _parse_bool, flag=True)
+    elif ann is int:
+        kind = _OptionKind("N", "an integer", int)
+    elif ann is float:
+        kind = _OptionKind("F", "a number", _parse_float)
+    elif ann is str:
+        kind = _OptionKind("TEXT", "text", str)
+    elif typing.get_origin(ann) is tuple:
+        kind = _tuple_kind(param.name, typing.get_args(ann))
+    if kind is None:
+        kind = _OptionKind("VALUE", "a number or text", _number_or_text)
+    return _optional(kind) if optional else kind
+
+
+def _optional(kind: _OptionKind) -> _OptionKind:
+    """``kind`` that also reads ``none`` (as None)."""
+    def parse(text: str, inner=kind.parse):
+        return None if text.strip().lower() == "none" else inner(text)
+
+    return _OptionKind(kind.metavar, f"{kind.expected}, or none", parse, kind.flag)
+
+
+def _show_default(value, kind: _OptionKind) -> str:
+    if value is None:
+        return "none"
+    if isinstance(value, bool):
+        return "on" if value else "off"
+    if isinstance(value, tuple):
+        return ("x" if kind.metavar == "WxH" else ",").join(_show_default(v, kind) for v in value)
+    if isinstance(value, float):
+        return f"{value:g}"
+    return str(value)
+
+
+def _stimulus_table() -> dict[str, dict[str, tuple]]:
+    """stimulus name -> {parameter name: (inspect.Parameter, _OptionKind)}, from the generators."""
+    from . import stimuli
+
+    return {name: {p: (param, _option_kind(param)) for p, param in stimuli.parameters(name).items()
+                   if p not in STIMULUS_OWN_OPTIONS}
+            for name in stimuli.NAMES}
+
+
+def _stimulus_epilog(table) -> str:
+    """Per stimulus (those with the same options together), its options and their defaults."""
+    import textwrap
+
+    groups: dict[tuple, list[str]] = {}
+    for name, opts in table.items():
+        # no-break spaces inside one option, so that a line never splits '--seed N [0]'
+        key = tuple(f"{_flag(p)}{' ' + k.metavar if k.metavar else ''} [{_show_default(param.default, k)}]"
+                    .replace(" ", "\xa0") for p, (param, k) in opts.items())
+        groups.setdefault(key, []).append(name)
+    lines = ["stimuli and the options each takes [default]:"]
+    for key, names in groups.items():
+        lines.append(textwrap.fill(", ".join(names) + ":", 78, initial_indent="  ", subsequent_indent="  "))
+        lines.append(textwrap.fill("  ".join(key) or "(no options)", 78, initial_indent="      ",
+                                   subsequent_indent="      ", break_on_hyphens=False).replace("\xa0", " "))
+    lines += ["", textwrap.fill("Options use dashes here and underscores in Python (--contact-time is "
+                                "contact_time of mlplc2.stimuli.looming); one whose value may be 'none' "
+                                "takes the word none.", 78)]
+    return "\n".join(lines)
+
+
 def _add_stimulus(p: argparse.ArgumentParser) -> None:
-    p.add_argument("name", help="stimulus name (mlplc2.stimuli.NAMES, e.g. four_phase, six_objects)")
+    table = _stimulus_table()
+    p.formatter_class = argparse.RawDescriptionHelpFormatter
+    p.epilog = _stimulus_epilog(table)
+    p.add_argument("name", help="stimulus name (mlplc2.stimuli.NAMES; listed below with their options)")
     p.add_argument("--out", "-o", required=True, metavar="FILE.mp4", help="video to write (.mp4 or .avi)")
     p.add_argument("--gt", metavar="FILE.json", help="ground truth JSON (default: <stem>_gt.json beside it)")
-    p.add_argument("--seed", type=int, help="seed of the procedural background")
-    p.add_argument("--background", metavar="procedural|plain|PATH",
-                   help="background: 'procedural', 'plain' or an image file")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing on success")
+    per_option: dict[str, dict[str, list[str]]] = {}  # parameter -> {expected: [stimuli]}
+    kinds: dict[str, list[_OptionKind]] = {}
+    for name, opts in table.items():
+        for pname, (_, kind) in opts.items():
+            per_option.setdefault(pname, {}).setdefault(kind.expected, []).append(name)
+            kinds.setdefault(pname, []).append(kind)
+    group = p.add_argument_group("stimulus options (the generators' parameters; which stimulus takes "
+                                 "which: below)")
+    for pname, by_kind in per_option.items():
+        help_ = "; ".join(f"{exp} ({', '.join(names)})" for exp, names in by_kind.items()).replace("%", "%%")
+        if all(k.flag for k in kinds[pname]):
+            group.add_argument(_flag(pname), dest=_STIM + pname, action=argparse.BooleanOptionalAction,
+                               default=argparse.SUPPRESS, help=help_)
+        else:
+            metavar = "|".join(dict.fromkeys(k.metavar or "true|false" for k in kinds[pname]))
+            group.add_argument(_flag(pname), dest=_STIM + pname, metavar=metavar, default=argparse.SUPPRESS,
+                               help=help_)
+
+
+def _stimulus_options(name: str, given: dict, table) -> dict:
+    """The generator keyword arguments from the command-line texts ``given`` (one-line errors)."""
+    accepted = table[name]
+    options = {}
+    for pname, text in given.items():
+        if pname not in accepted:
+            flags = ", ".join(_flag(p) for p in accepted) or "none"
+            raise InputValueError(f"{_flag(pname)}: stimulus {name!r} has no such option (its options: {flags}; "
+                                  f"see 'mlplc2 stimulus --help')")
+        kind = accepted[pname][1]
+        if isinstance(text, bool):  # an on/off flag
+            options[pname] = text
+            continue
+        try:
+            options[pname] = kind.parse(text)
+        except ValueError:
+            raise InputValueError(f"{_flag(pname)}: expected {kind.expected}, got {text!r} "
+                                  f"(see 'mlplc2 stimulus --help')") from None
+    return options
 
 
 def _cmd_stimulus(args) -> int:
+    import re
+
+    from . import stimuli
     from .runner import write_stimulus
 
-    try:
-        from . import stimuli
-    except ImportError:  # pragma: no cover - the module ships with the package
-        raise InputError("mlplc2.stimuli is not available in this installation") from None
     if args.name not in stimuli.NAMES:
-        raise InputValueError(f"unknown stimulus {args.name!r}; choose from {', '.join(stimuli.NAMES)}")
-    options = {}
-    if args.seed is not None:
-        options["seed"] = args.seed
-    if args.background is not None:
-        bg = args.background
-        if bg not in ("procedural", "plain") and not Path(bg).is_file():
-            raise InputValueError(f"--background {bg!r}: not 'procedural', 'plain' or an existing image file")
-        options["background"] = bg
-    video, gt = write_stimulus(args.name, args.out, gt=args.gt, **options)
+        raise InputValueError(f"unknown stimulus {args.name!r}; choose from {', '.join(stimuli.NAMES)} "
+                              f"(see 'mlplc2 stimulus --help')")
+    given = {k[len(_STIM):]: v for k, v in vars(args).items() if k.startswith(_STIM)}
+    options = _stimulus_options(args.name, given, _stimulus_table())
+    try:
+        with warnings.catch_warnings(record=True) as caught:
+            warnings.simplefilter("always")
+            video, gt = write_stimulus(args.name, args.out, gt=args.gt, **options)
+    except InputValueError as exc:
+        # the generator names its parameters in Python: name the options given as written here
+        msg = new = str(exc)
+        for pname in options:
+            new = re.sub(rf"(?<![\w\-/.]){re.escape(pname)}(?![\w\-/.])", _flag(pname), new)
+        if new == msg:
+            raise
+        raise InputValueError(f"{new} (see 'mlplc2 stimulus --help')") from None
+    for w in caught:  # the generator's own warnings (an object never visible, ...) as one line each
+        if issubclass(w.category, UserWarning):
+            _warn(_one_line(str(w.message)))
+        else:
+            warnings.warn_explicit(w.message, w.category, w.filename, w.lineno)
     _say(args, f"wrote {video} and {gt}")
     return EXIT_OK
 
@@ -286,7 +520,7 @@ def _cmd_demo(args) -> int:
 def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("inputs", nargs="+", metavar="RESULTS_OR_VIDEOS",
                    help="output folders of 'mlplc2 run' / 'mlplc2 batch' (responses.csv + fields.json), "
-                        "or videos (the models are run first)")
+                        "or videos, folders of videos or of images (the models are run first)")
     p.add_argument("--gt", required=True, metavar="GT.json", help="ground truth (see docs/evaluation.md)")
     p.add_argument("--model", "-m", action="append", metavar="NAME",
                    help="model(s) to score, repeatable or comma-separated (default: all in the results; "
@@ -297,9 +531,8 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("--tail", type=_nonneg_int, default=25, metavar="FRAMES",
                    help="frames after an approach during which its fields/alarms still count (default 25)")
     p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help="for video inputs: hold the models' output on duplicated frames "
-                        "(as in 'mlplc2 run --skip-repeats')")
+    _add_repeat_options(p, "for video inputs: hold the models' output on duplicated frames "
+                          "(as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--details", action="store_true", help="also print the per-video table")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -310,8 +543,8 @@ def _cmd_evaluate(args) -> int:
 
     models = _model_names(args.model) if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if args.skip_repeats is not None:
-        options["repeat_threshold"] = args.skip_repeats
+    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+        options["repeat_threshold"] = _repeat_threshold(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
         ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
@@ -344,8 +577,7 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=_nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
-    p.add_argument("--skip-repeats", type=_nonneg_float, nargs="?", const=REPEAT_THRESHOLD, metavar="LEVEL",
-                   help="hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
+    _add_repeat_options(p, "hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
     p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pandas, pyarrow)")
@@ -358,8 +590,8 @@ def _cmd_batch(args) -> int:
 
     models = _model_names(args.model)
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if args.skip_repeats is not None:
-        options["repeat_threshold"] = args.skip_repeats
+    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+        options["repeat_threshold"] = _repeat_threshold(args)
     try:
         res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
                     scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
@@ -372,10 +604,12 @@ def _cmd_batch(args) -> int:
     for r in res.rows:
         if r["status"] in ("error", "truncated") and r["out"] not in reported:  # once per task
             reported.add(r["out"])
-            _warn(f"{r['video']} ({r['model']}, {r['out']}): {r['error']}")
+            _warn(f"{r['video']} ({r['label']}, {r['out']}): {r['error']}")
     plotted = f" ({res.plotted} of them plotted now)" if res.plotted else ""
-    _say(args, f"{len(res.rows)} task(s): {res.ran} ran, {res.skipped} already done{plotted}, {res.failed} failed; "
-               f"{len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
+    # counted in runs, which add up: tasks that differ only in parameters a model does not use share its run
+    runs = f" in {res.tasks} run(s)" if res.tasks != len(res.rows) else ""
+    _say(args, f"{len(res.rows)} task(s){runs}: {res.ran - res.failed_runs} ran, {res.skipped} already done{plotted}, "
+               f"{res.failed_runs} failed; {len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
          f"results in {res.table}")
     return EXIT_INPUT if res.failed else EXIT_OK
 
@@ -393,6 +627,24 @@ def _cmd_reproduce(args) -> int:
     from .reproduce import cli_handler
 
     return cli_handler(args)
+
+
+# ---------------------------------------------------------------------------
+# params: the parameter tables (one source: the fields' metadata, mlplc2.params)
+# ---------------------------------------------------------------------------
+def _add_params(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--targets", action="store_true",
+                   help="the target estimators' TargetParams instead of the model's Params")
+    p.add_argument("--markdown", action="store_true",
+                   help="as the Markdown table of docs/model.md (docs/targets.md with --targets)")
+
+
+def _cmd_params(args) -> int:
+    from .params import Params, parameter_table
+    from .targets import TargetParams
+
+    print(parameter_table(TargetParams if args.targets else Params, markdown=args.markdown), end="")
+    return EXIT_OK
 
 
 # ---------------------------------------------------------------------------
@@ -427,6 +679,8 @@ SUBCOMMANDS: list[Subcommand] = [
                _add_batch, _cmd_batch),
     Subcommand("reproduce", "run the paper's Sec. IV experiments; write Fig. 3-6 and a PASS/FAIL report",
                _add_reproduce, _cmd_reproduce),
+    Subcommand("params", "print the parameters: Table I symbol, unit, default, valid values, description",
+               _add_params, _cmd_params),
     Subcommand("bench", "time the LPLC2 models per frame size: ms/frame, reference, bandwidth probe, memory",
                _add_bench, _cmd_bench),
 ]
@@ -504,7 +758,9 @@ def _main(argv: list[str] | None) -> int:
     _quiet_decoders()
     parser = build_parser()
     try:
-        args = parser.parse_args(argv)
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # pointing at the subcommand's help, not the top level's
+            raise _UsageError(f"unrecognized arguments: {' '.join(extra)} (see '{PROG} {args.command} --help')")
     except _UsageError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return EXIT_INPUT

@@ -335,6 +335,7 @@ class _Run:
     frame_fields: dict[int, list[tuple[int, float, float, bool]]]
     frame_alarm: dict[int, bool]
     param_set: str | None = None
+    params: dict = field(default_factory=dict)  # the parameter overrides it ran with (batch: done.json)
     # where the run came from (results folder or input, for messages) and its identity (two runs of one
     # label and video from different identities are an error); why it is incomplete (None: complete)
     origin: str = ""
@@ -354,13 +355,18 @@ def _localises(model: str) -> bool:
 
 
 def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None,
-                    origin="", ident=None, incomplete=None, video_known=True):
+                    params=None, origin="", ident=None, incomplete=None, video_known=True):
+    from .batch import param_label
+
     per: dict[str, _Run] = {}
 
     def new(m, fields):
-        label = m if param_set in (None, "", "default") else f"{m}@{param_set}"
+        if params or param_set in (None, "", "default"):
+            label = param_label(m, params)
+        else:  # a parameter set whose overrides are not recorded
+            label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
-                    origin or str(source), ident, incomplete, video_known)
+                    dict(params or {}), origin or str(source), ident, incomplete, video_known)
 
     for r in rows:
         m = r["model"]
@@ -446,13 +452,20 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
     if not math.isfinite(fps) or fps <= 0:
         raise InputValueError(f"{fj if info else csv_path}: fps must be a positive number, got {fps!r}")
     source = info.get("video") or done.get("video") or str(folder)
+    try:  # the overrides a batch task ran with (JSON text in done.json)
+        params = json.loads(done["params"]) if done.get("params") else {}
+    except (TypeError, ValueError):
+        params = {}
+    if not isinstance(params, Mapping):
+        params = {}
     if not info:
         incomplete = "no fields.json next to responses.csv, the run did not finish"
     else:
         incomplete = _incomplete_reason(n_frames, info.get("interrupted"), info.get("truncated"),
                                         complete=info.get("complete") is not False)
     return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
-                           n_frames=n_frames, models=models, param_set=done.get("param_set"), origin=str(folder),
+                           n_frames=n_frames, models=models, param_set=done.get("param_set"), params=params,
+                           origin=str(folder),
                            ident=("path", _path_key(folder)), incomplete=incomplete, video_known=bool(info.get("video") or done.get("video")))
 
 
@@ -462,8 +475,9 @@ def _path_key(path) -> str:
 
 def _expand_inputs(results, notes: list[str]) -> list:
     """The inputs, with folders holding results replaced by the result folders they
-    contain; an item given twice (the same folder, video or RunResult) is kept once,
-    with a note in ``notes``."""
+    contain, and other folders by the videos in them (:func:`mlplc2.batch.expand_inputs`:
+    a folder of images stays one input); an item given twice (the same folder, video or
+    RunResult) is kept once, with a note in ``notes``."""
     from .runner import RunResult
 
     if results is None:
@@ -480,6 +494,13 @@ def _expand_inputs(results, notes: list[str]) -> list:
                 found = sorted(q.parent for q in p.rglob("responses.csv"))
                 if found:
                     cands = found
+                else:  # no results: its videos (or the folder, of images), as mlplc2 batch reads it
+                    from .batch import expand_inputs
+
+                    try:
+                        cands = expand_inputs([r])
+                    except InputValueError:
+                        pass  # neither videos nor images: reported by evaluate()
             keys = [("path", _path_key(c)) for c in cands]
         else:
             cands, keys = [r], [("object", id(r))]
@@ -707,6 +728,10 @@ def _fmt(v, digits=1, pct=False) -> str:
     return str(v)
 
 
+#: Model labels longer than this are shortened in the Markdown tables (the JSON keeps them whole).
+LABEL_WIDTH = 40
+
+
 @dataclass
 class Evaluation:
     """What :func:`evaluate` computed.
@@ -714,8 +739,11 @@ class Evaluation:
     Attributes
     ----------
     models : dict
-        Per model label (``mlplc2``; ``mlplc2@<param set>`` for batch results
-        with non-default parameters), the summary over all videos.
+        Per model label, the summary over all videos: ``mlplc2``, or for batch
+        results with non-default parameters the model and its overrides,
+        ``mlplc2[r_af=30,t_a=8]`` (:func:`mlplc2.batch.param_label`); each
+        summary also gives ``model_name``, ``param_set`` (the batch id) and
+        ``params`` (the overrides, a dict).
     videos : list of dict
         One row per (model, video).
     objects : list of dict
@@ -745,8 +773,59 @@ class Evaluation:
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), indent=kw.pop("indent", 1), **kw)
 
+    def to_dataframe(self, kind: str = "objects"):
+        """One of the tables as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``),
+        one row per dict, its keys the columns (as in ``evaluation.json``; docs/evaluation.md):
+
+        ``"objects"`` (default)
+            :attr:`objects`: one row per (model label, video, approaching object).
+        ``"videos"``
+            :attr:`videos`: one row per (model label, video).
+        ``"models"``
+            :attr:`models`: one row per model label (column ``model``), the summary.
+
+        The ``model`` column holds the label (``mlplc2[t_a=8]`` for a batch parameter set);
+        ``model_name`` and ``params`` of the ``"models"`` table give the model and its overrides.
+        """
+        tables = {"objects": self.objects, "videos": self.videos, "models": list(self.models.values())}
+        if kind not in tables:
+            raise InputValueError(f"kind must be one of {', '.join(tables)}, got {kind!r}")
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("Evaluation.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        return pd.DataFrame(tables[kind])
+
+    def _shown(self) -> tuple[dict[str, str], list[str]]:
+        """Label -> what the Markdown tables show, and one note per model whose labels are
+        shortened: a model with a label longer than :data:`LABEL_WIDTH` shows its labels
+        without the overrides common to all of them (a leading ``…``, named in the note)
+        and cut to that width."""
+        from .batch import param_label
+
+        shown = {lb: lb for lb in self.models}
+        notes = []
+        by_model: dict[str, list[str]] = {}
+        for lb, s in self.models.items():
+            if s.get("params"):
+                by_model.setdefault(s["model_name"], []).append(lb)
+        for m, labels in by_model.items():
+            if all(len(lb) <= LABEL_WIDTH for lb in labels):
+                continue
+            sets = [self.models[lb]["params"] for lb in labels]
+            shared = {k: v for k, v in sets[0].items() if all(k in p and p[k] == v for p in sets[1:])} \
+                if len(sets) > 1 else {}
+            for lb in labels:
+                s = self.models[lb]
+                shown[lb] = param_label(m, s["params"], shared=shared, width=LABEL_WIDTH, tag=s["param_set"])
+            if shared:
+                notes.append(f"- {m}: `…` stands for {param_label(m, shared)[len(m) + 1:-1]}, common to its "
+                             f"{len(labels)} parameter sets (each in full in evaluation.json)")
+        return shown, notes
+
     def object_table(self) -> str:
         """Markdown: object-level metrics per model."""
+        shown = self._shown()[0]
         head = ("| model | videos | objects | detected | field latency (fr) | loc. err. at det. (px) "
                 "| loc. err. life (px) | fields/object | fields | alarmed | alarm latency (fr) "
                 "| false alarms | FA/min |")
@@ -754,7 +833,7 @@ class Evaluation:
         for s in self.models.values():
             det = "-" if s["detected"] is None else f"{s['detected']}/{s['objects']}"
             lines.append(
-                f"| {s['model']} | {s['videos']} | {s['objects']} | {det} | {_fmt(s['latency_field'])} "
+                f"| {shown[s['model']]} | {s['videos']} | {s['objects']} | {det} | {_fmt(s['latency_field'])} "
                 f"| {_fmt(s['error_detect'])} | {_fmt(s['error_life'])} | {_fmt(s['fields_per_object'], 2)} "
                 f"| {_fmt(s['fields_total'])} | {s['alarmed']}/{s['objects']} | {_fmt(s['latency_alarm'])} "
                 f"| {_fmt(s['false_alarms'])} | {_fmt(s['false_alarms_per_min'], 2)} |")
@@ -764,34 +843,37 @@ class Evaluation:
         """Markdown: clip-level metrics per model (empty string without clip-level truth)."""
         if not any(s["clips"] for s in self.models.values()):
             return ""
+        shown = self._shown()[0]
         lines = ["| model | clips | TP | FP | TN | FN | accuracy | precision | recall | warning (s) |",
                  "|" + "|".join(["---"] * 10) + "|"]
         for s in self.models.values():
-            lines.append(f"| {s['model']} | {s['clips']} | {s['tp']} | {s['fp']} | {s['tn']} | {s['fn']} "
+            lines.append(f"| {shown[s['model']]} | {s['clips']} | {s['tp']} | {s['fp']} | {s['tn']} | {s['fn']} "
                          f"| {_fmt(s['accuracy'], 2)} | {_fmt(s['precision'], 2)} | {_fmt(s['recall'], 2)} "
                          f"| {_fmt(s['warning_s'], 2)} |")
         return "\n".join(lines)
 
     def video_table(self) -> str:
         """Markdown: one row per (model, video)."""
+        shown = self._shown()[0]
         lines = ["| model | video | frames | objects | detected | alarmed | fields | false alarms | first alarm "
                  "| clip |", "|" + "|".join(["---"] * 10) + "|"]
         for v in self.videos:
             det = "-" if not v["localises"] else f"{v['detected']}/{v['objects']}"
-            lines.append(f"| {v['model']} | {v['video']} | {v['frames']} | {v['objects']} | {det} "
+            lines.append(f"| {shown[v['model']]} | {v['video']} | {v['frames']} | {v['objects']} | {det} "
                          f"| {v['alarmed']}/{v['objects']} | {_fmt(v['fields'])} | {_fmt(v['false_alarms'])} "
                          f"| {_fmt(v['first_alarm_frame'])} | {v['outcome'] or '-'} |")
         return "\n".join(lines)
 
     def notes(self) -> str:
         """Markdown: approaching objects not scored because they lie outside the
-        processed frames (incomplete or partial runs), per model; empty if none."""
-        lines = []
+        processed frames (incomplete or partial runs), per model, and what shortened
+        labels leave out; empty if none."""
+        shown, lines = self._shown()
         for s in self.models.values():
             if s["objects_outside"]:
                 inc = s["incomplete_videos"]
-                lines.append(f"- {s['model']}: {s['objects_outside']} approaching object(s) outside the processed "
-                             f"frames, not scored" + (f" ({inc} incomplete result(s))" if inc else ""))
+                lines.append(f"- {shown[s['model']]}: {s['objects_outside']} approaching object(s) outside the "
+                             f"processed frames, not scored" + (f" ({inc} incomplete result(s))" if inc else ""))
         return "\n".join(lines)
 
     def to_markdown(self, details: bool = False) -> str:
@@ -840,8 +922,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
         Each item is a :class:`~mlplc2.runner.RunResult`, an output folder of
         ``mlplc2 run`` / ``mlplc2 batch`` (``responses.csv`` + ``fields.json``;
         a folder without ``responses.csv`` is searched recursively for them),
-        or a video / image folder (the models are then run first, nothing is
-        written).
+        or a video, a folder of videos (each of them) or an image folder (the
+        models are then run first, nothing is written).
     gt : path, dict or GroundTruth
         Ground truth (see :func:`load_ground_truth`). A result's video is
         matched to a key by relative-path suffix, else by basename.
@@ -903,8 +985,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                 raise InputValueError(f"{item}: no such file or folder")
             if truth.match(item) is None:  # do not run models on a video that cannot be scored
                 if p.is_dir() and not any(f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS for f in p.iterdir()):
-                    problems.append(f"{item}: no results in this folder (no responses.csv in it or below) "
-                                    f"and no images")
+                    problems.append(f"{item}: no results in this folder (no responses.csv in it or below), "
+                                    f"no videos and no images")
                 elif p.is_file() and p.suffix.lower() not in VIDEO_EXTENSIONS + IMAGE_EXTENSIONS:
                     problems.append(f"{item}: not a results folder (responses.csv + fields.json) nor a video "
                                     f"({', '.join(VIDEO_EXTENSIONS)}) or image")
@@ -921,6 +1003,7 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     objects: list[dict] = []
     skipped: list[str] = []
     claimed: dict[tuple[str, str], _Run] = {}  # (model label, video) -> the run scored for it
+    by_label: dict[str, _Run] = {}  # model label -> a run scored under it (its model and parameters)
     incomplete: dict[str, tuple[str, int]] = {}  # origin -> (reason, approaching objects outside)
     for r in runs:
         t = truth.match(r.source) if r.model else None
@@ -940,6 +1023,7 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
             raise InputValueError(f"{prev.origin} and {other} both hold {r.label} results for {r.source}; "
                                   f"evaluate one of them (or each separately)")
         v, o = _score_run(r, t, radius=match_radius, tail=tail)
+        by_label.setdefault(r.label, r)
         videos.append(v)
         objects.extend(o)
         if r.incomplete is not None:
@@ -960,9 +1044,16 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     notes.extend(f"{p}; not scored" for p in problems)
     _issue(notes)
     order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
-    labels = sorted({v["model"] for v in videos},
-                    key=lambda lb: (order.index(lb.split("@")[0]) if lb.split("@")[0] in order else 99, lb))
-    summary = {lb: _summarise(lb, videos, objects) for lb in labels}
+
+    def rank(lb):  # model order, then parameter values (numbers as numbers: t_a=8 before t_a=12)
+        r = by_label[lb]
+        values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)
+                   else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(r.params.items())]
+        return order.index(r.model) if r.model in order else 99, r.model, values, lb
+
+    labels = sorted(by_label, key=rank)
+    summary = {lb: {"model": lb, "model_name": by_label[lb].model, "param_set": by_label[lb].param_set or "default",
+                    "params": by_label[lb].params, **_summarise(lb, videos, objects)} for lb in labels}
     videos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
     objects.sort(key=lambda o: (labels.index(o["model"]), o["video"], o["onset"], str(o["object"])))
     settings = {"ground_truth": truth.source, "match_radius": match_radius, "tail": tail}

@@ -45,7 +45,7 @@ Map to the paper (Sec. IV, "Experimental Evaluation")
 
 Arbitrary multi-object scenes are made with :func:`scene` and
 :class:`SceneObject`; :func:`generate` dispatches over :data:`NAMES` (the CLI's
-``mlplc2 stimulus NAME``).
+``mlplc2 stimulus NAME``) and :func:`parameters` gives each name's options.
 
 Square geometry: a square of side ``s`` centred at ``(cx, cy)`` covers the
 columns ``floor(cx - s/2 + 0.5)`` .. ``floor(cx + s/2 + 0.5) - 1`` (and the
@@ -59,6 +59,7 @@ import dataclasses
 import inspect
 import math
 import os
+import typing
 import warnings
 from dataclasses import dataclass
 from typing import Any, Callable, Sequence
@@ -80,6 +81,7 @@ __all__ = [
     "looming",
     "procedural_background",
     "generate",
+    "parameters",
     "focal_length_px",
 ]
 
@@ -984,6 +986,25 @@ _GENERATORS: dict[str, Callable[..., Stimulus]] = {name: _basic_factory(name) fo
 _GENERATORS.update(four_phase=four_phase, six_objects=six_objects, looming=looming)
 
 
+def parameters(name: str) -> dict[str, inspect.Parameter]:
+    """The keyword options of stimulus ``name``: its generator's parameters (from
+    ``inspect.signature``, annotations resolved to types where they can be), in order.
+
+    ``mlplc2 stimulus`` builds its ``--option`` list from these (docs/cli.md), so a
+    generator added to ``_GENERATORS`` gets its command-line options without CLI code.
+    """
+    if name not in _GENERATORS:
+        raise _fail(f"unknown stimulus {name!r}; valid names: {', '.join(NAMES)}")
+    func = _GENERATORS[name]
+    try:
+        hints = typing.get_type_hints(func)
+    except Exception:  # noqa: BLE001 - an annotation that does not resolve stays as written
+        hints = {}
+    return {p.name: p.replace(annotation=hints.get(p.name, p.annotation))
+            for p in inspect.signature(func).parameters.values()
+            if p.kind not in (inspect.Parameter.VAR_POSITIONAL, inspect.Parameter.VAR_KEYWORD)}
+
+
 def generate(name: str, **options: Any) -> Stimulus:
     """Generate the stimulus ``name`` (one of :data:`NAMES`) with keyword ``options``.
 
@@ -994,7 +1015,8 @@ def generate(name: str, **options: Any) -> Stimulus:
     **options
         Keyword arguments of the generator: :func:`basic` (``size``,
         ``frames``, ``fps``) for the six basic stimuli, else those of
-        :func:`four_phase`, :func:`six_objects` or :func:`looming`.
+        :func:`four_phase`, :func:`six_objects` or :func:`looming`
+        (:func:`parameters` lists them).
 
     Returns
     -------
@@ -1005,12 +1027,11 @@ def generate(name: str, **options: Any) -> Stimulus:
     mlplc2._validation.InputValueError
         Unknown name, unknown option or invalid option value.
     """
-    if name not in _GENERATORS:
-        raise _fail(f"unknown stimulus {name!r}; valid names: {', '.join(NAMES)}")
-    func = _GENERATORS[name]
-    valid = list(inspect.signature(func).parameters)
+    valid = list(parameters(name))
     unknown = [k for k in options if k not in valid]
     if unknown:
+        flags = ", ".join("--" + k.replace("_", "-") for k in valid)
         raise _fail(f"unknown option(s) {', '.join(map(repr, unknown))} for stimulus {name!r}; "
-                    f"valid options: {', '.join(valid)}")
-    return func(**options)
+                    f"valid options: {', '.join(valid) or 'none'} (command line: {flags or 'none'}; "
+                    f"see 'mlplc2 stimulus --help')")
+    return _GENERATORS[name](**options)

@@ -58,8 +58,9 @@ from dataclasses import dataclass, field
 import cv2
 import numpy as np
 
-from ._validation import InputValueError, check_int, check_real
+from ._validation import InputValueError, Valid, check_fields, check_real
 from .lobula_plate import LocalMotion
+from .params import document_parameters, param
 
 __all__ = ["TargetParams", "Target", "TargetLayer", "Extent", "Alignment", "measure_extent", "edge_distance",
            "align", "fit_contact", "fit_course", "bearing", "focal_length", "check_hfov"]
@@ -67,107 +68,95 @@ __all__ = ["TargetParams", "Target", "TargetLayer", "Extent", "Alignment", "meas
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
 
 
+@document_parameters("Parameters")
 @dataclass(frozen=True)
 class TargetParams:
-    """Parameters of the target layer (one set for every input; ``docs/targets.md``).
+    """Parameters of the target layer: candidates, the image measurement, time to contact,
+    course and the warning (one set for every input; ``docs/targets.md``).
 
-    Valid values (checked at construction; one-line :class:`mlplc2.InputError`
-    otherwise): integers are Python or NumPy integers (not bools) >= 0, stored as Python ints
-    (``patch`` >= 8, ``window`` >= 3, ``min_frames`` in [3, ``window``]); numbers are finite
-    Python or NumPy scalars >= 0, stored as Python floats; the fractions ``rel_start`` and
-    ``rel_edge`` lie in [0, 1]; ``heading`` is None or a pair of numbers (px).
+    Valid values (the table below; checked at construction; one-line
+    :class:`mlplc2.InputError` otherwise, a ``ValueError`` or ``TypeError``):
+    integers are Python or NumPy integers (not bools), stored as Python ints;
+    numbers are finite Python or NumPy scalars (not bools, strings or arrays) within
+    float32's range, stored as Python floats; ``heading`` is None or two numbers.
     """
 
-    # --- candidates and their box (the LM edges around a seed point) -------------------
-    band: int = 2
-    """Half-width (px) of the strips along the seed's row and column (:func:`measure_extent`)."""
-    min_peak: float = 0.08
-    """Smallest outward LM (profile mean, after the gain) that counts as an edge."""
-    noise_k: float = 3.0
-    """An edge complex must exceed ``noise_k`` x the 75th percentile of its profile (noise floor)."""
-    rel_start: float = 0.3
-    """An edge complex must reach ``rel_start`` x the largest value within ``local`` px of its start."""
-    local: int = 20
-    """Px beyond the start of a complex searched for a stronger edge (see ``rel_start``)."""
-    rel_edge: float = 0.25
-    """Outer boundary of the edge complex: where it falls below ``rel_edge`` x its peak."""
-    gap: int = 6
-    """Lobes closer than this (px) belong to one edge complex (fast edges make 2-3 lobes)."""
-    edge_offset: float = 6.5
-    """Px the outer boundary of the LM lobes trails the true edge (added back)."""
-    max_shift: float = 40.0
-    """Px: a candidate box whose centre lies further than this (in x or y) from its seed point
-    is dropped (it encloses two things, or background); 40 = R_AF."""
-    seed_lm: float = 0.5
-    """Local motion (LM, Eq. 12) above which the strongest point outside every target and
-    attention field also seeds a candidate (one per frame), well below the field threshold
-    T_a = 10: objects far away grow by a fraction of a pixel per frame. 0 = attention fields only."""
-    seed_contrast: float = 20.0
-    """... and above this many times the frame's mean LM (a salient point, not a moving background)."""
-    claim: float = 12.0
-    """Px around a target's box that belong to it: no new candidate is sought there (the front
-    end's local motion spreads about r_Di = 11 px beyond a moving edge)."""
-    change_frames: int = 4
-    """A faint candidate's box is the region that changed over this many frames
-    (:func:`change_box`): a slow edge moves a fraction of a pixel per frame."""
-    max_targets: int = 12
-    """Upper bound on simultaneous targets (no new candidate while this many exist)."""
-    # --- the image measurement ----------------------------------------------------------
-    patch: int = 32
-    """Side (samples) of the resampled patch the alignment works on."""
-    margin: float = 1.5
-    """Patch half-side = ``margin`` x half the box's larger side + 3 px."""
-    iterations: int = 10
-    """Most Gauss-Newton iterations per alignment."""
-    max_residual: float = 25.0
-    """Largest rms grey-level residual of an accepted alignment (0-255 scale)."""
-    max_fails: int = 3
-    """Consecutive failed alignments after which a target is dropped."""
-    # --- time to contact and course -----------------------------------------------------
-    window: int = 12
-    """Frames of the ``1 / S`` line fit."""
-    min_frames: int = 5
-    """Fewest frames a fit needs."""
-    min_tstat: float = 3.0
-    """The growth (the fit's slope) must be this many standard errors from 0."""
-    max_ttc_s: float = 10.0
-    """Longer times to contact are reported as None (no measurable approach)."""
-    heading: tuple[float, float] | None = None
-    """(x, y) px of the heading point in the model's frames; None = the principal point
-    ((W - 1) / 2, (H - 1) / 2): the camera moves along its optical axis (or stands still)."""
-    # --- the warning --------------------------------------------------------------------
-    horizon_s: float = 1.0
-    """A target warns only when its ``ttc_s`` is at most this (s)."""
-    max_miss: float = 1.0
-    """... its predicted miss at contact at most this many object widths ..."""
-    max_ttc_sigma: float = 0.3
-    """... its contact time known to this fraction (standard error / ttc) ..."""
-    evidence_frames: int = 15
-    """... and it shows looming evidence: one of its fields answered within this many frames,"""
-    confirm_frames: int = 6
-    """... or its growth has been significant for this many frames in a row."""
-    idle_frames: int = 30
-    """Frames without an estimate or an answering field after which a target is dropped."""
+    # --- candidates and their box ---------------------------------------------------------
+    band: int = param(2, "Half-width of the strips along a seed's row and column (:func:`measure_extent`).",
+                      unit="px", valid=Valid.integer(0))
+    min_peak: float = param(0.08, "Smallest outward LM (profile mean, after the gain) that counts as an edge.",
+                            valid=Valid.real(minimum=0))
+    noise_k: float = param(3.0, """An edge complex must exceed ``noise_k`` x the 75th percentile of its
+                           profile (noise floor).""", valid=Valid.real(minimum=0))
+    rel_start: float = param(0.3, """An edge complex must reach ``rel_start`` x the largest value within
+                             ``local`` px of its start.""", valid=Valid.real(minimum=0, maximum=1))
+    local: int = param(20, "How far beyond the start of a complex a stronger edge is searched for (see ``rel_start``).",
+                       unit="px", valid=Valid.integer(0))
+    rel_edge: float = param(0.25, "Outer boundary of the edge complex: where it falls below ``rel_edge`` x its peak.",
+                            valid=Valid.real(minimum=0, maximum=1))
+    gap: int = param(6, "Lobes closer than this belong to one edge complex (fast edges make 2-3 lobes).",
+                     unit="px", valid=Valid.integer(0))
+    edge_offset: float = param(6.5, "How far the outer boundary of the LM lobes trails the true edge (added back).",
+                               unit="px", valid=Valid.real(minimum=0))
+    max_shift: float = param(40.0, """A candidate box whose centre lies further than this (in x or y) from
+                             its seed point is dropped: it encloses two things, or background (40 = R_AF).""",
+                             unit="px", valid=Valid.real(minimum=0))
+    claim: float = param(12.0, """Margin around a target's box that belongs to it: no new candidate is
+                         sought there (the front end's local motion spreads about r_Di = 11 px beyond a
+                         moving edge).""", unit="px", valid=Valid.real(minimum=0))
+    seed_lm: float = param(0.5, """Local motion (LM, Eq. 12) above which the strongest point outside every
+                           target and attention field also seeds a candidate (one per frame), far below
+                           the field threshold T_a = 10: a far object grows by a fraction of a pixel per
+                           frame. 0 = attention fields only.""", valid=Valid.real(minimum=0))
+    seed_contrast: float = param(20.0, """... and above this many times the frame's mean LM (a salient
+                                 point, not a moving background).""", valid=Valid.real(minimum=0))
+    change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
+                               frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
+                               frame.""", unit="frames", valid=Valid.integer(1))
+    max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
+                             unit="targets", valid=Valid.integer(0))
+    # --- the image measurement ------------------------------------------------------------
+    patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",
+                       unit="samples", valid=Valid.integer(8, 256))
+    margin: float = param(1.5, "Patch half-side = ``margin`` x half the box's larger side + 3 px.",
+                          valid=Valid.real(minimum=1))
+    iterations: int = param(10, "Most Gauss-Newton iterations per alignment.", valid=Valid.integer(1))
+    max_residual: float = param(25.0, "Largest rms residual of an accepted alignment (0-255 scale).",
+                                unit="grey levels", valid=Valid.real(minimum=0))
+    max_fails: int = param(3, "Consecutive failed alignments after which a target is dropped.",
+                           unit="frames", valid=Valid.integer(1))
+    # --- time to contact and course -------------------------------------------------------
+    window: int = param(12, "Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course.",
+                        unit="frames", valid=Valid.integer(3, 1000, also=">= min_frames"))
+    min_frames: int = param(5, "Fewest frames a fit needs.", unit="frames",
+                            valid=Valid.integer(3, 1000, also="<= window"))
+    min_tstat: float = param(3.0, "The growth (the fit's slope) must be this many standard errors from 0.",
+                             valid=Valid.real(minimum=0))
+    max_ttc_s: float = param(10.0, "Longer times to contact are reported as None (no measurable approach).",
+                             unit="s", valid=Valid.real(minimum=0))
+    heading: tuple[float, float] | None = param(None, """Heading point (x, y) in the model's frames; None =
+                                                the principal point ((W - 1) / 2, (H - 1) / 2): the camera
+                                                moves along its optical axis, or stands still.""",
+                                                unit="px", valid=Valid.point())
+    # --- the warning ------------------------------------------------------------------------
+    horizon_s: float = param(1.0, "A target warns only when its ``ttc_s`` is at most this ...", unit="s",
+                             valid=Valid.real(minimum=0))
+    max_miss: float = param(1.0, "... its predicted miss at contact at most this ...", unit="object widths",
+                            valid=Valid.real(minimum=0))
+    max_ttc_sigma: float = param(0.3, "... its contact time known to this fraction (standard error / ttc) ...",
+                                 valid=Valid.real(minimum=0))
+    evidence_frames: int = param(15, """... and it shows looming evidence: one of its attention fields
+                                 answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
+    confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
+                                unit="frames", valid=Valid.integer(0))
+    idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
+                             unit="frames", valid=Valid.integer(0))
 
     def __post_init__(self) -> None:
-        def put(name, value):
-            object.__setattr__(self, name, value)
-
-        for name in ("band", "gap", "local", "change_frames", "max_targets", "iterations", "max_fails", "evidence_frames",
-                     "confirm_frames", "idle_frames"):
-            put(name, check_int(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        put("patch", check_int(self.patch, "TargetParams.patch", minimum=8, maximum=256))
-        put("window", check_int(self.window, "TargetParams.window", minimum=3, maximum=1000))
-        put("min_frames", check_int(self.min_frames, "TargetParams.min_frames", minimum=3, maximum=self.window))
-        for name in ("min_peak", "noise_k", "edge_offset", "max_shift", "claim", "seed_lm", "seed_contrast", "margin", "max_residual",
-                     "min_tstat", "max_ttc_s", "horizon_s", "max_miss", "max_ttc_sigma"):
-            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0))
-        for name in ("rel_start", "rel_edge"):
-            put(name, check_real(getattr(self, name), f"TargetParams.{name}", minimum=0, maximum=1))
-        if self.heading is not None:
-            from ._validation import check_reals
-
-            put("heading", check_reals(self.heading, "TargetParams.heading", 2, "x, y in px"))
+        check_fields(self, "TargetParams")
+        if self.min_frames > self.window:
+            raise InputValueError(f"TargetParams.min_frames must be <= window ({self.window}), "
+                                  f"got {self.min_frames!r}")
 
 
 @dataclass(frozen=True)

@@ -319,9 +319,11 @@ class LGMD1Params(_ParamsMixin):
 
     Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
     of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
-    the shared grouping layer; ``docs/model.md`` (Baselines) lists the sources.
+    the shared grouping layer; ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
+    value and rule with the published model.
 
-    Valid values: as for :class:`LGMD2Params` (``w_i_kernel`` 2 numbers >= 0).
+    Valid values: as for :class:`LGMD2Params` (``w_i_kernel`` 2 numbers >= 0, ``signed``
+    True or False).
     """
 
     w_i_kernel: tuple[float, float] = (0.25, 0.125)
@@ -345,12 +347,17 @@ class LGMD1Params(_ParamsMixin):
     t_ffi: float = 10.0
     """T_FFI (grey levels): LGMD output suppressed when the FFI, the mean |P| of the previous
     frame, reaches this."""
+    signed: bool = False
+    """If True, Yue & Rind's signed layers: E = P, I from the signed P(t-1), S = E - W_I I
+    (not rectified), membrane sum over |G|, so inhibition from a neighbour of the opposite
+    polarity adds to the excitation. If False (default, a documented deviation): magnitudes,
+    E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition always inhibits."""
 
     def __post_init__(self) -> None:
         object.__setattr__(self, "w_i_kernel", check_reals(self.w_i_kernel, "LGMD1Params.w_i_kernel", 2,
                                                            "nearest, diagonal", minimum=0))
         _check("LGMD1Params", self, positive=("c_w", "delta_c", "c_sig", "t_ffi"),
-               non_negative=("w_i", "c_de", "t_de", "t_sp"), ints=("n_ts",))
+               non_negative=("w_i", "c_de", "t_de", "t_sp"), ints=("n_ts",), bools=("signed",))
 
 
 @register("lgmd1")
@@ -379,7 +386,7 @@ class LGMD1(Model):
 
     def _reset(self) -> None:
         self._gray_prev: np.ndarray | None = None
-        self._e_prev: np.ndarray | None = None
+        self._p_prev: np.ndarray | None = None
         self._n_spikes = 0
         self.state: dict = {}
         """Scalars of the last frame (ffi, suppressed, sum_g, kappa), for inspection."""
@@ -388,20 +395,24 @@ class LGMD1(Model):
         p = self.params
         pr = photoreceptors(gray, self._gray_prev)
         self._gray_prev = gray
-        e = np.abs(pr)
-        e_prev = np.zeros_like(e) if self._e_prev is None else self._e_prev
-        self._e_prev = e
+        p_prev = np.zeros_like(pr) if self._p_prev is None else self._p_prev
+        self._p_prev = pr
+        e_prev = np.abs(p_prev)
 
         ffi = float(e_prev.mean(dtype=np.float64))
         suppressed = ffi >= p.t_ffi
         if suppressed:
             sum_g = 0.0
         else:
-            inh = cv2.filter2D(e_prev, cv2.CV_32F, self._kernel, borderType=_BORDER)
-            s = np.maximum(e - np.float32(p.w_i) * inh, 0)
+            w_i = np.float32(p.w_i)
+            if p.signed:
+                s = pr - w_i * cv2.filter2D(p_prev, cv2.CV_32F, self._kernel, borderType=_BORDER)
+            else:
+                s = np.maximum(np.abs(pr) - w_i * cv2.filter2D(e_prev, cv2.CV_32F, self._kernel,
+                                                               borderType=_BORDER), 0)
             g = _grouping(s, p.c_w, p.delta_c, p.c_de, p.t_de)
-            sum_g = float(g.sum(dtype=np.float64))
-        kappa = stable_sigmoid(sum_g / (e.size * p.c_sig))
+            sum_g = float(np.abs(g).sum(dtype=np.float64))
+        kappa = stable_sigmoid(sum_g / (pr.size * p.c_sig))
         spike = kappa >= p.t_sp
         self._n_spikes = self._n_spikes + 1 if spike else 0
         collision = self._n_spikes >= p.n_ts
