@@ -94,10 +94,11 @@ def test_step_returns_outputs_and_counts_frames(name, frames):
         assert isinstance(out.response, float) and math.isfinite(out.response)
         assert isinstance(out.collision, bool) and isinstance(out.spike, bool)
         assert isinstance(out.fields, tuple) and all(isinstance(fl, Field) for fl in out.fields)
-        if out.fields:
-            assert out.most_urgent is max(out.fields, key=lambda fl: fl.response)
-        else:
-            assert out.most_urgent is None
+        assert isinstance(out.targets, tuple)
+        # the most urgent target: warnings first, then the shortest time to contact
+        assert out.most_urgent is (out.targets[0] if out.targets else None)
+        assert list(out.targets) == sorted(out.targets, key=lambda t: t.urgency())
+        assert out.warning == any(t.warning for t in out.targets)
         outs.append(out)
     # it saw the square: a response and a collision alarm (the state the other tests compare is not trivial)
     assert max(o.response for o in outs) > min(o.response for o in outs)

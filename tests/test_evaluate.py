@@ -238,7 +238,7 @@ def test_to_dataframe_tables(scene, monkeypatch):
     models = ev.to_dataframe("models").set_index("model")
     assert models.loc["mlplc2", "detected"] == 2 and models.loc["mlplc2", "model_name"] == "mlplc2"
     assert models.loc["mlplc2", "detection_rate"] == ev.models["mlplc2"]["detection_rate"]
-    with pytest.raises(InputValueError, match="kind must be one of objects, videos, models, got 'fields'"):
+    with pytest.raises(InputValueError, match="kind must be one of objects, videos, models, warning_objects, warning_videos, got 'fields'"):
         ev.to_dataframe("fields")
     monkeypatch.setitem(sys.modules, "pandas", None)
     with pytest.raises(ImportError, match=r"Evaluation.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):

@@ -297,8 +297,10 @@ def test_make_frontend_backends():
 
 
 def test_without_numba_auto_falls_back_with_a_warning(monkeypatch, caplog):
-    monkeypatch.setattr(frontend, "fast_available", lambda: False)
-    monkeypatch.setattr(frontend, "_WARNED", False)
+    from mlplc2 import backend
+
+    monkeypatch.setattr(backend, "fast_available", lambda: False)
+    monkeypatch.setattr(backend, "_WARNED", False)
     with caplog.at_level(logging.WARNING, logger="mlplc2"):
         model = mlplc2.MLPLC2(fps=30.0)
     assert model.backend == "reference"

@@ -142,7 +142,7 @@ def test_the_ranges_shown_are_the_ranges_enforced(cls, prefix):
     cases = list(_bounds_cases(cls))
     assert len(cases) >= 2 * len(dataclasses.fields(cls)) - 8
     for name, value, passes in cases:
-        extra = {"min_points": {"window": 16}, "window": {"min_points": 2}}.get(name, {}) if cls is TargetParams else {}
+        extra = {"min_frames": {"window": 1000}, "window": {"min_frames": 3}}.get(name, {}) if cls is TargetParams else {}
         if passes:
             assert getattr(cls(**{name: value, **extra}), name) == value, (name, value)
         else:

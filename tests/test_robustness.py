@@ -467,6 +467,7 @@ STATIC = 40  # frames of a static scene after which every model must be silent
 def _check_output(name, model, out, shape):
     h, w = shape
     assert math.isfinite(out.response)
+    _check_targets(out)
     if name in LPLC2_FAMILY:
         assert out.response >= 0
         assert len(out.fields) <= model.params.max_fields
@@ -475,16 +476,25 @@ def _check_output(name, model, out, shape):
             assert 0 <= f.x < w and 0 <= f.y < h, (f.x, f.y)
             assert math.isfinite(f.response) and f.response >= 0
             assert all(math.isfinite(q) for q in f.quadrants)
-            for k in ("ttc_s", "expansion_rate", "azimuth_deg", "elevation_deg"):  # target estimates
-                v = getattr(f, k, None)
-                assert v is None or math.isfinite(v), (k, v)
         assert out.response == max((f.response for f in out.fields), default=0.0)
         for k in ("r", "l", "d", "u", "magnitude"):
             assert np.isfinite(getattr(model.maps, k)).all()
+    elif REGISTRY[name].has_targets:       # the optical-flow baseline: the largest expansion rate (1/s)
+        assert out.response >= 0 and out.fields == ()
     else:
         assert 0.5 <= out.response <= 1.0  # sigmoid membrane potential, resting 0.5
         assert out.fields == ()
         assert all(math.isfinite(v) for v in model.state.values() if isinstance(v, float))
+
+
+def _check_targets(out):
+    for t in out.targets:                  # target estimates: finite where present
+        for k in ("x", "y", "width", "height", "ttc_s", "miss", "expansion", "ttc_sigma_s"):
+            v = getattr(t, k)
+            assert v is None or math.isfinite(v), (k, v)
+        assert t.width > 0 and t.height > 0
+        assert t.ttc_s is None or t.ttc_s > 0
+        assert not t.warning or (t.ttc_s is not None and t.miss is not None)
 
 
 def _run_and_settle(name, frames, params=None):

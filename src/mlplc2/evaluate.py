@@ -37,283 +37,30 @@ from typing import Any, Iterable
 from ._validation import InputTypeError, InputValueError, check_int, check_real
 
 __all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
-           "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS"]
+           "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS", "TTC_BINS", "MIN_TTC_WIDTH",
+           "EARLY_S", "LATE_S"]
 
-#: Phase intervals an object may have, ``[start, end)`` in frames.
-PHASES = ("approach", "hold", "recede", "translate")
-#: ``"kind"`` values and the phase each stands for (``"kind"`` + ``"interval"`` is a shorthand).
-KINDS = {"approaching": "approach", "static": "hold", "receding": "recede", "translating": "translate"}
-#: Frames after the end of an approach during which a detection or alarm still counts for it.
-DEFAULT_TAIL = 25
-#: Match radius in ground-truth pixels.
-DEFAULT_MATCH_RADIUS = 20.0
-_LABELS = ("collision", "no_collision")
+#: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
+TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
+#: TTC coverage counts the frames in which a collision object is at least this wide (px).
+MIN_TTC_WIDTH = 16.0
+#: Real clips: a warning earlier than the danger onset minus this (s) is false.
+EARLY_S = 0.5
+#: A warning on a collision object up to this long (s) after its contact is neither true nor false.
+LATE_S = 0.5
+
+from .tracks import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, box_distance, episodes, on_object, warning_cause
+from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth
+from .truth import load as load_ground_truth
+
 #: Row order of the comparison table (other registered models follow, alphabetically).
-MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1")
+MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
 
 
 class EvaluationWarning(UserWarning):
     """Something :func:`evaluate` scored with a caveat or did not score (one line;
     also in :attr:`Evaluation.warnings`): an input given twice, incomplete results,
     an input that is neither results nor a video."""
-
-
-# ---------------------------------------------------------------------------
-# ground truth
-# ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class ObjectTruth:
-    """One object of a video's ground truth (coordinates in ground-truth pixels)."""
-
-    id: Any
-    center: tuple[float, float] | None = None
-    track: tuple[tuple[int, float, float], ...] = ()
-    polarity: str | None = None
-    approach: tuple[int, int] | None = None
-    hold: tuple[int, int] | None = None
-    recede: tuple[int, int] | None = None
-    translate: tuple[int, int] | None = None
-
-    @property
-    def approaching(self) -> bool:
-        return self.approach is not None
-
-    def center_at(self, frame: int) -> tuple[float, float] | None:
-        """Centre at ``frame``: the track linearly interpolated (held constant
-        before its first and after its last point), else ``center``."""
-        if self.track:
-            t = self.track
-            if frame <= t[0][0]:
-                return (t[0][1], t[0][2])
-            if frame >= t[-1][0]:
-                return (t[-1][1], t[-1][2])
-            lo, hi = 0, len(t) - 1
-            while hi - lo > 1:
-                mid = (lo + hi) // 2
-                if t[mid][0] <= frame:
-                    lo = mid
-                else:
-                    hi = mid
-            (f0, x0, y0), (f1, x1, y1) = t[lo], t[hi]
-            a = (frame - f0) / (f1 - f0)
-            return (x0 + a * (x1 - x0), y0 + a * (y1 - y0))
-        return self.center
-
-    def life_end(self) -> int:
-        """End of approach + the hold that directly follows it (exclusive)."""
-        end = self.approach[1]
-        if self.hold is not None and self.hold[0] <= end:
-            end = max(end, self.hold[1])
-        return end
-
-
-@dataclass(frozen=True)
-class VideoTruth:
-    """Ground truth of one video: objects and/or a clip-level label."""
-
-    key: str
-    size: tuple[int, int] | None = None
-    frames: int | None = None
-    fps: float | None = None
-    objects: tuple[ObjectTruth, ...] = ()
-    label: str | None = None
-    collision_frame: int | None = None
-
-    @property
-    def object_level(self) -> bool:
-        return bool(self.objects) or self.label is None
-
-
-class GroundTruth(Mapping):
-    """Video key -> :class:`VideoTruth`, with :meth:`match` to find a video's truth."""
-
-    def __init__(self, videos: Mapping[str, VideoTruth], source: str = "<dict>"):
-        self._videos = dict(videos)
-        self.source = source
-
-    def __getitem__(self, key):
-        return self._videos[key]
-
-    def __iter__(self):
-        return iter(self._videos)
-
-    def __len__(self):
-        return len(self._videos)
-
-    def match(self, video) -> VideoTruth | None:
-        """The truth of ``video`` (a path): the key that is the longest suffix of
-        its path (``scenes/a.avi`` matches ``/data/paper/scenes/a.avi``), else the
-        key with the same basename; ``None`` if none. Ambiguous basenames raise."""
-        parts = PurePosixPath(str(video).replace("\\", "/")).parts
-        best, best_len = None, 0
-        for key in self._videos:
-            kparts = PurePosixPath(key.replace("\\", "/")).parts
-            kparts = tuple(p for p in kparts if p not in (".", ""))
-            if kparts and len(kparts) <= len(parts) and tuple(parts[-len(kparts):]) == kparts:
-                if len(kparts) > best_len:
-                    best, best_len = key, len(kparts)
-        if best is not None:
-            return self._videos[best]
-        name = parts[-1] if parts else ""
-        same = [k for k in self._videos if PurePosixPath(k.replace("\\", "/")).name == name]
-        if len(same) > 1:
-            raise InputValueError(f"{video}: ambiguous ground truth, several keys have its name: {', '.join(same)}")
-        if same:
-            return self._videos[same[0]]
-        if len(self._videos) == 1:
-            only = next(iter(self._videos.values()))
-            if only.key == "*":
-                return only
-        return None
-
-
-def _bad(where: str, message: str) -> InputValueError:
-    return InputValueError(f"{where}: {message}")
-
-
-def _int(value, where: str, minimum: int | None = None) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not float(value).is_integer():
-        raise _bad(where, f"expected an integer, got {value!r}")
-    value = int(value)
-    if minimum is not None and value < minimum:
-        raise _bad(where, f"expected an integer >= {minimum}, got {value}")
-    return value
-
-
-def _number(value, where: str) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(float(value)):
-        raise _bad(where, f"expected a finite number, got {value!r}")
-    return float(value)
-
-
-def _interval(value, where: str) -> tuple[int, int]:
-    if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise _bad(where, f"expected an interval [start, end), got {value!r}")
-    start, end = _int(value[0], where, 0), _int(value[1], where, 0)
-    if end <= start:
-        raise _bad(where, f"interval [start, end) must have end > start, got {list(value)}")
-    return start, end
-
-
-def _point(value, where: str) -> tuple[float, float]:
-    if not isinstance(value, (list, tuple)) or len(value) != 2:
-        raise _bad(where, f"expected [x, y], got {value!r}")
-    return _number(value[0], where), _number(value[1], where)
-
-
-def _parse_object(obj, where: str, index: int) -> ObjectTruth:
-    if not isinstance(obj, Mapping):
-        raise _bad(where, f"expected an object (JSON dict), got {type(obj).__name__}")
-    oid = obj.get("id", index + 1)
-    center = _point(obj["center"], f"{where}.center") if obj.get("center") is not None else None
-    track: list[tuple[int, float, float]] = []
-    if obj.get("track") is not None:
-        raw = obj["track"]
-        if not isinstance(raw, (list, tuple)) or not raw:
-            raise _bad(f"{where}.track", "expected a non-empty list of [frame, x, y]")
-        for k, p in enumerate(raw):
-            if not isinstance(p, (list, tuple)) or len(p) != 3:
-                raise _bad(f"{where}.track[{k}]", f"expected [frame, x, y], got {p!r}")
-            track.append((_int(p[0], f"{where}.track[{k}]", 0), _number(p[1], f"{where}.track[{k}]"),
-                          _number(p[2], f"{where}.track[{k}]")))
-        track.sort()
-        if len({p[0] for p in track}) != len(track):
-            raise _bad(f"{where}.track", "a frame appears twice")
-    phases = {p: _interval(obj[p], f"{where}.{p}") for p in PHASES if obj.get(p) is not None}
-    if obj.get("kind") is not None:
-        kind = obj["kind"]
-        if not isinstance(kind, str) or kind not in KINDS:
-            raise _bad(f"{where}.kind", f"expected one of {', '.join(KINDS)}, got {kind!r}")
-        if obj.get("interval") is not None:
-            phases.setdefault(KINDS[kind], _interval(obj["interval"], f"{where}.interval"))
-        elif KINDS[kind] not in phases:
-            raise _bad(where, f"kind {kind!r} needs an 'interval' [start, end) or a {KINDS[kind]!r} interval")
-    polarity = obj.get("polarity")
-    if polarity is not None and polarity not in ("dark", "bright"):
-        raise _bad(f"{where}.polarity", f"expected 'dark' or 'bright', got {polarity!r}")
-    if "approach" in phases and center is None and not track:
-        raise _bad(where, "an approaching object needs a 'center' [x, y] or a 'track'")
-    return ObjectTruth(id=oid, center=center, track=tuple(track), polarity=polarity, **phases)
-
-
-def _parse_entry(key: str, entry, where: str) -> VideoTruth:
-    if not isinstance(entry, Mapping):
-        raise _bad(where, f"expected a JSON object, got {type(entry).__name__}")
-    if "objects" not in entry and "label" not in entry:
-        raise _bad(where, "a video entry needs 'objects' (object level) or 'label' (clip level)")
-    size = None
-    if entry.get("size") is not None:
-        s = entry["size"]
-        if not isinstance(s, (list, tuple)) or len(s) != 2:
-            raise _bad(f"{where}.size", f"expected [W, H], got {s!r}")
-        size = (_int(s[0], f"{where}.size", 1), _int(s[1], f"{where}.size", 1))
-    frames = _int(entry["frames"], f"{where}.frames", 1) if entry.get("frames") is not None else None
-    fps = None
-    if entry.get("fps") is not None:
-        fps = _number(entry["fps"], f"{where}.fps")
-        if fps <= 0:
-            raise _bad(f"{where}.fps", f"expected a positive number, got {fps}")
-    objects = entry.get("objects", [])
-    if not isinstance(objects, (list, tuple)):
-        raise _bad(f"{where}.objects", f"expected a list, got {type(objects).__name__}")
-    objs = tuple(_parse_object(o, f"{where}.objects[{i}]", i) for i, o in enumerate(objects))
-    label = entry.get("label")
-    if label is not None and label not in _LABELS:
-        raise _bad(f"{where}.label", f"expected 'collision' or 'no_collision', got {label!r}")
-    cf = entry.get("collision_frame")
-    if cf is not None:
-        if label != "collision":
-            raise _bad(f"{where}.collision_frame", "only a clip labelled 'collision' has a collision frame")
-        cf = _int(cf, f"{where}.collision_frame", 0)
-    return VideoTruth(key=key, size=size, frames=frames, fps=fps, objects=objs, label=label, collision_frame=cf)
-
-
-def load_ground_truth(gt) -> GroundTruth:
-    """Read ground truth: a path to a JSON file, or the parsed JSON.
-
-    Accepted: ``{"videos": {KEY: ENTRY, ...}}`` (the paper's ``ground_truth.json``;
-    other top-level keys are ignored) or a single ``ENTRY`` (as written by
-    ``mlplc2 stimulus``), whose key is its ``"video"`` field (matched by
-    basename), else ``"*"`` (applies to any video). Raises
-    :class:`~mlplc2.InputValueError` naming the offending field.
-    """
-    if isinstance(gt, GroundTruth):
-        return gt
-    source = "<dict>"
-    if isinstance(gt, (str, Path)):
-        source = str(gt)
-        data = _read_json(gt)
-    else:
-        data = gt
-    return _parse_ground_truth(data, source)
-
-
-def _read_json(path):
-    """The parsed content of the ground-truth file ``path`` (one-line errors)."""
-    path = Path(path)
-    if path.is_dir():
-        hint = " (did you mean its ground_truth.json?)" if (path / "ground_truth.json").is_file() else ""
-        raise InputValueError(f"{path}: is a folder, not a ground truth JSON file{hint}")
-    if not path.is_file():
-        raise InputValueError(f"{path}: ground truth file not found")
-    try:
-        return json.loads(path.read_text(encoding="utf-8"))
-    except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-        raise InputValueError(f"{path}: not valid JSON ({exc})") from None
-
-
-def _parse_ground_truth(data, source: str) -> GroundTruth:
-    if not isinstance(data, Mapping):
-        raise InputValueError(f"{source}: ground truth must be a JSON object, got {type(data).__name__}")
-    if "videos" in data:
-        videos = data["videos"]
-        if not isinstance(videos, Mapping) or not videos:
-            raise InputValueError(f"{source}: 'videos' must be a non-empty object {{name: entry}}")
-        parsed = {str(k): _parse_entry(str(k), v, f"{source}: videos[{k!r}]") for k, v in videos.items()}
-    else:
-        key = str(data.get("video") or "*")
-        parsed = {key: _parse_entry(key, data, source)}
-    return GroundTruth(parsed, source)
 
 
 # ---------------------------------------------------------------------------
@@ -343,19 +90,41 @@ class _Run:
     incomplete: str | None = None
     # False when the folder does not say which video it is (no fields.json nor done.json)
     video_known: bool = True
+    # frame -> the targets of that frame (models with targets: their warning is the targets' warning)
+    frame_targets: dict[int, list[TargetRow]] = field(default_factory=dict)
+    has_targets: bool = False
+
+
+def _model_class(model: str):
+    from .models.base import REGISTRY
+
+    return REGISTRY.get(model)
 
 
 def _localises(model: str) -> bool:
-    """mLPLC2 and sLPLC2 localise; LPLC2 (one frame-wide cell) and the LGMDs do not."""
-    from .models.base import REGISTRY
-    from .models.lplc2 import LPLC2, _LPLC2Family
+    """Whether the model's fields have meaningful positions (``Model.localises``: mLPLC2, sLPLC2)."""
+    cls = _model_class(model)
+    return cls is not None and bool(cls.localises)
 
-    cls = REGISTRY.get(model)
-    return cls is not None and issubclass(cls, _LPLC2Family) and not issubclass(cls, LPLC2)
+
+def _has_targets(model: str) -> bool:
+    cls = _model_class(model)
+    return cls is not None and bool(getattr(cls, "has_targets", False))
+
+
+def _target_row(r) -> TargetRow:
+    """A ``targets.csv`` row (dict of strings or numbers) as a :class:`TargetRow`."""
+    def num(v):
+        return None if v in (None, "") else float(v)
+
+    fields = r.get("fields") or ""
+    return TargetRow(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
+                     num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
+                     tuple(int(v) for v in str(fields).split()))
 
 
 def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None,
-                    params=None, origin="", ident=None, incomplete=None, video_known=True):
+                    params=None, origin="", ident=None, incomplete=None, video_known=True, target_rows=()):
     from .batch import param_label
 
     per: dict[str, _Run] = {}
@@ -366,7 +135,8 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
         else:  # a parameter set whose overrides are not recorded
             label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
-                    dict(params or {}), origin or str(source), ident, incomplete, video_known)
+                    dict(params or {}), origin or str(source), ident, incomplete, video_known,
+                    has_targets=_has_targets(m))
 
     for r in rows:
         m = r["model"]
@@ -383,6 +153,10 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
     for m in fields_by_model:
         if m not in per and (models is None or m in models):
             per[m] = new(m, fields_by_model[m])
+    for r in target_rows:
+        run = per.get(r["model"])
+        if run is not None:
+            run.frame_targets.setdefault(int(r["frame"]), []).append(_target_row(r))
     return list(per.values())
 
 
@@ -402,7 +176,7 @@ def _runs_from_result(res, models, origin=None) -> list["_Run"]:
                                 getattr(res, "message", None))
     return _runs_from_rows(res.source, res.rows, res.fields, fps=res.fps, size=tuple(res.size), start=res.start,
                            n_frames=res.n_frames, models=models, origin=origin or f"a RunResult of {res.source}",
-                           ident=("object", id(res)), incomplete=reason)
+                           ident=("object", id(res)), incomplete=reason, target_rows=res.targets)
 
 
 def _read_folder(folder: Path, models) -> list["_Run"]:
@@ -463,10 +237,22 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
     else:
         incomplete = _incomplete_reason(n_frames, info.get("interrupted"), info.get("truncated"),
                                         complete=info.get("complete") is not False)
+    target_rows = []
+    tp = folder / "targets.csv"
+    if tp.is_file():
+        with open(tp, newline="", encoding="utf-8") as f:
+            reader = csv.DictReader(f)
+            if "target_id" in (reader.fieldnames or ()):   # targets.csv of the target layer
+                try:
+                    target_rows = [r for r in reader if r.get("frame") not in (None, "")]
+                    for r in target_rows:
+                        int(r["frame"]), _target_row(r)
+                except (TypeError, ValueError, KeyError):
+                    raise InputValueError(f"{tp}: malformed row") from None
     return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
                            n_frames=n_frames, models=models, param_set=done.get("param_set"), params=params,
-                           origin=str(folder),
-                           ident=("path", _path_key(folder)), incomplete=incomplete, video_known=bool(info.get("video") or done.get("video")))
+                           origin=str(folder), ident=("path", _path_key(folder)), incomplete=incomplete,
+                           video_known=bool(info.get("video") or done.get("video")), target_rows=target_rows)
 
 
 def _path_key(path) -> str:
@@ -667,6 +453,202 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
     return video, objects
 
 
+# ---------------------------------------------------------------------------
+# warning metrics (3-D truth with kinds, and labelled clips)
+# ---------------------------------------------------------------------------
+def _warning_truth(truth: VideoTruth) -> bool:
+    """Whether the truth says which objects will hit (3-D kinds, or a clip label)."""
+    return truth.label is not None or any(o.kind is not None for o in truth.objects)
+
+
+def _median(values) -> float | None:
+    v = sorted(x for x in values if x is not None)
+    if not v:
+        return None
+    m = len(v) // 2
+    return float(v[m]) if len(v) % 2 else (v[m - 1] + v[m]) / 2.0
+
+
+def _quantile(values, q: float) -> float | None:
+    """The ``q`` quantile (linear interpolation, as ``numpy.quantile``)."""
+    v = sorted(x for x in values if x is not None)
+    if not v:
+        return None
+    pos = q * (len(v) - 1)
+    lo = int(math.floor(pos))
+    hi = min(lo + 1, len(v) - 1)
+    return v[lo] + (pos - lo) * (v[hi] - v[lo])
+
+
+def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dict, list[dict]]:
+    """The warning metrics of one run (``docs/evaluation.md``, "Warning metrics").
+
+    A model's warning is its targets' warnings (models with targets) or its alarm. Collision
+    objects (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
+    (:func:`mlplc2.tracks.on_object`) before contact; every other warning is false, with its
+    cause (:func:`mlplc2.tracks.warning_cause`). On a labelled clip, frames from the contact on
+    are not scored, and a warning before the danger onset minus ``EARLY_S`` is false ("early").
+    """
+    first, last = run.start, run.start + run.n_frames
+    sx = sy = 1.0
+    if truth.size and run.size and tuple(run.size) != tuple(truth.size):
+        sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
+    fps = run.fps
+    clip = truth.label is not None
+    colliders = [o for o in truth.objects if o.collides] + ([truth.collider] if truth.collider is not None else [])
+    late = int(round(LATE_S * fps))
+    end = last
+    if clip and truth.label == "collision" and truth.contact_frame is not None:
+        end = min(last, int(math.ceil(truth.contact_frame)))
+    early_before = None
+    if clip and truth.danger_onset_frame is not None:
+        early_before = truth.danger_onset_frame - EARLY_S * fps
+
+    def targets(f):
+        rows = run.frame_targets.get(f, ())
+        if sx == 1.0 and sy == 1.0:
+            return rows
+        return [TargetRow(t.id, t.x * sx, t.y * sy, None if t.width is None else t.width * sx,
+                          None if t.height is None else t.height * sy, t.ttc_s, t.miss, t.warning, t.fields)
+                for t in rows]
+
+    def fields(f):
+        return [(fid, x * sx, y * sy) for fid, x, y, _ in run.frame_fields.get(f, ())]
+
+    def warnings_at(f):
+        """(key, x, y) of every warning in frame f (key: target id, or None for a global alarm)."""
+        if run.has_targets:
+            return [(t.id, t.x, t.y) for t in targets(f) if t.warning]
+        return [(None, None, None)] if run.frame_alarm.get(f) else []
+
+    objects = []
+    for o in colliders:
+        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is truth.collider else None)
+        seen = [p.frame for p in o.track] if o.track else []
+        start = max(first, seen[0]) if seen and o is not truth.collider else first
+        stop = min(end, last, int(math.ceil(cf)) if cf is not None else last)
+        rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
+               "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
+               "ttc_at_warning_s": None, "warning_distance_px": None, "targets": None, "ttc_frames": 0,
+               "ttc_estimated": 0, "ttc_errors": []}
+        ids = set()
+        for f in range(start, stop):
+            if not rec["warned"] and (early_before is None or f >= early_before):
+                for key, x, y in warnings_at(f):
+                    if x is None or on_object(x, y, o, f, radius):
+                        if not rec["warned"]:
+                            c = o.center_at(f)
+                            rec.update(warned=True, warning_frame=f,
+                                       lead_s=None if cf is None else round((cf - f) / fps, 4),
+                                       ttc_at_warning_s=None if o.ttc_at(f, fps) is None else round(o.ttc_at(f, fps), 4),
+                                       warning_distance_px=None if x is None or c is None else round(
+                                           math.hypot(x - c[0], y - c[1]), 2))
+                        break
+            # fragmentation and time to contact: the targets (fields) on the object while in view
+            if o.track and not o.in_track(f) and o is not truth.collider:
+                continue
+            if run.has_targets:
+                on = [t for t in targets(f) if on_object(t.x, t.y, o, f, radius)]
+                ids.update(t.id for t in on)
+                width = o.width_at(f)
+                true = o.ttc_at(f, fps)
+                if o is not truth.collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
+                        and true > 0:
+                    rec["ttc_frames"] += 1
+                    est = [t for t in on if t.ttc_s is not None and t.ttc_s > 0]
+                    if est:
+                        c = o.center_at(f)
+                        t = min(est, key=lambda t: math.hypot(t.x - c[0], t.y - c[1]))
+                        rec["ttc_estimated"] += 1
+                        rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
+            elif _localises(run.model):
+                ids.update(fid for fid, x, y in fields(f) if on_object(x, y, o, f, radius))
+        rec["targets"] = len(ids) if (run.has_targets or _localises(run.model)) else None
+        objects.append(rec)
+
+    # false warnings: per frame, per cause; episodes per (target, cause)
+    false_frames: dict[str, set[int]] = {}
+    runs: dict[tuple, list[int]] = {}
+    scored = 0
+    for f in range(first, end):
+        scored += 1
+        for key, x, y in warnings_at(f):
+            if early_before is not None and f < early_before:
+                cause = "early"
+            else:
+                verdict, obj = warning_cause(x, y, f, truth, radius=radius, tail=late)
+                if verdict == "true":
+                    continue
+                if obj is not None and obj.collides and obj.contact_frame is not None \
+                        and obj.contact_frame <= f <= obj.contact_frame + late:
+                    continue                     # just after contact: neither true nor false
+                cause = verdict if not clip else "elsewhere"
+            false_frames.setdefault(cause, set()).add(f)
+            runs.setdefault((key, cause), []).append(f)
+    episodes_by = {}
+    for (key, cause), frames in runs.items():
+        episodes_by[cause] = episodes_by.get(cause, 0) + episodes(frames)
+    all_false = set().union(*false_frames.values()) if false_frames else set()
+    outcome = None
+    if clip:
+        warned = any(r["warned"] for r in objects)
+        outcome = {"label": truth.label, "warned": warned if truth.label == "collision" else None,
+                   "missed": (not warned) if truth.label == "collision" else None, "false": bool(all_false),
+                   "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None)}
+    video = {"model": run.label, "video": truth.key, "frames_scored": scored, "clip": clip,
+             "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
+             "false_frames_by_cause": {c: len(v) for c, v in sorted(false_frames.items())},
+             "false_episodes_by_cause": dict(sorted(episodes_by.items())), "outcome": outcome}
+    return video, objects
+
+
+def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -> dict:
+    """Per model: collision objects warned, lead time, false warnings by cause, TTC errors, fragmentation."""
+    vids = [v for v in wvideos if v["model"] == label]
+    objs = [o for o in wobjects if o["model"] == label]
+    if not vids:
+        return {}
+    synth = [v for v in vids if not v["clip"]]
+    sobjs = [o for o in objs if not any(v["video"] == o["video"] and v["clip"] for v in vids)]
+    warned = [o for o in sobjs if o["warned"]]
+    frames = sum(v["frames_scored"] for v in synth)
+    per_k = (lambda n: round(1000.0 * n / frames, 3)) if frames else (lambda n: None)
+    causes = ("pass", "distractor", "background")
+    s: dict[str, Any] = {
+        "collision_objects": len(sobjs), "warned": len(warned),
+        "warned_rate": round(len(warned) / len(sobjs), 4) if sobjs else None,
+        "lead_median_s": _median(o["lead_s"] for o in warned),
+        "lead_p10_s": _quantile([o["lead_s"] for o in warned], 0.1),
+        "ttc_at_warning_median_s": _median(o["ttc_at_warning_s"] for o in warned),
+        "warning_distance_median_px": _median(o["warning_distance_px"] for o in warned),
+        "frames": frames,
+        "false_frames_per_1000": per_k(sum(v["false_frames"] for v in synth)),
+        "false_episodes_per_1000": per_k(sum(v["false_episodes"] for v in synth)),
+        "false_frames_per_1000_by_cause": {c: per_k(sum(v["false_frames_by_cause"].get(c, 0) for v in synth))
+                                           for c in causes},
+        "false_episodes_per_1000_by_cause": {c: per_k(sum(v["false_episodes_by_cause"].get(c, 0) for v in synth))
+                                             for c in causes},
+        "false_frames_pct": round(100.0 * sum(v["false_frames"] for v in synth) / frames, 3) if frames else None,
+        "fragmentation": _mean(o["targets"] for o in sobjs if o["targets"] is not None),
+    }
+    errs = [e for o in sobjs for e in o["ttc_errors"]]
+    for lo, hi in TTC_BINS:
+        b = [(t, e) for t, e in errs if lo <= t < hi]
+        key = f"{lo:g}-{hi:g}s"
+        s[f"ttc_rte_pct_{key}"] = None if not b else round(100.0 * _median(abs(e - t) / t for t, e in b), 2)
+        s[f"ttc_mid_{key}"] = None if not b else round(_median(abs(math.log(e / t)) * 1e4 for t, e in b), 1)
+        s[f"ttc_n_{key}"] = len(b)
+    tf = sum(o["ttc_frames"] for o in sobjs)
+    s["ttc_coverage"] = round(sum(o["ttc_estimated"] for o in sobjs) / tf, 4) if tf else None
+    clips = [v for v in vids if v["clip"]]
+    cc = [v for v in clips if v["outcome"]["label"] == "collision"]
+    s.update(clips=len(clips), clips_collision=len(cc), clips_warned=sum(bool(v["outcome"]["warned"]) for v in cc),
+             clips_missed=sum(bool(v["outcome"]["missed"]) for v in cc),
+             clips_false=sum(bool(v["outcome"]["false"]) for v in clips),
+             clip_lead_median_s=_median(v["outcome"]["lead_s"] for v in cc if v["outcome"]["warned"]))
+    return s
+
+
 def _summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
     vids = [v for v in videos if v["model"] == label]
     objs = [o for o in objects if o["model"] == label]
@@ -757,6 +739,12 @@ class Evaluation:
         given more than once (scored once), incomplete results (interrupted or
         truncated runs: approaching objects after the processed frames are not
         scored), inputs that are neither results nor videos (not scored).
+    warning_videos : list of dict
+        Warning metrics per (model, video) with 3-D or clip-level truth: false warnings by cause,
+        the clip's outcome (``docs/evaluation.md``, "Warning metrics").
+    warning_objects : list of dict
+        Per (model, video, collision object): warned, lead time, true TTC at the warning,
+        targets on it, and its TTC estimates (true, estimated) per frame.
     """
 
     models: dict[str, dict]
@@ -765,10 +753,13 @@ class Evaluation:
     settings: dict
     skipped: list[str] = field(default_factory=list)
     warnings: list[str] = field(default_factory=list)
+    warning_videos: list[dict] = field(default_factory=list)
+    warning_objects: list[dict] = field(default_factory=list)
 
     def to_dict(self) -> dict:
         return {"settings": self.settings, "models": self.models, "videos": self.videos,
-                "objects": self.objects, "skipped": self.skipped, "warnings": self.warnings}
+                "objects": self.objects, "warning_videos": self.warning_videos,
+                "warning_objects": self.warning_objects, "skipped": self.skipped, "warnings": self.warnings}
 
     def to_json(self, **kw) -> str:
         return json.dumps(self.to_dict(), indent=kw.pop("indent", 1), **kw)
@@ -783,11 +774,14 @@ class Evaluation:
             :attr:`videos`: one row per (model label, video).
         ``"models"``
             :attr:`models`: one row per model label (column ``model``), the summary.
+        ``"warning_objects"``, ``"warning_videos"``
+            :attr:`warning_objects`, :attr:`warning_videos`: the warning metrics.
 
         The ``model`` column holds the label (``mlplc2[t_a=8]`` for a batch parameter set);
         ``model_name`` and ``params`` of the ``"models"`` table give the model and its overrides.
         """
-        tables = {"objects": self.objects, "videos": self.videos, "models": list(self.models.values())}
+        tables = {"objects": self.objects, "videos": self.videos, "models": list(self.models.values()),
+                  "warning_objects": self.warning_objects, "warning_videos": self.warning_videos}
         if kind not in tables:
             raise InputValueError(f"kind must be one of {', '.join(tables)}, got {kind!r}")
         try:
@@ -864,6 +858,43 @@ class Evaluation:
                          f"| {_fmt(v['first_alarm_frame'])} | {v['outcome'] or '-'} |")
         return "\n".join(lines)
 
+    def warning_table(self) -> str:
+        """Markdown: the warning metrics per model (empty without 3-D truth): collision objects
+        warned before contact, lead time, false warnings by cause, TTC errors, fragmentation."""
+        rows = [(lb, s["warnings"]) for lb, s in self.models.items() if s.get("warnings")
+                and s["warnings"]["collision_objects"]]
+        if not rows:
+            return ""
+        shown, _ = self._shown()
+        lines = ["| model | warned | lead median (s) | lead p10 (s) | TTC at warning (s) | false frames /1000 "
+                 "| false episodes /1000 | by cause: pass / distractor / background (episodes /1000) "
+                 "| TTC error 0-1 s | 1-3 s | 3-6 s | TTC coverage | targets/object |",
+                 "|" + "|".join(["---"] * 13) + "|"]
+        for lb, w in rows:
+            c = w["false_episodes_per_1000_by_cause"]
+            lines.append(
+                f"| {shown[lb]} | {w['warned']}/{w['collision_objects']} ({_fmt(w['warned_rate'], pct=True)}) "
+                f"| {_fmt(w['lead_median_s'], 2)} | {_fmt(w['lead_p10_s'], 2)} | {_fmt(w['ttc_at_warning_median_s'], 2)} "
+                f"| {_fmt(w['false_frames_per_1000'], 1)} | {_fmt(w['false_episodes_per_1000'], 2)} "
+                f"| {_fmt(c['pass'], 2)} / {_fmt(c['distractor'], 2)} / {_fmt(c['background'], 2)} "
+                + "".join(f"| {_fmt(w[f'ttc_rte_pct_{lo:g}-{hi:g}s'], 0)}{'' if w[f'ttc_rte_pct_{lo:g}-{hi:g}s'] is None else ' %'} "
+                          for lo, hi in TTC_BINS)
+                + f"| {_fmt(w['ttc_coverage'], pct=True)} | {_fmt(w['fragmentation'], 2)} |")
+        return "\n".join(lines)
+
+    def clip_warning_table(self) -> str:
+        """Markdown: per labelled clip and model, warned / missed / false and the lead time."""
+        clips = [v for v in self.warning_videos if v["clip"]]
+        if not clips:
+            return ""
+        shown, _ = self._shown()
+        lines = ["| model | clip | label | warned | lead (s) | false warnings (frames) |", "|---|---|---|---|---|---|"]
+        for v in clips:
+            o = v["outcome"]
+            lines.append(f"| {shown.get(v['model'], v['model'])} | {v['video']} | {o['label']} "
+                         f"| {_fmt(o['warned'])} | {_fmt(o['lead_s'], 2)} | {v['false_frames']} |")
+        return "\n".join(lines)
+
     def notes(self) -> str:
         """Markdown: approaching objects not scored because they lie outside the
         processed frames (incomplete or partial runs), per model, and what shortened
@@ -887,6 +918,12 @@ class Evaluation:
         clip = self.clip_table()
         if clip:
             parts.append(clip)
+        warn = self.warning_table()
+        if warn:
+            parts.append("Warnings (collision objects of 3-D truth):\n\n" + warn)
+        cw = self.clip_warning_table()
+        if cw:
+            parts.append("Warnings on labelled clips:\n\n" + cw)
         if details:
             parts.append(self.video_table())
         return "\n\n".join(parts)
@@ -1001,6 +1038,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                                   f"or a video path")
     videos: list[dict] = []
     objects: list[dict] = []
+    wvideos: list[dict] = []     # warning metrics, per (model, video) and per collision object
+    wobjects: list[dict] = []
     skipped: list[str] = []
     claimed: dict[tuple[str, str], _Run] = {}  # (model label, video) -> the run scored for it
     by_label: dict[str, _Run] = {}  # model label -> a run scored under it (its model and parameters)
@@ -1026,6 +1065,10 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
         by_label.setdefault(r.label, r)
         videos.append(v)
         objects.extend(o)
+        if _warning_truth(t):
+            wv, wo = _score_warnings(r, t, radius=match_radius)
+            wvideos.append(wv)
+            wobjects.extend(wo)
         if r.incomplete is not None:
             reason, n = incomplete.get(r.origin, (r.incomplete, 0))
             incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
@@ -1053,11 +1096,14 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
 
     labels = sorted(by_label, key=rank)
     summary = {lb: {"model": lb, "model_name": by_label[lb].model, "param_set": by_label[lb].param_set or "default",
-                    "params": by_label[lb].params, **_summarise(lb, videos, objects)} for lb in labels}
+                    "params": by_label[lb].params, **_summarise(lb, videos, objects),
+                    "warnings": _summarise_warnings(lb, wvideos, wobjects) or None} for lb in labels}
+    wvideos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
+    wobjects.sort(key=lambda o: (labels.index(o["model"]), o["video"], str(o["object"])))
     videos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
     objects.sort(key=lambda o: (labels.index(o["model"]), o["video"], o["onset"], str(o["object"])))
     settings = {"ground_truth": truth.source, "match_radius": match_radius, "tail": tail}
-    return Evaluation(summary, videos, objects, settings, skipped, notes)
+    return Evaluation(summary, videos, objects, settings, skipped, notes, wvideos, wobjects)
 
 
 def _video_key(source: str) -> str:

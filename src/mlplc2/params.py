@@ -19,7 +19,7 @@ from typing import Literal
 
 from ._validation import InputValueError, Valid, check_fields
 
-__all__ = ["Params", "GAMMA_MIN", "LM_SCALE_MAX", "param", "parameter_table", "document_parameters"]
+__all__ = ["Params", "ParameterSet", "GAMMA_MIN", "LM_SCALE_MAX", "param", "parameter_table", "document_parameters"]
 
 #: Smallest exponent gamma_on / gamma_off (Eq. 11). With tiny exponents T ** gamma lies within a
 #: few float32 steps of 1 for every T > 0, the opponent difference r - l is rounding noise and the
@@ -29,6 +29,20 @@ GAMMA_MIN = 0.01
 #: Largest lm_gain x max(1, leaky_slope): LM = lm_gain x f(r - l) with |r - l| <= 2, and Eq. 12
 #: squares it, in float32 (largest 3.4e38): 1e15 leaves a wide margin.
 LM_SCALE_MAX = 1e15
+
+
+class ParameterSet:
+    """What every frozen parameter dataclass offers (:class:`Params`, ``TargetParams``, the LGMD
+    and flow parameters): a validated :meth:`replace` and :meth:`to_dict`."""
+
+    def replace(self, **changes):
+        """Return a copy with ``changes`` applied (validated like the constructor)."""
+        names = {f.name for f in dataclasses.fields(self)}
+        unknown = sorted(set(changes) - names)
+        if unknown:
+            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+        return dataclasses.replace(self, **changes)
+
 
 
 def param(default, doc: str, *, valid: Valid, symbol: str = "", unit: str = "", table: str | None = None):
@@ -113,7 +127,7 @@ def document_parameters(title: str):
 
 @document_parameters("Parameters (Table I and extras)")
 @dataclass(frozen=True)
-class Params:
+class Params(ParameterSet):
     """Parameters of the LPLC2 model family (LPLC2, sLPLC2, mLPLC2).
 
     Defaults are Table I of Liu & Fu (the mLPLC2 paper) where Table I gives a
@@ -257,14 +271,6 @@ class Params:
             raise InputValueError(f"Params.lm_gain x max(1, leaky_slope) must be <= {LM_SCALE_MAX:g} (LM stays "
                                   f"finite in float32), got {scale:g}")
 
-    def replace(self, **changes) -> "Params":
-        """Return a copy with ``changes`` applied (validated like the constructor)."""
-        names = {f.name for f in dataclasses.fields(self)}
-        unknown = sorted(set(changes) - names)
-        if unknown:
-            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
-        return dataclasses.replace(self, **changes)
-
     def delays_ms(self) -> tuple[float, ...]:
         """Dynamic delays tau_s (ms) for sampling distances s = 1..N_c (Eq. 8, Table I)."""
         if self.n_c == 1:
@@ -272,6 +278,4 @@ class Params:
         step = (self.tau_nc - self.tau_1) / (self.n_c - 1)
         return tuple(self.tau_1 + k * step for k in range(self.n_c))
 
-    def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
 

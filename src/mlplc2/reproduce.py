@@ -233,12 +233,12 @@ def load_paper_objects(gt_path: Path) -> dict[str, list]:
     follow tracks)."""
     from collections.abc import Mapping
 
-    from .evaluate import PHASES, _parse_ground_truth, _read_json
+    from .truth import PHASES, parse, read_json
 
-    raw = _read_json(gt_path)
+    raw = read_json(gt_path)
     if not isinstance(raw, Mapping) or not isinstance(raw.get("videos"), Mapping):
         raise InputValueError(f"{gt_path}: expected {{\"videos\": {{name: entry}}}} (the paper's ground_truth.json)")
-    truth = _parse_ground_truth(raw, str(gt_path))
+    truth = parse(raw, str(gt_path))
     objects: dict[str, list] = {}
     for key, vt in truth.items():
         entry = raw["videos"][key] if key in raw["videos"] else {}

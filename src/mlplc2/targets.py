@@ -53,24 +53,25 @@ from __future__ import annotations
 import bisect
 import math
 from collections import deque
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import cv2
 import numpy as np
 
 from ._validation import InputValueError, Valid, check_fields, check_real
 from .lobula_plate import LocalMotion
-from .params import document_parameters, param
+from .params import ParameterSet, document_parameters, param
 
-__all__ = ["TargetParams", "Target", "TargetLayer", "Extent", "Alignment", "measure_extent", "edge_distance",
-           "align", "fit_contact", "fit_course", "bearing", "focal_length", "check_hfov"]
+__all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignment", "measure_extent", "edge_distance",
+           "align", "change_box", "pyramid", "fit_contact", "fit_course", "estimate", "count_down", "bearing", "focal_length",
+           "check_hfov"]
 
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
 
 
 @document_parameters("Parameters")
 @dataclass(frozen=True)
-class TargetParams:
+class TargetParams(ParameterSet):
     """Parameters of the target layer: candidates, the image measurement, time to contact,
     course and the warning (one set for every input; ``docs/targets.md``).
 
@@ -655,8 +656,9 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
 # the layer
 # ---------------------------------------------------------------------------
 @dataclass
-class _Track:
-    """Mutable state of one target."""
+class Track:
+    """Mutable state of one target: box, accumulated log-scale, the recent
+    ``(frame, log_scale, cx, cy, width)`` history the fits use, and the evidence counters."""
 
     id: int
     born: int
@@ -667,8 +669,9 @@ class _Track:
     log_s: float = 0.0
     history: deque = field(default_factory=deque)   # (frame, log_s, cx, cy, w)
     fails: int = 0
-    last_answer: int = -(10 ** 9)
-    last_estimate: int = -(10 ** 9)
+    last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
+    last_estimate: int = -(10 ** 9)    # frame of its last time to contact
+    last_seen: int = -(10 ** 9)        # frame its object was last found (models without fields)
     streak: int = 0
     fields: set = field(default_factory=set)
     rate: float | None = None
@@ -681,7 +684,7 @@ class _Track:
         return max(self.w, self.h)
 
 
-def _overlap(a: _Track, b: _Track) -> float:
+def _overlap(a: Track, b: Track) -> float:
     """Area of the intersection of two boxes over the area of the smaller."""
     ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
     iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
@@ -713,7 +716,7 @@ class TargetLayer:
         self.reset()
 
     def reset(self) -> None:
-        self._tracks: list[_Track] = []
+        self._tracks: list[Track] = []
         self._next = 1
         self._prev: list[np.ndarray] | None = None
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # the last grey frames
@@ -756,7 +759,7 @@ class TargetLayer:
             box = self._box(lm, gray, x, y, field_seed=f is not None)
             if box is None:
                 continue
-            t = _Track(self._next, index, *box)
+            t = Track(self._next, index, *box)
             host = next((o for o in self._tracks if _overlap(o, t) >= 0.5), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:
@@ -835,7 +838,7 @@ class TargetLayer:
     def _merge(self) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger: keep the older."""
         tracks = sorted(self._tracks, key=lambda t: t.id)
-        out: list[_Track] = []
+        out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if _overlap(o, t) >= 0.5), None)
             if host is None:
@@ -845,26 +848,47 @@ class TargetLayer:
                 host.last_answer = max(host.last_answer, t.last_answer)
         self._tracks = out
 
-    def _estimate(self, t: _Track, index: int, w: int, h: int) -> Target:
-        p = self.params
-        frames = [q[0] for q in t.history]
-        ttc = sigma = miss = None
-        fit = fit_contact(frames, [q[1] for q in t.history]) if len(frames) >= p.min_frames else None
-        if fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat and fit.ttc / self.fps <= p.max_ttc_s:
-            ttc, sigma = fit.ttc / self.fps, fit.sigma / self.fps
-            heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
-            miss = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
-                              [q[4] for q in t.history], heading, fit.ttc)
-            t.streak += 1
-            t.last_estimate = index
-        else:
-            t.streak = 0
-        looming = index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames
-        warning = bool(looming and ttc is not None and miss is not None and ttc <= p.horizon_s
-                       and miss <= p.max_miss and sigma <= p.max_ttc_sigma * ttc)
-        az = el = None
-        if self.focal is not None:
-            az, el = bearing(t.cx, t.cy, (h, w), self.focal)
-        return Target(t.id, t.cx, t.cy, t.w, t.h, ttc_s=ttc, miss=miss, warning=warning,
-                      fields=tuple(sorted(t.fields)), born=t.born, looming=looming, expansion=t.rate,
-                      ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el)
+    def _estimate(self, t: Track, index: int, w: int, h: int) -> Target:
+        return estimate(t, self.params, self.fps, index, (h, w), self.focal)
+
+
+def count_down(targets, elapsed: float) -> tuple[Target, ...]:
+    """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down; an estimate
+    whose contact has passed becomes None and loses its warning; re-sorted by urgency."""
+    out = []
+    for t in targets:
+        if t.ttc_s is not None:
+            left = t.ttc_s - elapsed
+            t = replace(t, ttc_s=left) if left > 0 else replace(t, ttc_s=None, miss=None, warning=False,
+                                                                 ttc_sigma_s=None)
+        out.append(t)
+    return tuple(sorted(out, key=Target.urgency))
+
+
+def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
+             focal: float | None = None) -> Target:
+    """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
+    course (:func:`fit_course`) and the warning rule (step 5 of the module docstring). Shared
+    by every model with targets (the LPLC2 family and the optical-flow baseline)."""
+    h, w = shape
+    frames = [q[0] for q in t.history]
+    ttc = sigma = miss = None
+    fit = fit_contact(frames, [q[1] for q in t.history]) if len(frames) >= p.min_frames else None
+    if fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat and fit.ttc / fps <= p.max_ttc_s:
+        ttc, sigma = fit.ttc / fps, fit.sigma / fps
+        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+        miss = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
+                          [q[4] for q in t.history], heading, fit.ttc)
+        t.streak += 1
+        t.last_estimate = index
+    else:
+        t.streak = 0
+    looming = index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames
+    warning = bool(looming and ttc is not None and miss is not None and ttc <= p.horizon_s
+                   and miss <= p.max_miss and sigma <= p.max_ttc_sigma * ttc)
+    az = el = None
+    if focal is not None:
+        az, el = bearing(t.cx, t.cy, (h, w), focal)
+    return Target(t.id, t.cx, t.cy, t.w, t.h, ttc_s=ttc, miss=miss, warning=warning,
+                  fields=tuple(sorted(t.fields)), born=t.born, looming=looming, expansion=t.rate,
+                  ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el)

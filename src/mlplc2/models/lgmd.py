@@ -21,7 +21,6 @@ float64.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from dataclasses import dataclass
 
@@ -30,6 +29,7 @@ import numpy as np
 
 from .._validation import (FLOAT32_MAX, InputTypeError, InputValueError, check_bool, check_int, check_real,
                            check_reals)
+from ..params import ParameterSet
 from ..retina import photoreceptors
 from .base import Model, Output, register
 
@@ -93,19 +93,6 @@ def _check(cls_name: str, obj, positive=(), non_negative=(), ints=(), bools=()) 
         object.__setattr__(obj, name, check_bool(getattr(obj, name), f"{cls_name}.{name}"))
 
 
-class _ParamsMixin:
-    def replace(self, **changes):
-        """Return a copy with ``changes`` applied (validated like the constructor)."""
-        names = {f.name for f in dataclasses.fields(self)}
-        unknown = sorted(set(changes) - names)
-        if unknown:
-            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
-        return dataclasses.replace(self, **changes)
-
-    def to_dict(self) -> dict:
-        return dataclasses.asdict(self)
-
-
 # ---------------------------------------------------------------------------
 # Grouping layer, shared (Yue & Rind 2006 feature enhancement; Fu et al.)
 # ---------------------------------------------------------------------------
@@ -124,7 +111,7 @@ def _grouping(s: np.ndarray, c_w: float, delta_c: float, c_de: float, t_de: floa
 # LGMD2
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class LGMD2Params(_ParamsMixin):
+class LGMD2Params(ParameterSet):
     """Parameters of the LGMD2 network (Fu et al., IEEE TCYB 2020; Fu & Yue 2015).
 
     Defaults follow Fu's open-source LGMD2 ("lgmd2OpenSource", the code of the
@@ -314,7 +301,7 @@ class LGMD2(Model):
 # LGMD1
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
-class LGMD1Params(_ParamsMixin):
+class LGMD1Params(ParameterSet):
     """Parameters of the LGMD1 network (Yue & Rind, IEEE TNN 2006).
 
     Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values

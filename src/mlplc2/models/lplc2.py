@@ -13,7 +13,7 @@ from ..attention import AttentionField, IdCounter, argmax_outside, gate_area, lp
 from ..backend import resolve
 from ..lobula_plate import LocalMotion
 from ..params import Params
-from ..targets import Target, TargetLayer, TargetParams, check_hfov, focal_length
+from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
 from .base import Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
@@ -90,16 +90,8 @@ class _LPLC2Family(Model):
                       spike=collision, targets=targets)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
-        """A repeated frame: the targets' times to contact count down by ``elapsed`` seconds (an
-        estimate whose contact has passed becomes None and loses its warning)."""
-        targets = []
-        for t in last.targets:
-            if t.ttc_s is not None:
-                left = t.ttc_s - elapsed
-                t = dataclasses.replace(t, ttc_s=left) if left > 0 else dataclasses.replace(
-                    t, ttc_s=None, miss=None, warning=False, ttc_sigma_s=None)
-            targets.append(t)
-        return dataclasses.replace(last, targets=tuple(sorted(targets, key=Target.urgency)))
+        """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
+        return dataclasses.replace(last, targets=count_down(last.targets, elapsed))
 
 
 @register("mlplc2")
