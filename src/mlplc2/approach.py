@@ -50,18 +50,20 @@ Rendering
 ---------
 Every pixel's ray is intersected with the object's plane (a homography per
 object and frame, evaluated only in the object's bounding box) on a
-``supersample x supersample`` grid of sub-pixel samples whose mean is the
-pixel's coverage, so sub-pixel growth shows as grey-level changes. Objects are
-drawn far to near (painter's order by the depth Z of their centre); an object
-whose centre is behind the camera (Z <= 0) or farther than :data:`FAR_M` is
-not drawn. Textured objects carry a :func:`~mlplc2.stimuli.procedural_background`
-pattern fixed on the object, sampled through the projection from a box-filter
-mip-map. Backgrounds: ``"plain"`` (:func:`mlplc2.stimuli.plain_level`),
+``supersample x supersample`` grid of sub-pixel samples; each sample counts the
+share of its cell inside the outline (from its signed distance to it, exact for
+a straight edge) and their mean is the pixel's coverage, so sub-pixel growth
+shows as grey-level changes. Objects are drawn far to near (painter's order by
+the depth Z of their centre); an object is drawn until it reaches the camera
+plane (contact) while its centre is in front of the camera and nearer than
+:data:`FAR_M`. Textured objects carry a
+:func:`~mlplc2.stimuli.procedural_background` pattern fixed on the object,
+sampled through the projection from a box-filter mip-map. Backgrounds: ``"plain"`` (:func:`mlplc2.stimuli.plain_level`),
 ``"texture"`` (a procedural texture at infinity, a panorama sampled by ray
 direction: it moves only when the camera turns) and ``"ground"`` (a textured
-ground plane :data:`camera_height_m` below the camera under the far texture,
-each pixel's ray intersected with the plane and filtered by its footprint, so
-the far ground blurs instead of aliasing). Then optional optics blur
+ground plane ``camera_height_m`` below the camera under the far texture, each
+pixel's ray intersected with the plane and filtered by its footprint, so the
+far ground blurs instead of aliasing). Then optional optics blur
 (``blur_px``, Gaussian sigma) and sensor noise (``noise_std`` grey levels),
 rounded to ``uint8``.
 """
@@ -1051,8 +1053,8 @@ def approach_scene(*, kind: str = "collision", n_objects: int | None = None, app
     -------
     ApproachStimulus
     """
-    kinds = APPROACH_KINDS + ("mixed",)
-    kind = _choice(kind, "kind", kinds)
+    kind = _choice(kind, "kind", APPROACH_KINDS + ("mixed",))
+    fps = check_fps(fps)
     count = (3 if kind == "mixed" else 1) if n_objects is None else check_int(n_objects, "n_objects", minimum=1)
     camera = _choice(camera, "camera", CAMERA_MOTIONS)
     cam_speed = DEFAULT_CAMERA_SPEED[camera] if camera_speed is None else check_real(camera_speed, "camera_speed")
