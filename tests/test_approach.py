@@ -327,7 +327,8 @@ def test_either_module_may_be_imported_first():
 # --------------------------------------------------------------------------- bad input
 
 @pytest.mark.parametrize("make, match", [
-    (lambda: S.approach([], size=(0, 10), frames=1), "size width"),
+    (lambda: S.approach([], size=(0, 10), frames=1), "width"),
+    (lambda: S.approach([], size=320, frames=1), "size"),
     (lambda: S.approach([], frames=1, hfov_deg=180), "hfov_deg"),
     (lambda: S.approach([], frames=1, camera="zoom"), "camera"),
     (lambda: S.approach([], frames=1, background="sky"), "background"),

@@ -335,28 +335,10 @@ def _side_angle(side) -> float:
     return math.radians(check_real(side, "side"))
 
 
-def _check_size(size) -> tuple[int, int]:
-    if isinstance(size, (str, bytes)):
-        raise InputTypeError(f"size must be (width, height) in pixels, got {size!r}")
-    try:
-        w, h = size
-    except (TypeError, ValueError):
-        raise InputTypeError(f"size must be (width, height) in pixels, got {size!r}") from None
-    return check_int(w, "size width", minimum=1), check_int(h, "size height", minimum=1)
-
-
-def _check_hfov(hfov_deg) -> float:
-    return check_real(hfov_deg, "hfov_deg", positive=True, below=180.0)
-
-
-def _focal(width: int, hfov: float) -> float:
-    return (width / 2.0) / math.tan(math.radians(hfov) / 2.0)
-
-
 def _place(at, distance, width_m, width_px, size, hfov_deg):
     """Ray ``(X/Z, Y/Z, 1)`` through image point ``at``, depth and physical width."""
     w, h = _check_size(size)
-    f = _focal(w, _check_hfov(hfov_deg))
+    f = focal_length_px(w, hfov_deg)
     z = check_real(distance, "distance_m", positive=True)
     if at is None:
         x, y = (w - 1) / 2.0, (h - 1) / 2.0
@@ -454,7 +436,7 @@ class _Camera:
     def __init__(self, w: int, h: int, hfov: float, fps: float, motion: str, speed: float, height: float, n: int):
         self.w, self.h, self.hfov, self.fps = w, h, hfov, fps
         self.motion, self.speed, self.height, self.n = motion, speed, height, n
-        self.f = _focal(w, hfov)
+        self.f = focal_length_px(w, hfov)
         self.cx, self.cy = (w - 1) / 2.0, (h - 1) / 2.0
         self.K = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
         t = np.arange(n, dtype=np.float64) / fps
@@ -662,8 +644,6 @@ class _Background:
             self.az0, self.el0 = az.min() - m, el.min() - m
             pw = int(math.ceil((az.max() - az.min()) * cam.f)) + 2 * _PANORAMA_MARGIN + 2
             ph = int(math.ceil((el.max() - el.min()) * cam.f)) + 2 * _PANORAMA_MARGIN + 2
-            from .stimuli import procedural_background
-
             self.panorama = procedural_background(pw, ph, _seed(seed, 1)).astype(np.float32)
         self.ground = _Ground(cam, _seed(seed, 2)) if kind == "ground" else None
 
@@ -709,8 +689,6 @@ class _Ground:
     """
 
     def __init__(self, cam: _Camera, seed: int):
-        from .stimuli import procedural_background
-
         self.cam = cam
         self.levels = _mipmap(procedural_background(GROUND_TEXTURE_PX, GROUND_TEXTURE_PX, seed, periodic=True))
         sub = (np.arange(GROUND_SUBROWS) + 0.5) / GROUND_SUBROWS - 0.5
@@ -899,8 +877,6 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     >>> stim.frames.shape, stim.objects[0].contact_frame
     ((10, 48, 64), 15.0)
     """
-    from .stimuli import MAX_STIMULUS_BYTES, plain_level
-
     if isinstance(objects, ApproachObject):
         objects = [objects]
     if isinstance(objects, (str, bytes)) or not hasattr(objects, "__iter__"):
@@ -911,7 +887,8 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
             raise InputTypeError(f"objects[{i}] must be an ApproachObject, got {type(o).__name__}")
     w, h = _check_size(size)
     fps = check_fps(fps)
-    hfov = _check_hfov(hfov_deg)
+    focal_length_px(w, hfov_deg)                  # checks hfov_deg
+    hfov = float(hfov_deg)
     background = _choice(background, "background", APPROACH_BACKGROUNDS)
     camera = _choice(camera, "camera", CAMERA_MOTIONS)
     speed = check_real(camera_speed, "camera_speed")
@@ -955,8 +932,6 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
 
     level = plain_level([o.appearance for o in objects])
     bg = _Background(background, cam, level, seed)
-    from .stimuli import procedural_background
-
     textures = [_mipmap(procedural_background(OBJECT_TEXTURE_PX, OBJECT_TEXTURE_PX,
                                               o.seed if o.seed is not None else _seed(seed, 3, i)))
                 if o.appearance == "textured" else None for i, o in enumerate(objects)]
@@ -1142,7 +1117,7 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     n = int(round(dur * fps))
     rng = np.random.default_rng(_seed(seed, 6))
     count = int(rng.integers(1, 4)) if n_objects is None else check_int(n_objects, "n_objects", minimum=1)
-    f = _focal(w, _check_hfov(hfov_deg))
+    f = focal_length_px(w, hfov_deg)
     objs = []
     for i in range(count):
         if i == 0:
@@ -1184,6 +1159,8 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
                     name=f"random_scene_{seed}")
 
 
-# mlplc2.stimuli holds the result type and re-exports this module's names: each module imports
-# the other at its end, once its own names exist, so either may be imported first.
-from .stimuli import ApproachStimulus  # noqa: E402
+# mlplc2.stimuli holds the result type and the shared helpers, and re-exports this module's
+# names: each module imports the other at its end, once its own names exist, so either may be
+# imported first.
+from .stimuli import (MAX_STIMULUS_BYTES, ApproachStimulus, _check_size, focal_length_px,  # noqa: E402
+                      plain_level, procedural_background)
