@@ -680,8 +680,9 @@ class _Ground:
     Each pixel is sampled on :data:`GROUND_SUBROWS` sub-rows (the ground's footprint is longest
     along the image's columns); every sample's ray is intersected with the plane, and the
     periodic texture is read from the box-filter mip-map at the level of the sample's footprint
-    (the larger of its extents along x and along the sub-rows, in texels; trilinear
-    interpolation), so the far ground blurs instead of aliasing. Samples whose ray does not
+    (the larger of the pixel's extent along x and the sub-row's along y, in texels, measured on
+    the pixel's middle sub-row; trilinear interpolation), so the far ground blurs instead of
+    aliasing. Samples whose ray does not
     reach the ground (above the horizon) keep the far texture; the sub-row mean also
     anti-aliases the horizon. The rays, footprints and levels are computed once, except for a
     tilting camera: moving forward only shifts the ground points, panning turns them about
@@ -693,25 +694,29 @@ class _Ground:
         self.levels = _mipmap(procedural_background(GROUND_TEXTURE_PX, GROUND_TEXTURE_PX, seed, periodic=True))
         sub = (np.arange(GROUND_SUBROWS) + 0.5) / GROUND_SUBROWS - 0.5
         ys = (np.arange(cam.h)[:, None] + sub[None, :]).ravel()[:, None]
-        self.rays = cam.rays(np.arange(cam.w, dtype=np.float64)[None, :], ys)   # (H * S, W, 3)
+        # float32: the ground points need no more (the far ones read coarse levels), at half the cost
+        self.rays = cam.rays(np.arange(cam.w, dtype=np.float64)[None, :], ys).astype(np.float32)
         self.plan = None
 
     def _setup(self, rot: np.ndarray) -> None:
         """Ground points (texels from the camera), mip-map levels and weights of the samples."""
         cam = self.cam
-        d = self.rays @ rot.T
-        below = d[..., 1] > 1e-9
-        s = cam.height / np.where(below, d[..., 1], np.nan)          # ray length to the ground
-        gx = s * d[..., 0] / GROUND_TEXEL_M
-        gz = s * d[..., 2] / GROUND_TEXEL_M
+        d = self.rays @ rot.T.astype(np.float32)
+        below = d[..., 1] > 1e-6
+        s = np.float32(cam.height / GROUND_TEXEL_M) / np.where(below, d[..., 1], np.nan)   # ray length, texels
+        gx = s * d[..., 0]
+        gz = s * d[..., 2]
+        # footprint per pixel (from its middle sub-row) along x and per sub-row along y
+        S = GROUND_SUBROWS
+        px, pz = gx[S // 2::S], gz[S // 2::S]
         with np.errstate(invalid="ignore"):
-            fx = np.hypot(np.diff(gx, axis=1), np.diff(gz, axis=1))
-            fy = np.hypot(np.diff(gx, axis=0), np.diff(gz, axis=0))
-        fx = np.concatenate([fx, fx[:, -1:]], axis=1) if cam.w > 1 else np.full(gx.shape, np.nan)
-        fy = np.concatenate([fy, fy[-1:]], axis=0)
+            fx = np.hypot(np.diff(px, axis=1), np.diff(pz, axis=1))
+            fy = np.hypot(np.diff(px, axis=0), np.diff(pz, axis=0)) / S
+        fx = np.concatenate([fx, fx[:, -1:]], axis=1) if cam.w > 1 else np.full(px.shape, np.nan, np.float32)
+        fy = np.concatenate([fy, fy[-1:]], axis=0) if cam.h > 1 else np.full(px.shape, np.nan, np.float32)
         top = len(self.levels) - 1
         with np.errstate(divide="ignore", invalid="ignore"):
-            lam = np.clip(np.log2(np.fmax(fx, fy)), 0.0, float(top))
+            lam = np.repeat(np.clip(np.log2(np.fmax(fx, fy)), 0.0, float(top)), S, axis=0)
         idx = np.flatnonzero(below)
         lam = lam.ravel()[idx]
         lam[~np.isfinite(lam)] = top                                  # next to the horizon
