@@ -43,6 +43,13 @@ Map to the paper (Sec. IV, "Experimental Evaluation")
     half-size ``atan(l / (v (t_c - t)))``) for time-to-collision tests. Built
     by :func:`looming`.
 
+``approach``
+    Not in the paper: flat objects moving in 3-D in front of a pinhole camera
+    that may pan, tilt or move forward over a ground plane (collisions,
+    passes, distractors), with exact per-frame truth. Built by
+    :func:`approach_scene` over :func:`approach` (module :mod:`mlplc2.approach`,
+    re-exported here; docs/stimuli.md).
+
 Arbitrary multi-object scenes are made with :func:`scene` and
 :class:`SceneObject`; :func:`generate` dispatches over :data:`NAMES` (the CLI's
 ``mlplc2 stimulus NAME``) and :func:`parameters` gives each name's options.
@@ -83,6 +90,14 @@ __all__ = [
     "generate",
     "parameters",
     "focal_length_px",
+    "plain_level",
+    # 3-D approaches (mlplc2.approach)
+    "ApproachObject",
+    "ObjectTrack",
+    "ApproachStimulus",
+    "approach",
+    "approach_scene",
+    "random_scene",
 ]
 
 #: Column order of Fig. 3 (Sec. IV-A).
@@ -90,7 +105,7 @@ BASIC_NAMES: tuple[str, ...] = (
     "dark_approach", "dark_recede", "bright_approach", "bright_recede", "translating", "grating")
 
 #: Every name :func:`generate` accepts.
-NAMES: tuple[str, ...] = BASIC_NAMES + ("four_phase", "six_objects", "looming")
+NAMES: tuple[str, ...] = BASIC_NAMES + ("four_phase", "six_objects", "looming", "approach")
 
 #: Grey level of "white" in the paper's basic test videos (not 255).
 BASIC_WHITE = 250
@@ -251,6 +266,31 @@ class Stimulus:
         return self.object(object_id).center_at(int(frame))
 
 
+@dataclass(frozen=True, eq=False)
+class ApproachStimulus(Stimulus):
+    """A :class:`Stimulus` of :func:`mlplc2.approach.approach`, with its camera and background.
+
+    Its ``objects`` are :class:`mlplc2.approach.ObjectTrack` (per-frame track, time to contact,
+    miss) instead of :class:`ObjectTruth`.
+
+    Attributes
+    ----------
+    camera : dict
+        ``{"hfov_deg", "focal_px", "motion", "speed"}``.
+    background : str
+        ``"plain"``, ``"texture"`` or ``"ground"``.
+    """
+
+    camera: dict | None = None
+    background: str = "plain"
+
+    def to_ground_truth(self) -> dict[str, Any]:
+        """Return the JSON entry of docs/stimuli.md ("Ground truth")."""
+        return {"size": list(self.size), "frames": len(self), "fps": float(self.fps),
+                "camera": dict(self.camera or {}), "background": self.background,
+                "objects": [o.to_dict() for o in self.objects]}
+
+
 @dataclass(frozen=True)
 class SceneObject:
     """One square object of a :func:`scene`.
@@ -396,6 +436,13 @@ def focal_length_px(width: int, hfov_deg: float) -> float:
     return (width / 2.0) / math.tan(math.radians(hfov) / 2.0)
 
 
+def plain_level(appearances: Sequence[str]) -> float:
+    """Grey level of a plain background for objects of these appearances: 250 (the paper's
+    "white") if every one is dark, 0 if every one is bright, else mid-grey 128."""
+    kinds = set(appearances)
+    return 250.0 if kinds == {"dark"} else 0.0 if kinds == {"bright"} else 128.0
+
+
 def _physical_sides(frames_idx: np.ndarray, contact_frame: float, fps: float, half_size: float,
                     speed: float, focal: float) -> np.ndarray:
     """Side length in px of a constant-speed approach at (absolute) frame indices."""
@@ -413,7 +460,7 @@ def _physical_sides(frames_idx: np.ndarray, contact_frame: float, fps: float, ha
 OPTICS_BLUR_PX = 1.0
 
 
-def procedural_background(width: int, height: int, seed: int = 0) -> np.ndarray:
+def procedural_background(width: int, height: int, seed: int = 0, *, periodic: bool = False) -> np.ndarray:
     """Natural-like grey texture: 1/f noise plus a few blurred blobs, seen through
     slightly blurring optics (``OPTICS_BLUR_PX``).
 
@@ -432,6 +479,11 @@ def procedural_background(width: int, height: int, seed: int = 0) -> np.ndarray:
     seed : int
         Seed of :func:`numpy.random.default_rng`; the same seed gives the same
         texture.
+    periodic : bool
+        Make the texture tile seamlessly (blobs wrap around the borders and the
+        blurs are circular; the noise is periodic anyway): for the ground plane
+        of :func:`mlplc2.approach.approach`. ``False`` gives the texture as
+        before (the same for a seed).
 
     Returns
     -------
@@ -461,17 +513,31 @@ def procedural_background(width: int, height: int, seed: int = 0) -> np.ndarray:
         ay = int(rng.integers(max(2, height // 16), max(3, height // 4)))
         angle = float(rng.uniform(0, 180))
         value = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.8, 1.6))
-        cv2.ellipse(blobs, (cx, cy), (ax, ay), angle, 0, 360, value, -1)
+        for dx, dy in ([(dx, dy) for dx in (-width, 0, width) for dy in (-height, 0, height)]
+                       if periodic else [(0, 0)]):
+            cv2.ellipse(blobs, (cx + dx, cy + dy), (ax, ay), angle, 0, 360, value, -1)
     sigma = max(1.0, height / 40.0)
-    blobs = cv2.GaussianBlur(blobs, (0, 0), sigma)
+    blobs = _blur(blobs, sigma, periodic)
     tex = tex + blobs.astype(np.float64)
     # Camera optics: a 1-px Gaussian blur. Without it the 1/f texture changes by ~16 grey
     # levels per pixel of scroll, far busier than the paper's photographs (2.7 for
     # outdoor_2.jpg, 8.8 for outdoor_3.jpg); with it ~5.
-    tex = cv2.GaussianBlur(tex, (0, 0), OPTICS_BLUR_PX)
+    tex = _blur(tex, OPTICS_BLUR_PX, periodic)
     lo, hi = np.percentile(tex, [2.0, 98.0])
     tex = 60.0 + (tex - lo) * (160.0 / max(hi - lo, 1e-12))
     return np.clip(np.rint(tex), 30, 240).astype(np.uint8)
+
+
+def _blur(image: np.ndarray, sigma: float, periodic: bool) -> np.ndarray:
+    """Gaussian blur; circular (the image wrapped around its borders) if ``periodic``."""
+    import cv2
+
+    if not periodic:
+        return cv2.GaussianBlur(image, (0, 0), sigma)
+    pad = int(math.ceil(4 * sigma))
+    h, w = image.shape
+    big = np.pad(image, ((pad, pad), (pad, pad)), mode="wrap")
+    return cv2.GaussianBlur(big, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)[pad:pad + h, pad:pad + w]
 
 
 def _fit_height(image: np.ndarray, height: int) -> np.ndarray:
@@ -790,8 +856,7 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     checked = [_check_object(o, n, i) for i, o in enumerate(objects)]
 
     if isinstance(background, str) and background == "plain":
-        pols = {o.polarity for o in checked}
-        background = 250.0 if pols == {"dark"} else 0.0 if pols == {"bright"} else 128.0
+        background = plain_level([o.polarity for o in checked])
     if n * w * h > MAX_STIMULUS_BYTES:
         raise _fail(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
                     f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
@@ -1015,8 +1080,8 @@ def generate(name: str, **options: Any) -> Stimulus:
     **options
         Keyword arguments of the generator: :func:`basic` (``size``,
         ``frames``, ``fps``) for the six basic stimuli, else those of
-        :func:`four_phase`, :func:`six_objects` or :func:`looming`
-        (:func:`parameters` lists them).
+        :func:`four_phase`, :func:`six_objects`, :func:`looming` or, for
+        ``"approach"``, :func:`approach_scene` (:func:`parameters` lists them).
 
     Returns
     -------
@@ -1035,3 +1100,11 @@ def generate(name: str, **options: Any) -> Stimulus:
                     f"valid options: {', '.join(valid) or 'none'} (command line: {flags or 'none'}; "
                     f"see 'mlplc2 stimulus --help')")
     return _GENERATORS[name](**options)
+
+
+# 3-D approaches live in mlplc2.approach, which builds on ApproachStimulus and
+# procedural_background above: it is imported here, at the end, so that either module may be
+# imported first.
+from .approach import ApproachObject, ObjectTrack, approach, approach_scene, random_scene  # noqa: E402
+
+_GENERATORS["approach"] = approach_scene
