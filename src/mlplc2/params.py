@@ -43,6 +43,8 @@ class ParameterSet:
             raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
         return dataclasses.replace(self, **changes)
 
+    def to_dict(self) -> dict:
+        return dataclasses.asdict(self)
 
 
 def param(default, doc: str, *, valid: Valid, symbol: str = "", unit: str = "", table: str | None = None):

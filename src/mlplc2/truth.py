@@ -544,12 +544,12 @@ def parse_entry(key: str, entry, where: str) -> VideoTruth:
     old = entry.get("collision_frame")
     if old is not None and contact is not None and old != contact:
         raise _bad(f"{where}.collision_frame", f"differs from contact_frame ({old!r} vs {contact!r}); give one")
-    key = "contact_frame" if contact is not None else "collision_frame"
+    given = "contact_frame" if contact is not None else "collision_frame"
     contact = contact if contact is not None else old
     if contact is not None:
         if label != "collision":
-            raise _bad(f"{where}.{key}", f"only a clip labelled 'collision' has a {key.replace('_', ' ')}")
-        contact = _int(contact, f"{where}.{key}", 0)
+            raise _bad(f"{where}.{given}", f"only a clip labelled 'collision' has a {given.replace('_', ' ')}")
+        contact = _int(contact, f"{where}.{given}", 0)
     onset = entry.get("danger_onset_frame")
     onset = None if onset is None else _int(onset, f"{where}.danger_onset_frame", 0)
     visible = entry.get("first_visible_frame")
