@@ -1078,7 +1078,8 @@ def approach_scene(*, kind: str = "collision", n_objects: int | None = None, app
 
 
 def random_scene(seed: int, *, background: str = "texture", camera: str = "static", appearance: str | None = None,
-                 shape: str | None = None, n_objects: int | None = None, camera_speed: float | None = None,
+                 shape: str | None = None, n_objects: int | None = None, kinds: Sequence[str] | None = None,
+                 camera_speed: float | None = None,
                  camera_height_m: float = 1.0, size: tuple[int, int] = (320, 240), fps: float = 30.0,
                  hfov_deg: float = 60.0, duration_s: float = 5.0, noise_std: float = 0.0,
                  blur_px: float = 0.0, supersample: int = 4) -> ApproachStimulus:
@@ -1102,7 +1103,11 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     appearance, shape : str or None
         Of every object; None: drawn per object.
     n_objects : int or None
-        Number of objects; None: 1-3, drawn.
+        Number of objects; None: 1-3, drawn (or ``len(kinds)``).
+    kinds : sequence of str or None
+        The kind of each object, in order (``"collision"``, ``"pass"``, ``"recede"``,
+        ``"translate"``, ``"static"``); None: drawn as described above. The other draws do
+        not depend on it, so a seed's positions, sizes and timings stay the same.
     camera_speed : float or None
         As in :func:`approach`; None: :data:`DEFAULT_CAMERA_SPEED`.
     duration_s : float
@@ -1122,6 +1127,11 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     n = int(round(dur * fps))
     rng = np.random.default_rng(_seed(seed, 6))
     count = int(rng.integers(1, 4)) if n_objects is None else check_int(n_objects, "n_objects", minimum=1)
+    if kinds is not None:
+        kinds = [_choice(k, "kinds", APPROACH_KINDS) for k in kinds]
+        if not kinds or (n_objects is not None and len(kinds) != count):
+            raise InputValueError(f"kinds must name one kind per object (n_objects={count}), got {kinds!r}")
+        count = len(kinds)
     f = focal_length_px(w, hfov_deg)
     objs = []
     for i in range(count):
@@ -1129,6 +1139,8 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
             kind = str(rng.choice(["collision", "pass"]))
         else:
             kind = str(rng.choice(APPROACH_KINDS, p=[0.25, 0.25, 0.15, 0.2, 0.15]))
+        if kinds is not None:
+            kind = kinds[i]
         common = dict(
             at=(float(rng.uniform(0.2, 0.8) * (w - 1)), float(rng.uniform(0.2, 0.8) * (h - 1))),
             shape=str(rng.choice(APPROACH_SHAPES)) if shape is None else shape,

@@ -748,8 +748,9 @@ def _rate(fps: float):
 
 
 def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int, int] | None = None, *,
-                backend: str | None = None) -> Path:
-    """Write ``frames`` (grey or RGB uint8) to ``path`` atomically; see :class:`VideoWriter`.
+                backend: str | None = None, quality: int = 23) -> Path:
+    """Write ``frames`` (grey or RGB uint8) to ``path`` atomically; see :class:`VideoWriter`
+    (``quality``: the H.264 CRF, lower is closer to lossless).
 
     ``size`` is ``(W, H)``; if omitted it is taken from the first frame.
     Returns the path written.
@@ -762,7 +763,7 @@ def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int,
             raise InputValueError(f"{path}: no frames to write") from None
         size = (first.shape[1], first.shape[0])
         it = _chain_first(first, it)
-    with VideoWriter(path, fps, size, backend=backend) as writer:
+    with VideoWriter(path, fps, size, backend=backend, quality=quality) as writer:
         for frame in it:
             writer.write(frame)
     return writer.path

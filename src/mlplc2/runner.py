@@ -291,7 +291,21 @@ def default_out_dir(source) -> Path:
     return p.parent / f"{p.stem}_mlplc2"
 
 
-def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=None) -> list[Model]:
+def _target_params(value):
+    """``run(target_params=...)``: None, a TargetParams, or a dict of its fields."""
+    from .targets import TargetParams
+
+    if value is None or isinstance(value, TargetParams):
+        return value
+    if isinstance(value, Mapping):
+        return TargetParams().replace(**{str(k): v for k, v in value.items()})
+    raise InputValueError(f"target_params must be mlplc2.targets.TargetParams or a dict of its fields, "
+                          f"got {type(value).__name__}")
+
+
+def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=None,
+                  target_params=None) -> list[Model]:
+    target_params = _target_params(target_params)
     if isinstance(models, (str, Model)):
         models = [models]
     names = [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
@@ -321,11 +335,15 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
                 model.hfov_deg = check_hfov(hfov_deg)
             if repeat_threshold is not None:
                 model.repeat_threshold = check_repeat_threshold(repeat_threshold)
+            if target_params is not None and model.has_targets:
+                model.target_params = target_params
         else:
             name = str(m).strip().lower()
             cls = get_model(name)
             p = params.get(name) if isinstance(params, Mapping) else params
             kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.has_targets) else {}
+            if target_params is not None and cls.has_targets:
+                kw["target_params"] = target_params
             kw["repeat_threshold"] = repeat_threshold
             model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
         if model.name in seen:
@@ -358,7 +376,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
         hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | None = None) -> RunResult:
+        repeat_threshold: float | None = None, target_params=None) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -409,6 +427,10 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         this many grey levels as a duplicate: the models hold their last output for it
         (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
         paper's clips). Default: every frame steps the models.
+    target_params : TargetParams or dict, optional
+        Settings of the targets (time to contact, course, warning: ``horizon_s``,
+        ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
+        targets; a dict gives the fields to change from the defaults.
 
     Returns
     -------
@@ -437,7 +459,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
                       keep_original=video, backend=backend)
     try:
-        built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold)
+        built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold, target_params)
         _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     except BaseException:
         src.close()

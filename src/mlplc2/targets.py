@@ -139,6 +139,12 @@ class TargetParams(ParameterSet):
                                                 the principal point ((W - 1) / 2, (H - 1) / 2): the camera
                                                 moves along its optical axis, or stands still.""",
                                                 unit="px", valid=Valid.point())
+    max_anisotropy: float = param(0.35, """Largest difference of the vertical and horizontal growth
+                                  (log ky - log kx over the fit's frames) relative to the growth of a
+                                  looming target: a fronto-parallel object grows alike in both directions
+                                  (0), the ground ahead of a moving camera twice as fast vertically
+                                  (0.67), a wall beside its path the other way round (-0.67).""",
+                                  valid=Valid.real(minimum=0))
     # --- the warning ------------------------------------------------------------------------
     horizon_s: float = param(1.0, "A target warns only when its ``ttc_s`` is at most this ...", unit="s",
                              valid=Valid.real(minimum=0))
@@ -433,18 +439,30 @@ def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = Targe
 # ---------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Alignment:
-    """Similarity between a patch of the previous frame and this one (:func:`align`).
+    """Scales and shift of a patch from the previous frame to this one (:func:`align`).
 
-    ``scale``: k = size now / size before; ``dx``, ``dy``: shift (px) of the patch centre;
-    ``residual``: rms grey-level difference left (weighted); ``sigma``: standard error of
-    ``log k`` from the Gauss-Newton normal equations.
+    ``kx``, ``ky``: the horizontal and vertical scale (size now / size before); ``dx``, ``dy``:
+    shift (px) of the patch centre; ``residual``: rms grey-level difference left (weighted);
+    ``sigma``: standard error of ``log scale`` from the Gauss-Newton normal equations.
     """
 
-    scale: float
+    kx: float
+    ky: float
     dx: float
     dy: float
     residual: float
     sigma: float
+
+    @property
+    def scale(self) -> float:
+        """The mean scale ``sqrt(kx ky)`` (an approaching object: its growth)."""
+        return math.sqrt(self.kx * self.ky)
+
+    @property
+    def anisotropy(self) -> float:
+        """``log(ky / kx)``: 0 for a fronto-parallel object; a ground plane grows twice as fast
+        vertically as horizontally, a wall beside the path the other way round."""
+        return math.log(self.ky / self.kx)
 
 
 def pyramid(gray: np.ndarray, smallest: int = 16) -> list[np.ndarray]:
@@ -467,39 +485,40 @@ def _grid(n: int):
     return _GRIDS[n]
 
 
-def _sample(levels, level: int, cx: float, cy: float, step: float, n: int):
+def _sample(levels, level: int, cx: float, cy: float, step_x: float, step_y: float, n: int):
     """``n`` x ``n`` bilinear samples of pyramid ``level`` around (cx, cy) (level-0 px) every
-    ``step`` level-0 px, and the mask of the samples that fall inside the frame."""
+    ``step_x`` / ``step_y`` level-0 px, and the mask of the samples that fall inside the frame."""
     img = levels[level]
     f = float(1 << level)
-    s = step / f
-    ox = (cx + 0.5) / f - 0.5 - (n - 1) / 2.0 * s
-    oy = (cy + 0.5) / f - 0.5 - (n - 1) / 2.0 * s
-    m = np.array([[s, 0.0, ox], [0.0, s, oy]], np.float32)
+    sx, sy = step_x / f, step_y / f
+    ox = (cx + 0.5) / f - 0.5 - (n - 1) / 2.0 * sx
+    oy = (cy + 0.5) / f - 0.5 - (n - 1) / 2.0 * sy
+    m = np.array([[sx, 0.0, ox], [0.0, sy, oy]], np.float32)
     patch = cv2.warpAffine(img, m, (n, n), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
                            borderMode=cv2.BORDER_REPLICATE)
     idx = _grid(n)[2]
     h, w = img.shape
-    xs, ys = ox + idx * s, oy + idx * s
+    xs, ys = ox + idx * sx, oy + idx * sy
     inside = ((ys >= 0) & (ys <= h - 1))[:, None] & ((xs >= 0) & (xs <= w - 1))[None, :]
     return patch, inside
 
 
 def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
           box: tuple[float, float], *, n: int = 32, iterations: int = 10) -> Alignment | None:
-    """Scale and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
+    """Scales and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
     ``cur`` (two :func:`pyramid` s), weighted on the object's box (half-width, half-height px).
 
-    Gauss-Newton on ``cur(c + d + k (x - c)) = prev(x)`` with the previous patch's gradients
-    (forward-additive with a fixed Hessian), ``n`` x ``n`` samples taken from the pyramid level
-    whose pixel is at most 1.5 samples (so the cost does not depend on the object's size);
-    samples outside the frame get no weight. None when the patch has too little texture or
-    the iteration does not settle.
+    Gauss-Newton on ``cur(c + d + K (x - c)) = prev(x)`` with ``K = diag(kx, ky)`` (the four
+    parameters log kx, log ky, dx, dy), using the previous patch's gradients
+    (forward-additive with a fixed Hessian); ``n`` x ``n`` samples are taken from the pyramid
+    level whose pixel is at most 1.5 samples, so the cost does not depend on the object's size;
+    samples outside the frame get no weight. None when the patch has too little texture or the
+    iteration does not settle.
     """
     uu, vv, _ = _grid(n)
     step = 2.0 * half / n
     level = 0 if step <= 1.5 else min(int(math.ceil(math.log2(step / 1.5))), len(prev) - 1)
-    a, inside = _sample(prev, level, cx, cy, step, n)
+    a, inside = _sample(prev, level, cx, cy, step, step, n)
     a = cv2.GaussianBlur(a, (0, 0), 0.8)
     gx = cv2.Sobel(a, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
     gy = cv2.Sobel(a, cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
@@ -507,34 +526,33 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     hw, hh = max(box[0], 1.0) / step, max(box[1], 1.0) / step
     wgt = (np.clip((1.2 * hw - np.abs(uu)) / (0.2 * hw), 0, 1) * np.clip((1.2 * hh - np.abs(vv)) / (0.2 * hh), 0, 1)
            * inside).astype(np.float32).ravel()
-    jac = np.stack([(gx * uu + gy * vv).ravel(), gx.ravel(), gy.ravel()], 1)
+    jac = np.stack([(gx * uu).ravel(), (gy * vv).ravel(), gx.ravel(), gy.ravel()], 1)
     jw = jac * wgt[:, None]
-    hess = jw.T @ jac
-    try:
-        hinv = np.linalg.inv(hess.astype(np.float64))
-    except np.linalg.LinAlgError:
+    hess = (jw.T @ jac).astype(np.float64)
+    if not np.all(np.isfinite(hess)) or np.linalg.cond(hess) > 1e7:
         return None
-    if not np.all(np.isfinite(hinv)) or np.linalg.cond(hess) > 1e7:
-        return None
-    p0 = p1 = p2 = 0.0
+    hinv = np.linalg.inv(hess)
+    px = py = tx = ty = 0.0
     r = None
     for _ in range(max(iterations, 1)):
-        k = math.exp(p0)
-        b, inside_b = _sample(cur, level, cx + p1 * step, cy + p2 * step, step * k, n)
+        kx, ky = math.exp(px), math.exp(py)
+        b, inside_b = _sample(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n)
         b = cv2.GaussianBlur(b, (0, 0), 0.8)
         r = (b - a).ravel()
         w_it = jw if inside_b.all() else jw * inside_b.ravel()[:, None]
-        d0, d1, d2 = hinv @ (w_it.T @ r)
-        p0 -= d0
-        p1 -= d1 * k
-        p2 -= d2 * k
-        if not (abs(p0) < 1.0 and abs(p1) < n and abs(p2) < n):
+        d0, d1, d2, d3 = hinv @ (w_it.T @ r)
+        px -= d0
+        py -= d1
+        tx -= d2 * kx
+        ty -= d3 * ky
+        if not (abs(px) < 1.0 and abs(py) < 1.0 and abs(tx) < n and abs(ty) < n):
             return None
-        if abs(d0) < 1e-5 and abs(d1) < 1e-3 and abs(d2) < 1e-3:
+        if abs(d0) < 1e-5 and abs(d1) < 1e-5 and abs(d2) < 1e-3 and abs(d3) < 1e-3:
             break
     wsum = float(wgt.sum())
     res = math.sqrt(float(wgt @ (r * r)) / wsum) if wsum > 0 else math.inf
-    return Alignment(math.exp(p0), p1 * step, p2 * step, res, res * math.sqrt(max(float(hinv[0, 0]), 0.0)))
+    var = 0.25 * (hinv[0, 0] + hinv[1, 1] + 2 * hinv[0, 1])     # of (log kx + log ky) / 2
+    return Alignment(math.exp(px), math.exp(py), tx * step, ty * step, res, res * math.sqrt(max(float(var), 0.0)))
 
 
 # ---------------------------------------------------------------------------
@@ -657,8 +675,9 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
 # ---------------------------------------------------------------------------
 @dataclass
 class Track:
-    """Mutable state of one target: box, accumulated log-scale, the recent
-    ``(frame, log_scale, cx, cy, width)`` history the fits use, and the evidence counters."""
+    """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
+    ``(frame, log_scale, cx, cy, width, anisotropy)`` history the fits use, and the evidence
+    counters."""
 
     id: int
     born: int
@@ -667,7 +686,8 @@ class Track:
     w: float
     h: float
     log_s: float = 0.0
-    history: deque = field(default_factory=deque)   # (frame, log_s, cx, cy, w)
+    aniso: float = 0.0                               # accumulated log(ky / kx)
+    history: deque = field(default_factory=deque)   # (frame, log_s, cx, cy, w, aniso)
     fails: int = 0
     last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
     last_estimate: int = -(10 ** 9)    # frame of its last time to contact
@@ -767,7 +787,7 @@ class TargetLayer:
                     if f.response > 0:
                         host.last_answer = index
                 continue
-            t.history = deque([(index, 0.0, t.cx, t.cy, t.w)], maxlen=p.window)
+            t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
             self._next += 1
             if f is not None:
                 t.fields.add(f.id)
@@ -824,11 +844,12 @@ class TargetLayer:
             t.fails = 0
             t.cx += al.dx
             t.cy += al.dy
-            t.w *= al.scale
-            t.h *= al.scale
+            t.w *= al.kx
+            t.h *= al.ky
             t.log_s += math.log(al.scale)
+            t.aniso += al.anisotropy
             t.rate = math.log(al.scale) * self.fps
-            t.history.append((index, t.log_s, t.cx, t.cy, t.w))
+            t.history.append((index, t.log_s, t.cx, t.cy, t.w, t.aniso))
             # The object's centre has left the frame (a pass-by leaving the view) or it is tiny: lost.
             if t.size < 2.0 or t.size > 4.0 * max(w, h) or not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1):
                 continue
@@ -883,7 +904,16 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.last_estimate = index
     else:
         t.streak = 0
-    looming = index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames
+    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
+    # the path) grows twice as fast in one: not an object on a collision course
+    isotropic = True
+    if ttc is not None and len(t.history) >= 2:
+        growth = t.history[-1][1] - t.history[0][1]
+        skew = t.history[-1][5] - t.history[0][5]
+        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
+    if not isotropic:
+        t.streak = 0
+    looming = (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames) and isotropic
     warning = bool(looming and ttc is not None and miss is not None and ttc <= p.horizon_s
                    and miss <= p.max_miss and sigma <= p.max_ttc_sigma * ttc)
     az = el = None

@@ -69,9 +69,10 @@ class FlowParams(ParameterSet):
         check_fields(self, "FlowParams")
 
 
-def _similarity(flow: np.ndarray, cx: float, cy: float, hw: float, hh: float) -> tuple[float, tuple[float, float]]:
-    """Least-squares ``u = s (x - cx) + tx``, ``v = s (y - cy) + ty`` over the box of half-sizes
-    (hw, hh) around (cx, cy): the expansion ``s = d(log size)`` per frame and the shift (tx, ty)."""
+def _expansion(flow: np.ndarray, cx: float, cy: float, hw: float, hh: float):
+    """Least-squares ``u = sx (x - cx) + tx``, ``v = sy (y - cy) + ty`` over the box of half-sizes
+    (hw, hh) around (cx, cy): the horizontal and vertical expansion rates (d log size per frame)
+    and the shift (tx, ty)."""
     h, w = flow.shape[:2]
     x0, x1 = int(max(round(cx - hw), 0)), int(min(round(cx + hw) + 1, w))
     y0, y1 = int(max(round(cy - hh), 0)), int(min(round(cy + hh) + 1, h))
@@ -84,10 +85,10 @@ def _similarity(flow: np.ndarray, cx: float, cy: float, hw: float, hh: float) ->
     mx, my = float(xs.mean()), float(ys.mean())
     mu, mv = float(u.mean()), float(v.mean())
     dx, dy = xs - mx, ys - my
-    num = float((u * dx[None, :]).sum() - mu * dx.sum() * len(ys)) + float((v * dy[:, None]).sum() - mv * dy.sum() * len(xs))
-    den = float((dx * dx).sum()) * len(ys) + float((dy * dy).sum()) * len(xs)
-    s = num / den if den > 0 else 0.0
-    return s, (mu - s * mx, mv - s * my)
+    den_x, den_y = float((dx * dx).sum()) * len(ys), float((dy * dy).sum()) * len(xs)
+    sx = float((u * dx[None, :]).sum()) / den_x if den_x > 0 else 0.0
+    sy = float((v * dy[:, None]).sum()) / den_y if den_y > 0 else 0.0
+    return sx, sy, (mu - sx * mx, mv - sy * my)
 
 
 @register("flow")
@@ -207,22 +208,22 @@ class FlowTTC(Model):
             # the flow in the box's inner part, fitted by a similarity: u = s (x - cx) + tx (and v):
             # the divergence averaged over a box that holds the whole object would be ~0 (the
             # flux through a border where the background is still)
-            rate, shift = _similarity(flow, t.cx, t.cy, 0.375 * t.w, 0.375 * t.h)
-            d = 2.0 * rate
-            k = math.exp(rate)
+            rx, ry, shift = _expansion(flow, t.cx, t.cy, 0.375 * t.w, 0.375 * t.h)
+            rate = 0.5 * (rx + ry)
             t.cx += shift[0]
             t.cy += shift[1]
-            t.w *= k
-            t.h *= k
+            t.w *= math.exp(rx)
+            t.h *= math.exp(ry)
             if best is not None:
                 used.add(best)
                 r = regions[best]
                 t.cx, t.cy = 0.7 * t.cx + 0.3 * r[0], 0.7 * t.cy + 0.3 * r[1]
                 t.w, t.h = 0.7 * t.w + 0.3 * r[2], 0.7 * t.h + 0.3 * r[3]
                 t.last_seen = index
-            t.log_s += d / 2.0
-            t.rate = d / 2.0 * self.fps
-            t.history.append((index, t.log_s, t.cx, t.cy, t.w))
+            t.log_s += rate
+            t.aniso += ry - rx
+            t.rate = rate * self.fps
+            t.history.append((index, t.log_s, t.cx, t.cy, t.w, t.aniso))
             if not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1) or index - t.last_seen > p.idle_frames:
                 continue
             kept.append(t)
@@ -231,7 +232,7 @@ class FlowTTC(Model):
             if i in used or len(self._tracks) >= p.max_targets:
                 continue
             t = Track(self._next, index, r[0], r[1], r[2], r[3])
-            t.history = deque([(index, 0.0, t.cx, t.cy, t.w)], maxlen=tp.window)
+            t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)
             t.last_seen = index
             self._next += 1
             self._tracks.append(t)

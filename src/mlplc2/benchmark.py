@@ -1,0 +1,414 @@
+"""``mlplc2 benchmark``: the standard suite of realistic approaches, every model, one report.
+
+One command measures how early and how reliably each model warns (``docs/benchmark.md``):
+
+1. **Generated suite** (:func:`suite`): fixed seeds of :func:`mlplc2.stimuli.random_scene`,
+   3-D scenes with exact ground truth (collisions, pass-bys, receding, translating and
+   static distractors; plain and textured backgrounds, a panning and a tilting camera,
+   forward ego-motion over a textured ground), 320x240 at 30 fps, written as near-lossless
+   H.264 with their ground truth (``scenes/``; reused when already there).
+2. **Real clips**, when ``../shared/data/real`` is present: its clips (not the full-resolution
+   copies) and the paper's four UAV clips, with the hand labels of its ``ground_truth.json``.
+3. Every model (:data:`MODELS`) runs on every video through :func:`mlplc2.batch.batch`
+   (a local Dask cluster by default, ``scheduler=`` for a real one; finished tasks are kept).
+4. :func:`mlplc2.evaluate.evaluate` scores the runs: the warning metrics (collision objects
+   warned before contact, lead time, false warnings by cause, time-to-contact errors,
+   fragmentation, real clips warned / missed / false).
+5. ``benchmark.md`` / ``.csv`` / ``.json`` and three plots: lead time per model, TTC estimate
+   against the true TTC, false warnings by cause.
+
+``quick=True`` runs a small subset (4 short scenes, no real clips) in well under a minute:
+the test suite runs it.
+"""
+
+from __future__ import annotations
+
+import csv
+import json
+import time
+from collections.abc import Sequence
+from dataclasses import asdict, dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ._validation import InputValueError
+
+__all__ = ["Scene", "suite", "benchmark", "BenchmarkResult", "MODELS", "REAL_DIR", "SUITE_GT", "COLUMNS"]
+
+#: Every model the benchmark compares, in table order (the optical-flow baseline last).
+MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
+#: Where the labelled real clips are looked for, relative to the current folder and to the checkout.
+REAL_DIR = Path("..") / "shared" / "data" / "real"
+#: File name of the generated suite's ground truth (in ``scenes/``).
+SUITE_GT = "ground_truth.json"
+#: H.264 quality of the generated videos (CRF; 0 = lossless, 23 = the default of ``mlplc2 run --video``).
+SCENE_CRF = 10
+
+
+@dataclass(frozen=True)
+class Scene:
+    """One scene of the generated suite: the arguments of :func:`mlplc2.stimuli.random_scene`."""
+
+    name: str
+    seed: int
+    background: str
+    camera: str
+    appearance: str | None = None
+    duration_s: float = 6.0
+    noise_std: float = 0.0
+    blur_px: float = 0.0
+    kinds: tuple[str, ...] | None = None
+
+    def generate(self):
+        from .stimuli import random_scene
+
+        return random_scene(self.seed, background=self.background, camera=self.camera,
+                            appearance=self.appearance, duration_s=self.duration_s, noise_std=self.noise_std,
+                            blur_px=self.blur_px, kinds=self.kinds)
+
+
+#: The backgrounds and camera motions of the suite, five scenes each.
+_SETTINGS = (("plain", "static"), ("texture", "static"), ("texture", "pan"), ("texture", "tilt"),
+             ("ground", "forward"), ("ground", "static"))
+_APPEARANCES = ("dark", "bright", "textured", None, None)
+_DURATIONS = (5.0, 7.0, 10.0, 6.0, 8.0)
+#: The objects of the five scenes of each setting: 5 collision objects (two at once in one
+#: scene), 3 pass-bys and 3 other distractors per setting; one scene without a collision.
+_KINDS = (("collision",), ("collision", "pass"), ("pass", "static", "translate"), ("collision", "recede"),
+          ("collision", "collision", "pass"))
+
+
+def suite(quick: bool = False) -> list[Scene]:
+    """The generated scenes: 30 (every background and camera motion of :data:`_SETTINGS` with
+    dark, bright, textured and mixed objects, the objects of :data:`_KINDS`, 5-10 s, sensor
+    noise and optics blur on every other scene), or 4 short ones (``quick``)."""
+    if quick:
+        return [Scene("quick_plain_static", 901, "plain", "static", "dark", 4.0, kinds=("collision", "pass")),
+                Scene("quick_texture_pan", 902, "texture", "pan", "bright", 4.0, noise_std=2.0,
+                      kinds=("collision", "translate")),
+                Scene("quick_ground_forward", 903, "ground", "forward", "textured", 4.0, kinds=("collision",)),
+                Scene("quick_texture_static", 904, "texture", "static", None, 4.0, noise_std=2.0,
+                      kinds=("collision", "recede", "pass"))]
+    scenes = []
+    for i, (bg, cam) in enumerate(_SETTINGS):
+        for k in range(5):
+            seed = 100 + 10 * i + k
+            scenes.append(Scene(f"{bg}_{cam}_{k}", seed, bg, cam, _APPEARANCES[k], _DURATIONS[k],
+                                noise_std=2.0 if k % 2 else 0.0, blur_px=0.5 if k % 2 else 0.0, kinds=_KINDS[k]))
+    return scenes
+
+
+def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[list[Path], Path]:
+    """Write every scene's video and one ground-truth file; scenes already written with the same
+    description are kept."""
+    from tqdm import tqdm
+
+    from .io import atomic_path, write_video
+
+    folder.mkdir(parents=True, exist_ok=True)
+    gt_path = folder / SUITE_GT
+    old: dict = {}
+    if gt_path.is_file():
+        try:
+            old = json.loads(gt_path.read_text(encoding="utf-8")).get("videos", {})
+        except (json.JSONDecodeError, UnicodeDecodeError, AttributeError):
+            old = {}
+    videos, entries = [], {}
+    for sc in tqdm(scenes, desc="generating scenes", unit="scene", disable=not progress, leave=False):
+        path = folder / f"{sc.name}.mp4"
+        key = path.name
+        spec = json.loads(json.dumps(asdict(sc)))      # as stored (tuples become lists)
+        if path.is_file() and old.get(key, {}).get("scene") == spec:
+            entries[key] = old[key]
+        else:
+            stim = sc.generate()
+            write_video(path, stim.frames, stim.fps, quality=SCENE_CRF)
+            entries[key] = {"scene": spec, **stim.to_ground_truth()}
+        videos.append(path)
+    with atomic_path(gt_path) as tmp:
+        Path(tmp).write_text(json.dumps({"about": "mlplc2 benchmark: generated suite (mlplc2.benchmark.suite)",
+                                         "videos": entries}) + "\n", encoding="utf-8")
+    return videos, gt_path
+
+
+def _real_inputs(real) -> tuple[list[Path], Path | None]:
+    """The labelled real clips (``real`` folder and the paper's ``uav/`` beside it), and their labels."""
+    if real is None:
+        return [], None
+    real = Path(real)
+    gt = real / "ground_truth.json"
+    if not gt.is_file():
+        return [], None
+    from .truth import load
+
+    truth = load(gt)
+    found = []
+    for base in (real, real.parent / "paper"):
+        for p in sorted(base.rglob("*")):
+            if p.is_file() and "fullres" not in p.name and p.suffix.lower() in (".mp4", ".avi") \
+                    and truth.match(p) is not None:
+                found.append(p)
+    return found, gt
+
+
+def default_real_dir() -> Path | None:
+    """``../shared/data/real`` from the current folder, else beside the package's checkout."""
+    here = Path(__file__).resolve().parents[3] / "shared" / "data" / "real"
+    for cand in (REAL_DIR, here):
+        if (cand / "ground_truth.json").is_file():
+            return cand
+    return None
+
+
+#: Columns of ``benchmark.csv`` (one row per model).
+COLUMNS = ("model", "collision_objects", "warned", "warned_pct", "lead_median_s", "lead_p10_s",
+           "ttc_at_warning_median_s", "false_frames_per_1000", "false_frames_pct", "false_episodes_per_1000",
+           "false_episodes_pass", "false_episodes_distractor", "false_episodes_background",
+           "ttc_rte_pct_0-1s", "ttc_rte_pct_1-3s", "ttc_rte_pct_3-6s", "ttc_mid_0-1s", "ttc_mid_1-3s",
+           "ttc_mid_3-6s", "ttc_coverage_pct", "targets_per_object", "clips", "clips_warned", "clips_missed",
+           "clips_false", "clip_lead_median_s", "ms_per_frame")
+
+
+@dataclass
+class BenchmarkResult:
+    """What :func:`benchmark` measured (also in ``benchmark.json``)."""
+
+    rows: list[dict]
+    evaluation: Any
+    scenes: list[str]
+    clips: list[str]
+    seconds: float
+    files: dict[str, Path] = field(default_factory=dict)
+    settings: dict = field(default_factory=dict)
+
+    def to_markdown(self) -> str:
+        return _markdown(self)
+
+
+def _row(model: str, summary: dict, ms: float | None) -> dict:
+    w = summary.get("warnings") or {}
+
+    def pct(v):
+        return None if v is None else round(100.0 * v, 1)
+
+    c = w.get("false_episodes_per_1000_by_cause") or {}
+    return {"model": model, "collision_objects": w.get("collision_objects"), "warned": w.get("warned"),
+            "warned_pct": pct(w.get("warned_rate")), "lead_median_s": w.get("lead_median_s"),
+            "lead_p10_s": w.get("lead_p10_s"), "ttc_at_warning_median_s": w.get("ttc_at_warning_median_s"),
+            "false_frames_per_1000": w.get("false_frames_per_1000"), "false_frames_pct": w.get("false_frames_pct"),
+            "false_episodes_per_1000": w.get("false_episodes_per_1000"), "false_episodes_pass": c.get("pass"),
+            "false_episodes_distractor": c.get("distractor"), "false_episodes_background": c.get("background"),
+            **{f"ttc_rte_pct_{b}": w.get(f"ttc_rte_pct_{b}") for b in ("0-1s", "1-3s", "3-6s")},
+            **{f"ttc_mid_{b}": w.get(f"ttc_mid_{b}") for b in ("0-1s", "1-3s", "3-6s")},
+            "ttc_coverage_pct": pct(w.get("ttc_coverage")), "targets_per_object": w.get("fragmentation"),
+            "clips": w.get("clips"), "clips_warned": w.get("clips_warned"), "clips_missed": w.get("clips_missed"),
+            "clips_false": w.get("clips_false"), "clip_lead_median_s": w.get("clip_lead_median_s"),
+            "ms_per_frame": None if ms is None else round(ms, 2)}
+
+
+def _fmt(v, digits: int = 2) -> str:
+    if v is None:
+        return "-"
+    if isinstance(v, float):
+        return f"{v:.{digits}f}"
+    return str(v)
+
+
+def _markdown(res: BenchmarkResult) -> str:
+    st = res.settings
+    lines = [f"Generated suite: {len(res.scenes)} scenes ({st.get('frames', 0)} frames); real clips: "
+             f"{len(res.clips)}; {res.seconds:.0f} s.", "",
+             "| model | warned | lead median (s) | lead p10 (s) | false episodes /1000 fr | false frames (%) "
+             "| pass / distractor / background (episodes /1000) | TTC error 0-1 s | 1-3 s | 3-6 s "
+             "| TTC coverage | targets/object | real clips warned | missed | false | lead (s) | ms/frame |",
+             "|" + "|".join(["---"] * 17) + "|"]
+    for r in res.rows:
+        lines.append(
+            f"| {r['model']} | {_fmt(r['warned'])}/{_fmt(r['collision_objects'])} ({_fmt(r['warned_pct'], 0)} %) "
+            f"| {_fmt(r['lead_median_s'])} | {_fmt(r['lead_p10_s'])} | {_fmt(r['false_episodes_per_1000'])} "
+            f"| {_fmt(r['false_frames_pct'])} | {_fmt(r['false_episodes_pass'])} / {_fmt(r['false_episodes_distractor'])} "
+            f"/ {_fmt(r['false_episodes_background'])} "
+            + "".join(f"| {_fmt(r[f'ttc_rte_pct_{b}'], 0)}{'' if r[f'ttc_rte_pct_{b}'] is None else ' %'} "
+                      for b in ("0-1s", "1-3s", "3-6s"))
+            + f"| {_fmt(r['ttc_coverage_pct'], 0)}{'' if r['ttc_coverage_pct'] is None else ' %'} "
+            f"| {_fmt(r['targets_per_object'])} | {_fmt(r['clips_warned'])}/{_fmt(r['clips'])} "
+            f"| {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} | {_fmt(r['clip_lead_median_s'])} "
+            f"| {_fmt(r['ms_per_frame'])} |")
+    clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
+    if clip:
+        lines += ["", "Real clips:", "", clip]
+    return "\n".join(lines) + "\n"
+
+
+def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
+    """lead_time.png, ttc.png, false_warnings.png."""
+    import matplotlib
+
+    matplotlib.use("Agg", force=False)
+    from matplotlib.figure import Figure
+
+    ev = res.evaluation
+    models = [r["model"] for r in res.rows]
+    files = {}
+    # lead time per model
+    fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.6), dpi=110)
+    ax = fig.subplots()
+    for i, m in enumerate(models):
+        objs = [o for o in ev.warning_objects if o["model"] == m and not o["video"].startswith("clip:")
+                and o.get("contact_frame") is not None]
+        leads = [o["lead_s"] for o in objs if o["warned"] and o["lead_s"] is not None]
+        missed = sum(1 for o in objs if not o["warned"])
+        ax.scatter([i + (k % 7 - 3) * 0.04 for k in range(len(leads))], leads, s=10, alpha=0.7)
+        if missed:
+            ax.text(i, -0.15, f"{missed} missed", ha="center", va="top", fontsize=7, color="crimson")
+    ax.axhline(0.25, color="grey", lw=0.8, ls="--")
+    ax.set_xticks(range(len(models)), models)
+    ax.set_ylabel("lead time before contact (s)")
+    ax.set_ylim(bottom=-0.5)
+    ax.set_title("Collision objects of the generated suite: warning lead time")
+    fig.tight_layout()
+    files["lead_time.png"] = out / "lead_time.png"
+    fig.savefig(files["lead_time.png"])
+    # TTC estimate against truth
+    with_ttc = [m for m in models if any(o["ttc_errors"] for o in ev.warning_objects if o["model"] == m)]
+    if with_ttc:
+        fig = Figure(figsize=(3.0 * len(with_ttc), 3.2), dpi=110)
+        axes = fig.subplots(1, len(with_ttc), squeeze=False)[0]
+        for ax, m in zip(axes, with_ttc):
+            pts = [e for o in ev.warning_objects if o["model"] == m for e in o["ttc_errors"]]
+            ax.scatter([t for t, _ in pts], [e for _, e in pts], s=3, alpha=0.3)
+            ax.plot([0, 6], [0, 6], color="grey", lw=0.8)
+            ax.set_xlim(0, 6)
+            ax.set_ylim(0, 8)
+            ax.set_title(m, fontsize=9)
+            ax.set_xlabel("true TTC (s)")
+        axes[0].set_ylabel("estimated TTC (s)")
+        fig.tight_layout()
+        files["ttc.png"] = out / "ttc.png"
+        fig.savefig(files["ttc.png"])
+    # false warnings by cause
+    fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.4), dpi=110)
+    ax = fig.subplots()
+    bottom = [0.0] * len(models)
+    for cause, key in (("pass-by", "false_episodes_pass"), ("distractor", "false_episodes_distractor"),
+                       ("background", "false_episodes_background")):
+        vals = [r[key] or 0.0 for r in res.rows]
+        ax.bar(range(len(models)), vals, bottom=bottom, label=cause)
+        bottom = [b + v for b, v in zip(bottom, vals)]
+    ax.axhline(1.0, color="grey", lw=0.8, ls="--")
+    ax.set_xticks(range(len(models)), models)
+    ax.set_ylabel("false-warning episodes per 1000 frames")
+    ax.legend(fontsize=7)
+    ax.set_title("False warnings on the generated suite, by cause")
+    fig.tight_layout()
+    files["false_warnings.png"] = out / "false_warnings.png"
+    fig.savefig(files["false_warnings.png"])
+    return files
+
+
+def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
+              scheduler: str | None = None, workers: int | None = None, target_params=None,
+              progress: bool = True, force: bool = False) -> BenchmarkResult:
+    """Run the benchmark into folder ``out`` (see the module docstring).
+
+    Parameters
+    ----------
+    out : path
+        Output folder: ``scenes/`` (the generated videos and their truth), ``runs/`` (the batch),
+        ``benchmark.md``, ``benchmark.csv``, ``benchmark.json``, ``evaluation.json`` and the plots.
+    quick : bool
+        4 short scenes and no real clips (the test suite's run).
+    models : list of str, optional
+        Registry names (default :data:`MODELS`).
+    real : "auto", path or None
+        Folder of the labelled real clips (``ground_truth.json`` inside): "auto" looks for
+        :data:`REAL_DIR`; None leaves them out. Ignored with ``quick``.
+    scheduler, workers
+        As in :func:`mlplc2.batch.batch` (default: a local Dask cluster).
+    target_params : TargetParams or dict, optional
+        Target and warning settings for the models with targets (``horizon_s``, ``max_miss``, ...).
+    progress : bool
+        Progress bars on stderr.
+    force : bool
+        Rerun tasks already done.
+    """
+    from .batch import batch
+    from .evaluate import evaluate
+    from .models.base import available_models
+    from .runner import _target_params
+
+    t0 = time.perf_counter()
+    if isinstance(models, str):
+        models = [m.strip() for m in models.split(",") if m.strip()]
+    models = list(models or [m for m in MODELS if m in available_models()])
+    for m in models:
+        if m not in available_models():
+            raise InputValueError(f"unknown model {m!r}; choose from {', '.join(available_models())}")
+    tp = _target_params(target_params)
+    out = Path(out)
+    if out.exists() and not out.is_dir():
+        raise InputValueError(f"{out}: is a file, expected a folder for the benchmark")
+    real_dir = None if quick or real is None else (default_real_dir() if real == "auto" else Path(real))
+    if real not in ("auto", None) and not quick and not (Path(real) / "ground_truth.json").is_file():
+        raise InputValueError(f"{real}: no ground_truth.json there (the labelled real clips)")
+    scenes = suite(quick)
+    videos, suite_gt = _generate(scenes, out / "scenes", progress)
+    clips, real_gt = _real_inputs(real_dir)
+    run_options = {}
+    if tp is not None:
+        changed = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
+        run_options["target_params"] = changed
+    res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
+                workers=workers, run_options=run_options, progress=progress, force=force)
+    gts = [suite_gt] + ([real_gt] if real_gt is not None else [])
+    import warnings
+
+    from .evaluate import EvaluationWarning
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", EvaluationWarning)
+        ev = evaluate(out / "runs", gts, models=models)
+    frames = sum(int(round(sc.duration_s * 30)) for sc in scenes)
+    speed: dict[str, list[float]] = {}
+    for r in res.rows:
+        if r.get("seconds") and r.get("n_frames"):
+            speed.setdefault(r["model"], []).append(1000.0 * float(r["seconds"]) / float(r["n_frames"]))
+    rows = []
+    for m in models:
+        s = ev.models.get(m)
+        if s is None:
+            continue
+        ms = sorted(speed.get(m, []))
+        rows.append(_row(m, s, ms[len(ms) // 2] if ms else None))
+    result = BenchmarkResult(rows, ev, [sc.name for sc in scenes], [str(c) for c in clips],
+                             time.perf_counter() - t0,
+                             settings={"quick": quick, "frames": frames, "models": models,
+                                       "target_params": run_options.get("target_params", {}),
+                                       "real": None if real_dir is None else str(real_dir),
+                                       "scheduler": res.scheduler})
+    _write(result, out)
+    return result
+
+
+def _write(res: BenchmarkResult, out: Path) -> None:
+    from .io import atomic_path
+
+    files = {}
+    text = "# mlplc2 benchmark\n\n" + res.to_markdown()
+    for name, content in (("benchmark.md", text),
+                          ("benchmark.json", json.dumps({"settings": res.settings, "models": res.rows,
+                                                         "scenes": res.scenes, "clips": res.clips,
+                                                         "seconds": round(res.seconds, 1)}, indent=1) + "\n")):
+        with atomic_path(out / name) as tmp:
+            Path(tmp).write_text(content, encoding="utf-8")
+        files[name] = out / name
+    with atomic_path(out / "benchmark.csv") as tmp:
+        with open(tmp, "w", newline="", encoding="utf-8") as f:
+            w = csv.DictWriter(f, fieldnames=COLUMNS, lineterminator="\n")
+            w.writeheader()
+            w.writerows(res.rows)
+    files["benchmark.csv"] = out / "benchmark.csv"
+    files.update(res.evaluation.write(out))
+    files.update(_plots(res, out))
+    res.files = files
+
