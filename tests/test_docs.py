@@ -7,7 +7,7 @@ import importlib
 
 import pytest
 
-MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd"]
+MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd", "mlplc2._signals"]
 
 
 @pytest.mark.parametrize("name", MODULES)
