@@ -20,6 +20,8 @@ from mlplc2.cli import SUBCOMMANDS, add_subcommand, main
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, RunInterrupted, TruncatedInputWarning, run
 
+from .helpers import check_outputs_agree
+
 # A dark square approaching (growing 4 px/frame) at a known centre, 320x240.
 CX, CY = 200, 100
 W, H, T = 320, 240, 60
@@ -260,6 +262,7 @@ def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     assert sorted({int(r["frame"]) for r in rows}) == list(range(k))
     summary = json.loads((out / "fields.json").read_text())
     assert summary["interrupted"] and summary["n_frames"] == k
+    assert check_outputs_agree(out, ["mlplc2"]) == k  # targets.csv and the summaries too
     assert _frame_count(out / "annotated.mp4")[0] == k
     with pytest.raises(RunInterrupted) as info:
         run(data["avi"], out=False, quiet=True)

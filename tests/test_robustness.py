@@ -374,9 +374,12 @@ def test_real_signal_leaves_valid_outputs(tmp_path, sig):
     n = 900
     p = write_video(tmp_path / "long.avi", _noise_frames(n, 160, 120), 30.0)
     out = tmp_path / "o"
+    # SIGINT as in a terminal, even when pytest runs in the background (which ignores it, and
+    # an ignored SIGINT is inherited: the run would not stop).
     proc = subprocess.Popen(_console_script() + ["run", str(p), "--out", str(out), "-m", "mlplc2,lgmd2",
                                                  "--quiet"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     csv_path = out / "responses.csv"
     deadline = time.monotonic() + 60
     try:
