@@ -537,9 +537,10 @@ def test_cli_run_writes_targets(tmp_path, capsys):
         assert next(csv.reader(fh)) == list(COLUMNS)
     with open(out / "targets.csv", newline="") as fh:
         reader = csv.reader(fh)
-        assert next(reader) == list(TARGET_COLUMNS) == ["frame", "model", "field_id", "ttc_s", "expansion_rate",
-                                                        "azimuth_deg", "elevation_deg", "rank"]
-        rows = [dict(zip(TARGET_COLUMNS, r)) for r in reader]
+        assert next(reader) == list(TARGET_COLUMNS["deg"]) == ["frame", "model", "field_id", "ttc_s",
+                                                               "expansion_rate_deg_s", "azimuth_deg",
+                                                               "elevation_deg", "rank"]
+        rows = [dict(zip(TARGET_COLUMNS["deg"], r)) for r in reader]
     timed = [r for r in rows if r["ttc_s"]]
     assert timed and all(r["rank"] for r in timed)
     last = max(int(r["frame"]) for r in timed)
@@ -553,6 +554,37 @@ def test_cli_run_writes_targets(tmp_path, capsys):
     fields = summary["models"]["mlplc2"]
     assert all("at_peak" in fl and "last_estimate" in fl for fl in fields)
     assert any(fl["last_estimate"] and fl["last_estimate"]["ttc_s"] is not None for fl in fields)
+    assert all(list(fl["at_peak"]) == ["ttc_s", "expansion_rate_deg_s", "azimuth_deg", "elevation_deg", "rank"]
+               for fl in fields)
+    # without a field of view the same columns are pixels, and say so
+    assert main(["run", str(video), "--out", str(tmp_path / "px"), "--start", "30", "--quiet"]) == 0
+    with open(tmp_path / "px" / "targets.csv", newline="") as fh:
+        reader = csv.reader(fh)
+        assert next(reader) == list(TARGET_COLUMNS["px"]) == ["frame", "model", "field_id", "ttc_s",
+                                                              "expansion_rate_px_s", "azimuth_px", "elevation_px",
+                                                              "rank"]
+        px = [dict(zip(TARGET_COLUMNS["px"], r)) for r in reader]
+    px_timed = [r for r in px if r["ttc_s"]]
+    assert px_timed and all(abs(float(r["azimuth_px"]) - 40) < 4 for r in px_timed)  # 200 - 160 px, right
+    summary = json.loads((tmp_path / "px" / "fields.json").read_text())
+    assert summary["hfov_deg"] is None
+    estimates = [fl[k] for fl in summary["models"]["mlplc2"] for k in ("at_peak", "last_estimate") if fl[k]]
+    assert estimates and all("azimuth_px" in e and "expansion_rate_px_s" in e and "azimuth_deg" not in e
+                             for e in estimates)
     # a field of view outside (0, 180): one error line, exit 2
     assert main(["run", str(video), "--out", str(tmp_path / "bad"), "--hfov", "180", "--quiet"]) == 2
     assert "--hfov" in capsys.readouterr().err
+
+
+def test_run_refuses_models_with_different_fields_of_view(tmp_path):
+    """One targets.csv has one unit: models in degrees and in pixels cannot share a run."""
+    from mlplc2 import SLPLC2, run
+
+    stim = stimuli.looming(half_size=0.5, speed=5.0, contact_time=2.0)
+    video = write_video(tmp_path / "loom.avi", stim.frames[:5], FPS)
+    out = tmp_path / "res"
+    with pytest.raises(InputValueError, match=r"different fields of view \(hfov_deg 60.0, None\)"):
+        run(video, [MLPLC2(fps=FPS, hfov_deg=60.0), SLPLC2(fps=FPS)], out=out, progress=False)
+    assert not (out / "targets.csv").exists()
+    res = run(video, [MLPLC2(fps=FPS, hfov_deg=60.0), SLPLC2(fps=FPS)], out=False, hfov_deg=60.0)
+    assert res.n_frames == 5  # the run's hfov_deg gives both the same

@@ -5,19 +5,23 @@ steps every model on each frame, writing as it goes:
 
 ``responses.csv``
     one row per active field per frame (``frame,time_s,model,field_id,x,y,response,collision``),
-    flushed after every frame: a run stopped by Ctrl-C leaves a valid file.
+    flushed after every frame: a run stopped by Ctrl-C leaves a valid file. A signal
+    (Ctrl-C, SIGTERM) that arrives during a frame takes effect once the frame is written,
+    so ``responses.csv``, ``targets.csv`` and ``fields.json`` always cover the same frames.
 ``fields.json``
     one summary per attention field (centre, birth, death, peak, first alarm,
     and the target estimates at the peak and the last one, see ``docs/targets.md``).
 ``targets.csv``
     (models with attention fields) one row per field per frame:
-    ``frame,model,field_id,ttc_s,expansion_rate,azimuth_deg,elevation_deg,rank``
-    (time to collision, expansion rate, bearing and TTC rank; empty cells while
-    not estimable; degrees with ``hfov_deg``, else input pixels).
+    ``frame,model,field_id,ttc_s,expansion_rate_deg_s,azimuth_deg,elevation_deg,rank``
+    with ``hfov_deg``, ``frame,model,field_id,ttc_s,expansion_rate_px_s,azimuth_px,elevation_px,rank``
+    without (input pixels): time to collision, expansion rate, bearing and TTC
+    rank, the column names saying the unit (:data:`TARGET_COLUMNS`); empty cells
+    while not estimable.
 ``responses.png``
     response against frame, one panel per model (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
-    (``video=True``) the input with the fields drawn.
+    (``video=True``) the input with the fields drawn (:func:`mlplc2.plots.annotate_frame`).
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
@@ -32,15 +36,18 @@ import logging
 import math
 import sys
 import tempfile
+import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._signals import interrupts
 from ._validation import InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, check_repeat_threshold, get_model
+from .plots import DRAW_FIELDS
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir",
@@ -50,8 +57,14 @@ log = logging.getLogger(__name__)
 
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
-#: Columns of ``targets.csv``, in order (``docs/targets.md``).
-TARGET_COLUMNS = ("frame", "model", "field_id", "ttc_s", "expansion_rate", "azimuth_deg", "elevation_deg", "rank")
+#: Columns of ``targets.csv``, in order, by the unit of the run's bearings (``docs/targets.md``):
+#: ``"deg"`` with a field of view (``hfov_deg``: degrees, deg/s), ``"px"`` without (input
+#: pixels from the image centre, px/s). The same names key ``at_peak``/``last_estimate`` in
+#: ``fields.json``.
+TARGET_COLUMNS = {
+    "deg": ("frame", "model", "field_id", "ttc_s", "expansion_rate_deg_s", "azimuth_deg", "elevation_deg", "rank"),
+    "px": ("frame", "model", "field_id", "ttc_s", "expansion_rate_px_s", "azimuth_px", "elevation_px", "rank"),
+}
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -87,7 +100,10 @@ class RunResult:
     truncated : bool
         The input stopped decoding early (see ``message``).
     interrupted : bool
-        The run was stopped by Ctrl-C.
+        The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
+    seconds : float
+        Wall time of the frame loop (decoding, models, writing the per-frame outputs),
+        in seconds; ``n_frames / seconds`` is the processing rate.
     files : dict
         Output name -> path of the files written (empty with ``out=False``).
     """
@@ -107,9 +123,10 @@ class RunResult:
     out: Path | None = None
     files: dict[str, Path] = field(default_factory=dict)
     targets: list[dict] = field(default_factory=list)
-    """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
+    """The rows of ``targets.csv`` (keys: :data:`TARGET_COLUMNS` of the run's unit; empty with ``keep_rows=False``)."""
     alarms: dict[str, dict] = field(default_factory=dict)
     hfov_deg: float | None = None
+    seconds: float = 0.0
 
     def to_dataframe(self):
         """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
@@ -140,6 +157,7 @@ class RunResult:
             "model_size": list(self.model_size),
             "start": self.start,
             "n_frames": self.n_frames,
+            "seconds": round(self.seconds, 3),
             "complete": not (self.truncated or self.interrupted),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
@@ -238,22 +256,34 @@ def _target_converter(model: Model, scale_x: float, scale_y: float):
 
     With a field of view (the model's ``hfov_deg``) bearings are degrees and the
     expansion rate deg/s; without one, the model's pixel offsets and px/s are
-    turned into input pixels (``--resize``).
+    turned into input pixels (``--resize``). The keys are :data:`TARGET_COLUMNS` of
+    that unit (``azimuth_deg`` or ``azimuth_px``, ...).
     """
     if not model.localises:
         return None
-    degrees = getattr(model, "hfov_deg", None) is not None
-    sx, sy = (1.0, 1.0) if degrees else (scale_x, scale_y)
+    unit = "px" if getattr(model, "hfov_deg", None) is None else "deg"
+    sx, sy = (1.0, 1.0) if unit == "deg" else (scale_x, scale_y)
+    k_rate, k_az, k_el = TARGET_COLUMNS[unit][4:7]
 
     def convert(f) -> dict:
         az, el, rate = (getattr(f, k, None) for k in ("azimuth_deg", "elevation_deg", "expansion_rate"))
         return {"ttc_s": _opt(getattr(f, "ttc_s", None)),
-                "expansion_rate": _opt(None if rate is None else rate * sx),
-                "azimuth_deg": _opt(None if az is None else az * sx),
-                "elevation_deg": _opt(None if el is None else el * sy),
+                k_rate: _opt(None if rate is None else rate * sx),
+                k_az: _opt(None if az is None else az * sx),
+                k_el: _opt(None if el is None else el * sy),
                 "rank": getattr(f, "rank", None)}
 
     return convert
+
+
+def _target_unit(models: Sequence[Model]) -> str:
+    """``"deg"`` or ``"px"``: the unit of the bearings of the models with fields (one per run)."""
+    fovs = {getattr(m, "hfov_deg", None) for m in models if m.localises}
+    if len(fovs) > 1:
+        raise InputValueError(f"the models with attention fields have different fields of view "
+                              f"(hfov_deg {', '.join(sorted(map(str, fovs)))}), but one run writes one "
+                              f"targets.csv: give them the same hfov_deg or run them separately")
+    return "px" if fovs <= {None} else "deg"
 
 
 def _target_rows(index: int, name: str, out: Output, convert) -> list[dict]:
@@ -348,7 +378,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
         hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | None = None) -> RunResult:
+        repeat_threshold: float | None = None, draw_fields: str = "responding") -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -372,7 +402,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Process source frames ``start <= frame < end``.
     video : bool
         Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header.
+        first LPLC2-family model drawn, and every model's response in a header
+        (:func:`mlplc2.plots.annotate_frame`).
     quiet : bool
         No progress bar.
     params : Params or dict, optional
@@ -399,6 +430,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         this many grey levels as a duplicate: the models hold their last output for it
         (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
         paper's clips). Default: every frame steps the models.
+    draw_fields : {'responding', 'all'}
+        Which fields ``annotated.mp4`` shows: those that respond (response > 0) or are
+        in alarm (default), or all of them (CLI ``--all-fields``).
 
     Returns
     -------
@@ -410,7 +444,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Bad input (missing file, not a video, unknown model, bad resize, ...).
     RunInterrupted
         On Ctrl-C, after writing the outputs of the frames done
-        (``fields.json`` then says ``"interrupted": true``).
+        (``fields.json`` then says ``"interrupted": true``). A Ctrl-C during a frame
+        takes effect when the frame is finished; a second one stops at once.
 
     Warns
     -----
@@ -421,6 +456,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     # Validate everything cheap before decoding anything.
     if isinstance(models, str):
         models = [s for s in models.split(",") if s.strip()]
+    if draw_fields not in DRAW_FIELDS:
+        raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, got {draw_fields!r}")
     for m in models:
         if not isinstance(m, Model):
             get_model(str(m).strip())
@@ -429,6 +466,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     try:
         built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold)
         _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+        _target_unit(built)
     except BaseException:
         src.close()
         raise
@@ -455,7 +493,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
             raise
         result.out = out_dir
     return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
-                 keep_rows=keep_rows)
+                 keep_rows=keep_rows, draw_fields=draw_fields)
 
 
 #: The files a run writes into its output folder (all of them, whatever the options).
@@ -472,116 +510,125 @@ def _remove_stale_outputs(out_dir: Path) -> None:
 
 
 def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
-          keep_rows=True) -> RunResult:
+          keep_rows=True, draw_fields="responding") -> RunResult:
     from tqdm import tqdm
 
     converters = [_target_converter(m, src.scale_x, src.scale_y) for m in built]
     trackers = [_FieldTracker(src.start, conv, spill=not keep_rows) for conv in converters]
     primary = _primary(built)
+    field_shape = getattr(built[primary].params, "field_shape", "square") if primary is not None else "square"
     csv_file = writer = vw = None
     tcsv_file = twriter = None
     interrupted = False
     bar = None
-    try:
-        if out_dir is not None:
-            csv_path = out_dir / "responses.csv"
-            csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
-            buf = io.StringIO()
-            writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
-            writer.writeheader()
-            csv_file.write(buf.getvalue())
-            csv_file.flush()
-            result.files["responses.csv"] = csv_path
-            if any(c is not None for c in converters):
-                tpath = out_dir / "targets.csv"
-                tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
-                tbuf = io.StringIO()
-                twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS, lineterminator="\n")
-                twriter.writeheader()
-                tcsv_file.write(tbuf.getvalue())
-                tcsv_file.flush()
-                result.files["targets.csv"] = tpath
-            if video:
-                vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
-        bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
-                   desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
-        to_input = src.to_input
-        fps = src.fps
-        for item in src:
-            index, frame = item[0], item[1]
-            outputs = [m.step(frame) for m in built]
-            time_s = round(index / fps, 6)
-            frame_rows = []
-            target_rows = []
-            for name, out, tracker, conv in zip(names, outputs, trackers, converters):
-                frame_rows.extend(_rows(index, time_s, name, out, to_input))
-                target_rows.extend(_target_rows(index, name, out, conv))
-                tracker.update(index, out, to_input)
-            if twriter is not None and target_rows:
-                tbuf.seek(0)
-                tbuf.truncate()
-                twriter.writerows(target_rows)
-                tcsv_file.write(tbuf.getvalue())
-                tcsv_file.flush()
-            if keep_rows:
-                result.targets.extend(target_rows)
-            if writer is not None:
-                # One write() per frame, then flush: an interrupt leaves whole frames only.
-                buf.seek(0)
-                buf.truncate()
-                writer.writerows(frame_rows)
+    # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
+    # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
+    with interrupts(defer=True) as stop:
+        t0 = time.perf_counter()
+        try:
+            if out_dir is not None:
+                csv_path = out_dir / "responses.csv"
+                csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
+                buf = io.StringIO()
+                writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+                writer.writeheader()
                 csv_file.write(buf.getvalue())
                 csv_file.flush()
-            if keep_rows:
-                result.rows.extend(frame_rows)
-            for name, out in zip(names, outputs):
-                if out.collision:
-                    a = result.alarms[name]
-                    a["count"] += 1
-                    if a["first"] is None:
-                        a["first"] = index
-            if vw is not None:
-                from .plots import annotate_frame
+                result.files["responses.csv"] = csv_path
+                if any(c is not None for c in converters):
+                    tpath = out_dir / "targets.csv"
+                    tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
+                    tbuf = io.StringIO()
+                    twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS[_target_unit(built)],
+                                             lineterminator="\n")
+                    twriter.writeheader()
+                    tcsv_file.write(tbuf.getvalue())
+                    tcsv_file.flush()
+                    result.files["targets.csv"] = tpath
+                if video:
+                    vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
+            bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
+                       desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
+            to_input = src.to_input
+            fps = src.fps
+            t0 = time.perf_counter()
+            for item in stop.between(src):
+                index, frame = item[0], item[1]
+                outputs = [m.step(frame) for m in built]
+                time_s = round(index / fps, 6)
+                frame_rows = []
+                target_rows = []
+                for name, out, conv in zip(names, outputs, converters):
+                    frame_rows.extend(_rows(index, time_s, name, out, to_input))
+                    target_rows.extend(_target_rows(index, name, out, conv))
+                if vw is not None:
+                    from .plots import annotate_frame
 
-                vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
-                                        index=index))
-            result.n_frames += 1
-            bar.update()
-    except KeyboardInterrupt:
-        interrupted = True
-    except BaseException:
-        if vw is not None:
-            vw.abort()
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-        if csv_file is not None:
-            csv_file.close()
-        if tcsv_file is not None:
-            tcsv_file.close()
-        src.close()
-
-    result.interrupted = interrupted
-    result.truncated = src.truncated
-    result.message = src.message
-    # Fields still alive at the end keep died = None.
-    try:
-        result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
-    finally:
-        for t in trackers:
-            t.close()
-    if out_dir is not None:
-        try:
-            _finish(result, out_dir, vw, plot)
+                    vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
+                                            index=index, field_shape=field_shape, draw_fields=draw_fields))
+                # The frame's share of every output, together (a few dict updates and two writes).
+                for out, tracker in zip(outputs, trackers):
+                    tracker.update(index, out, to_input)
+                for name, out in zip(names, outputs):
+                    if out.collision:
+                        a = result.alarms[name]
+                        a["count"] += 1
+                        if a["first"] is None:
+                            a["first"] = index
+                if twriter is not None and target_rows:
+                    tbuf.seek(0)
+                    tbuf.truncate()
+                    twriter.writerows(target_rows)
+                    tcsv_file.write(tbuf.getvalue())
+                    tcsv_file.flush()
+                if writer is not None:
+                    # One write() per frame, then flush: the file holds whole frames only.
+                    buf.seek(0)
+                    buf.truncate()
+                    writer.writerows(frame_rows)
+                    csv_file.write(buf.getvalue())
+                    csv_file.flush()
+                if keep_rows:
+                    result.targets.extend(target_rows)
+                    result.rows.extend(frame_rows)
+                result.n_frames += 1
+                bar.update()
+        except KeyboardInterrupt:
+            interrupted = True
         except BaseException:
             if vw is not None:
                 vw.abort()
             raise
-    if result.truncated:
-        warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
-    if interrupted:
-        raise RunInterrupted(result)
+        finally:
+            result.seconds = time.perf_counter() - t0
+            if bar is not None:
+                bar.close()
+            if csv_file is not None:
+                csv_file.close()
+            if tcsv_file is not None:
+                tcsv_file.close()
+            src.close()
+
+        result.interrupted = interrupted
+        result.truncated = src.truncated
+        result.message = src.message
+        # Fields still alive at the end keep died = None.
+        try:
+            result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
+        finally:
+            for t in trackers:
+                t.close()
+        if out_dir is not None:
+            try:
+                _finish(result, out_dir, vw, plot)
+            except BaseException:
+                if vw is not None:
+                    vw.abort()
+                raise
+        if result.truncated:
+            warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
+        if interrupted:
+            raise RunInterrupted(result)
     return result
 
 
