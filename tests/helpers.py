@@ -1,7 +1,10 @@
-"""Scoring helpers shared by the scene tests (not part of the package API)."""
+"""Helpers shared by the tests (not part of the package API): scoring of the scene tests, and
+the check that the outputs of an interrupted run agree."""
 
 from __future__ import annotations
 
+import csv
+import json
 import math
 
 
@@ -39,3 +42,26 @@ def false_alarms(outs, objects, radius=20.0, tail=25):
             if not near:
                 bad.append((out.frame, f.id))
     return bad
+
+
+def _read_csv(path):
+    with open(path, newline="", encoding="utf-8") as f:
+        return list(csv.DictReader(f))
+
+
+def check_outputs_agree(out, models, *, localising="mlplc2") -> int:
+    """``responses.csv``, ``targets.csv`` and ``fields.json`` in ``out`` cover the same frames,
+    ``0 .. n_frames - 1`` (a run from frame 0): every model has rows for exactly these frames,
+    ``targets.csv`` has the frames in which ``localising`` had fields, and no field summary
+    names a later frame. Returns ``n_frames``."""
+    summary = json.loads((out / "fields.json").read_text())
+    n = summary["n_frames"]
+    rows = _read_csv(out / "responses.csv")
+    for name in models:
+        assert sorted({int(r["frame"]) for r in rows if r["model"] == name}) == list(range(n)), name
+    with_fields = {int(r["frame"]) for r in rows if r["field_id"] and r["model"] == localising}
+    targets = {int(r["frame"]) for r in _read_csv(out / "targets.csv") if r["model"] == localising}
+    assert targets == with_fields and all(k < n for k in targets)
+    for f in summary["models"][localising]:
+        assert f["born"] < n and f["peak_frame"] < n and (f["died"] is None or f["died"] <= n)
+    return n

@@ -20,6 +20,8 @@ from mlplc2.cli import SUBCOMMANDS, add_subcommand, main
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, RunInterrupted, TruncatedInputWarning, run
 
+from .helpers import check_outputs_agree
+
 # A dark square approaching (growing 4 px/frame) at a known centre, 320x240.
 CX, CY = 200, 100
 W, H, T = 320, 240, 60
@@ -260,6 +262,7 @@ def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     assert sorted({int(r["frame"]) for r in rows}) == list(range(k))
     summary = json.loads((out / "fields.json").read_text())
     assert summary["interrupted"] and summary["n_frames"] == k
+    assert check_outputs_agree(out, ["mlplc2"]) == k  # targets.csv and the summaries too
     assert _frame_count(out / "annotated.mp4")[0] == k
     with pytest.raises(RunInterrupted) as info:
         run(data["avi"], out=False, quiet=True)
@@ -289,7 +292,9 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
         assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
     # the summaries of dead fields wait on disk, and come back complete and in order
     assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
-    assert (tmp_path / "a" / "fields.json").read_text() == (tmp_path / "b" / "fields.json").read_text()
+    a, b = (json.loads((tmp_path / d / "fields.json").read_text()) for d in "ab")
+    assert a.pop("seconds") > 0 and b.pop("seconds") > 0  # the measured wall time differs from run to run
+    assert json.dumps(a) == json.dumps(b)  # the rest identical, in the same order
     # the table is read back from responses.csv
     pytest.importorskip("pandas")
     a, b = kept.to_dataframe(), lean.to_dataframe()
@@ -500,6 +505,8 @@ def test_demo_command(tmp_path, capsys):
     assert main(["demo", "--out", str(out), "--scene", "six_objects"]) == 0
     text = capsys.readouterr().out
     assert "matched an object" in text
+    assert re.match(r"demo scene .*demo\.mp4 \(\d+ frames\) with mlplc2, .* in \d+\.\d s \(\d+\.\d frames/s\)$",
+                    text.splitlines()[0]), text
     assert (out / "demo.mp4").exists() and (out / "demo_gt.json").exists()
     res = out / "demo_mlplc2"
     for name in ("responses.csv", "fields.json", "responses.png", "annotated.mp4"):
@@ -638,3 +645,51 @@ def test_run_backend_option_reaches_the_decoder(data, tmp_path, monkeypatch, cap
     monkeypatch.setitem(sys.modules, "av", None)   # import av now fails
     assert main(["run", str(data["avi"]), "--out", str(tmp_path / "p"), "--backend", "pyav", "-q"]) == 2
     assert "needs PyAV" in _one_error_line(capsys.readouterr().err)
+
+
+# -- what a new user sees (issue 14) ------------------------------------------------------
+def test_summary_gives_frames_seconds_and_rate(data, tmp_path, capsys):
+    """The progress bar goes away at the end; the summary keeps the rate, and fields.json the time."""
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "20"]) == 0
+    first = capsys.readouterr().out.splitlines()[0]
+    m = re.fullmatch(r"20 frames of .*square\.avi \(320x240, 30 fps\) in (\d+\.\d) s \((\d+\.\d) frames/s\)", first)
+    assert m, first
+    seconds = json.loads((out / "fields.json").read_text())["seconds"]
+    assert seconds > 0 and float(m.group(1)) == pytest.approx(seconds, abs=0.05)
+    assert float(m.group(2)) == pytest.approx(20 / seconds, rel=0.05)
+    res = run(data["avi"], out=False, end=5, progress=False)
+    assert res.seconds > 0 and res.summary()["seconds"] == round(res.seconds, 3)
+
+
+def test_all_fields_option_reaches_the_overlay(data, tmp_path, monkeypatch):
+    import mlplc2.plots as plots
+
+    seen = []
+    real = plots.annotate_frame
+
+    def spy(*args, **kwargs):
+        seen.append((kwargs["draw_fields"], kwargs["field_shape"]))
+        return real(*args, **kwargs)
+
+    monkeypatch.setattr(plots, "annotate_frame", spy)
+    base = ["run", str(data["avi"]), "--end", "3", "--video", "-q"]
+    assert main(base + ["--out", str(tmp_path / "a")]) == 0
+    assert main(base + ["--out", str(tmp_path / "b"), "--all-fields"]) == 0
+    assert seen == [("responding", "square")] * 3 + [("all", "square")] * 3
+    seen.clear()
+    run(data["avi"], out=tmp_path / "c", end=2, video=True, progress=False, params=mlplc2.Params(field_shape="disc"))
+    assert seen == [("responding", "disc")] * 2
+    with pytest.raises(mlplc2.InputError, match="draw_fields"):
+        run(data["avi"], out=False, draw_fields="none")
+
+
+@pytest.mark.filterwarnings("default::mlplc2.io.VideoCodecWarning")
+def test_video_without_h264_is_one_warning_line(data, tmp_path, monkeypatch, capsys):
+    monkeypatch.setitem(sys.modules, "av", None)   # as if PyAV were not installed
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "4", "--video", "-q"]) == 0
+    err = capsys.readouterr().err
+    assert err == ("mlplc2: warning: annotated.mp4: written as MP4 'mp4v' by OpenCV, which browsers do not "
+                   "play, not H.264: PyAV is not installed (pip install av)\n")
+    assert _frame_count(out / "annotated.mp4")[0] == 4

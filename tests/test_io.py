@@ -252,3 +252,53 @@ def test_writer_is_atomic(tmp_path):
         with VideoWriter(p, 30.0, (W, H)) as w:
             w.write(np.zeros((60, 80, 3), np.uint8))
     assert list(tmp_path.iterdir()) == []
+
+
+# -- H.264 by default (issue 14, item 1) ---------------------------------------------------
+def test_pyav_is_a_core_dependency():
+    """MP4 output is H.264 (which browsers play) for every install, not only with an extra."""
+    tomllib = pytest.importorskip("tomllib")
+    from pathlib import Path
+
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    if not pyproject.exists():
+        pytest.skip("not a source checkout")
+    project = tomllib.loads(pyproject.read_text())["project"]
+    assert any(d.replace(" ", "").startswith("av>=") for d in project["dependencies"])
+    assert project["optional-dependencies"]["video"] == []  # kept: pip install "mlplc2[video]" works
+
+
+def test_mp4_is_h264(tmp_path):
+    av = pytest.importorskip("av")
+    p = write_video(tmp_path / "h.mp4", _frames(4), 30.0)
+    with av.open(str(p)) as c:
+        assert c.streams.video[0].codec_context.name == "h264"
+
+
+@pytest.mark.parametrize("why", ["no PyAV", "no libx264"])
+def test_mp4_falls_back_to_opencv_with_one_warning(tmp_path, monkeypatch, why):
+    import sys
+    import warnings
+
+    from mlplc2.io import VideoCodecWarning
+
+    if why == "no PyAV":
+        monkeypatch.setitem(sys.modules, "av", None)  # import av -> ImportError
+        expect = "PyAV is not installed"
+    else:
+        av = pytest.importorskip("av")
+
+        def no_codec(name, mode="r"):
+            raise av.codec.codec.UnknownCodecError(name)
+
+        monkeypatch.setattr(av.codec, "Codec", no_codec)
+        expect = "PyAV's FFmpeg has no H.264 encoder"
+    with warnings.catch_warnings(record=True) as caught:
+        warnings.simplefilter("always")
+        p = write_video(tmp_path / "f.mp4", _frames(6), 30.0)
+    assert [str(w.message) for w in caught if w.category is VideoCodecWarning] == [
+        f"f.mp4: written as MP4 'mp4v' by OpenCV, which browsers do not play, not H.264: {expect}"
+        + (" (pip install av)" if why == "no PyAV" else " (UnknownCodecError: libx264)")]
+    assert len(caught) == 1
+    arr, _ = read_video(p)
+    assert arr.shape == (6, H, W, 3)

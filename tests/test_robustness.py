@@ -43,6 +43,8 @@ from mlplc2.models import REGISTRY
 from mlplc2.models.lplc2 import _LPLC2Family
 from mlplc2.runner import COLUMNS
 
+from .helpers import check_outputs_agree
+
 NAMES = sorted(REGISTRY)
 LPLC2_FAMILY = [n for n in NAMES if issubclass(REGISTRY[n], _LPLC2Family)]
 H, W = 48, 64
@@ -372,9 +374,12 @@ def test_real_signal_leaves_valid_outputs(tmp_path, sig):
     n = 900
     p = write_video(tmp_path / "long.avi", _noise_frames(n, 160, 120), 30.0)
     out = tmp_path / "o"
+    # SIGINT as in a terminal, even when pytest runs in the background (which ignores it, and
+    # an ignored SIGINT is inherited: the run would not stop).
     proc = subprocess.Popen(_console_script() + ["run", str(p), "--out", str(out), "-m", "mlplc2,lgmd2",
                                                  "--quiet"], stdout=subprocess.PIPE,
-                            stderr=subprocess.PIPE, text=True)
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
     csv_path = out / "responses.csv"
     deadline = time.monotonic() + 60
     try:
@@ -401,6 +406,8 @@ def test_real_signal_leaves_valid_outputs(tmp_path, sig):
     for name in ("mlplc2", "lgmd2"):  # every processed frame complete, none beyond
         assert sorted({int(r["frame"]) for r in rows if r["model"] == name}) == list(range(k))
     assert [int(r["frame"]) for r in rows if r["model"] == "lgmd2"] == list(range(k))
+    # the three outputs agree: no frame in responses.csv or targets.csv at or past n_frames
+    assert check_outputs_agree(out, ["mlplc2", "lgmd2"]) == k
     assert not [q for q in out.iterdir() if q.name.startswith(".")]
 
 

@@ -32,9 +32,7 @@ import json
 import logging
 import math
 import os
-import signal
 import sys
-import threading
 import time
 import warnings
 from collections.abc import Mapping, Sequence
@@ -42,6 +40,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+from ._signals import interrupts
 from ._validation import InputTypeError, InputValueError, check_int
 
 __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep", "expand_inputs",
@@ -607,18 +606,14 @@ def start_local_cluster(workers: int, **kwargs):
     saved = {k: os.environ.get(k) for k in environ}
     # A worker process inherits an ignored SIGINT (a handler would be reset by exec): started so,
     # it leaves Ctrl-C to this process, which closes the cluster. Ctrl-C is ignored while it starts.
-    sigint = signal.getsignal(signal.SIGINT) if threading.current_thread() is threading.main_thread() else None
     try:
-        if sigint is not None:
-            signal.signal(signal.SIGINT, signal.SIG_IGN)
-        with dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}), \
+        with interrupts(ignore=True), \
+                dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}), \
                 warnings.catch_warnings():
             # the scheduler's HTTP server (no dashboard) takes another port when 8787 is taken: not news
             warnings.filterwarnings("ignore", r"Port \d+ is already in use", UserWarning)
             cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
     finally:
-        if sigint is not None:
-            signal.signal(signal.SIGINT, sigint)
         for k, v in saved.items():
             if v is None:
                 os.environ.pop(k, None)
@@ -836,62 +831,54 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                 if not muted:
                     muted.extend(_mute_dask_logs())
 
-            def on_sigint(signum, frame):  # mute first: the unwinding interrupt makes Dask log at once
-                mute()
-                previous(signum, frame)
-
-            previous = signal.getsignal(signal.SIGINT) \
-                if threading.current_thread() is threading.main_thread() else None
-            if callable(previous):
-                signal.signal(signal.SIGINT, on_sigint)
+            # Ctrl-C / SIGTERM mute Dask first: the unwinding interrupt makes it log at once.
             try:
-                if client is None:
-                    if scheduler:
-                        try:
-                            own = Client(scheduler)
-                        except (TypeError, ValueError) as exc:
-                            raise InputValueError(f"scheduler {scheduler}: {_one_line(str(exc))}") from None
-                        used = scheduler
-                    else:
-                        n = workers if workers else min(4, os.cpu_count() or 1)
-                        cluster, own = start_local_cluster(n)
-                        used = f"LocalCluster({n} workers)"
-                    c = own
-                else:
-                    c = client
-                    used = str(getattr(client, "scheduler", None) and client.scheduler.address)
-                prepare()
-                futures = {}
-                for i, t in jobs:
-                    key = f"mlplc2-{Path(t['out']).relative_to(out.resolve()).as_posix()}-" \
-                          f"{hashlib.sha1(t['out'].encode()).hexdigest()[:6]}-{time.time_ns()}"
-                    futures[c.submit(run_task, t, key=key, pure=False)] = i
-                for fut in as_completed(futures):
-                    i = futures[fut]
+                with interrupts(before=mute):
                     try:
-                        rows[i] = fut.result()
-                    except Exception as exc:  # noqa: BLE001 - a worker died, ...
-                        t = tasks[i]
-                        rows[i] = {"video": t["video"], "model": t["model"], "param_set": t["param_set"],
-                                   "params": json.dumps(t["overrides"], sort_keys=True), "n_frames": None,
-                                   "fields": None, "alarms": None, "first_alarm_frame": None, "seconds": None,
-                                   "status": "error", "error": _one_line(f"{type(exc).__name__}: {exc}"),
-                                   "out": t["rel_out"]}
-                    finished.add(i)
-                    bar.update()
-            except KeyboardInterrupt:
-                mute()  # workers stopped mid-task make the cluster log warnings
-                raise
+                        if client is None:
+                            if scheduler:
+                                try:
+                                    own = Client(scheduler)
+                                except (TypeError, ValueError) as exc:
+                                    raise InputValueError(f"scheduler {scheduler}: {_one_line(str(exc))}") from None
+                                used = scheduler
+                            else:
+                                n = workers if workers else min(4, os.cpu_count() or 1)
+                                cluster, own = start_local_cluster(n)
+                                used = f"LocalCluster({n} workers)"
+                            c = own
+                        else:
+                            c = client
+                            used = str(getattr(client, "scheduler", None) and client.scheduler.address)
+                        prepare()
+                        futures = {}
+                        for i, t in jobs:
+                            key = f"mlplc2-{Path(t['out']).relative_to(out.resolve()).as_posix()}-" \
+                                  f"{hashlib.sha1(t['out'].encode()).hexdigest()[:6]}-{time.time_ns()}"
+                            futures[c.submit(run_task, t, key=key, pure=False)] = i
+                        for fut in as_completed(futures):
+                            i = futures[fut]
+                            try:
+                                rows[i] = fut.result()
+                            except Exception as exc:  # noqa: BLE001 - a worker died, ...
+                                t = tasks[i]
+                                rows[i] = {"video": t["video"], "model": t["model"], "param_set": t["param_set"],
+                                           "params": json.dumps(t["overrides"], sort_keys=True), "n_frames": None,
+                                           "fields": None, "alarms": None, "first_alarm_frame": None, "seconds": None,
+                                           "status": "error", "error": _one_line(f"{type(exc).__name__}: {exc}"),
+                                           "out": t["rel_out"]}
+                            finished.add(i)
+                            bar.update()
+                    except KeyboardInterrupt:
+                        mute()  # workers stopped mid-task make the cluster log warnings
+                        raise
+                    finally:
+                        if own is not None:
+                            own.close()
+                        if cluster is not None:
+                            cluster.close()
             finally:
-                try:
-                    if own is not None:
-                        own.close()
-                    if cluster is not None:
-                        cluster.close()
-                finally:
-                    if callable(previous):
-                        signal.signal(signal.SIGINT, previous)
-                    _unmute(muted)
+                _unmute(muted)
     except KeyboardInterrupt:
         done = list(rows)  # read back, or finished now
         ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in done]

@@ -18,14 +18,13 @@ from __future__ import annotations
 import argparse
 import math
 import os
-import signal
 import sys
-import threading
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
+from ._signals import interrupts
 from ._validation import InputError, InputValueError
 from .models.base import MAX_REPEATS, REPEAT_THRESHOLD
 
@@ -155,11 +154,13 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--start", type=_nonneg_int, default=0, metavar="N", help="first frame (0-based)")
     p.add_argument("--end", type=_nonneg_int, metavar="N", help="stop before this frame")
     p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the fields drawn")
+    p.add_argument("--all-fields", action="store_true",
+                   help="with --video: draw every field, not only those that respond or are in alarm")
     p.add_argument("--hfov", type=_hfov, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
     p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
-                   help="video decoder (default: opencv; pyav needs mlplc2[video])")
+                   help="video decoder (default: opencv)")
     _add_repeat_options(p, f"hold the models' output on duplicated frames: frames in which no pixel "
                           f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
                           f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
@@ -181,7 +182,7 @@ def _cmd_run(args) -> int:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
-                         backend=args.backend)
+                         backend=args.backend, draw_fields="all" if args.all_fields else "responding")
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
@@ -189,6 +190,12 @@ def _cmd_run(args) -> int:
         _warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
+
+
+def _timing(result) -> str:
+    """``in 12.3 s (32.5 frames/s)``: the wall time of a run's frame loop and its rate."""
+    rate = result.n_frames / result.seconds if result.seconds > 0 else math.inf
+    return f"in {result.seconds:.1f} s ({rate:.1f} frames/s)"
 
 
 def _report_interrupt(exc) -> int:
@@ -202,7 +209,7 @@ def _print_run_summary(args, result) -> None:
     w, h = result.size
     mw, mh = result.model_size
     size = f"{w}x{h}" + (f" -> {mw}x{mh}" if (mw, mh) != (w, h) else "")
-    lines = [f"{result.n_frames} frames of {result.source} ({size}, {result.fps:g} fps)"]
+    lines = [f"{result.n_frames} frames of {result.source} ({size}, {result.fps:g} fps) {_timing(result)}"]
     for name in result.models:
         fields = result.fields.get(name, [])
         if fields:
@@ -494,7 +501,8 @@ def _cmd_demo(args) -> int:
         d = demo(args.out, scene=args.scene, quiet=args.quiet)
     except RunInterrupted as exc:
         return _report_interrupt(exc)
-    lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)}",
+    lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)} "
+             f"{_timing(d.result)}",
              "  object  centre        frames    mlplc2 field  centre        error   first alarm"]
     for m in d.matches:
         cx, cy = m["center"]
@@ -731,27 +739,21 @@ def _quiet_decoders() -> None:
             pass
 
 
-def _terminate_as_interrupt(signum, frame):  # noqa: ARG001 - signal handler signature
-    raise KeyboardInterrupt
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG001
+    """``warnings.showwarning`` of the CLI: one line, ``mlplc2: warning: ...``."""
+    _warn(_one_line(str(message)))
 
 
 def main(argv: list[str] | None = None) -> int:
     """Entry point of the ``mlplc2`` console script; returns the exit code.
 
     SIGTERM (what batch schedulers and ``timeout`` send) is handled like Ctrl-C: the
-    outputs of the frames done are written and the exit code is 130.
+    outputs of the frames done are written and the exit code is 130 (``mlplc2._signals``).
+    Warnings are printed as one line each, ``mlplc2: warning: ...``.
     """
-    previous = None
-    if threading.current_thread() is threading.main_thread():
-        try:
-            previous = signal.signal(signal.SIGTERM, _terminate_as_interrupt)
-        except (ValueError, OSError):  # pragma: no cover - embedded interpreters
-            previous = None
-    try:
+    with interrupts(sigterm=True), warnings.catch_warnings():
+        warnings.showwarning = _show_warning
         return _main(argv)
-    finally:
-        if previous is not None:
-            signal.signal(signal.SIGTERM, previous)
 
 
 def _main(argv: list[str] | None) -> int:

@@ -4,15 +4,16 @@
 * :func:`open_source` streams frames one at a time from a video file, a folder
   of images, a glob pattern or a camera, decoding in a background thread so
   decoding and the model overlap; memory does not depend on the video length.
-* :func:`write_video` / :class:`VideoWriter` write MP4 (H.264 via PyAV when it
-  is installed, else OpenCV) or AVI (MJPG) atomically.
+* :func:`write_video` / :class:`VideoWriter` write MP4 (H.264 via PyAV) or AVI
+  (MJPG) atomically.
 
 Frames are always RGB ``uint8`` arrays of shape ``(H, W, 3)``. Sizes are given
 as ``(W, H)`` (OpenCV convention), shapes as ``(H, W)`` (numpy convention).
 
-OpenCV is the default decoder (a core dependency); PyAV (``pip install
-mlplc2[video]``) is used for decoding only on request (``backend="pyav"``) and
-for H.264 encoding when it is installed.
+OpenCV is the default decoder. PyAV, also a core dependency, decodes on request
+(``backend="pyav"``) and encodes every MP4 as H.264, which browsers play. Where PyAV is
+missing or its FFmpeg has no H.264 encoder, MP4 files are written by OpenCV
+(``mp4v``, which browsers do not play), with one :class:`VideoCodecWarning`.
 """
 
 from __future__ import annotations
@@ -33,7 +34,7 @@ import numpy as np
 from ._validation import InputError, InputTypeError, InputValueError, check_fps
 
 __all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter", "atomic_path",
-           "TruncatedInputWarning",
+           "TruncatedInputWarning", "VideoCodecWarning",
            "parse_resize", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]
 
 log = logging.getLogger(__name__)
@@ -50,6 +51,10 @@ _QUEUE_SIZE = 4
 
 class TruncatedInputWarning(UserWarning):
     """The input stopped decoding before its stated end; results cover the frames before."""
+
+
+class VideoCodecWarning(UserWarning):
+    """An MP4 is written with OpenCV's ``mp4v`` instead of H.264 (PyAV missing or without libx264)."""
 
 
 # ---------------------------------------------------------------------------
@@ -206,7 +211,7 @@ class _PyAVDecoder(_Decoder):
         try:
             import av
         except ImportError:
-            raise InputError("backend 'pyav' needs PyAV: pip install 'mlplc2[video]'") from None
+            raise InputError("backend 'pyav' needs PyAV, which is not installed: pip install av") from None
         self.name = name
         self._av = av
         try:
@@ -538,7 +543,7 @@ def open_source(source, *, fps=None, start: int = 0, end: int | None = None, res
     keep_original : bool
         Also yield the frame at the input size: items ``(index, frame, original)``.
     backend : {'opencv', 'pyav'}
-        Video decoder (PyAV needs ``mlplc2[video]``).
+        Video decoder.
 
     Returns
     -------
@@ -599,12 +604,17 @@ def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
 # ---------------------------------------------------------------------------
 # writing
 # ---------------------------------------------------------------------------
-def _have_pyav() -> bool:
+def _h264_unavailable() -> str | None:
+    """Why PyAV cannot encode H.264 here (None: it can)."""
     try:
-        import av  # noqa: F401
+        import av
     except ImportError:
-        return False
-    return True
+        return "PyAV is not installed (pip install av)"
+    try:
+        av.codec.Codec("libx264", "w")
+    except Exception as exc:  # noqa: BLE001 - UnknownCodecError, or an FFmpeg build without it
+        return f"PyAV's FFmpeg has no H.264 encoder ({type(exc).__name__}: {exc})"
+    return None
 
 
 #: Suffixes :class:`VideoWriter` writes: MP4 (H.264) and AVI (MJPG).
@@ -615,8 +625,9 @@ class VideoWriter:
     """Write RGB frames to ``path`` one at a time; the file appears only on :meth:`close`.
 
     ``.avi`` -> MJPG (OpenCV). ``.mp4`` -> MP4 H.264 (``libx264``,
-    ``yuv420p``, moov atom first so a cut file still plays) via PyAV when it
-    is installed, else OpenCV ``mp4v``. H.264 needs even dimensions: odd
+    ``yuv420p``, moov atom first so a cut file still plays) via PyAV. Where PyAV
+    is missing or cannot encode H.264, OpenCV ``mp4v`` instead, with a
+    :class:`VideoCodecWarning` that says so. H.264 needs even dimensions: odd
     ones are padded by one black row/column on the bottom/right.
 
     Frames go to a hidden temporary name in the same folder, renamed to
@@ -635,7 +646,14 @@ class VideoWriter:
         suffix = self.path.suffix.lower()
         self.codec = "mjpg" if suffix == ".avi" else "h264"
         if backend is None:
-            backend = "pyav" if (self.codec == "h264" and _have_pyav()) else "opencv"
+            backend = "opencv"
+            if self.codec == "h264":
+                why = _h264_unavailable()
+                if why is None:
+                    backend = "pyav"
+                else:
+                    warnings.warn(f"{self.path.name}: written as MP4 'mp4v' by OpenCV, which browsers do not "
+                                  f"play, not H.264: {why}", VideoCodecWarning, stacklevel=3)
         self.backend = backend
         self.tmp = self.path.with_name(f".{self.path.stem}.partial-{os.getpid()}{self.path.suffix}")
         self.n_frames = 0

@@ -13,7 +13,7 @@ from pathlib import Path
 
 import numpy as np
 
-__all__ = ["plot_responses", "annotate_frame", "read_responses"]
+__all__ = ["plot_responses", "annotate_frame", "read_responses", "DRAW_FIELDS"]
 
 #: RGB colours of the annotated video.
 ALARM_RGB = (230, 30, 30)
@@ -171,55 +171,164 @@ def _label(fid: int, summary: dict | None, series) -> str:
     return f"#{fid} ({x:.0f}, {y:.0f}) {span}"
 
 
+#: Which fields :func:`annotate_frame` draws: ``"responding"`` (response > 0 or in alarm) or ``"all"``.
+DRAW_FIELDS = ("responding", "all")
+#: Label backgrounds of the annotated video: the header and the frame number.
+PANEL_RGB = (20, 20, 20)
+
+
 def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: float = 1.0,
-                   scale_y: float = 1.0, *, primary: int | None = 0, index: int | None = None) -> np.ndarray:
+                   scale_y: float = 1.0, *, primary: int | None = 0, index: int | None = None,
+                   field_shape: str = "square", draw_fields: str = "responding") -> np.ndarray:
     """Draw attention fields and responses on a copy of an RGB frame.
 
-    The fields of ``outputs[primary]`` are drawn as ellipses (circles unless
-    the model frames were resized anisotropically) of the field radius scaled
-    to input pixels, with ``id:response`` beside them: red while in alarm,
-    green otherwise. A header lists every model's response (red ``ALARM``
-    when its collision flag is set).
-    """
-    import cv2
+    The fields of ``outputs[primary]`` are drawn in their real shape, scaled to input
+    pixels: a square of half-side ``radius`` (``field_shape="square"``, the default of
+    :class:`mlplc2.Params`) or a disc of that radius (``"disc"``), a rectangle or an
+    ellipse when the model frames were resized anisotropically. Each gets a cross at its
+    centre and a label ``#id response`` (and ``ttc`` once estimated). Fields in alarm are
+    red, the others green. With ``draw_fields="responding"`` (default) only the fields
+    that respond (response > 0) or are in alarm are drawn; ``"all"`` draws every field.
+    A header at the top left lists every model's response (``ALARM`` on red while its
+    collision flag is set), and ``index`` is shown at the bottom left.
 
+    Text size, line widths and margins scale with the frame size (``_Style``), and every
+    label sits on a filled box, placed where it hides no other label, so it reads on any
+    background. Each drawn thing is one small function (``_draw_field``,
+    ``_header_labels``) that puts its labels through :class:`_Labels`.
+    """
+    if draw_fields not in DRAW_FIELDS:
+        from ._validation import InputValueError
+
+        raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, "
+                              f"got {draw_fields!r}")
     img = np.ascontiguousarray(frame[:, :, :3], dtype=np.uint8).copy()
-    h, w = img.shape[:2]
-    fs = max(0.3, min(w, h) / 600.0)
-    th = 1 if fs < 0.6 else 2
-    if primary is not None and outputs[primary].fields:
+    style = _Style(*img.shape[:2])
+    labels = _Labels(img, style)
+    _header_labels(labels, outputs, names, index)  # placed first: the other labels keep clear of them
+    if primary is not None:
         for f in outputs[primary].fields:
-            c = ALARM_RGB if f.collision else CALM_RGB
-            cx, cy = int(round(f.x * scale_x)), int(round(f.y * scale_y))
-            ax = max(1, int(round(f.radius * scale_x)))
-            ay = max(1, int(round(f.radius * scale_y)))
-            cv2.ellipse(img, (cx, cy), (ax, ay), 0, 0, 360, c, th + (1 if f.collision else 0), cv2.LINE_AA)
-            cv2.drawMarker(img, (cx, cy), c, cv2.MARKER_CROSS, max(4, int(8 * fs * 2)), th)
-            ttc = getattr(f, "ttc_s", None)  # time to collision (docs/targets.md)
-            label = f"{f.id}:{_fmt(f.response)}" + ("" if ttc is None else f" ttc {ttc:.2f}s")
-            _text(img, label, (cx + 4, cy - 4), c, fs)
-    y = 4
+            if draw_fields == "all" or f.response > 0 or f.collision:
+                _draw_field(img, labels, f, style, scale_x, scale_y, field_shape)
+    labels.draw()  # last: on top of the outlines
+    return img
+
+
+class _Style:
+    """Sizes of the overlay for one frame size: everything scales with ``u = min(H, W) / 240``.
+
+    Font scale ``0.45 u``: "mlplc2 1.5" is 11 px high (ascender to descender) at 320x240,
+    34 px at 1280x720, on a box 19 and 60 px high (measured with OpenCV 5.0). Field outlines
+    are ``round(u)`` px wide (one more in alarm).
+    """
+
+    def __init__(self, h: int, w: int):
+        u = max(min(h, w), 1) / 240.0
+        self.font_scale = max(0.35, 0.45 * u)
+        self.text_thickness = max(1, int(round(self.font_scale * 1.4)))
+        self.line = max(1, int(round(u)))
+        self.pad = max(2, int(round(2.5 * u)))
+        self.margin = max(2, int(round(3 * u)))
+        self.gap = max(1, int(round(1.5 * u)))
+        self.cross = max(5, int(round(8 * u)))
+
+
+def _text_on(bg) -> tuple[int, int, int]:
+    """Black or white, whichever contrasts more with ``bg`` (Rec. 601 luma)."""
+    luma = 0.299 * bg[0] + 0.587 * bg[1] + 0.114 * bg[2]
+    return (0, 0, 0) if luma > 140 else (255, 255, 255)
+
+
+class _Labels:
+    """The text labels of one frame: each placed where it overlaps no label placed before,
+    then all drawn on top of the outlines (:meth:`draw`).
+
+    A label is ``text`` in black or white on a filled ``bg`` box. ``add`` takes candidate
+    positions, each ``(x, y, anchor)`` with ``anchor`` "top" (``(x, y)`` is the box's
+    top-left corner) or "bottom" (its bottom-left corner), and uses the first one whose box,
+    moved inside the frame, overlaps no earlier label (else the first one).
+    """
+
+    def __init__(self, img: np.ndarray, style: _Style):
+        import cv2
+
+        self._cv2 = cv2
+        self.img = img
+        self.style = style
+        self.items: list[tuple[str, tuple, tuple[int, int, int, int], int]] = []
+
+    def size(self, text: str) -> tuple[int, int, int]:
+        """``(width, height, text height)`` of the box of ``text``."""
+        st = self.style
+        (tw, th), base = self._cv2.getTextSize(text, self._cv2.FONT_HERSHEY_SIMPLEX, st.font_scale,
+                                               st.text_thickness)
+        return tw + 2 * st.pad, th + base + 2 * st.pad, th
+
+    def _box(self, x: float, y: float, anchor: str, bw: int, bh: int) -> tuple[int, int, int, int]:
+        h, w = self.img.shape[:2]
+        x0 = min(max(int(x), 0), max(w - bw, 0))
+        y0 = min(max(int(y) - (bh if anchor == "bottom" else 0), 0), max(h - bh, 0))
+        return x0, y0, min(x0 + bw, w), min(y0 + bh, h)
+
+    def add(self, text: str, bg, *candidates: tuple[float, float, str]) -> tuple[int, int, int, int]:
+        """Place one label (see the class docstring); returns its box ``(x0, y0, x1, y1)``."""
+        bw, bh, th = self.size(text)
+        boxes = [self._box(x, y, anchor, bw, bh) for x, y, anchor in candidates]
+        box = next((b for b in boxes if not any(_overlap(b, other) for _, _, other, _ in self.items)), boxes[0])
+        self.items.append((text, tuple(int(c) for c in bg), box, th))
+        return box
+
+    def draw(self) -> None:
+        cv2, st = self._cv2, self.style
+        for text, bg, (x0, y0, x1, y1), th in self.items:
+            cv2.rectangle(self.img, (x0, y0), (x1 - 1, y1 - 1), bg, cv2.FILLED)
+            cv2.putText(self.img, text, (x0 + st.pad, y0 + st.pad + th), cv2.FONT_HERSHEY_SIMPLEX,
+                        st.font_scale, _text_on(bg), st.text_thickness, cv2.LINE_AA)
+
+
+def _overlap(a, b) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def _header_labels(labels: _Labels, outputs, names: Sequence[str], index: int | None) -> None:
+    """Top left, one row per model: ``name response``, on red with ``ALARM`` while it is in
+    alarm; bottom left: the frame number."""
+    st = labels.style
+    y = st.margin
     for name, out in zip(names, outputs):
         alarm = bool(out.collision)
-        label = f"{name} {_fmt(out.response)}" + (" ALARM" if alarm else "")
-        y += int(26 * fs) + 4
-        _text(img, label, (4, y), ALARM_RGB if alarm else (255, 255, 255), fs)
+        text = f"{name} {_fmt(out.response)}" + (" ALARM" if alarm else "")
+        y = labels.add(text, ALARM_RGB if alarm else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
     if index is not None:
-        _text(img, f"frame {index}", (4, h - 6), (255, 255, 255), fs)
-    return img
+        labels.add(f"frame {index}", PANEL_RGB, (st.margin, labels.img.shape[0] - st.margin, "bottom"))
+
+
+def _draw_field(img: np.ndarray, labels: _Labels, f, style: _Style, scale_x: float, scale_y: float,
+                shape: str) -> None:
+    """One attention field: its outline (square or disc), a centre cross and its label."""
+    import cv2
+
+    colour = ALARM_RGB if f.collision else CALM_RGB
+    cx, cy = int(round(f.x * scale_x)), int(round(f.y * scale_y))
+    ax = max(1, int(round(f.radius * scale_x)))
+    ay = max(1, int(round(f.radius * scale_y)))
+    line = style.line + (1 if f.collision else 0)
+    if shape == "disc":
+        cv2.ellipse(img, (cx, cy), (ax, ay), 0, 0, 360, colour, line, cv2.LINE_AA)
+    else:
+        cv2.rectangle(img, (cx - ax, cy - ay), (cx + ax, cy + ay), colour, line)
+    cv2.drawMarker(img, (cx, cy), colour, cv2.MARKER_CROSS, style.cross, style.line)
+    ttc = getattr(f, "ttc_s", None)  # time to collision (docs/targets.md)
+    text = f"#{f.id} {_fmt(f.response)}" + ("" if ttc is None else f" ttc {ttc:.2f}s")
+    h, w = img.shape[:2]
+    edge = (line + 1) // 2
+    left, top, bottom = cx - ax - edge, cy - ay - edge, cy + ay + edge
+    if 0 <= cx - ax < w and 0 <= cy - ay < h:  # above the top-left corner, else below the bottom-left one
+        candidates = [(left, top, "bottom"), (left, bottom, "top"), (left + 2 * edge, top + 2 * edge, "top")]
+    else:  # a field larger than the frame (LPLC2's one cell): beside its centre
+        candidates = [(cx + style.cross, cy - style.cross, "bottom"), (cx + style.cross, cy + style.cross, "top")]
+    labels.add(text, colour, *candidates)
 
 
 def _fmt(v: float) -> str:
     return f"{v:.0f}" if abs(v) >= 100 else f"{v:.3g}"
-
-
-def _text(img, text: str, org, colour, fs: float) -> None:
-    import cv2
-
-    font = cv2.FONT_HERSHEY_SIMPLEX
-    th = 1 if fs < 0.6 else 2
-    (tw, tht), base = cv2.getTextSize(text, font, fs, th + 2)
-    h, w = img.shape[:2]
-    org = (int(min(max(org[0], 0), max(w - tw, 0))), int(min(max(org[1], tht + 1), max(h - base, tht + 1))))
-    cv2.putText(img, text, org, font, fs, (0, 0, 0), th + 2, cv2.LINE_AA)
-    cv2.putText(img, text, org, font, fs, colour, th, cv2.LINE_AA)

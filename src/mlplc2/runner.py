@@ -5,19 +5,23 @@ steps every model on each frame, writing as it goes:
 
 ``responses.csv``
     one row per active field per frame (``frame,time_s,model,field_id,x,y,response,collision``),
-    flushed after every frame: a run stopped by Ctrl-C leaves a valid file.
+    flushed after every frame: a run stopped by Ctrl-C leaves a valid file. A signal
+    (Ctrl-C, SIGTERM) that arrives during a frame takes effect once the frame is written,
+    so ``responses.csv``, ``targets.csv`` and ``fields.json`` always cover the same frames.
 ``fields.json``
-    one summary per attention field (centre, birth, death, peak, first alarm,
-    and the target estimates at the peak and the last one, see ``docs/targets.md``).
+    one summary per attention field (centre, birth, death, peak, first alarm) and, under
+    ``"targets"``, one per target (life, first estimate, first warning and the estimates
+    then, see ``docs/targets.md``).
 ``targets.csv``
     (models with targets) one row per target per frame:
     ``frame,model,target_id,x,y,width,height,ttc_s,miss,warning,fields,azimuth_deg,elevation_deg``
     (input pixels; time to contact in s, miss in object widths, empty while not estimable;
-    the bearing only with ``hfov_deg``; ``fields`` the ids of its attention fields, space-separated).
+    the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
+    space-separated).
 ``responses.png``
     response against frame, one panel per model (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
-    (``video=True``) the input with the fields drawn.
+    (``video=True``) the input with the fields drawn (:func:`mlplc2.plots.annotate_frame`).
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
@@ -32,15 +36,18 @@ import logging
 import math
 import sys
 import tempfile
+import time
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
+from ._signals import interrupts
 from ._validation import InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
 from .models.base import Model, Output, check_repeat_threshold, get_model
+from .plots import DRAW_FIELDS
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir",
@@ -50,7 +57,8 @@ log = logging.getLogger(__name__)
 
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
-#: Columns of ``targets.csv``, in order (``docs/targets.md``).
+#: Columns of ``targets.csv``, in order (``docs/targets.md``): positions and sizes in input pixels,
+#: the bearing in degrees (empty without a field of view).
 TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
                   "azimuth_deg", "elevation_deg")
 
@@ -88,7 +96,10 @@ class RunResult:
     truncated : bool
         The input stopped decoding early (see ``message``).
     interrupted : bool
-        The run was stopped by Ctrl-C.
+        The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
+    seconds : float
+        Wall time of the frame loop (decoding, models, writing the per-frame outputs),
+        in seconds; ``n_frames / seconds`` is the processing rate.
     files : dict
         Output name -> path of the files written (empty with ``out=False``).
     """
@@ -111,6 +122,7 @@ class RunResult:
     """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
     alarms: dict[str, dict] = field(default_factory=dict)
     hfov_deg: float | None = None
+    seconds: float = 0.0
     target_summaries: dict[str, list[dict]] = field(default_factory=dict)
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
 
@@ -143,6 +155,7 @@ class RunResult:
             "model_size": list(self.model_size),
             "start": self.start,
             "n_frames": self.n_frames,
+            "seconds": round(self.seconds, 3),
             "complete": not (self.truncated or self.interrupted),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
@@ -376,7 +389,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
         hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | None = None, target_params=None) -> RunResult:
+        repeat_threshold: float | None = None, draw_fields: str = "responding",
+        target_params=None) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -400,7 +414,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Process source frames ``start <= frame < end``.
     video : bool
         Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header.
+        first LPLC2-family model drawn, and every model's response in a header
+        (:func:`mlplc2.plots.annotate_frame`).
     quiet : bool
         No progress bar.
     params : Params or dict, optional
@@ -431,6 +446,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Settings of the targets (time to contact, course, warning: ``horizon_s``,
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
+    draw_fields : {'responding', 'all'}
+        Which fields ``annotated.mp4`` shows: those that respond (response > 0) or are
+        in alarm (default), or all of them (CLI ``--all-fields``).
 
     Returns
     -------
@@ -442,7 +460,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Bad input (missing file, not a video, unknown model, bad resize, ...).
     RunInterrupted
         On Ctrl-C, after writing the outputs of the frames done
-        (``fields.json`` then says ``"interrupted": true``).
+        (``fields.json`` then says ``"interrupted": true``). A Ctrl-C during a frame
+        takes effect when the frame is finished; a second one stops at once.
 
     Warns
     -----
@@ -453,6 +472,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     # Validate everything cheap before decoding anything.
     if isinstance(models, str):
         models = [s for s in models.split(",") if s.strip()]
+    if draw_fields not in DRAW_FIELDS:
+        raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, got {draw_fields!r}")
     for m in models:
         if not isinstance(m, Model):
             get_model(str(m).strip())
@@ -487,7 +508,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
             raise
         result.out = out_dir
     return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
-                 keep_rows=keep_rows)
+                 keep_rows=keep_rows, draw_fields=draw_fields)
 
 
 #: The files a run writes into its output folder (all of them, whatever the options).
@@ -504,117 +525,125 @@ def _remove_stale_outputs(out_dir: Path) -> None:
 
 
 def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
-          keep_rows=True) -> RunResult:
+          keep_rows=True, draw_fields="responding") -> RunResult:
     from tqdm import tqdm
 
     trackers = [_FieldTracker(src.start, targets=m.has_targets, spill=not keep_rows) for m in built]
     primary = _primary(built)
+    field_shape = getattr(built[primary].params, "field_shape", "square") if primary is not None else "square"
     csv_file = writer = vw = None
     tcsv_file = twriter = None
     interrupted = False
     bar = None
-    try:
-        if out_dir is not None:
-            csv_path = out_dir / "responses.csv"
-            csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
-            buf = io.StringIO()
-            writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
-            writer.writeheader()
-            csv_file.write(buf.getvalue())
-            csv_file.flush()
-            result.files["responses.csv"] = csv_path
-            if any(m.has_targets for m in built):
-                tpath = out_dir / "targets.csv"
-                tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
-                tbuf = io.StringIO()
-                twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS, lineterminator="\n")
-                twriter.writeheader()
-                tcsv_file.write(tbuf.getvalue())
-                tcsv_file.flush()
-                result.files["targets.csv"] = tpath
-            if video:
-                vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
-        bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
-                   desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
-        to_input = src.to_input
-        fps = src.fps
-        for item in src:
-            index, frame = item[0], item[1]
-            outputs = [m.step(frame) for m in built]
-            time_s = round(index / fps, 6)
-            frame_rows = []
-            target_rows = []
-            for name, out, tracker in zip(names, outputs, trackers):
-                frame_rows.extend(_rows(index, time_s, name, out, to_input))
-                target_rows.extend(_target_rows(index, name, out, to_input))
-                tracker.update(index, out, to_input)
-            if twriter is not None and target_rows:
-                tbuf.seek(0)
-                tbuf.truncate()
-                twriter.writerows(target_rows)
-                tcsv_file.write(tbuf.getvalue())
-                tcsv_file.flush()
-            if keep_rows:
-                result.targets.extend(target_rows)
-            if writer is not None:
-                # One write() per frame, then flush: an interrupt leaves whole frames only.
-                buf.seek(0)
-                buf.truncate()
-                writer.writerows(frame_rows)
+    # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
+    # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
+    with interrupts(defer=True) as stop:
+        t0 = time.perf_counter()
+        try:
+            if out_dir is not None:
+                csv_path = out_dir / "responses.csv"
+                csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
+                buf = io.StringIO()
+                writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
+                writer.writeheader()
                 csv_file.write(buf.getvalue())
                 csv_file.flush()
-            if keep_rows:
-                result.rows.extend(frame_rows)
-            for name, out in zip(names, outputs):
-                if out.collision:
-                    a = result.alarms[name]
-                    a["count"] += 1
-                    if a["first"] is None:
-                        a["first"] = index
-            if vw is not None:
-                from .plots import annotate_frame
+                result.files["responses.csv"] = csv_path
+                if any(m.has_targets for m in built):
+                    tpath = out_dir / "targets.csv"
+                    tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
+                    tbuf = io.StringIO()
+                    twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS, lineterminator="\n")
+                    twriter.writeheader()
+                    tcsv_file.write(tbuf.getvalue())
+                    tcsv_file.flush()
+                    result.files["targets.csv"] = tpath
+                if video:
+                    vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
+            bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
+                       desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
+            to_input = src.to_input
+            fps = src.fps
+            t0 = time.perf_counter()
+            for item in stop.between(src):
+                index, frame = item[0], item[1]
+                outputs = [m.step(frame) for m in built]
+                time_s = round(index / fps, 6)
+                frame_rows = []
+                target_rows = []
+                for name, out in zip(names, outputs):
+                    frame_rows.extend(_rows(index, time_s, name, out, to_input))
+                    target_rows.extend(_target_rows(index, name, out, to_input))
+                if vw is not None:
+                    from .plots import annotate_frame
 
-                vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
-                                        index=index))
-            result.n_frames += 1
-            bar.update()
-    except KeyboardInterrupt:
-        interrupted = True
-    except BaseException:
-        if vw is not None:
-            vw.abort()
-        raise
-    finally:
-        if bar is not None:
-            bar.close()
-        if csv_file is not None:
-            csv_file.close()
-        if tcsv_file is not None:
-            tcsv_file.close()
-        src.close()
-
-    result.interrupted = interrupted
-    result.truncated = src.truncated
-    result.message = src.message
-    # Fields still alive at the end keep died = None.
-    try:
-        result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
-        result.target_summaries = {name: t.target_summaries() for name, t in zip(names, trackers)
-                                   if t.targets is not None}
-    finally:
-        for t in trackers:
-            t.close()
-    if out_dir is not None:
-        try:
-            _finish(result, out_dir, vw, plot)
+                    vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
+                                            index=index, field_shape=field_shape, draw_fields=draw_fields))
+                # The frame's share of every output, together (a few dict updates and two writes).
+                for out, tracker in zip(outputs, trackers):
+                    tracker.update(index, out, to_input)
+                for name, out in zip(names, outputs):
+                    if out.collision:
+                        a = result.alarms[name]
+                        a["count"] += 1
+                        if a["first"] is None:
+                            a["first"] = index
+                if twriter is not None and target_rows:
+                    tbuf.seek(0)
+                    tbuf.truncate()
+                    twriter.writerows(target_rows)
+                    tcsv_file.write(tbuf.getvalue())
+                    tcsv_file.flush()
+                if writer is not None:
+                    # One write() per frame, then flush: the file holds whole frames only.
+                    buf.seek(0)
+                    buf.truncate()
+                    writer.writerows(frame_rows)
+                    csv_file.write(buf.getvalue())
+                    csv_file.flush()
+                if keep_rows:
+                    result.targets.extend(target_rows)
+                    result.rows.extend(frame_rows)
+                result.n_frames += 1
+                bar.update()
+        except KeyboardInterrupt:
+            interrupted = True
         except BaseException:
             if vw is not None:
                 vw.abort()
             raise
-    if result.truncated:
-        warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
-    if interrupted:
-        raise RunInterrupted(result)
+        finally:
+            result.seconds = time.perf_counter() - t0
+            if bar is not None:
+                bar.close()
+            if csv_file is not None:
+                csv_file.close()
+            if tcsv_file is not None:
+                tcsv_file.close()
+            src.close()
+
+        result.interrupted = interrupted
+        result.truncated = src.truncated
+        result.message = src.message
+        # Fields still alive at the end keep died = None.
+        try:
+            result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
+            result.target_summaries = {name: t.target_summaries() for name, t in zip(names, trackers)
+                                       if t.targets is not None}
+        finally:
+            for t in trackers:
+                t.close()
+        if out_dir is not None:
+            try:
+                _finish(result, out_dir, vw, plot)
+            except BaseException:
+                if vw is not None:
+                    vw.abort()
+                raise
+        if result.truncated:
+            warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
+        if interrupted:
+            raise RunInterrupted(result)
     return result
 
 
