@@ -52,16 +52,21 @@ def _read_csv(path):
 def check_outputs_agree(out, models, *, localising="mlplc2") -> int:
     """``responses.csv``, ``targets.csv`` and ``fields.json`` in ``out`` cover the same frames,
     ``0 .. n_frames - 1`` (a run from frame 0): every model has rows for exactly these frames,
-    ``targets.csv`` has the frames in which ``localising`` had fields, and no field summary
-    names a later frame. Returns ``n_frames``."""
+    ``targets.csv`` has no later frame (and the same targets per frame as the summaries say
+    were alive), and no field or target summary names a later frame. Returns ``n_frames``."""
     summary = json.loads((out / "fields.json").read_text())
     n = summary["n_frames"]
     rows = _read_csv(out / "responses.csv")
     for name in models:
         assert sorted({int(r["frame"]) for r in rows if r["model"] == name}) == list(range(n)), name
-    with_fields = {int(r["frame"]) for r in rows if r["field_id"] and r["model"] == localising}
-    targets = {int(r["frame"]) for r in _read_csv(out / "targets.csv") if r["model"] == localising}
-    assert targets == with_fields and all(k < n for k in targets)
+    trows = [r for r in _read_csv(out / "targets.csv") if r["model"] == localising]
+    assert all(int(r["frame"]) < n for r in trows)
     for f in summary["models"][localising]:
         assert f["born"] < n and f["peak_frame"] < n and (f["died"] is None or f["died"] <= n)
+    counts: dict[int, int] = {}
+    for r in trows:
+        counts[int(r["target_id"])] = counts.get(int(r["target_id"]), 0) + 1
+    for t in summary["targets"][localising]:       # a target's rows are the frames of its life
+        assert t["born"] < n and (t["died"] is None or t["died"] <= n) and counts.get(t["id"], 0) == t["frames"]
+    assert set(counts) == {t["id"] for t in summary["targets"][localising]}
     return n
