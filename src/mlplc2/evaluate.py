@@ -547,10 +547,14 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
             # fragmentation and time to contact: the targets (fields) on the object while in view
             if o.track and not o.in_track(f) and o is not truth.collider:
                 continue
+            width = o.width_at(f)
+            # fragmentation counts while the object fits in the frame: in the last frames before
+            # contact it covers the view, and every target anywhere lies on it
+            fits = width is None or truth.size is None or width <= max(truth.size)
             if run.has_targets:
                 on = [t for t in targets(f) if on_object(t.x, t.y, o, f, radius)]
-                ids.update(t.id for t in on)
-                width = o.width_at(f)
+                if fits:
+                    ids.update(t.id for t in on)
                 true = o.ttc_at(f, fps)
                 if o is not truth.collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
                         and true > 0:
@@ -561,7 +565,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                         t = min(est, key=lambda t: math.hypot(t.x - c[0], t.y - c[1]))
                         rec["ttc_estimated"] += 1
                         rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
-            elif _localises(run.model):
+            elif _localises(run.model) and fits:
                 ids.update(fid for fid, x, y in fields(f) if on_object(x, y, o, f, radius))
         rec["targets"] = len(ids) if (run.has_targets or _localises(run.model)) else None
         objects.append(rec)
@@ -570,9 +574,19 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     false_frames: dict[str, set[int]] = {}
     runs: dict[tuple, list[int]] = {}
     scored = 0
+    def just_hit(x, y, f):
+        """A warning up to LATE_S after a collision object's contact, where it last was."""
+        for o in colliders:
+            cf = o.contact_frame
+            if cf is not None and cf <= f <= cf + late and (x is None or on_object(x, y, o, min(f, cf), radius)):
+                return True
+        return False
+
     for f in range(first, end):
         scored += 1
         for key, x, y in warnings_at(f):
+            if just_hit(x, y, f):
+                continue
             if early_before is not None and f < early_before:
                 cause = "early"
             else:

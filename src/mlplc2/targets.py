@@ -67,6 +67,8 @@ __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignmen
            "check_hfov"]
 
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
+#: Sizes (fractions of the candidate's box) at which a new candidate's growth is measured.
+BOX_TRIALS = (1.0, 0.7, 0.5, 0.35)
 
 
 @document_parameters("Parameters")
@@ -114,6 +116,10 @@ class TargetParams(ParameterSet):
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
+    min_growth: float = param(0.01, """A candidate becomes a target only when its box grew by at least this
+                              much (log of the scale) over the last ``change_frames`` frames, alike in
+                              both directions (``max_anisotropy``): 0.01 over 4 frames is a time to
+                              contact of 13 s at 30 fps. 0 = no test.""", valid=Valid.real(minimum=0))
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
@@ -199,6 +205,9 @@ class Target:
     azimuth_deg, elevation_deg : float or None
         Bearing of the centre in degrees (azimuth positive right, elevation positive up)
         when the model was given the camera's field of view; None otherwise.
+    miss_xy : (float, float) or None
+        Where the object's centre passes the camera plane, from the heading point, in object
+        widths (right, down): ``miss`` is its length.
     """
 
     id: int
@@ -216,6 +225,7 @@ class Target:
     ttc_sigma_s: float | None = None
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
+    miss_xy: tuple[float, float] | None = None
 
     def urgency(self) -> tuple:
         """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""
@@ -606,9 +616,10 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
     return ContactFit(ttc, sigma, tstat, rate)
 
 
-def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float) -> float | None:
-    """Predicted miss at contact (object widths): the lines through ``(x - x_h) / w`` and
-    ``(y - y_h) / w`` over ``frames``, evaluated ``ttc`` frames after the newest one."""
+def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float) -> tuple[float, float] | None:
+    """Predicted offset at contact from the heading point, in object widths ``(right, down)``:
+    the lines through ``(x - x_h) / w`` and ``(y - y_h) / w`` over ``frames``, evaluated
+    ``ttc`` frames after the newest one (its length is the miss distance)."""
     t = np.asarray(frames, dtype=np.float64)
     w = np.asarray(widths, dtype=np.float64)
     if t.size < 2 or np.any(w <= 0):
@@ -626,26 +637,42 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
         b = float(dt @ (z - z.mean())) / sxx
         return float(z.mean()) + b * (ttc - tm)
 
-    return math.hypot(at(u), at(v))
+    return at(u), at(v)
 
 
 def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
                rel: float = 0.2) -> tuple[float, float, float, float] | None:
     """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y).
 
-    Within ``radius`` px of (x, y), the pixels whose grey level changed by at least
-    ``max(min_change, rel x`` the largest change``)`` are joined (3 x 3 dilation) and the
-    connected region nearest to (x, y) is taken: for a small object growing on a still
-    background, the ring of its edge, hence its size to a pixel, long before its edges move a
-    pixel per frame. None when nothing changed or the region reaches the window's border (a
-    moving background: no compact object to box).
+    Within ``radius`` px of (x, y), the window's own image motion (a turning camera moves the
+    background as a whole) is found by phase correlation and undone; then the pixels whose
+    grey level still changed by at least ``max(min_change, rel x`` the largest change``)`` are
+    joined (3 x 3 dilation) and the connected region nearest to (x, y) is taken: for a small
+    object growing against its background, the ring of its edge, hence its size to a pixel,
+    long before its edges move a pixel per frame. None when nothing changed or the region
+    reaches the window's border (a background that does not move as a whole: no compact
+    object to box).
     """
     h, w = cur.shape
     x0, x1 = max(x - radius, 0), min(x + radius + 1, w)
     y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
-    if x1 - x0 < 3 or y1 - y0 < 3:
+    if x1 - x0 < 8 or y1 - y0 < 8:
         return None
-    d = cv2.absdiff(cur[y0:y1, x0:x1], prev[y0:y1, x0:x1])
+    a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
+    b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
+    (sx, sy), _ = cv2.phaseCorrelate(a, b, cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F))
+    if abs(sx) > 0.1 or abs(sy) > 0.1:      # the background moved: compare it with itself
+        m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
+        b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        border = int(math.ceil(max(abs(sx), abs(sy)))) + 1
+    else:
+        border = 0
+    d = cv2.absdiff(b, a)
+    if border:                               # the replicated margin is not a change
+        d[:border] = 0
+        d[-border:] = 0
+        d[:, :border] = 0
+        d[:, -border:] = 0
     top = float(d.max())
     if top < min_change:
         return None
@@ -740,6 +767,7 @@ class TargetLayer:
         self._next = 1
         self._prev: list[np.ndarray] | None = None
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # the last grey frames
+        self._past_levels: list[np.ndarray] | None = None                     # pyramid of _past[0]
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
@@ -787,6 +815,8 @@ class TargetLayer:
                     if f.response > 0:
                         host.last_answer = index
                 continue
+            if not self._grows(levels, t):
+                continue
             t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
             self._next += 1
             if f is not None:
@@ -796,6 +826,7 @@ class TargetLayer:
             self._tracks.append(t)
         self._prev = levels
         self._past.append(gray)
+        self._past_levels = None
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
@@ -805,10 +836,44 @@ class TargetLayer:
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 
+    def _grows(self, levels, t: Track) -> bool:
+        """Whether the candidate grew, alike in both directions, over the last ``change_frames``
+        frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
+        background that slides with a turning camera, a receding or a static object does not
+        become a target. The box is tried at ``BOX_TRIALS`` of its size and the one that grew
+        most is kept: a box much larger than a small object measures mostly its background.
+        Without that frame yet (the first frames), True."""
+        p = self.params
+        if p.min_growth <= 0 or len(self._past) < p.change_frames:
+            return True
+        if self._past_levels is None:
+            self._past_levels = pyramid(self._past[0])
+        trials = []
+        for f in BOX_TRIALS:
+            w, h = t.w * f, t.h * f
+            if min(w, h) < 4.0 and f < 1.0:
+                break
+            half = p.margin * max(w, h) / 2.0 + 3.0
+            al = align(self._past_levels, levels, t.cx, t.cy, half, (w / 2.0, h / 2.0), n=p.patch,
+                       iterations=p.iterations)
+            if al is None or al.residual > p.max_residual:
+                continue
+            g = math.log(al.scale)
+            if g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g:
+                trials.append((g, w, h))
+        if not trials:
+            return False
+        # the largest box that grew nearly as much as the best: a box inside the object grows as
+        # much as the object (where it has texture), one beyond it less (its background is still)
+        top = max(g for g, _, _ in trials)
+        g, t.w, t.h = max((tr for tr in trials if tr[0] >= 0.75 * top), key=lambda tr: tr[1] * tr[2])
+        return True
+
     def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
-        """The box of a candidate at (x, y): the LM edges (:func:`measure_extent`) for a field's
-        seed, the changed region (:func:`change_box`) for a faint one; each falls back on the
-        other. None when neither finds a box holding the seed within ``max_shift``."""
+        """The box of a candidate at (x, y): the region that changed over the last frames
+        (:func:`change_box`, tight for a small object), else the edges of the local motion
+        (:func:`measure_extent`). None when neither finds a box holding the seed within
+        ``max_shift``."""
         p = self.params
 
         def edges():
@@ -822,7 +887,7 @@ class TargetLayer:
                 return None
             return change_box(self._past[0], gray, x, y, int(p.max_shift))
 
-        for find in ((edges, change) if field_seed else (change, edges)):
+        for find in (change, edges):
             box = find()
             if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
                 return box
@@ -881,7 +946,7 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
         if t.ttc_s is not None:
             left = t.ttc_s - elapsed
             t = replace(t, ttc_s=left) if left > 0 else replace(t, ttc_s=None, miss=None, warning=False,
-                                                                 ttc_sigma_s=None)
+                                                                 ttc_sigma_s=None, miss_xy=None)
         out.append(t)
     return tuple(sorted(out, key=Target.urgency))
 
@@ -893,13 +958,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     by every model with targets (the LPLC2 family and the optical-flow baseline)."""
     h, w = shape
     frames = [q[0] for q in t.history]
-    ttc = sigma = miss = None
+    ttc = sigma = miss = miss_xy = None
     fit = fit_contact(frames, [q[1] for q in t.history]) if len(frames) >= p.min_frames else None
     if fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat and fit.ttc / fps <= p.max_ttc_s:
         ttc, sigma = fit.ttc / fps, fit.sigma / fps
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
-        miss = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
-                          [q[4] for q in t.history], heading, fit.ttc)
+        miss_xy = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
+                             [q[4] for q in t.history], heading, fit.ttc)
+        miss = None if miss_xy is None else math.hypot(*miss_xy)
         t.streak += 1
         t.last_estimate = index
     else:
@@ -921,4 +987,4 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         az, el = bearing(t.cx, t.cy, (h, w), focal)
     return Target(t.id, t.cx, t.cy, t.w, t.h, ttc_s=ttc, miss=miss, warning=warning,
                   fields=tuple(sorted(t.fields)), born=t.born, looming=looming, expansion=t.rate,
-                  ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el)
+                  ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el, miss_xy=miss_xy)

@@ -77,7 +77,7 @@ def _expansion(flow: np.ndarray, cx: float, cy: float, hw: float, hh: float):
     x0, x1 = int(max(round(cx - hw), 0)), int(min(round(cx + hw) + 1, w))
     y0, y1 = int(max(round(cy - hh), 0)), int(min(round(cy + hh) + 1, h))
     if x1 - x0 < 2 or y1 - y0 < 2:
-        return 0.0, (0.0, 0.0)
+        return 0.0, 0.0, (0.0, 0.0)
     f = flow[y0:y1, x0:x1]
     xs = np.arange(x0, x1, dtype=np.float32) - np.float32(cx)
     ys = np.arange(y0, y1, dtype=np.float32) - np.float32(cy)
