@@ -67,8 +67,6 @@ __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignmen
            "check_hfov"]
 
 _FLOATS = (np.dtype(np.float32), np.dtype(np.float64))
-#: Sizes (fractions of the candidate's box) at which a new candidate's growth is measured.
-BOX_TRIALS = (1.0, 0.7, 0.5, 0.35)
 
 
 @document_parameters("Parameters")
@@ -116,10 +114,12 @@ class TargetParams(ParameterSet):
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
-    min_growth: float = param(0.01, """A candidate becomes a target only when its box grew by at least this
+    min_growth: float = param(0.005, """A candidate becomes a target only when its box grew by at least this
                               much (log of the scale) over the last ``change_frames`` frames, alike in
-                              both directions (``max_anisotropy``): 0.01 over 4 frames is a time to
-                              contact of 13 s at 30 fps. 0 = no test.""", valid=Valid.real(minimum=0))
+                              both directions (``max_anisotropy``): a patch of background that slides
+                              with a turning camera, a receding or a static object does not grow. 0.005
+                              over 4 frames is a time to contact of 27 s at 30 fps. 0 = no test.""",
+                              valid=Valid.real(minimum=0))
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
@@ -661,7 +661,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
     b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
     (sx, sy), _ = cv2.phaseCorrelate(a, b, cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F))
-    if abs(sx) > 0.1 or abs(sy) > 0.1:      # the background moved: compare it with itself
+    if abs(sx) > 0.5 or abs(sy) > 0.5:      # the background moved: compare it with itself
         m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
         b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
         border = int(math.ceil(max(abs(sx), abs(sy)))) + 1
@@ -840,34 +840,19 @@ class TargetLayer:
         """Whether the candidate grew, alike in both directions, over the last ``change_frames``
         frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
         background that slides with a turning camera, a receding or a static object does not
-        become a target. The box is tried at ``BOX_TRIALS`` of its size and the one that grew
-        most is kept: a box much larger than a small object measures mostly its background.
-        Without that frame yet (the first frames), True."""
+        become a target. Without that frame yet (the first frames), True."""
         p = self.params
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
         if self._past_levels is None:
             self._past_levels = pyramid(self._past[0])
-        trials = []
-        for f in BOX_TRIALS:
-            w, h = t.w * f, t.h * f
-            if min(w, h) < 4.0 and f < 1.0:
-                break
-            half = p.margin * max(w, h) / 2.0 + 3.0
-            al = align(self._past_levels, levels, t.cx, t.cy, half, (w / 2.0, h / 2.0), n=p.patch,
-                       iterations=p.iterations)
-            if al is None or al.residual > p.max_residual:
-                continue
-            g = math.log(al.scale)
-            if g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g:
-                trials.append((g, w, h))
-        if not trials:
+        half = p.margin * t.size / 2.0 + 3.0
+        al = align(self._past_levels, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                   iterations=p.iterations)
+        if al is None or al.residual > p.max_residual:
             return False
-        # the largest box that grew nearly as much as the best: a box inside the object grows as
-        # much as the object (where it has texture), one beyond it less (its background is still)
-        top = max(g for g, _, _ in trials)
-        g, t.w, t.h = max((tr for tr in trials if tr[0] >= 0.75 * top), key=lambda tr: tr[1] * tr[2])
-        return True
+        g = math.log(al.scale)
+        return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
 
     def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
         """The box of a candidate at (x, y): the region that changed over the last frames
@@ -887,7 +872,7 @@ class TargetLayer:
                 return None
             return change_box(self._past[0], gray, x, y, int(p.max_shift))
 
-        for find in (change, edges):
+        for find in ((edges, change) if field_seed else (change, edges)):
             box = find()
             if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
                 return box
