@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2 import cli, stimuli
+from mlplc2 import InputError, cli, stimuli
 from mlplc2.models.base import MAX_REPEATS, REGISTRY, REPEAT_THRESHOLD
 
 from .conftest import read_gray
@@ -51,9 +51,31 @@ def test_duplicates_are_held_and_do_not_change_the_model(name):
 def test_without_threshold_every_frame_steps():
     frames = stimuli.four_phase(seed=0).frames[:30]
     dup, _ = _duplicated(frames)
-    model = mlplc2.MLPLC2(fps=30.0)
-    assert model.repeat_threshold is None
+    model = mlplc2.MLPLC2(fps=30.0, repeat_threshold=None)
     assert not any(model.step(f).repeated for f in dup)
+
+
+def test_duplicated_video_detected_by_default():
+    """By default ("auto") the model finds out that a video repeats its frames and holds the
+    copies, once it has seen a few of them; a smooth video (a slow approach, small changes first
+    and large ones later) is not taken for one."""
+    frames = stimuli.four_phase(seed=0).frames[:60]
+    dup, origin = _duplicated(frames)
+    model = mlplc2.MLPLC2(fps=30.0)
+    assert model.repeat_threshold == "auto"
+    flags = [model.step(f).repeated for f in dup]
+    copies = [k for k in range(1, len(dup)) if origin[k] == origin[k - 1]]
+    assert sum(flags[k] for k in copies[len(copies) // 3:]) >= 0.9 * len(copies[len(copies) // 3:])
+    assert not any(flags[k] for k in range(1, len(dup)) if origin[k] != origin[k - 1])   # new frames step
+    from mlplc2.stimuli import ApproachObject, approach
+
+    slow = approach([ApproachObject.collision(ttc_s=5.0, width_px=4.0, speed_mps=2.0)], background="plain",
+                    duration_s=4.5, seed=1)                # anti-aliased: a change every frame
+    for cls in (mlplc2.MLPLC2, mlplc2.LGMD2):
+        model = cls(fps=30.0)
+        assert not any(model.step(f).repeated for f in slow.frames)
+    with pytest.raises(InputError):
+        cli._repeat_threshold(cli.build_parser().parse_args(["run", "x.avi", "--every-frame", "--skip-repeats"]))
 
 
 def test_a_still_scene_is_not_held_forever():
@@ -102,9 +124,10 @@ def test_cli_skip_repeats(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
-@pytest.mark.parametrize("argv, level", [([], None), (["--skip-repeats"], REPEAT_THRESHOLD),
+@pytest.mark.parametrize("argv, level", [([], "auto"), (["--skip-repeats"], REPEAT_THRESHOLD),
                                          (["--repeat-level", "4"], 4.0),
-                                         (["--skip-repeats", "--repeat-level", "0"], 0.0)])
+                                         (["--skip-repeats", "--repeat-level", "0"], 0.0),
+                                         (["--every-frame"], None)])
 def test_repeat_options_reach_the_run(command, argv, level, monkeypatch):
     """--skip-repeats is a flag (threshold REPEAT_THRESHOLD), --repeat-level N sets the level
     and implies it, on run, evaluate and batch."""
@@ -126,7 +149,9 @@ def test_repeat_options_reach_the_run(command, argv, level, monkeypatch):
     extra = {"run": [], "evaluate": ["--gt", "gt.json"], "batch": ["--out", "b"]}[command]
     with pytest.raises(Stop):
         cli.main([command, *argv, "clip.avi", *extra])
-    assert seen == [level]
+    # run() gets the models' duplicate detection ("auto") by default; evaluate and batch leave
+    # it to run()'s default (nothing in run_options)
+    assert seen == [None if (level == "auto" and command != "run") else level]
 
 
 @pytest.mark.paper
@@ -136,11 +161,18 @@ def test_raptor_clip_alarms_once_duplicates_are_held(paper_dir):
     alarm); holding the duplicates, mLPLC2 raises its alarm on the raptor (docs/model.md,
     "Repeated frames")."""
     frames = read_gray(paper_dir / "uav" / "bird_attack_2.avi")
-    plain = mlplc2.MLPLC2(fps=30.0)
+    plain = mlplc2.MLPLC2(fps=30.0, repeat_threshold=None)
     assert not any(plain.step(f).collision for f in frames)
     held = mlplc2.MLPLC2(fps=30.0, repeat_threshold=REPEAT_THRESHOLD)
     alarms = [k for k, f in enumerate(frames) if held.step(f).collision]
     assert alarms and alarms[0] < 30  # the raptor fills the view from frame ~33
+    # by default the duplicates are found without the user knowing (issue 16): a model on its own
+    # after a few copies, mlplc2.run from the first frames of the video on
+    auto = mlplc2.MLPLC2(fps=30.0)
+    assert sum(auto.step(f).repeated for f in frames) >= 12
+    res = mlplc2.run(paper_dir / "uav" / "bird_attack_2.avi", ["mlplc2"], out=False, progress=False)
+    assert res.duplicated and res.repeated["mlplc2"] == 29
+    assert res.alarms["mlplc2"]["first"] is not None and res.alarms["mlplc2"]["first"] < 30
 
 
 def test_batch_passes_skip_repeats(tmp_path):

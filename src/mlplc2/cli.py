@@ -119,19 +119,28 @@ _nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a num
 
 
 def _add_repeat_options(p: argparse.ArgumentParser, help: str) -> None:
-    """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``) and ``--repeat-level N``
-    (that threshold instead; implies skipping), read back by :func:`_repeat_threshold`."""
+    """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``), ``--repeat-level N``
+    (that threshold instead; implies skipping) and ``--every-frame`` (never hold), read back by
+    :func:`_repeat_threshold`; without them the models detect duplicated frames themselves."""
     p.add_argument("--skip-repeats", action="store_true", help=help)
     p.add_argument("--repeat-level", type=_nonneg_float, metavar="N",
                    help=f"grey-level change up to which a frame counts as a repeat (default "
                         f"{REPEAT_THRESHOLD:g}); implies --skip-repeats")
+    p.add_argument("--every-frame", action="store_true",
+                   help="step the models on every frame, duplicates too (by default the models hold "
+                        "their output on duplicated frames when the video looks duplicated)")
 
 
-def _repeat_threshold(args) -> float | None:
-    """``Model.repeat_threshold`` asked for by :func:`_add_repeat_options` (``None``: off)."""
+def _repeat_threshold(args) -> float | str | None:
+    """``Model.repeat_threshold`` asked for by :func:`_add_repeat_options`: a level, None
+    (``--every-frame``) or ``"auto"`` (no option: the models' duplicate detection)."""
+    if args.every_frame and (args.skip_repeats or args.repeat_level is not None):
+        raise InputValueError("--every-frame cannot be combined with --skip-repeats or --repeat-level")
     if args.repeat_level is not None:
         return args.repeat_level
-    return REPEAT_THRESHOLD if args.skip_repeats else None
+    if args.skip_repeats:
+        return REPEAT_THRESHOLD
+    return None if args.every_frame else "auto"
 
 
 def _add_run(p: argparse.ArgumentParser) -> None:
@@ -224,9 +233,24 @@ def _print_run_summary(args, result) -> None:
             first_alarm = result.alarms[name]["first"]
             first = f", first alarm at frame {first_alarm}" if first_alarm is not None else ", no alarm"
             lines.append(f"  {name}: no fields{first}")
+        targets = result.target_summaries.get(name)
+        if targets:
+            warned = [t for t in targets if t["first_warning_frame"] is not None]
+            lines.append(f"  {name}: {len(targets)} target(s), {len(warned)} warned"
+                         + (f" (first warning at frame {min(t['first_warning_frame'] for t in warned)})"
+                            if warned else ""))
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     _say(args, *lines)
+    held = max(result.repeated.values(), default=0)
+    if held and not getattr(args, "skip_repeats", False) and getattr(args, "repeat_level", None) is None:
+        _note(args, f"the video repeats its frames (duplicated frames): the models held their output on "
+                    f"{held} of {result.n_frames} frames (--every-frame processes every frame)")
+
+
+def _note(args, message: str) -> None:
+    if not getattr(args, "quiet", False):
+        print(f"{PROG}: note: {message}", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------
@@ -551,7 +575,7 @@ def _cmd_evaluate(args) -> int:
 
     models = _model_names(args.model) if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+    if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
@@ -598,7 +622,7 @@ def _cmd_batch(args) -> int:
 
     models = _model_names(args.model)
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if _repeat_threshold(args) is not None:  # --skip-repeats / --repeat-level
+    if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)
     try:
         res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,

@@ -125,6 +125,11 @@ class RunResult:
     seconds: float = 0.0
     target_summaries: dict[str, list[dict]] = field(default_factory=dict)
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
+    repeated: dict[str, int] = field(default_factory=dict)
+    """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
+    duplicated: bool = False
+    """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
+    the copies from the start (:data:`PRESCAN_FRAMES`)."""
 
     def to_dataframe(self):
         """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
@@ -162,6 +167,8 @@ class RunResult:
             "hfov_deg": self.hfov_deg,
             "models": self.fields,
             "targets": self.target_summaries,
+            "duplicated": self.duplicated,
+            "frames_held": self.repeated,
         }
 
 
@@ -316,7 +323,7 @@ def _target_params(value):
                           f"got {type(value).__name__}")
 
 
-def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=None,
+def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold="model default",
                   target_params=None) -> list[Model]:
     target_params = _target_params(target_params)
     if isinstance(models, (str, Model)):
@@ -346,7 +353,7 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
                 from .targets import check_hfov
 
                 model.hfov_deg = check_hfov(hfov_deg)
-            if repeat_threshold is not None:
+            if repeat_threshold != "model default":
                 model.repeat_threshold = check_repeat_threshold(repeat_threshold)
             if target_params is not None and model.has_targets:
                 model.target_params = target_params
@@ -357,7 +364,8 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold=No
             kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.has_targets) else {}
             if target_params is not None and cls.has_targets:
                 kw["target_params"] = target_params
-            kw["repeat_threshold"] = repeat_threshold
+            if repeat_threshold != "model default":
+                kw["repeat_threshold"] = repeat_threshold
             model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
         if model.name in seen:
             continue
@@ -389,7 +397,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
         hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | None = None, draw_fields: str = "responding",
+        repeat_threshold: float | str | None = "model default", draw_fields: str = "responding",
         target_params=None) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
@@ -437,11 +445,12 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         flat whatever the length (the rows are in the CSV files, and the summaries of fields
         that have died wait in a temporary file until ``fields.json`` is written; the CLI does
         this). ``RunResult.to_dataframe()`` then reads ``responses.csv``.
-    repeat_threshold : float, optional
+    repeat_threshold : float, "auto" or None, optional
         Treat a frame in which no pixel differs from the last processed one by more than
         this many grey levels as a duplicate: the models hold their last output for it
         (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
-        paper's clips). Default: every frame steps the models.
+        paper's clips). ``"auto"`` (the models' default): 16 while the video looks duplicated;
+        None: every frame steps the models. Not given: the models' own setting.
     target_params : TargetParams or dict, optional
         Settings of the targets (time to contact, course, warning: ``horizon_s``,
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
@@ -482,6 +491,8 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     try:
         built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold, target_params)
         _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+        duplicated = _prescan_repeats(source, built, src, fps=fps, start=start, end=end, resize=resize,
+                                      scale=scale, backend=backend)
     except BaseException:
         src.close()
         raise
@@ -491,6 +502,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
     result.alarms = {name: {"count": 0, "first": None} for name in names}
+    result.duplicated = duplicated
     out_dir = None
     if out is not False:
         out_dir = Path(out) if out is not None else default_out_dir(source)
@@ -509,6 +521,46 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         result.out = out_dir
     return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
                  keep_rows=keep_rows, draw_fields=draw_fields)
+
+
+#: Frames of a video :func:`run` looks at first to tell whether its frames were duplicated.
+PRESCAN_FRAMES = 60
+
+
+def _prescan_repeats(source, models, src: FrameSource, **options) -> bool:
+    """For a video or image sequence with models whose ``repeat_threshold`` is ``"auto"``: whether
+    its first :data:`PRESCAN_FRAMES` frames look duplicated (:func:`mlplc2.models.base.looks_duplicated`,
+    measured at the models' working size). If so those models hold duplicates from the first frame
+    on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera is not scanned."""
+    import cv2
+
+    from ._validation import as_gray
+    from .models.base import REPEAT_THRESHOLD, looks_duplicated
+
+    auto = [m for m in models if m.repeat_threshold == "auto"]
+    if not auto or src.kind == "camera":
+        return False
+    width = min((m.work_width for m in auto if m.work_width is not None), default=None)
+    scan = open_source(source, **options)
+    diffs, prev = [], None
+    try:
+        for k, item in enumerate(scan):
+            if k >= PRESCAN_FRAMES:
+                break
+            g = as_gray(item[1])
+            if width is not None and g.shape[1] > width:
+                g = cv2.resize(g, (width, max(int(round(g.shape[0] * width / g.shape[1])), 3)),
+                               interpolation=cv2.INTER_AREA)
+            if prev is not None:
+                diffs.append(float(cv2.norm(g, prev, cv2.NORM_INF)))
+            prev = g
+    finally:
+        scan.close()
+    if not looks_duplicated(diffs):
+        return False
+    for m in auto:
+        m.repeat_threshold = REPEAT_THRESHOLD
+    return True
 
 
 #: The files a run writes into its output folder (all of them, whatever the options).
@@ -583,6 +635,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                 for out, tracker in zip(outputs, trackers):
                     tracker.update(index, out, to_input)
                 for name, out in zip(names, outputs):
+                    if out.repeated:
+                        result.repeated[name] = result.repeated.get(name, 0) + 1
                     if out.collision:
                         a = result.alarms[name]
                         a["count"] += 1

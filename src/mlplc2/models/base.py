@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import abc
 import dataclasses
+from collections import deque
 from collections.abc import Iterable, Iterator
 from dataclasses import dataclass
 from typing import Any, ClassVar
@@ -16,11 +17,11 @@ from typing import Any, ClassVar
 import cv2
 import numpy as np
 
-from .._validation import InputValueError, as_gray, check_fps, check_unit_scale
+from .._validation import InputValueError, as_gray, check_fps, check_int, check_unit_scale
 from ..attention import Field
 
-__all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "register", "get_model",
-           "available_models"]
+__all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
+           "get_model", "available_models", "looks_duplicated"]
 
 
 @dataclass(frozen=True)
@@ -81,17 +82,60 @@ REPEAT_THRESHOLD = 16.0
 MAX_REPEATS = 5
 
 
-def check_repeat_threshold(value) -> float | None:
-    """``value`` as a non-negative float, or None (repeat detection off)."""
-    if value is None:
-        return None
+#: Frames the "auto" repeat detection looks back on (``Model.repeat_threshold = "auto"``).
+REPEAT_WINDOW = 30
+#: Default working width (px) of every model (``Model.work_width``): wider frames are reduced to
+#: it (keeping their aspect) before the models see them, and the outputs are mapped back to the
+#: frame's pixels, so one parameter set (pixel radii, thresholds, the paper's 320x240) gives the
+#: same answers at any input resolution. The paper's videos are 320 px wide or less: unchanged.
+WORK_WIDTH = 320
+
+
+def looks_duplicated(diffs) -> bool:
+    """Whether a run of frame-to-frame changes (largest pixel change, grey levels, in order)
+    looks like a video whose frames were duplicated: at least 6 of them; at least 30 % at most
+    :data:`REPEAT_THRESHOLD` (copies, compression noise aside) and at least 15 % above it, the
+    latter at least twice as large (medians); and a copy right after a new frame at least once
+    per 8 frames. A smooth video (a slow approach: small changes first, large ones later, or
+    every change alike) is not taken for one."""
+    d = list(diffs)
+    if len(d) < 6:
+        return False
+    small = sorted(v for v in d if v <= REPEAT_THRESHOLD)
+    big = sorted(v for v in d if v > REPEAT_THRESHOLD)
+    if len(small) < 0.3 * len(d) or len(big) < 0.15 * len(d):
+        return False
+    if big[len(big) // 2] < 2.0 * max(small[len(small) // 2], 2.0):
+        return False
+    starts = sum(1 for a, b in zip(d, d[1:]) if a > REPEAT_THRESHOLD >= b)
+    return starts >= max(1, len(d) // 8)
+
+
+def check_repeat_threshold(value) -> float | str | None:
+    """``value`` as a non-negative float, ``"auto"``, or None (repeat detection off)."""
+    if value is None or (isinstance(value, str) and value == "auto"):
+        return value
     try:
         v = float(value)
     except (TypeError, ValueError):
-        raise InputValueError(f"repeat_threshold must be a number of grey levels or None, got {value!r}") from None
+        raise InputValueError(f"repeat_threshold must be a number of grey levels, 'auto' or None, got {value!r}") from None
     if not (v >= 0 and np.isfinite(v)):
         raise InputValueError(f"repeat_threshold must be a finite number >= 0 or None, got {value!r}")
     return v
+
+
+def _to_frame(out: Output, sx: float, sy: float) -> Output:
+    """``out`` of a working frame mapped to the frame given (pixel centres: ``x = (x' + 0.5) s - 0.5``)."""
+    def fx(v):
+        return (v + 0.5) * sx - 0.5
+
+    def fy(v):
+        return (v + 0.5) * sy - 0.5
+
+    fields = tuple(dataclasses.replace(f, x=fx(f.x), y=fy(f.y), radius=f.radius * sx) for f in out.fields)
+    targets = tuple(dataclasses.replace(t, x=fx(t.x), y=fy(t.y), width=t.width * sx, height=t.height * sy)
+                    for t in out.targets)
+    return dataclasses.replace(out, fields=fields, targets=targets)
 
 
 REGISTRY: dict[str, type["Model"]] = {}
@@ -146,22 +190,33 @@ class Model(abc.ABC):
     #: targets' warning; models without targets warn with their alarm (``Output.collision``).
     has_targets: ClassVar[bool] = False
 
-    def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | None = None):
+    def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | str | None = "auto",
+                 work_width: int | None = WORK_WIDTH):
         self.fps = check_fps(fps)
         self.params = params
         self.repeat_threshold = check_repeat_threshold(repeat_threshold)
         """A frame in which no pixel differs from the last processed frame by more than this
         many grey levels (0-255) is a repeat (a duplicated frame of a frame-rate conversion,
         compression noise aside): the model does not step and returns its last output
-        (``Output.repeated``), at most :data:`MAX_REPEATS` times in a row. None (the default):
-        every frame steps. :data:`REPEAT_THRESHOLD` = 16 suits videos with duplicated frames.
-        See docs/model.md, "Repeated frames"."""
+        (``Output.repeated``), at most :data:`MAX_REPEATS` times in a row. ``"auto"`` (the
+        default): :data:`REPEAT_THRESHOLD` while the last :data:`REPEAT_WINDOW` frames look
+        duplicated (:func:`looks_duplicated`), else every frame steps (``mlplc2.run`` looks
+        at the first frames of a video first and holds from the start). None: every frame
+        steps. See docs/model.md, "Repeated frames"."""
+        self.work_width = None if work_width is None else check_int(work_width, "work_width", minimum=16)
+        """Frames wider than this (px) are reduced to it, keeping their aspect (``cv2.INTER_AREA``),
+        before the model's stages; fields and targets come back in the frame's own pixels
+        (``model.maps`` stays at the working size). None: every frame at its own size.
+        Default :data:`WORK_WIDTH` = 320 (the paper's videos)."""
         self._shape: tuple[int, int] | None = None
         self._frame = 0
         self._last_gray: np.ndarray | None = None
         self._last_out: Output | None = None
         self._repeats = 0
         self._scale_warned = False
+        self._prev_in: np.ndarray | None = None      # the previous input frame ("auto" repeats)
+        self._diffs: deque = deque(maxlen=REPEAT_WINDOW)
+        self._work: tuple[int, int] | None = None     # (W, H) of the working frames, None: as given
 
     @property
     def frame_index(self) -> int:
@@ -188,14 +243,20 @@ class Model(abc.ABC):
             self._scale_warned = check_unit_scale(frame, gray)
         if self._shape is None:
             self._shape = gray.shape
+            h, w = gray.shape
+            if self.work_width is not None and w > self.work_width:
+                self._work = (self.work_width, max(int(round(h * self.work_width / w)), self.min_size))
         elif gray.shape != self._shape:
             h0, w0 = self._shape
             h, w = gray.shape
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
-        if self.repeat_threshold is not None:
+        if self._work is not None:
+            gray = cv2.resize(gray, self._work, interpolation=cv2.INTER_AREA)
+        threshold = self._repeat_level(gray)
+        if threshold is not None:
             last = self._last_gray
-            if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= self.repeat_threshold:
+            if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= threshold:
                 self._repeats += 1
                 if self._repeats <= MAX_REPEATS:
                     out = self._held_output()
@@ -209,9 +270,24 @@ class Model(abc.ABC):
                 else:
                     np.copyto(last, gray)
         out = self._step(gray, self._frame)
+        if self._work is not None:
+            out = _to_frame(out, self._shape[1] / self._work[0], self._shape[0] / self._work[1])
         self._frame += 1
         self._last_out = out
         return out
+
+    def _repeat_level(self, gray: np.ndarray) -> float | None:
+        """The repeat threshold for this frame: ``repeat_threshold``, or for ``"auto"``
+        :data:`REPEAT_THRESHOLD` while the recent frames look duplicated (None otherwise)."""
+        if self.repeat_threshold != "auto":
+            return self.repeat_threshold
+        prev = self._prev_in
+        if prev is not None:
+            self._diffs.append(cv2.norm(gray, prev, cv2.NORM_INF))
+            np.copyto(prev, gray)
+        else:
+            self._prev_in = gray.copy()
+        return REPEAT_THRESHOLD if looks_duplicated(self._diffs) else None
 
     def _held_output(self) -> Output:
         """The last output for a repeated frame: this frame's index, ``repeated`` set, and what
@@ -230,6 +306,9 @@ class Model(abc.ABC):
         self._last_gray = None
         self._last_out = None
         self._repeats = 0
+        self._prev_in = None
+        self._diffs.clear()
+        self._work = None
         self._reset()
 
     def run(self, frames: Iterable[np.ndarray]) -> Iterator[Output]:

@@ -35,7 +35,7 @@ import numpy as np
 from .._validation import InputTypeError, Valid, check_fields
 from ..params import ParameterSet, document_parameters, param
 from ..targets import Target, TargetParams, Track, check_hfov, count_down, estimate, focal_length
-from .base import Model, Output, register
+from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["FlowTTC", "FlowParams"]
 
@@ -115,14 +115,14 @@ class FlowTTC(Model):
     has_targets = True
 
     def __init__(self, fps: float = 30.0, params: FlowParams | None = None, *, hfov_deg: float | None = None,
-                 target_params: TargetParams | None = None, repeat_threshold: float | None = None):
+                 target_params: TargetParams | None = None, repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
         params = FlowParams() if params is None else params
         if not isinstance(params, FlowParams):
             raise InputTypeError(f"params must be mlplc2.models.flow.FlowParams, got {type(params).__name__}")
         target_params = TargetParams() if target_params is None else target_params
         if not isinstance(target_params, TargetParams):
             raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
-        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         self.hfov_deg = check_hfov(hfov_deg)
         self.target_params = target_params
         self._reset()

@@ -31,7 +31,7 @@ from .._validation import (FLOAT32_MAX, InputTypeError, InputValueError, check_b
                            check_reals)
 from ..params import ParameterSet
 from ..retina import photoreceptors
-from .base import Model, Output, register
+from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "lowpass_alpha", "highpass_coeff",
            "stable_sigmoid", "RESTING_POTENTIAL"]
@@ -212,11 +212,11 @@ class LGMD2(Model):
     """
 
     def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None, *,
-                 repeat_threshold: float | None = None):
+                 repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
         params = LGMD2Params() if params is None else params
         if not isinstance(params, LGMD2Params):
             raise InputTypeError(f"params must be LGMD2Params, got {type(params).__name__}")
-        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         p = params
         self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
         self.alpha_off = tuple(lowpass_alpha(t, self.fps) for t in p.tau_off)
@@ -362,11 +362,11 @@ class LGMD1(Model):
     """
 
     def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None, *,
-                 repeat_threshold: float | None = None):
+                 repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
         params = LGMD1Params() if params is None else params
         if not isinstance(params, LGMD1Params):
             raise InputTypeError(f"params must be LGMD1Params, got {type(params).__name__}")
-        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         kn, kd = params.w_i_kernel
         self._kernel = np.array([[kd, kn, kd], [kn, 0.0, kn], [kd, kn, kd]], np.float32)
         self._reset()

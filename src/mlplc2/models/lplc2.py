@@ -14,7 +14,7 @@ from ..backend import resolve
 from ..lobula_plate import LocalMotion
 from ..params import Params
 from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
-from .base import Model, Output, register
+from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
 
@@ -28,14 +28,14 @@ class _LPLC2Family(Model):
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, backend: str = "auto",
-                 repeat_threshold: float | None = None):
+                 repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
         params = Params() if params is None else params
         if not isinstance(params, Params):
             raise InputTypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
         target_params = TargetParams() if target_params is None else target_params
         if not isinstance(target_params, TargetParams):
             raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
-        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold)
+        super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         self.hfov_deg = check_hfov(hfov_deg)
         """Horizontal field of view (degrees) of the camera, or None. Given: targets carry their
         bearing (``Target.azimuth_deg`` / ``elevation_deg``); time to contact and course need none."""
@@ -80,7 +80,11 @@ class _LPLC2Family(Model):
     def _output(self, gray, index: int) -> Output:
         """This frame's fields, and the targets the target layer makes of them."""
         if self._layer is None:
-            self._layer = TargetLayer(self.target_params, self.fps, kernel=self._edge_kernel,
+            tp = self.target_params
+            if tp.heading is not None and self._work is not None:   # the heading in working pixels
+                sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
+                tp = tp.replace(heading=((tp.heading[0] + 0.5) * sx - 0.5, (tp.heading[1] + 0.5) * sy - 0.5))
+            self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
         targets = self._layer.step(gray, self.maps, self._fields, index)
         fields = tuple(f.snapshot() for f in self._fields)
