@@ -354,6 +354,21 @@ def test_global_alarm_on_clips():
     assert ev.models["lgmd2"]["tp"] == 1 and ev.models["lgmd2"]["tn"] == 1
 
 
+def test_collision_clip_without_a_track():
+    """Without the collider's track its position is unknown: every warning from the danger onset
+    - 0.5 s to the contact is on it (the early rule still holds)."""
+    gt = {"clips": {"c.mp4": {"label": "collision", "collision_frame": 30, "danger_onset_frame": 20},
+                    "d.mp4": {"label": "collision", "contact_frame": 30}}}
+    runs = [result("c.mp4", 40, targets=[T(f, 1, 10, 10, warn=True) for f in (12, 17, 18)]),
+            result("d.mp4", 40, alarms=[25], model="lgmd2")]
+    ev = evaluate(runs, gt)
+    v = wvid(ev, "c.mp4")
+    assert v["outcome"] == {"label": "collision", "warned": True, "missed": False, "false": True, "lead_s": 1.3}
+    assert v["false_frames_by_cause"] == {"early": 1}
+    assert wvid(ev, "d.mp4", "lgmd2")["outcome"]["lead_s"] == pytest.approx(0.5)
+    assert wobj(ev, oid="collider", video="c.mp4")["warning_distance_px"] is None
+
+
 # ---------------------------------------------------------------------------
 # results at another size than the truth; results folders
 # ---------------------------------------------------------------------------

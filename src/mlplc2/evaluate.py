@@ -515,7 +515,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     cause (:func:`mlplc2.tracks.warning_cause`), except within ``LATE_S`` after a contact, on
     the object that hit. On a labelled clip, frames from the contact on are not scored, and a
     warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
-    collider ("elsewhere"). A collision object none of whose frames before contact were
+    collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were
     processed (an interrupted or partial run) is not scored, only counted (``collision_objects_outside``).
     """
     first, last = run.start, run.start + run.n_frames
@@ -524,7 +524,11 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
     fps = run.fps
     clip = truth.label is not None
-    colliders = [o for o in truth.objects if o.collides] + ([truth.collider] if truth.collider is not None else [])
+    collider = truth.collider
+    if clip and truth.label == "collision" and collider is None:  # no track: any warning may be on it
+        collider = ObjectTruth(id="collider", kind="collision", contact_frame=truth.contact_frame)
+    blind = collider is not None and not collider.track   # the collider's position is unknown
+    colliders = [o for o in truth.objects if o.collides] + ([collider] if collider is not None else [])
     late = int(round(LATE_S * fps))
     end = last
     if clip and truth.label == "collision" and truth.contact_frame is not None:
@@ -556,8 +560,8 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     objects = []
     outside = 0
     for o in colliders:
-        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is truth.collider else None)
-        start = max(first, o.track[0].frame) if o.track and o is not truth.collider else first
+        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is collider else None)
+        start = max(first, o.track[0].frame) if o.track and o is not collider else first
         stop = min(end, int(math.ceil(cf)) if cf is not None else last)
         if start >= stop:
             outside += 1
@@ -570,7 +574,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         for f in range(start, stop):
             if not rec["warned"] and (early_before is None or f >= early_before):
                 for key, x, y in warnings_at(f):
-                    if x is None or on_object(x, y, o, f, radius):
+                    if x is None or (blind and o is collider) or on_object(x, y, o, f, radius):
                         c = o.center_at(f)
                         true = o.ttc_at(f, fps)
                         rec.update(warned=True, warning_frame=f,
@@ -580,7 +584,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                                        math.hypot(x - c[0], y - c[1]), 2))
                         break
             # fragmentation and time to contact: the targets (fields) on the object while in view
-            if o.track and not o.in_track(f) and o is not truth.collider:
+            if o.track and not o.in_track(f) and o is not collider:
                 continue
             width = o.width_at(f)
             # fragmentation counts while the object fits in the frame: in the last frames before
@@ -591,7 +595,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                 if fits:
                     ids.update(t.id for t in on)
                 true = o.ttc_at(f, fps)
-                if o is not truth.collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
+                if o is not collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
                         and true > 0:
                     rec["ttc_frames"] += 1
                     est = [t for t in on if t.ttc_s is not None and t.ttc_s > 0]
@@ -623,6 +627,8 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                 continue
             if early_before is not None and f < early_before:
                 cause = "early"
+            elif blind:
+                continue                     # a collision clip without a track: on its collider
             else:
                 verdict, _ = warning_cause(x, y, f, truth, radius=radius, tail=late)
                 if verdict == "true":
