@@ -15,6 +15,12 @@ clip level
     collision frame = true positive, alarm in a no-collision clip = false
     positive): accuracy, precision, recall and warning time.
 
+Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
+collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
+:func:`_score_warnings`): collision objects warned before contact, lead time, false warnings
+per 1000 frames by cause, time-to-contact errors (RTE, MiD) and coverage, fragmentation, and
+per clip warned / missed / false.
+
 :func:`evaluate` takes run results (a :class:`~mlplc2.runner.RunResult`, an
 output folder with ``responses.csv`` and ``fields.json``, a ``mlplc2 batch``
 folder) or videos (the models are run first) and returns an
