@@ -33,7 +33,8 @@ from typing import Any
 
 from ._validation import InputValueError
 
-__all__ = ["Scene", "suite", "benchmark", "BenchmarkResult", "MODELS", "REAL_DIR", "SUITE_GT", "COLUMNS"]
+__all__ = ["Scene", "suite", "benchmark", "BenchmarkResult", "BenchmarkWarning", "MODELS", "REAL_DIR", "SUITE_GT",
+           "COLUMNS"]
 
 #: Every model the benchmark compares, in table order (the optical-flow baseline last).
 MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
@@ -169,9 +170,18 @@ COLUMNS = ("model", "collision_objects", "warned", "warned_pct", "lead_median_s"
            "clips_false", "clip_lead_median_s", "ms_per_frame")
 
 
+class BenchmarkWarning(UserWarning):
+    """A batch task of the benchmark that failed (not scored) or whose video stopped decoding
+    early (scored as far as it decoded); one line each, also in ``benchmark.md`` / ``.json``."""
+
+
 @dataclass
 class BenchmarkResult:
-    """What :func:`benchmark` measured (also in ``benchmark.json``)."""
+    """What :func:`benchmark` measured (also in ``benchmark.json``).
+
+    ``failed``: one dict per batch task that did not finish cleanly (``video``, ``model`` label,
+    ``status`` ``"error"`` or ``"truncated"``, ``error``, ``out``): a failed task leaves its model
+    without results on that video, so that model's metrics do not count it."""
 
     rows: list[dict]
     evaluation: Any
@@ -180,6 +190,7 @@ class BenchmarkResult:
     seconds: float
     files: dict[str, Path] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
+    failed: list[dict] = field(default_factory=list)
 
     def to_markdown(self) -> str:
         return _markdown(self)
@@ -237,7 +248,17 @@ def _markdown(res: BenchmarkResult) -> str:
     clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
     if clip:
         lines += ["", "Real clips:", "", clip]
+    if res.failed:
+        lines += ["", f"Tasks that did not finish cleanly ({len(res.failed)}; a failed task's model has no results "
+                      f"on that video, and its metrics above leave the video out):", ""]
+        lines += [f"- {_failure(f)}" for f in res.failed]
     return "\n".join(lines) + "\n"
+
+
+def _failure(f: dict) -> str:
+    """One line on a task that did not finish cleanly."""
+    what = "failed, not scored" if f["status"] == "error" else "stopped decoding early, scored as far as it decoded"
+    return f"{f['video']} ({f['model']}, runs/{f['out']}): {what}: {f['error']}"
 
 
 def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
@@ -360,8 +381,17 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         run_options["target_params"] = changed
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
-    gts = [suite_gt] + ([real_gt] if real_gt is not None else [])
     import warnings
+
+    failed, seen = [], set()
+    for r in res.rows:  # once per task (a task shared by parameter sets has several rows)
+        if r.get("status") not in (None, "ok") and r.get("out") not in seen:
+            seen.add(r.get("out"))
+            failed.append({"video": str(r.get("video")), "model": r.get("label") or r.get("model"),
+                           "status": r["status"], "error": r.get("error") or "", "out": r.get("out")})
+    for f in failed:
+        warnings.warn(_failure(f), BenchmarkWarning, stacklevel=2)
+    gts = [suite_gt] + ([real_gt] if real_gt is not None else [])
 
     from .evaluate import EvaluationWarning
 
@@ -385,7 +415,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
                                        "real": None if real_dir is None else str(real_dir),
-                                       "scheduler": res.scheduler})
+                                       "scheduler": res.scheduler}, failed=failed)
     _write(result, out)
     return result
 
@@ -398,6 +428,7 @@ def _write(res: BenchmarkResult, out: Path) -> None:
     for name, content in (("benchmark.md", text),
                           ("benchmark.json", json.dumps({"settings": res.settings, "models": res.rows,
                                                          "scenes": res.scenes, "clips": res.clips,
+                                                         "failed": res.failed,
                                                          "seconds": round(res.seconds, 1)}, indent=1) + "\n")):
         with atomic_path(out / name) as tmp:
             Path(tmp).write_text(content, encoding="utf-8")

@@ -1,4 +1,4 @@
-"""Command line: ``mlplc2 run | stimulus | demo`` (see docs/cli.md).
+"""Command line: ``mlplc2 run | stimulus | demo | evaluate | batch | benchmark | ...`` (see docs/cli.md).
 
 Thin by design: each subcommand parses its arguments and calls one public
 function (:func:`mlplc2.run`, :func:`mlplc2.runner.write_stimulus`,
@@ -143,6 +143,35 @@ def _repeat_threshold(args) -> float | str | None:
     return None if args.every_frame else "auto"
 
 
+def _add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
+    """``--horizon S`` and ``--max-miss W``: the warning settings of the target layer
+    (``TargetParams.horizon_s``, ``.max_miss``), read back by :func:`_target_options`."""
+    from .targets import TargetParams
+
+    d = TargetParams()
+    p.add_argument("--horizon", type=_nonneg_float, metavar="S",
+                   help=f"{what}a target warns only when its time to contact is at most S seconds "
+                        f"(TargetParams.horizon_s, default {d.horizon_s:g}; docs/targets.md)")
+    p.add_argument("--max-miss", type=_nonneg_float, metavar="W",
+                   help=f"{what}... and its predicted miss at contact at most W object widths "
+                        f"(TargetParams.max_miss, default {d.max_miss:g})")
+
+
+def _target_options(args) -> dict:
+    """The ``target_params`` of :func:`mlplc2.run` asked for by :func:`_add_warning_options`: a
+    dict of :class:`~mlplc2.targets.TargetParams` fields (JSON-able, for batch tasks; empty: the
+    defaults), checked here so that a bad value is one error before anything runs."""
+    from .targets import TargetParams
+
+    options = {}
+    if args.horizon is not None:
+        options["horizon_s"] = args.horizon
+    if args.max_miss is not None:
+        options["max_miss"] = args.max_miss
+    TargetParams().replace(**options)
+    return options
+
+
 def _add_run(p: argparse.ArgumentParser) -> None:
     from .models.base import available_models
 
@@ -174,6 +203,7 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                           f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
                           f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
                           f"repeated to raise the frame rate (docs/model.md)")
+    _add_warning_options(p)
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
@@ -191,7 +221,8 @@ def _cmd_run(args) -> int:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
-                         backend=args.backend, draw_fields="all" if args.all_fields else "responding")
+                         backend=args.backend, draw_fields="all" if args.all_fields else "responding",
+                         target_params=_target_options(args) or None)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
@@ -565,6 +596,7 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
     _add_repeat_options(p, "for video inputs: hold the models' output on duplicated frames "
                           "(as in 'mlplc2 run --skip-repeats')")
+    _add_warning_options(p, "for video inputs: ")
     p.add_argument("--details", action="store_true", help="also print the per-video table")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -577,6 +609,9 @@ def _cmd_evaluate(args) -> int:
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)
+    target = _target_options(args)  # --horizon / --max-miss
+    if target:
+        options["target_params"] = target
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
         ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
@@ -610,6 +645,7 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
     _add_repeat_options(p, "hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
+    _add_warning_options(p)
     p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pandas, pyarrow)")
@@ -624,6 +660,9 @@ def _cmd_batch(args) -> int:
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)
+    target = _target_options(args)  # --horizon / --max-miss: part of each task's options
+    if target:
+        options["target_params"] = target
     try:
         res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
                     scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
@@ -644,6 +683,50 @@ def _cmd_batch(args) -> int:
                f"{res.failed_runs} failed; {len(res.videos)} video(s) in {res.seconds:.1f} s on {res.scheduler}",
          f"results in {res.table}")
     return EXIT_INPUT if res.failed else EXIT_OK
+
+
+# ---------------------------------------------------------------------------
+# benchmark (docs/benchmark.md)
+# ---------------------------------------------------------------------------
+def _add_benchmark(p: argparse.ArgumentParser) -> None:
+    from .benchmark import MODELS
+
+    p.add_argument("--out", "-o", required=True, metavar="DIR",
+                   help="output folder: scenes/ (generated videos), runs/ (the batch; finished tasks are reused), "
+                        "benchmark.md/.csv/.json, evaluation.md/.json and the plots")
+    p.add_argument("--quick", action="store_true", help="4 short scenes and no real clips (the test suite's run)")
+    p.add_argument("--models", "--model", "-m", dest="model", action="append", metavar="NAME",
+                   help=f"model(s), repeatable or comma-separated (default: {','.join(MODELS)})")
+    real = p.add_mutually_exclusive_group()
+    real.add_argument("--real", metavar="DIR",
+                      help="folder of the labelled real clips, with their ground_truth.json (default: "
+                           "../shared/data/real when it is there)")
+    real.add_argument("--no-real", action="store_true", help="leave the real clips out")
+    p.add_argument("--scheduler", metavar="ADDRESS",
+                   help="tcp://host:8786 of a running Dask scheduler (default: start a local cluster)")
+    p.add_argument("--workers", type=_nonneg_int, metavar="N",
+                   help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
+    _add_warning_options(p)
+    p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bars and no table")
+
+
+def _cmd_benchmark(args) -> int:
+    from .batch import BatchInterrupted
+    from .benchmark import benchmark
+
+    models = _model_names(args.model) if args.model else None
+    real = None if args.no_real else (args.real if args.real is not None else "auto")
+    try:
+        res = benchmark(args.out, quick=args.quick, models=models, real=real, scheduler=args.scheduler,
+                        workers=args.workers, target_params=_target_options(args) or None,
+                        progress=not args.quiet, force=args.force)
+    except BatchInterrupted as exc:
+        if args.quiet:  # with progress output batch() has already said it
+            print(f"{PROG}: {_one_line(str(exc))}", file=sys.stderr)
+        return EXIT_INTERRUPTED
+    _say(args, res.to_markdown().rstrip("\n"), f"wrote {', '.join(str(f) for f in res.files.values())}")
+    return EXIT_INPUT if any(f["status"] == "error" for f in res.failed) else EXIT_OK
 
 
 # ---------------------------------------------------------------------------
@@ -709,6 +792,8 @@ SUBCOMMANDS: list[Subcommand] = [
                _add_evaluate, _cmd_evaluate),
     Subcommand("batch", "run every (video, model, parameter set) as a Dask task; one results table",
                _add_batch, _cmd_batch),
+    Subcommand("benchmark", "the standard suite of generated approaches (+ real clips), every model: how early "
+                            "and how reliably each warns", _add_benchmark, _cmd_benchmark),
     Subcommand("reproduce", "run the paper's Sec. IV experiments; write Fig. 3-6 and a PASS/FAIL report",
                _add_reproduce, _cmd_reproduce),
     Subcommand("params", "print the parameters: Table I symbol, unit, default, valid values, description",

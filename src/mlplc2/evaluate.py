@@ -15,6 +15,12 @@ clip level
     collision frame = true positive, alarm in a no-collision clip = false
     positive): accuracy, precision, recall and warning time.
 
+Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
+collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
+:func:`_score_warnings`): collision objects warned before contact, lead time, false warnings
+per 1000 frames by cause, time-to-contact errors (RTE, MiD) and coverage, fragmentation, and
+per clip warned / missed / false.
+
 :func:`evaluate` takes run results (a :class:`~mlplc2.runner.RunResult`, an
 output folder with ``responses.csv`` and ``fields.json``, a ``mlplc2 batch``
 folder) or videos (the models are run first) and returns an
@@ -30,7 +36,7 @@ import math
 import os
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from pathlib import Path, PurePosixPath
 from typing import Any, Iterable
 
@@ -38,7 +44,7 @@ from ._validation import InputTypeError, InputValueError, check_int, check_real
 
 __all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
            "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS", "TTC_BINS", "MIN_TTC_WIDTH",
-           "EARLY_S", "LATE_S"]
+           "EARLY_S", "LATE_S", "MID_INTERVAL_S", "mid_error"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
@@ -48,6 +54,16 @@ MIN_TTC_WIDTH = 16.0
 EARLY_S = 0.5
 #: A warning on a collision object up to this long (s) after its contact is neither true nor false.
 LATE_S = 0.5
+#: MiD (the TSTTC benchmark's motion-in-depth error) compares the depth ratio over this interval (s):
+#: TSTTC's frame interval (10 fps).
+MID_INTERVAL_S = 0.1
+
+
+def mid_error(true_ttc: float, est_ttc: float, interval: float = MID_INTERVAL_S) -> float:
+    """MiD of one time-to-contact estimate, as the TSTTC benchmark computes it: the depth ratio
+    over ``interval`` implied by a TTC, ``s = ttc / (ttc + interval)``, compared in log space,
+    ``|ln s(est) - ln s(true)| x 10^4`` (positive TTCs)."""
+    return abs(math.log(est_ttc / (est_ttc + interval)) - math.log(true_ttc / (true_ttc + interval))) * 1e4
 
 from .tracks import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, box_distance, episodes, on_object, warning_cause
 from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth
@@ -124,7 +140,8 @@ def _target_row(r) -> TargetRow:
 
 
 def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None,
-                    params=None, origin="", ident=None, incomplete=None, video_known=True, target_rows=()):
+                    params=None, origin="", ident=None, incomplete=None, video_known=True, target_rows=(),
+                    targets_known=True):
     from .batch import param_label
 
     per: dict[str, _Run] = {}
@@ -136,7 +153,7 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
             label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
                     dict(params or {}), origin or str(source), ident, incomplete, video_known,
-                    has_targets=_has_targets(m))
+                    has_targets=_has_targets(m) and targets_known)
 
     for r in rows:
         m = r["model"]
@@ -238,11 +255,13 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
         incomplete = _incomplete_reason(n_frames, info.get("interrupted"), info.get("truncated"),
                                         complete=info.get("complete") is not False)
     target_rows = []
+    targets_known = False  # without the target layer's targets.csv (older results) the alarm is the warning
     tp = folder / "targets.csv"
     if tp.is_file():
         with open(tp, newline="", encoding="utf-8") as f:
             reader = csv.DictReader(f)
             if "target_id" in (reader.fieldnames or ()):   # targets.csv of the target layer
+                targets_known = True
                 try:
                     target_rows = [r for r in reader if r.get("frame") not in (None, "")]
                     for r in target_rows:
@@ -252,7 +271,8 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
     return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
                            n_frames=n_frames, models=models, param_set=done.get("param_set"), params=params,
                            origin=str(folder), ident=("path", _path_key(folder)), incomplete=incomplete,
-                           video_known=bool(info.get("video") or done.get("video")), target_rows=target_rows)
+                           video_known=bool(info.get("video") or done.get("video")), target_rows=target_rows,
+                           targets_known=targets_known)
 
 
 def _path_key(path) -> str:
@@ -317,6 +337,17 @@ def _mean(values) -> float | None:
     return sum(values) / len(values) if values else None
 
 
+def _with_approach(o: ObjectTruth) -> ObjectTruth | None:
+    """``o`` with an ``approach`` interval for the paper's object metrics: its own, else (a 3-D
+    collision or pass-by given with a track but no ``approach``) its tracked frames; None
+    without either (nothing to score it on)."""
+    if o.approach is not None:
+        return o
+    if not o.track:
+        return None
+    return replace(o, approach=(o.track[0].frame, o.track[-1].frame + 1))
+
+
 def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tuple[dict, list[dict]]:
     first, last = run.start, run.start + run.n_frames  # processed frames [first, last)
     sx = sy = 1.0
@@ -332,7 +363,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
         for fid, x, y, _ in fields_at(f):
             births.setdefault(fid, (f, x, y))
 
-    approaching = [o for o in truth.objects if o.approaching]
+    approaching = [a for a in (_with_approach(o) for o in truth.objects if o.approaching) if a is not None]
 
     def window(o):
         return max(o.approach[0], first), min(o.approach[1] + tail, last)
@@ -483,11 +514,15 @@ def _quantile(values, q: float) -> float | None:
 def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dict, list[dict]]:
     """The warning metrics of one run (``docs/evaluation.md``, "Warning metrics").
 
-    A model's warning is its targets' warnings (models with targets) or its alarm. Collision
-    objects (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
+    A model's warning is its targets' warnings (models with targets), else its alarm: the fields
+    in alarm of a model that localises, the frame's alarm of one that does not. Collision objects
+    (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
     (:func:`mlplc2.tracks.on_object`) before contact; every other warning is false, with its
-    cause (:func:`mlplc2.tracks.warning_cause`). On a labelled clip, frames from the contact on
-    are not scored, and a warning before the danger onset minus ``EARLY_S`` is false ("early").
+    cause (:func:`mlplc2.tracks.warning_cause`), except within ``LATE_S`` after a contact, on
+    the object that hit. On a labelled clip, frames from the contact on are not scored, and a
+    warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
+    collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were
+    processed (an interrupted or partial run) is not scored, only counted (``collision_objects_outside``).
     """
     first, last = run.start, run.start + run.n_frames
     sx = sy = 1.0
@@ -495,7 +530,11 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
     fps = run.fps
     clip = truth.label is not None
-    colliders = [o for o in truth.objects if o.collides] + ([truth.collider] if truth.collider is not None else [])
+    collider = truth.collider
+    if clip and truth.label == "collision" and collider is None:  # no track: any warning may be on it
+        collider = ObjectTruth(id="collider", kind="collision", contact_frame=truth.contact_frame)
+    blind = collider is not None and not collider.track   # the collider's position is unknown
+    colliders = [o for o in truth.objects if o.collides] + ([collider] if collider is not None else [])
     late = int(round(LATE_S * fps))
     end = last
     if clip and truth.label == "collision" and truth.contact_frame is not None:
@@ -503,6 +542,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     early_before = None
     if clip and truth.danger_onset_frame is not None:
         early_before = truth.danger_onset_frame - EARLY_S * fps
+    localises = _localises(run.model)
 
     def targets(f):
         rows = run.frame_targets.get(f, ())
@@ -513,20 +553,25 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                 for t in rows]
 
     def fields(f):
-        return [(fid, x * sx, y * sy) for fid, x, y, _ in run.frame_fields.get(f, ())]
+        return [(fid, x * sx, y * sy, c) for fid, x, y, c in run.frame_fields.get(f, ())]
 
     def warnings_at(f):
-        """(key, x, y) of every warning in frame f (key: target id, or None for a global alarm)."""
+        """(key, x, y) of every warning in frame f (key: target or field id; x None: a global alarm)."""
         if run.has_targets:
             return [(t.id, t.x, t.y) for t in targets(f) if t.warning]
+        if localises:
+            return [(fid, x, y) for fid, x, y, c in fields(f) if c]
         return [(None, None, None)] if run.frame_alarm.get(f) else []
 
     objects = []
+    outside = 0
     for o in colliders:
-        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is truth.collider else None)
-        seen = [p.frame for p in o.track] if o.track else []
-        start = max(first, seen[0]) if seen and o is not truth.collider else first
-        stop = min(end, last, int(math.ceil(cf)) if cf is not None else last)
+        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is collider else None)
+        start = max(first, o.track[0].frame) if o.track and o is not collider else first
+        stop = min(end, int(math.ceil(cf)) if cf is not None else last)
+        if start >= stop:
+            outside += 1
+            continue
         rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
                "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
                "ttc_at_warning_s": None, "warning_distance_px": None, "targets": None, "ttc_frames": 0,
@@ -535,17 +580,17 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         for f in range(start, stop):
             if not rec["warned"] and (early_before is None or f >= early_before):
                 for key, x, y in warnings_at(f):
-                    if x is None or on_object(x, y, o, f, radius):
-                        if not rec["warned"]:
-                            c = o.center_at(f)
-                            rec.update(warned=True, warning_frame=f,
-                                       lead_s=None if cf is None else round((cf - f) / fps, 4),
-                                       ttc_at_warning_s=None if o.ttc_at(f, fps) is None else round(o.ttc_at(f, fps), 4),
-                                       warning_distance_px=None if x is None or c is None else round(
-                                           math.hypot(x - c[0], y - c[1]), 2))
+                    if x is None or (blind and o is collider) or on_object(x, y, o, f, radius):
+                        c = o.center_at(f)
+                        true = o.ttc_at(f, fps)
+                        rec.update(warned=True, warning_frame=f,
+                                   lead_s=None if cf is None else round((cf - f) / fps, 4),
+                                   ttc_at_warning_s=None if true is None else round(true, 4),
+                                   warning_distance_px=None if x is None or c is None else round(
+                                       math.hypot(x - c[0], y - c[1]), 2))
                         break
             # fragmentation and time to contact: the targets (fields) on the object while in view
-            if o.track and not o.in_track(f) and o is not truth.collider:
+            if o.track and not o.in_track(f) and o is not collider:
                 continue
             width = o.width_at(f)
             # fragmentation counts while the object fits in the frame: in the last frames before
@@ -556,7 +601,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                 if fits:
                     ids.update(t.id for t in on)
                 true = o.ttc_at(f, fps)
-                if o is not truth.collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
+                if o is not collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
                         and true > 0:
                     rec["ttc_frames"] += 1
                     est = [t for t in on if t.ttc_s is not None and t.ttc_s > 0]
@@ -565,15 +610,15 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                         t = min(est, key=lambda t: math.hypot(t.x - c[0], t.y - c[1]))
                         rec["ttc_estimated"] += 1
                         rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
-            elif _localises(run.model) and fits:
-                ids.update(fid for fid, x, y in fields(f) if on_object(x, y, o, f, radius))
-        rec["targets"] = len(ids) if (run.has_targets or _localises(run.model)) else None
+            elif localises and fits:
+                ids.update(fid for fid, x, y, _ in fields(f) if on_object(x, y, o, f, radius))
+        rec["targets"] = len(ids) if (run.has_targets or localises) else None
         objects.append(rec)
 
     # false warnings: per frame, per cause; episodes per (target, cause)
     false_frames: dict[str, set[int]] = {}
     runs: dict[tuple, list[int]] = {}
-    scored = 0
+
     def just_hit(x, y, f):
         """A warning up to LATE_S after a collision object's contact, where it last was."""
         for o in colliders:
@@ -583,23 +628,21 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         return False
 
     for f in range(first, end):
-        scored += 1
         for key, x, y in warnings_at(f):
             if just_hit(x, y, f):
                 continue
             if early_before is not None and f < early_before:
                 cause = "early"
+            elif blind:
+                continue                     # a collision clip without a track: on its collider
             else:
-                verdict, obj = warning_cause(x, y, f, truth, radius=radius, tail=late)
+                verdict, _ = warning_cause(x, y, f, truth, radius=radius, tail=late)
                 if verdict == "true":
                     continue
-                if obj is not None and obj.collides and obj.contact_frame is not None \
-                        and obj.contact_frame <= f <= obj.contact_frame + late:
-                    continue                     # just after contact: neither true nor false
                 cause = verdict if not clip else "elsewhere"
             false_frames.setdefault(cause, set()).add(f)
             runs.setdefault((key, cause), []).append(f)
-    episodes_by = {}
+    episodes_by: dict[str, int] = {}
     for (key, cause), frames in runs.items():
         episodes_by[cause] = episodes_by.get(cause, 0) + episodes(frames)
     all_false = set().union(*false_frames.values()) if false_frames else set()
@@ -609,7 +652,8 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         outcome = {"label": truth.label, "warned": warned if truth.label == "collision" else None,
                    "missed": (not warned) if truth.label == "collision" else None, "false": bool(all_false),
                    "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None)}
-    video = {"model": run.label, "video": truth.key, "frames_scored": scored, "clip": clip,
+    video = {"model": run.label, "video": truth.key, "frames_scored": max(end - first, 0), "clip": clip,
+             "collision_objects_outside": outside,
              "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
              "false_frames_by_cause": {c: len(v) for c, v in sorted(false_frames.items())},
              "false_episodes_by_cause": dict(sorted(episodes_by.items())), "outcome": outcome}
@@ -630,6 +674,7 @@ def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -
     causes = ("pass", "distractor", "background")
     s: dict[str, Any] = {
         "collision_objects": len(sobjs), "warned": len(warned),
+        "collision_objects_outside": sum(v["collision_objects_outside"] for v in synth),
         "warned_rate": round(len(warned) / len(sobjs), 4) if sobjs else None,
         "lead_median_s": _median(o["lead_s"] for o in warned),
         "lead_p10_s": _quantile([o["lead_s"] for o in warned], 0.1),
@@ -650,7 +695,7 @@ def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -
         b = [(t, e) for t, e in errs if lo <= t < hi]
         key = f"{lo:g}-{hi:g}s"
         s[f"ttc_rte_pct_{key}"] = None if not b else round(100.0 * _median(abs(e - t) / t for t, e in b), 2)
-        s[f"ttc_mid_{key}"] = None if not b else round(_median(abs(math.log(e / t)) * 1e4 for t, e in b), 1)
+        s[f"ttc_mid_{key}"] = None if not b else round(_median(mid_error(t, e) for t, e in b), 1)
         s[f"ttc_n_{key}"] = len(b)
     tf = sum(o["ttc_frames"] for o in sobjs)
     s["ttc_coverage"] = round(sum(o["ttc_estimated"] for o in sobjs) / tf, 4) if tf else None
@@ -874,25 +919,34 @@ class Evaluation:
 
     def warning_table(self) -> str:
         """Markdown: the warning metrics per model (empty without 3-D truth): collision objects
-        warned before contact, lead time, false warnings by cause, TTC errors, fragmentation."""
+        warned before contact, lead time, true TTC and distance at the first warning, false
+        warnings by cause, TTC errors (median RTE / MiD per true-TTC bin), coverage, fragmentation."""
         rows = [(lb, s["warnings"]) for lb, s in self.models.items() if s.get("warnings")
                 and s["warnings"]["collision_objects"]]
         if not rows:
             return ""
         shown, _ = self._shown()
-        lines = ["| model | warned | lead median (s) | lead p10 (s) | TTC at warning (s) | false frames /1000 "
-                 "| false episodes /1000 | by cause: pass / distractor / background (episodes /1000) "
-                 "| TTC error 0-1 s | 1-3 s | 3-6 s | TTC coverage | targets/object |",
-                 "|" + "|".join(["---"] * 13) + "|"]
+        bins = [f"{lo:g}-{hi:g}s" for lo, hi in TTC_BINS]
+        lines = ["| model | warned | lead median (s) | lead p10 (s) | TTC at warning (s) | distance (px) "
+                 "| false frames /1000 | false episodes /1000 "
+                 "| by cause: pass / distractor / background (episodes /1000) "
+                 + "".join(f"| TTC error {lo:g}-{hi:g} s (RTE / MiD) " for lo, hi in TTC_BINS)
+                 + "| TTC coverage | targets/object |",
+                 "|" + "|".join(["---"] * (12 + len(TTC_BINS))) + "|"]
+
+        def ttc_cell(w, b):
+            rte, mid = w[f"ttc_rte_pct_{b}"], w[f"ttc_mid_{b}"]
+            return "-" if rte is None else f"{rte:.0f} % / {mid:.0f}"
+
         for lb, w in rows:
             c = w["false_episodes_per_1000_by_cause"]
             lines.append(
                 f"| {shown[lb]} | {w['warned']}/{w['collision_objects']} ({_fmt(w['warned_rate'], pct=True)}) "
-                f"| {_fmt(w['lead_median_s'], 2)} | {_fmt(w['lead_p10_s'], 2)} | {_fmt(w['ttc_at_warning_median_s'], 2)} "
+                f"| {_fmt(w['lead_median_s'], 2)} | {_fmt(w['lead_p10_s'], 2)} "
+                f"| {_fmt(w['ttc_at_warning_median_s'], 2)} | {_fmt(w['warning_distance_median_px'], 1)} "
                 f"| {_fmt(w['false_frames_per_1000'], 1)} | {_fmt(w['false_episodes_per_1000'], 2)} "
                 f"| {_fmt(c['pass'], 2)} / {_fmt(c['distractor'], 2)} / {_fmt(c['background'], 2)} "
-                + "".join(f"| {_fmt(w[f'ttc_rte_pct_{lo:g}-{hi:g}s'], 0)}{'' if w[f'ttc_rte_pct_{lo:g}-{hi:g}s'] is None else ' %'} "
-                          for lo, hi in TTC_BINS)
+                + "".join(f"| {ttc_cell(w, b)} " for b in bins)
                 + f"| {_fmt(w['ttc_coverage'], pct=True)} | {_fmt(w['fragmentation'], 2)} |")
         return "\n".join(lines)
 
