@@ -669,6 +669,16 @@ def _unmute(saved: list) -> None:
         logger.setLevel(level)
 
 
+def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
+    """The run options that concern ``model``: the targets' settings only for models with
+    targets (so that changing them does not rerun the others)."""
+    from .models.base import get_model
+
+    if "target_params" in options and not get_model(model).has_targets:
+        return {k: v for k, v in options.items() if k != "target_params"}
+    return dict(options)
+
+
 def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None, sweep=None,
           scheduler: str | None = None, workers: int | None = None, client=None,
           run_options: Mapping[str, Any] | None = None, plot: bool = False, progress: bool = True,
@@ -782,7 +792,7 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                     tasks.append({"video": v, "model": m, "label": param_label(m, over),
                                   "param_set": param_set_id(own), "pset": own, "overrides": over,
                                   "out": str((out / rel).resolve()), "rel_out": key, "plot": plot,
-                                  "run_options": run_options})
+                                  "run_options": _model_run_options(run_options, m)})
                 slots.append((by_out[key], pid))
 
     rows: dict[int, dict] = {}

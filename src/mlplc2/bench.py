@@ -5,7 +5,9 @@ For every model and frame size it reports, measured in the same run:
 * ms/frame and frames/s of the model with the fast front end (median over ``--frames``
   frames after a warm-up; the frames are generated in memory beforehand, so no decoding is
   timed; the time is that of ``model.step(uint8 frame)``, input conversion, front end,
-  attention fields and target estimates included);
+  attention fields and the target layer included; every frame at its own size: the models run
+  with ``work_width=None`` and ``repeat_threshold=None``, so the larger sizes measure the
+  pipeline there, not the default reduction to 320 px);
 * the same for the reference front end (``backend="reference"``, fewer frames) and the
   speed-up;
 * a memory-bandwidth probe: the time to copy the float32 planes the fast pipeline touches
@@ -142,7 +144,7 @@ def time_model(name: str, frames: np.ndarray, backend: str, warmup: int, fps: fl
     """(median ms per step, max fields) of model ``name`` over ``frames[warmup:]``."""
     from .models.base import get_model
 
-    model = get_model(name)(fps=fps, backend=backend)
+    model = get_model(name)(fps=fps, backend=backend, work_width=None, repeat_threshold=None)  # every frame, full size
     for f in frames[:warmup]:
         model.step(f)
     times = []
@@ -179,7 +181,7 @@ def peak_memory_mb(name: str, frames: np.ndarray, backend: str = "auto", n: int 
     tracemalloc.start()
     try:
         tracemalloc.reset_peak()
-        model = get_model(name)(fps=30.0, backend=backend)
+        model = get_model(name)(fps=30.0, backend=backend, work_width=None, repeat_threshold=None)
         for f in frames[:n]:
             model.step(f)
         _, peak = tracemalloc.get_traced_memory()

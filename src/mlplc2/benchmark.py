@@ -275,7 +275,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.6), dpi=110)
     ax = fig.subplots()
     for i, m in enumerate(models):
-        objs = [o for o in ev.warning_objects if o["model"] == m and not o["video"].startswith("clip:")
+        objs = [o for o in ev.warning_objects if o["model"] == m and o["object"] != "collider"
                 and o.get("contact_frame") is not None]
         leads = [o["lead_s"] for o in objs if o["warned"] and o["lead_s"] is not None]
         missed = sum(1 for o in objs if not o["warned"])
