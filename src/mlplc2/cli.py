@@ -191,9 +191,13 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     size.add_argument("--scale", type=_pos_float, metavar="S", help="resize by a factor (e.g. 0.5)")
     p.add_argument("--start", type=_nonneg_int, default=0, metavar="N", help="first frame (0-based)")
     p.add_argument("--end", type=_nonneg_int, metavar="N", help="stop before this frame")
-    p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the fields drawn")
-    p.add_argument("--all-fields", action="store_true",
-                   help="with --video: draw every field, not only those that respond or are in alarm")
+    p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the targets drawn")
+    fields = p.add_mutually_exclusive_group()
+    fields.add_argument("--fields", action="store_true",
+                        help="with --video: also draw the attention fields that respond or alarm (by default "
+                             "the video shows the targets only)")
+    fields.add_argument("--all-fields", action="store_true",
+                        help="with --video: also draw every attention field")
     p.add_argument("--hfov", type=_hfov, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
@@ -221,7 +225,7 @@ def _cmd_run(args) -> int:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
-                         backend=args.backend, draw_fields="all" if args.all_fields else "responding",
+                         backend=args.backend, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                          target_params=_target_options(args) or None)
         except RunInterrupted as exc:
             return _report_interrupt(exc)

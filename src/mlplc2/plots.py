@@ -172,25 +172,36 @@ def _label(fid: int, summary: dict | None, series) -> str:
 
 
 #: Which fields :func:`annotate_frame` draws: ``"responding"`` (response > 0 or in alarm) or ``"all"``.
-DRAW_FIELDS = ("responding", "all")
+#: Which attention fields ``annotate_frame`` draws: "auto" (none when the model has targets, else
+#: those that respond or alarm), "none", "responding", "all".
+DRAW_FIELDS = ("auto", "none", "responding", "all")
+#: Target outlines: warning, with a time to contact, without one yet.
+WARN_RGB = ALARM_RGB
+TIMED_RGB = (255, 170, 0)
+TARGET_RGB = (90, 170, 255)
 #: Label backgrounds of the annotated video: the header and the frame number.
 PANEL_RGB = (20, 20, 20)
 
 
 def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: float = 1.0,
                    scale_y: float = 1.0, *, primary: int | None = 0, index: int | None = None,
-                   field_shape: str = "square", draw_fields: str = "responding") -> np.ndarray:
-    """Draw attention fields and responses on a copy of an RGB frame.
+                   field_shape: str = "square", draw_fields: str = "auto") -> np.ndarray:
+    """Draw targets, attention fields and responses on a copy of an RGB frame.
+
+    The targets of ``outputs[primary]`` (``Output.targets``) are drawn as boxes of their
+    apparent size, labelled ``T<id>`` with the time to contact and the predicted miss once
+    known, red while warning (orange with a time to contact, blue without one).
 
     The fields of ``outputs[primary]`` are drawn in their real shape, scaled to input
     pixels: a square of half-side ``radius`` (``field_shape="square"``, the default of
     :class:`mlplc2.Params`) or a disc of that radius (``"disc"``), a rectangle or an
     ellipse when the model frames were resized anisotropically. Each gets a cross at its
     centre and a label ``#id response`` (and ``ttc`` once estimated). Fields in alarm are
-    red, the others green. With ``draw_fields="responding"`` (default) only the fields
-    that respond (response > 0) or are in alarm are drawn; ``"all"`` draws every field.
-    A header at the top left lists every model's response (``ALARM`` on red while its
-    collision flag is set), and ``index`` is shown at the bottom left.
+    red, the others green. ``draw_fields``: "auto" (default) draws no field when the model
+    has targets and else only the fields that respond (response > 0) or are in alarm,
+    "responding" those, "all" every field, "none" none. A header at the top left lists every
+    model's response (``ALARM`` on red while its collision flag is set, ``WARNING`` while a
+    target warns), and ``index`` is shown at the bottom left.
 
     Text size, line widths and margins scale with the frame size (``_Style``), and every
     label sits on a filled box, placed where it hides no other label, so it reads on any
@@ -207,9 +218,14 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     labels = _Labels(img, style)
     _header_labels(labels, outputs, names, index)  # placed first: the other labels keep clear of them
     if primary is not None:
-        for f in outputs[primary].fields:
-            if draw_fields == "all" or f.response > 0 or f.collision:
-                _draw_field(img, labels, f, style, scale_x, scale_y, field_shape)
+        out = outputs[primary]
+        mode = draw_fields if draw_fields != "auto" else ("none" if out.targets else "responding")
+        if mode != "none":
+            for f in out.fields:
+                if mode == "all" or f.response > 0 or f.collision:
+                    _draw_field(img, labels, f, style, scale_x, scale_y, field_shape)
+        for t in reversed(out.targets):            # the most urgent last: on top
+            _draw_target(img, labels, t, style, scale_x, scale_y)
     labels.draw()  # last: on top of the outlines
     return img
 
@@ -297,10 +313,34 @@ def _header_labels(labels: _Labels, outputs, names: Sequence[str], index: int | 
     y = st.margin
     for name, out in zip(names, outputs):
         alarm = bool(out.collision)
-        text = f"{name} {_fmt(out.response)}" + (" ALARM" if alarm else "")
-        y = labels.add(text, ALARM_RGB if alarm else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
+        warn = bool(getattr(out, "warning", False))
+        text = f"{name} {_fmt(out.response)}" + (" ALARM" if alarm else "") + (" WARNING" if warn else "")
+        y = labels.add(text, ALARM_RGB if alarm or warn else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
     if index is not None:
         labels.add(f"frame {index}", PANEL_RGB, (st.margin, labels.img.shape[0] - st.margin, "bottom"))
+
+
+def _draw_target(img: np.ndarray, labels: _Labels, t, style: _Style, scale_x: float, scale_y: float) -> None:
+    """One target: a box of its apparent size and a label ``T<id> <ttc>s miss <m>``."""
+    import cv2
+
+    colour = WARN_RGB if t.warning else TIMED_RGB if t.ttc_s is not None else TARGET_RGB
+    cx, cy = t.x * scale_x, t.y * scale_y
+    hw, hh = max(t.width * scale_x / 2.0, 1.0), max(t.height * scale_y / 2.0, 1.0)
+    x0, y0, x1, y1 = (int(round(v)) for v in (cx - hw, cy - hh, cx + hw, cy + hh))
+    line = style.line + (1 if t.warning else 0)
+    cv2.rectangle(img, (x0, y0), (x1, y1), colour, line)
+    text = f"T{t.id}"
+    if t.ttc_s is not None:
+        text += f" {t.ttc_s:.2f}s"
+        if t.miss is not None:
+            text += f" miss {t.miss:.1f}"
+    if t.warning:
+        text += " WARN"
+    h, w = img.shape[:2]
+    x0c, y0c = min(max(x0, 0), w - 1), min(max(y0, 0), h - 1)
+    y1c = min(max(y1, 0), h - 1)
+    labels.add(text, colour, (x0c, y0c, "bottom"), (x0c, y1c, "top"), (x0c, y0c, "top"))
 
 
 def _draw_field(img: np.ndarray, labels: _Labels, f, style: _Style, scale_x: float, scale_y: float,
@@ -318,8 +358,7 @@ def _draw_field(img: np.ndarray, labels: _Labels, f, style: _Style, scale_x: flo
     else:
         cv2.rectangle(img, (cx - ax, cy - ay), (cx + ax, cy + ay), colour, line)
     cv2.drawMarker(img, (cx, cy), colour, cv2.MARKER_CROSS, style.cross, style.line)
-    ttc = getattr(f, "ttc_s", None)  # time to collision (docs/targets.md)
-    text = f"#{f.id} {_fmt(f.response)}" + ("" if ttc is None else f" ttc {ttc:.2f}s")
+    text = f"#{f.id} {_fmt(f.response)}"
     h, w = img.shape[:2]
     edge = (line + 1) // 2
     left, top, bottom = cx - ax - edge, cy - ay - edge, cy + ay + edge

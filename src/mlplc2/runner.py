@@ -397,7 +397,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
         params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
         hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | str | None = "model default", draw_fields: str = "responding",
+        repeat_threshold: float | str | None = "model default", draw_fields: str = "auto",
         target_params=None) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
@@ -455,9 +455,10 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Settings of the targets (time to contact, course, warning: ``horizon_s``,
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
-    draw_fields : {'responding', 'all'}
-        Which fields ``annotated.mp4`` shows: those that respond (response > 0) or are
-        in alarm (default), or all of them (CLI ``--all-fields``).
+    draw_fields : {'auto', 'none', 'responding', 'all'}
+        Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
+        none for a model with targets, else those that respond (response > 0) or are in
+        alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
 
     Returns
     -------
@@ -577,7 +578,7 @@ def _remove_stale_outputs(out_dir: Path) -> None:
 
 
 def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
-          keep_rows=True, draw_fields="responding") -> RunResult:
+          keep_rows=True, draw_fields="auto") -> RunResult:
     from tqdm import tqdm
 
     trackers = [_FieldTracker(src.start, targets=m.has_targets, spill=not keep_rows) for m in built]

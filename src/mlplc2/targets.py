@@ -970,6 +970,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
-    return Target(t.id, t.cx, t.cy, t.w, t.h, ttc_s=ttc, miss=miss, warning=warning,
-                  fields=tuple(sorted(t.fields)), born=t.born, looming=looming, expansion=t.rate,
-                  ttc_sigma_s=sigma, azimuth_deg=az, elevation_deg=el, miss_xy=miss_xy)
+    def num(v):
+        return None if v is None else float(v)
+
+    return Target(t.id, float(t.cx), float(t.cy), float(t.w), float(t.h), ttc_s=num(ttc), miss=num(miss),
+                  warning=warning, fields=tuple(sorted(t.fields)), born=t.born, looming=looming,
+                  expansion=num(t.rate), ttc_sigma_s=num(sigma), azimuth_deg=num(az), elevation_deg=num(el),
+                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])))
