@@ -945,7 +945,16 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     frames = [q[0] for q in t.history]
     ttc = sigma = miss = miss_xy = None
     fit = fit_contact(frames, [q[1] for q in t.history]) if len(frames) >= p.min_frames else None
-    if fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat and fit.ttc / fps <= p.max_ttc_s:
+    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
+    # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
+    # along the motion: none of them is an object approaching, none gets a time to contact
+    isotropic = True
+    if fit is not None and fit.ttc is not None:
+        growth = t.history[-1][1] - t.history[0][1]
+        skew = t.history[-1][5] - t.history[0][5]
+        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
+    if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
+            and fit.ttc / fps <= p.max_ttc_s:
         ttc, sigma = fit.ttc / fps, fit.sigma / fps
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
         miss_xy = fit_course(frames, [q[2] for q in t.history], [q[3] for q in t.history],
@@ -955,18 +964,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.last_estimate = index
     else:
         t.streak = 0
-    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
-    # the path) grows twice as fast in one: not an object on a collision course
-    isotropic = True
-    if ttc is not None and len(t.history) >= 2:
-        growth = t.history[-1][1] - t.history[0][1]
-        skew = t.history[-1][5] - t.history[0][5]
-        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
-    if not isotropic:
-        t.streak = 0
-    looming = (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames) and isotropic
-    warning = bool(looming and ttc is not None and miss is not None and ttc <= p.horizon_s
-                   and miss <= p.max_miss and sigma <= p.max_ttc_sigma * ttc)
+    looming = ttc is not None and (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames)
+    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
+                   and sigma <= p.max_ttc_sigma * ttc)
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
