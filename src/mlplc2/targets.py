@@ -111,6 +111,11 @@ class TargetParams(ParameterSet):
                            frame. 0 = attention fields only.""", valid=Valid.real(minimum=0))
     seed_contrast: float = param(20.0, """... and above this many times the frame's mean LM (a salient
                                  point, not a moving background).""", valid=Valid.real(minimum=0))
+    seed_change: float = param(6.0, """When no local motion stands out, the largest grey-level change over
+                               the last ``change_frames`` frames outside every target and field seeds a
+                               candidate (:meth:`TargetLayer._change_seed`) when it is at least this
+                               much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
+                               unit="grey levels", valid=Valid.real(minimum=0))
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
@@ -799,6 +804,10 @@ class TargetLayer:
             cand = argmax_outside(lm.magnitude, zones)
             if cand is not None and cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                 seeds.append((cand[0], cand[1], None))
+            else:
+                cand = self._change_seed(levels, zones)
+                if cand is not None:
+                    seeds.append((cand[0], cand[1], None))
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
@@ -835,6 +844,28 @@ class TargetLayer:
         self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    def _change_seed(self, levels, zones):
+        """A candidate where the image changed most over the last ``change_frames`` frames (at
+        half resolution, outside the zones of targets and fields), when that change stands out:
+        at least ``seed_change`` grey levels and ``seed_contrast`` times the frame's mean change.
+        An object that grows straight at the camera moves its edges a fraction of a pixel per
+        frame, too little for the local motion, while the grey levels along its edge change
+        steadily; a moving background changes everywhere and seeds nothing here."""
+        p = self.params
+        if p.seed_change <= 0 or len(self._past) < p.change_frames or len(levels) < 2:
+            return None
+        if self._past_levels is None:
+            self._past_levels = pyramid(self._past[0])
+        d = cv2.blur(cv2.absdiff(levels[1], self._past_levels[1]), (3, 3))
+        for zx, zy, zr in zones:                 # at half resolution
+            x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
+            y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
+            d[y0:y1, x0:x1] = 0
+        _, top, _, (x, y) = cv2.minMaxLoc(d)
+        if top < max(p.seed_change, p.seed_contrast * float(d.mean())):
+            return None
+        return 2 * x + 1, 2 * y + 1
 
     def _grows(self, levels, t: Track) -> bool:
         """Whether the candidate grew, alike in both directions, over the last ``change_frames``
