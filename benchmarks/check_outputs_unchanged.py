@@ -115,6 +115,28 @@ def _masked(path: Path, root: Path) -> bytes:
     return data
 
 
+def _same_video(a: Path, b: Path, tolerance: float = 3.0) -> bool:
+    """Same number and size of frames, and every pair of decoded frames within ``tolerance``
+    grey levels on average."""
+    import cv2
+    import numpy as np
+
+    ca, cb = cv2.VideoCapture(str(a)), cv2.VideoCapture(str(b))
+    try:
+        while True:
+            oka, fa = ca.read()
+            okb, fb = cb.read()
+            if oka != okb:
+                return False
+            if not oka:
+                return True
+            if fa.shape != fb.shape or np.abs(fa.astype(np.int16) - fb).mean() >= tolerance:
+                return False
+    finally:
+        ca.release()
+        cb.release()
+
+
 def compare(a: Path, b: Path) -> int:
     def files(root):
         return {p.relative_to(root).as_posix() for p in root.rglob("*") if p.is_file()
@@ -128,11 +150,14 @@ def compare(a: Path, b: Path) -> int:
     for rel in sorted(fb - fa):
         print(f"only in {b}: {rel}")
         bad += 1
-    same = 0
+    same = close = 0
     for rel in sorted(fa & fb):
         if _masked(a / rel, a) == _masked(b / rel, b):
             same += 1
             continue
+        if rel.endswith(".mp4") and _same_video(a / rel, b / rel):
+            close += 1   # H.264 with threads: the same frames do not encode to the same bytes twice (the
+            continue     # demo's annotated.mp4 of one code differs by up to 2 grey levels on average between runs)
         bad += 1
         print(f"differs: {rel}")
         if Path(rel).suffix.lower() in (".json", ".md", ".stdout", ".txt", ".csv"):
@@ -142,7 +167,8 @@ def compare(a: Path, b: Path) -> int:
             lb = _masked(b / rel, b).decode().splitlines()
             for line in list(difflib.unified_diff(la, lb, lineterm="", n=0))[2:14]:
                 print(f"    {line[:200]}")
-    print(f"{same} files identical, {bad} differ or are missing ({len(fa | fb)} files)")
+    print(f"{same} files identical, {close} videos equal up to encoder noise (mean |difference| < 3 grey "
+          f"level in every frame), {bad} differ or are missing ({len(fa | fb)} files)")
     return 1 if bad else 0
 
 
