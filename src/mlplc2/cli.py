@@ -78,22 +78,10 @@ def _warn(message: str) -> None:
 # run
 # ---------------------------------------------------------------------------
 def _model_names(values) -> list[str]:
-    """--model may be repeated and comma-separated; checked against the registry."""
-    from .models.base import available_models
+    """--model may be repeated and comma-separated (default mlplc2): :func:`mlplc2.models.resolve_names`."""
+    from .models.base import resolve_names
 
-    names: list[str] = []
-    for v in values or ["mlplc2"]:
-        for name in v.split(","):
-            name = name.strip().lower()
-            if not name:
-                continue
-            if name not in available_models():
-                raise InputValueError(f"unknown model {name!r}; choose from {', '.join(available_models())}")
-            if name not in names:
-                names.append(name)
-    if not names:
-        raise InputValueError("--model needs at least one model name")
-    return names
+    return resolve_names(values or ["mlplc2"], what="--model")
 
 
 def number_type(cast, ok, expected: str):

@@ -996,26 +996,11 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     Evaluation
     """
     from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
-    from .models.base import available_models
+    from .models.base import available_models, resolve_names
     from .runner import RunResult, run
 
-    if isinstance(models, str):
-        models = [m.strip().lower() for m in models.split(",") if m.strip()]
-    elif models is not None:
-        if not isinstance(models, Iterable):
-            raise InputTypeError(f"models must be a model name or a list of names, got {type(models).__name__}")
-        models = list(models)
-        for m in models:
-            if not isinstance(m, str):
-                raise InputTypeError(f"models must be model names (str), got {m!r}")
-        models = [m.strip().lower() for m in models]
     if models is not None:
-        if not models:
-            raise InputValueError("models is empty: give at least one model name (or None for all)")
-        known = available_models()
-        for m in models:
-            if m not in known:
-                raise InputValueError(f"unknown model {m!r}; choose from {', '.join(known)}")
+        models = resolve_names(models)
     match_radius = check_real(match_radius, "match_radius", positive=True)
     tail = check_int(tail, "tail", minimum=0)
     if run_options is not None and not isinstance(run_options, Mapping):

@@ -38,15 +38,15 @@ import sys
 import tempfile
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from ._signals import interrupts
-from ._validation import InputValueError
+from ._validation import InputTypeError, InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
-from .models.base import Model, Output, check_repeat_threshold, get_model
+from .models.base import Model, Output, check_repeat_threshold, get_model, resolve_names
 from .plots import DRAW_FIELDS
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
@@ -470,13 +470,13 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         and ``result.truncated`` is True.
     """
     # Validate everything cheap before decoding anything.
-    if isinstance(models, str):
-        models = [s for s in models.split(",") if s.strip()]
+    if isinstance(models, (str, Model)):
+        models = [models]
+    if not isinstance(models, Iterable):
+        raise InputTypeError(f"models must be a model, a model name or a list of them, got {type(models).__name__}")
+    models = [n for m in models for n in ([m] if isinstance(m, Model) else resolve_names(m))]
     if draw_fields not in DRAW_FIELDS:
         raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, got {draw_fields!r}")
-    for m in models:
-        if not isinstance(m, Model):
-            get_model(str(m).strip())
     src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
                       keep_original=video, backend=backend)
     try:
