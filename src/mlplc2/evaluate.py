@@ -49,7 +49,8 @@ EARLY_S = 0.5
 #: A warning on a collision object up to this long (s) after its contact is neither true nor false.
 LATE_S = 0.5
 
-from .tracks import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, box_distance, episodes, on_object, warning_cause
+from .tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance, episodes,
+                     on_object, warning_cause)
 from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth
 from .truth import load as load_ground_truth
 
@@ -352,8 +353,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
         if localises:
             rec["detected"] = False
             for f in range(w0, w1):
-                c = o.center_at(f)
-                near = [(math.hypot(x - c[0], y - c[1]), fid) for fid, x, y, _ in fields_at(f)]
+                near = [(centre_distance(x, y, o, f), fid) for fid, x, y, _ in fields_at(f)]
                 near = [n for n in near if n[0] <= radius]
                 if near:
                     d, fid = min(near)
@@ -363,21 +363,14 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
             if rec["detected"]:
                 errs = []
                 for f in range(rec["detect_frame"], min(o.life_end(), last)):
-                    c = o.center_at(f)
                     for fid, x, y, _ in fields_at(f):
                         if fid == rec["field"]:
-                            errs.append(math.hypot(x - c[0], y - c[1]))
+                            errs.append(centre_distance(x, y, o, f))
                 rec["error_life"] = round(sum(errs) / len(errs), 2) if errs else None
-            n = 0
-            for fid, (b, x, y) in births.items():
-                if w0 <= b < w1:
-                    c = o.center_at(b)
-                    if math.hypot(x - c[0], y - c[1]) <= radius:
-                        n += 1
-            rec["fields"] = n
+            rec["fields"] = sum(1 for b, x, y in births.values()
+                                if w0 <= b < w1 and centre_distance(x, y, o, b) <= radius)
             for f in range(w0, w1):
-                c = o.center_at(f)
-                if any(cl and math.hypot(x - c[0], y - c[1]) <= radius for _, x, y, cl in fields_at(f)):
+                if any(cl and centre_distance(x, y, o, f) <= radius for _, x, y, cl in fields_at(f)):
                     rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
                     break
         else:
@@ -387,17 +380,10 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                     break
         objects.append(rec)
 
-    # false alarms: alarm onsets (per field for localising models, per frame signal otherwise)
-    def explained(f, xy=None):
-        for o in approaching:
-            w0, w1 = window(o)
-            if w0 <= f < w1:
-                if xy is None:
-                    return True
-                c = o.center_at(f)
-                if math.hypot(xy[0] - c[0], xy[1] - c[1]) <= radius:
-                    return True
-        return False
+    # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
+    # no approaching object explains (mlplc2.tracks.alarm_explained)
+    def explained(f, x=None, y=None):
+        return alarm_explained(f, approaching, x, y, radius=radius, tail=tail)
 
     fa_events = fa_frames = 0
     alarm_frames = sorted(f for f, a in run.frame_alarm.items() if a)
@@ -410,7 +396,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                 if not c:
                     continue
                 now.add(fid)
-                if not explained(f, (x, y)):
+                if not explained(f, x, y):
                     bad_frame = True
                     if fid not in prev:
                         fa_events += 1

@@ -149,6 +149,13 @@ class ObjectTruth:
         colliding object of a real clip)."""
         return self.kind == "collision"
 
+    @property
+    def span(self) -> tuple[int, int] | None:
+        """``[start, end)`` from the start of its first phase to the end of its last (the frames
+        a 2-D object is on screen); None without phases."""
+        spans = [getattr(self, p) for p in PHASES if getattr(self, p) is not None]
+        return (min(a for a, _ in spans), max(b for _, b in spans)) if spans else None
+
     def life_end(self) -> int:
         """End of approach + the hold that directly follows it (exclusive)."""
         end = self.approach[1]
