@@ -28,9 +28,9 @@ def _coverage(frame: np.ndarray, background: float = WHITE, level: float = 0.0) 
 
 
 def _row(obj, frame):
-    r = obj.row(frame)
+    r = next((p for p in obj.track if p.frame == frame), None)
     assert r is not None, f"object not in view at frame {frame}"
-    return dict(zip(("frame", "x", "y", "width", "height", "ttc_s", "miss"), r))
+    return r._asdict()
 
 
 # --------------------------------------------------------------------------- sizes

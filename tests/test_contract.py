@@ -20,7 +20,7 @@ import pytest
 
 import mlplc2
 from mlplc2 import Field, InputError, Output
-from mlplc2.models import REGISTRY, get_model
+from mlplc2.models import REGISTRY, get_model, resolve_names
 
 NAMES = sorted(REGISTRY)
 H, W = 48, 64
@@ -79,6 +79,52 @@ def test_registry_has_every_model():
     with pytest.raises(InputError, match="unknown model 'nope'; choose from") as info:
         get_model("nope")
     assert isinstance(info.value, ValueError)
+
+
+@pytest.mark.parametrize("value, names", [
+    ("mlplc2", ["mlplc2"]), (" MLPLC2 , lgmd2,", ["mlplc2", "lgmd2"]), (["lgmd2", "mlplc2,LGMD2"], ["lgmd2", "mlplc2"]),
+    (("slplc2",), ["slplc2"]),
+])
+def test_resolve_names_one_parser_of_model_names(value, names):
+    assert resolve_names(value) == names
+
+
+@pytest.mark.parametrize("value, message", [
+    ("mlplc2,nope", "unknown model 'nope'; choose from " + ", ".join(NAMES)), (",,", "models needs at least one"),
+    ([], "models needs at least one"), (5, "models must be a model name or a list"), ([None], r"model names \(str\)"),
+])
+def test_resolve_names_bad_values_are_one_line_errors(value, message):
+    with pytest.raises(InputError, match=message) as info:
+        resolve_names(value)
+    assert "\n" not in str(info.value)
+
+
+def test_every_entry_point_reads_model_names_alike(tmp_path, monkeypatch):
+    """run, batch, evaluate and benchmark take the same spellings (benchmark and run used to
+    reject upper case or a comma-separated list item)."""
+    from mlplc2 import batch, benchmark
+
+    video = tmp_path / "v.avi"
+    from mlplc2.io import write_video
+
+    write_video(video, np.full((3, 48, 64), 128, np.uint8), 30.0)
+    assert mlplc2.run(video, ["MLPLC2, lgmd2", "mlplc2"], out=False, quiet=True).models == ["mlplc2", "lgmd2"]
+
+    class Reached(Exception):
+        pass
+
+    def stop(*args, **kwargs):
+        raise Reached
+
+    monkeypatch.setattr(benchmark, "suite", stop)
+    with pytest.raises(Reached):   # past the model names
+        benchmark.benchmark(tmp_path / "b", quick=True, models="MLPLC2,Flow")
+    for call in (lambda m: benchmark.benchmark(tmp_path / "b", quick=True, models=m),
+                 lambda m: batch.batch([video], tmp_path / "o", models=m, workers=0),
+                 lambda m: mlplc2.evaluate(video, {"videos": {"v.avi": {"objects": []}}}, models=m),
+                 lambda m: mlplc2.run(video, m, out=False)):
+        with pytest.raises(InputError, match="unknown model 'nope'; choose from"):
+            call("mlplc2, NOPE")
 
 
 # -- step / reset / run ---------------------------------------------------------------

@@ -346,7 +346,7 @@ def test_evaluate_errors(scene):
 @pytest.mark.parametrize("kw, error, message", [
     ({"models": 5}, InputTypeError, "models must be"),
     ({"models": [None]}, InputTypeError, "model names"),
-    ({"models": []}, InputValueError, "models is empty"),
+    ({"models": []}, InputValueError, "models needs at least one model name"),
     ({"match_radius": "x"}, InputTypeError, "match_radius must be a number"),
     ({"match_radius": None}, InputTypeError, "match_radius must be a number"),
     ({"match_radius": True}, InputTypeError, "match_radius must be a number"),

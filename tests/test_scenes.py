@@ -3,32 +3,36 @@ generated here and, when present, the paper's own videos. One parameter set thro
 
 from __future__ import annotations
 
-import math
-
 import pytest
 
 import mlplc2
-from mlplc2 import stimuli
+from mlplc2 import stimuli, truth
+from mlplc2.tracks import false_alarms, fields_near, first_field, record
 
 from .conftest import read_gray
-from .helpers import false_alarms, first_field, run_fields
 
 MAX_LATENCY = 7   # frames from approach onset to the field (paper: "within 7 frames")
 MAX_ERROR = 10.0  # px between field centre and true centre
 
 
 def check_localisation(frames, objects, fps=30.0):
-    born, outs = run_fields(mlplc2.MLPLC2(fps=fps), frames)
+    """mLPLC2 on ``frames``; every approaching object of ``objects`` (ObjectTruth) gets a field
+    in time and in place, and no alarm is false (the paper's rules, mlplc2.tracks)."""
+    rec = record(mlplc2.MLPLC2(fps=fps), frames)
     for o in objects:
-        if not o.get("approach"):
+        if not o.approach:
             continue
-        hit = first_field(born, o["center"], o["approach"][0], o["approach"][1])
-        assert hit is not None, f"object {o['id']} at {o['center']} got no field"
-        latency, error = hit
-        assert latency <= MAX_LATENCY, f"object {o['id']}: field after {latency} frames"
-        assert error <= MAX_ERROR, f"object {o['id']}: field {error:.1f} px from centre"
-    assert false_alarms(outs, objects) == []
-    return born, outs
+        hit = first_field(rec, o)
+        assert hit is not None, f"object {o.id} at {o.center} got no field"
+        _, latency, error = hit
+        assert latency <= MAX_LATENCY, f"object {o.id}: field after {latency} frames"
+        assert error <= MAX_ERROR, f"object {o.id}: field {error:.1f} px from centre"
+    assert false_alarms(rec, objects) == []
+    return rec
+
+
+def paper_objects(paper_dir, name):
+    return truth.load(paper_dir / "ground_truth.json")[name].objects
 
 
 @pytest.fixture(scope="module")
@@ -42,16 +46,15 @@ def six_objects():
 
 
 def test_four_phase_generated(four_phase):
-    gt = four_phase.to_ground_truth()
-    born, outs = check_localisation(four_phase.frames, gt["objects"])
+    rec = check_localisation(four_phase.frames, four_phase.objects)
     # Every approaching object raises an alarm on its own field.
-    alarmed = {f.id for out in outs for f in out.fields if f.collision}
+    alarmed = {f.id for f in rec.alarmed()}
     assert len(alarmed) >= 5
-    assert len(born) <= 20  # few spurious fields (the authors' code: 84)
+    assert len(rec.fields) <= 20  # few spurious fields (the authors' code: 84)
 
 
 def test_six_objects_generated(six_objects):
-    check_localisation(six_objects.frames, six_objects.to_ground_truth()["objects"])
+    check_localisation(six_objects.frames, six_objects.objects)
 
 
 def phase_peaks(model_name, frames):
@@ -92,30 +95,26 @@ def test_no_alarm_without_approach():
 
 
 @pytest.mark.paper
-def test_paper_four_phase(paper_dir, paper_truth):
+def test_paper_four_phase(paper_dir):
     name = "scenes/outdoor_2_black_4_period.avi"
-    born, outs = check_localisation(read_gray(paper_dir / name), paper_truth[name]["objects"])
-    assert len(born) < 84  # the authors' code created 84 fields
+    rec = check_localisation(read_gray(paper_dir / name), paper_objects(paper_dir, name))
+    assert len(rec.fields) < 84  # the authors' code created 84 fields
 
 
 @pytest.mark.paper
-def test_paper_six_objects(paper_dir, paper_truth):
+def test_paper_six_objects(paper_dir):
     """Localisation, and the extra fields as docs/model.md "Measured behaviour" describes them:
     one field per object raises the alarm; the fields on no object raise none, and all but
     one of them never answer (that one answers the edge of object 1 below the alarm level;
     the docs once said none of them answers)."""
     name = "scenes/outdoor_3_black_expand_multi_6.avi"
-    objects = paper_truth[name]["objects"]
-    born, outs = check_localisation(read_gray(paper_dir / name), objects)
-
-    def on_object(fid):
-        b, x, y = born[fid]
-        return any(o["approach"][0] <= b < o["approach"][1]
-                   and math.hypot(x - o["center"][0], y - o["center"][1]) <= 20 for o in objects)
-
-    extra = [fid for fid in born if not on_object(fid)]
-    peak = {fid: max(f.response for out in outs for f in out.fields if f.id == fid) for fid in born}
-    alarmed = {f.id for out in outs for f in out.fields if f.collision}
+    objects = paper_objects(paper_dir, name)
+    rec = check_localisation(read_gray(paper_dir / name), objects)
+    born = rec.fields
+    on_objects = {f.id for o in objects for f in fields_near(born.values(), o, *o.approach)}
+    extra = [fid for fid in born if fid not in on_objects]
+    peak = {fid: f.peak for fid, f in born.items()}
+    alarmed = {f.id for f in rec.alarmed()}
     assert len(born) - len(extra) == len(objects) == 6 and alarmed == set(born) - set(extra)
     answering = [fid for fid in extra if peak[fid] > 0]
     assert len(extra) == 6 and len(answering) == 1, {fid: peak[fid] for fid in extra}

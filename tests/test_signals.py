@@ -22,7 +22,8 @@ import mlplc2
 from mlplc2._signals import interrupts
 from mlplc2.cli import main
 from mlplc2.io import VideoWriter, write_video
-from mlplc2.runner import RunInterrupted, _FieldTracker, run
+from mlplc2.runner import RunInterrupted, run
+from mlplc2.tracks import Recorder
 
 from .helpers import check_outputs_agree
 
@@ -174,7 +175,7 @@ def _signal_during(monkeypatch, where: str, sig) -> None:
     elif where == "video":
         monkeypatch.setattr(VideoWriter, "write", hook(VideoWriter.write, lambda w, frame: w.n_frames))
     elif where == "summaries":
-        monkeypatch.setattr(_FieldTracker, "update", hook(_FieldTracker.update, lambda t, index, *a: index))
+        monkeypatch.setattr(Recorder, "update", hook(Recorder.update, lambda t, index, *a: index))
 
 
 @pytest.mark.parametrize("where", ["model", "video", "summaries"])

@@ -11,6 +11,7 @@ import pytest
 
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
+from mlplc2.truth import PHASES
 
 from .conftest import PAPER, read_gray
 
@@ -238,7 +239,7 @@ def test_physical_looming_follows_atan_law():
     w, h = stim.size
     f = (w / 2) / math.tan(math.radians(30))
     assert obj.contact_frame == pytest.approx(60.0)
-    assert obj.half_size == 0.5 and obj.speed == 5.0
+    assert obj.extra["half_size"] == 0.5 and obj.extra["speed"] == 5.0
     assert obj.approach == (0, len(stim))
     for t in range(len(stim)):
         theta = math.atan(0.5 / (5.0 * (2.0 - t / 30.0)))
@@ -302,7 +303,7 @@ def test_ground_truth_json_round_trip_and_schema():
         assert len(mine["objects"]) == len(theirs["objects"])
         for a, b in zip(mine["objects"], theirs["objects"]):
             assert set(b) - {"note"} <= set(a)
-            assert set(a) & set(S._PHASES) == set(b) & set(S._PHASES)
+            assert set(a) & set(PHASES) == set(b) & set(PHASES)
             for key in set(b) - {"note"}:
                 assert a[key] == b[key], (stim.name, key)
 

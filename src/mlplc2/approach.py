@@ -70,7 +70,6 @@ rounded to ``uint8``.
 
 from __future__ import annotations
 
-import bisect
 import math
 import warnings
 from dataclasses import dataclass
@@ -79,6 +78,7 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._validation import (InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals)
+from .truth import ObjectTruth, TrackPoint
 
 __all__ = [
     "ApproachObject",
@@ -357,73 +357,14 @@ def _place(at, distance, width_m, width_px, size, hfov_deg):
 # Ground truth
 # ---------------------------------------------------------------------------
 
-#: Columns of :attr:`ObjectTrack.track`.
-TRACK_COLUMNS = ("frame", "x", "y", "width", "height", "ttc_s", "miss")
-
-
-@dataclass(frozen=True)
-class ObjectTrack:
-    """Ground truth of one object of an :func:`approach` scene.
-
-    Attributes
-    ----------
-    id : int
-        1-based object number (its position in the list given to :func:`approach`).
-    kind, shape, appearance, width_m, onset
-        As in :class:`ApproachObject`.
-    start_m, velocity_mps : tuple of float
-        :attr:`ApproachObject.start` and :attr:`ApproachObject.velocity`.
-    contact_frame : float or None
-        Fractional frame at which the object, relative to the camera, reaches
-        ``Z = 0``; None if it never does (moving away or parallel).
-    miss : float or None
-        Lateral distance from the camera centre then, in widths
-        (``sqrt(X^2 + Y^2) / width``); None without contact.
-    approach : tuple of int or None
-        Half-open frames ``[start, end)`` from the first to the last frame in
-        view while approaching (Z decreasing); None if never.
-    track : tuple of tuple
-        One row per frame in which the object is at least partly in view (its
-        unoccluded outline covers a sub-pixel sample of the image), columns
-        :data:`TRACK_COLUMNS`: frame; ``x``, ``y`` the projection of its centre
-        (px, may lie outside the image); ``width``, ``height`` the extent of its
-        projected outline (px; None while part of it is behind the camera, only
-        possible with pan or tilt); ``ttc_s`` the true time to contact (s, None
-        if not approaching); ``miss`` the predicted miss at contact (widths,
-        None without contact).
-    """
-
-    id: int
-    kind: str
-    shape: str
-    appearance: str
-    width_m: float
-    onset: int
-    start_m: tuple[float, float, float]
-    velocity_mps: tuple[float, float, float]
-    contact_frame: float | None
-    miss: float | None
-    approach: tuple[int, int] | None
-    track: tuple[tuple[Any, ...], ...]
-
-    def row(self, frame: int) -> tuple[Any, ...] | None:
-        """The track row of ``frame``, None when the object is not in view then."""
-        frames = [r[0] for r in self.track]
-        i = bisect.bisect_left(frames, int(frame))
-        return self.track[i] if i < len(frames) and frames[i] == int(frame) else None
-
-    def center_at(self, frame: int) -> tuple[float, float] | None:
-        """Projected centre ``(x, y)`` at ``frame``; None when the object is not in view."""
-        r = self.row(frame)
-        return None if r is None else (r[1], r[2])
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict in the format of docs/stimuli.md ("Ground truth")."""
-        return {"id": int(self.id), "kind": self.kind, "shape": self.shape, "appearance": self.appearance,
-                "width_m": self.width_m, "onset": int(self.onset), "start_m": list(self.start_m),
-                "velocity_mps": list(self.velocity_mps), "contact_frame": self.contact_frame,
-                "miss": self.miss, "approach": None if self.approach is None else list(self.approach),
-                "track_columns": list(TRACK_COLUMNS), "track": [list(r) for r in self.track]}
+#: The older name of the 3-D truth: one :class:`mlplc2.truth.ObjectTruth` per object, with its
+#: ``kind``, ``approach`` (the frames in view while approaching), ``contact_frame``, ``miss``,
+#: a ``track`` of :class:`mlplc2.truth.TrackPoint` (one row per frame in which the object is at
+#: least partly in view: the projection of its centre, the extent of its outline, None while
+#: part of it is behind the camera, the true time to contact and the predicted miss) and the
+#: object as given in ``extra`` (``shape``, ``width_m``, ``onset``, ``start_m``,
+#: ``velocity_mps``); its ``polarity`` is the object's appearance. docs/stimuli.md "Ground truth".
+ObjectTrack = ObjectTruth
 
 
 # ---------------------------------------------------------------------------
@@ -557,22 +498,22 @@ class _Geometry:
         elif kind == "static" and not speed <= tol:
             raise InputValueError(f"{where} moves relative to the camera at {speed:g} m/s")
 
-    def truth(self, oid: int, visible: np.ndarray, fps: float) -> ObjectTrack:
+    def truth(self, oid: int, visible: np.ndarray, fps: float) -> ObjectTruth:
         obj = self.obj
         rows = []
         approaching = self.v_rel[2] < 0
         for j in np.flatnonzero(visible):
             k = int(self.frames[j])
             ttc = float((self.contact - k) / fps) if approaching else None
-            rows.append((k, float(self.x[j]), float(self.y[j]), _opt(self.width[j]), _opt(self.height[j]),
-                         ttc, self.miss))
+            rows.append(TrackPoint(k, float(self.x[j]), float(self.y[j]), _opt(self.width[j]), _opt(self.height[j]),
+                                   ttc, self.miss))
         span = None
         if approaching and rows:
-            span = (rows[0][0], rows[-1][0] + 1)
-        return ObjectTrack(id=oid, kind=obj.kind, shape=obj.shape, appearance=obj.appearance,
-                           width_m=obj.width_m, onset=obj.onset, start_m=tuple(obj.start),
-                           velocity_mps=tuple(obj.velocity), contact_frame=self.contact, miss=self.miss,
-                           approach=span, track=tuple(rows))
+            span = (rows[0].frame, rows[-1].frame + 1)
+        return ObjectTruth(id=oid, kind=obj.kind, polarity=obj.appearance, approach=span, track=tuple(rows),
+                           contact_frame=self.contact, miss=self.miss,
+                           extra={"shape": obj.shape, "width_m": obj.width_m, "onset": int(obj.onset),
+                                  "start_m": list(obj.start), "velocity_mps": list(obj.velocity)})
 
 
 def _opt(value: float) -> float | None:
@@ -870,7 +811,7 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     Returns
     -------
     ApproachStimulus
-        ``frames`` ``uint8 (T, H, W)``; ``objects`` one :class:`ObjectTrack`
+        ``frames`` ``uint8 (T, H, W)``; ``objects`` one 3-D :class:`~mlplc2.truth.ObjectTruth`
         per object; :meth:`ApproachStimulus.to_ground_truth` gives the JSON
         entry of docs/stimuli.md.
 

@@ -734,19 +734,9 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         On Ctrl-C (a ``KeyboardInterrupt``), after writing ``results.csv``
         for the tasks finished.
     """
-    from .models.base import available_models
+    from .models.base import resolve_names
 
-    if isinstance(models, str):
-        models = [m for m in models.split(",") if m.strip()]
-    names: list[str] = []
-    for m in models:
-        m = str(m).strip().lower()
-        if m not in available_models():
-            raise InputValueError(f"unknown model {m!r}; choose from {', '.join(available_models())}")
-        if m not in names:
-            names.append(m)
-    if not names:
-        raise InputValueError("no model given")
+    names = resolve_names(models)
     if workers is not None:
         workers = check_int(workers, "workers", minimum=0)
     if client is not None and (scheduler is not None or workers is not None):

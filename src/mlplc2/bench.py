@@ -286,14 +286,9 @@ def add_arguments(p: argparse.ArgumentParser) -> None:
 
 def cli_handler(args) -> int:
     from ._validation import InputValueError
-    from .models.base import available_models
+    from .models.base import available_models, resolve_names
 
-    names = []
-    for v in args.models or ["mlplc2"]:
-        for name in v.split(","):
-            name = name.strip().lower()
-            if name and name not in names:
-                names.append(name)
+    names = resolve_names(args.models or ["mlplc2"], what="--models")
     family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
     bad = [n for n in names if n not in family]
     if bad:

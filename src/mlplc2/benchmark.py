@@ -355,13 +355,13 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     """
     from .batch import batch
     from .evaluate import evaluate
-    from .models.base import available_models
+    from .models.base import available_models, resolve_names
     from .runner import _target_params
 
     t0 = time.perf_counter()
     if isinstance(models, str):
         models = [m.strip() for m in models.split(",") if m.strip()]
-    models = list(models or [m for m in MODELS if m in available_models()])
+    models = resolve_names(models) if models else [m for m in MODELS if m in available_models()]
     for m in models:
         if m not in available_models():
             raise InputValueError(f"unknown model {m!r}; choose from {', '.join(available_models())}")

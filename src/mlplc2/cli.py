@@ -26,7 +26,7 @@ from pathlib import Path
 
 from ._signals import interrupts
 from ._validation import InputError, InputValueError
-from .models.base import MAX_REPEATS, REPEAT_THRESHOLD
+from .models.base import MAX_REPEATS, REPEAT_THRESHOLD, resolve_names
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "add_subcommand",
            "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
@@ -77,25 +77,6 @@ def _warn(message: str) -> None:
 # ---------------------------------------------------------------------------
 # run
 # ---------------------------------------------------------------------------
-def _model_names(values) -> list[str]:
-    """--model may be repeated and comma-separated; checked against the registry."""
-    from .models.base import available_models
-
-    names: list[str] = []
-    for v in values or ["mlplc2"]:
-        for name in v.split(","):
-            name = name.strip().lower()
-            if not name:
-                continue
-            if name not in available_models():
-                raise InputValueError(f"unknown model {name!r}; choose from {', '.join(available_models())}")
-            if name not in names:
-                names.append(name)
-    if not names:
-        raise InputValueError("--model needs at least one model name")
-    return names
-
-
 def number_type(cast, ok, expected: str):
     """An argparse ``type``: ``cast(text)``, accepted when ``ok(value)``; else
     "expected <expected>, got '<text>'" (argparse turns it into a one-line usage error)."""
@@ -215,7 +196,7 @@ def _cmd_run(args) -> int:
     from .io import parse_resize
     from .runner import RunInterrupted, TruncatedInputWarning, run
 
-    models = _model_names(args.model)
+    models = resolve_names(args.model or ["mlplc2"], what="--model")
     resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
     if args.end is not None and args.end <= args.start:
         raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
@@ -609,7 +590,7 @@ def _cmd_evaluate(args) -> int:
     from .evaluate import EvaluationWarning, evaluate
     from .io import parse_resize
 
-    models = _model_names(args.model) if args.model else None
+    models = resolve_names(args.model, what="--model") if args.model else None
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)
@@ -660,7 +641,7 @@ def _cmd_batch(args) -> int:
     from .batch import BatchInterrupted, batch
     from .io import parse_resize
 
-    models = _model_names(args.model)
+    models = resolve_names(args.model or ["mlplc2"], what="--model")
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = _repeat_threshold(args)

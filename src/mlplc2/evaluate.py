@@ -65,7 +65,8 @@ def mid_error(true_ttc: float, est_ttc: float, interval: float = MID_INTERVAL_S)
     ``|ln s(est) - ln s(true)| x 10^4`` (positive TTCs)."""
     return abs(math.log(est_ttc / (est_ttc + interval)) - math.log(true_ttc / (true_ttc + interval))) * 1e4
 
-from .tracks import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, box_distance, episodes, on_object, warning_cause
+from .tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance, episodes,
+                     on_object, warning_cause)
 from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth
 from .truth import load as load_ground_truth
 
@@ -383,8 +384,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
         if localises:
             rec["detected"] = False
             for f in range(w0, w1):
-                c = o.center_at(f)
-                near = [(math.hypot(x - c[0], y - c[1]), fid) for fid, x, y, _ in fields_at(f)]
+                near = [(centre_distance(x, y, o, f), fid) for fid, x, y, _ in fields_at(f)]
                 near = [n for n in near if n[0] <= radius]
                 if near:
                     d, fid = min(near)
@@ -394,21 +394,14 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
             if rec["detected"]:
                 errs = []
                 for f in range(rec["detect_frame"], min(o.life_end(), last)):
-                    c = o.center_at(f)
                     for fid, x, y, _ in fields_at(f):
                         if fid == rec["field"]:
-                            errs.append(math.hypot(x - c[0], y - c[1]))
+                            errs.append(centre_distance(x, y, o, f))
                 rec["error_life"] = round(sum(errs) / len(errs), 2) if errs else None
-            n = 0
-            for fid, (b, x, y) in births.items():
-                if w0 <= b < w1:
-                    c = o.center_at(b)
-                    if math.hypot(x - c[0], y - c[1]) <= radius:
-                        n += 1
-            rec["fields"] = n
+            rec["fields"] = sum(1 for b, x, y in births.values()
+                                if w0 <= b < w1 and centre_distance(x, y, o, b) <= radius)
             for f in range(w0, w1):
-                c = o.center_at(f)
-                if any(cl and math.hypot(x - c[0], y - c[1]) <= radius for _, x, y, cl in fields_at(f)):
+                if any(cl and centre_distance(x, y, o, f) <= radius for _, x, y, cl in fields_at(f)):
                     rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
                     break
         else:
@@ -418,17 +411,10 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                     break
         objects.append(rec)
 
-    # false alarms: alarm onsets (per field for localising models, per frame signal otherwise)
-    def explained(f, xy=None):
-        for o in approaching:
-            w0, w1 = window(o)
-            if w0 <= f < w1:
-                if xy is None:
-                    return True
-                c = o.center_at(f)
-                if math.hypot(xy[0] - c[0], xy[1] - c[1]) <= radius:
-                    return True
-        return False
+    # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
+    # no approaching object explains (mlplc2.tracks.alarm_explained)
+    def explained(f, x=None, y=None):
+        return alarm_explained(f, approaching, x, y, radius=radius, tail=tail)
 
     fa_events = fa_frames = 0
     alarm_frames = sorted(f for f, a in run.frame_alarm.items() if a)
@@ -441,7 +427,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                 if not c:
                     continue
                 now.add(fid)
-                if not explained(f, (x, y)):
+                if not explained(f, x, y):
                     bad_frame = True
                     if fid not in prev:
                         fa_events += 1
@@ -1050,26 +1036,11 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     Evaluation
     """
     from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
-    from .models.base import available_models
+    from .models.base import available_models, resolve_names
     from .runner import RunResult, run
 
-    if isinstance(models, str):
-        models = [m.strip().lower() for m in models.split(",") if m.strip()]
-    elif models is not None:
-        if not isinstance(models, Iterable):
-            raise InputTypeError(f"models must be a model name or a list of names, got {type(models).__name__}")
-        models = list(models)
-        for m in models:
-            if not isinstance(m, str):
-                raise InputTypeError(f"models must be model names (str), got {m!r}")
-        models = [m.strip().lower() for m in models]
     if models is not None:
-        if not models:
-            raise InputValueError("models is empty: give at least one model name (or None for all)")
-        known = available_models()
-        for m in models:
-            if m not in known:
-                raise InputValueError(f"unknown model {m!r}; choose from {', '.join(known)}")
+        models = resolve_names(models)
     match_radius = check_real(match_radius, "match_radius", positive=True)
     tail = check_int(tail, "tail", minimum=0)
     if run_options is not None and not isinstance(run_options, Mapping):

@@ -11,6 +11,8 @@ from pathlib import Path
 
 import numpy as np
 
+from .tracks import DEFAULT_MATCH_RADIUS, fields_near
+
 __all__ = ["fig3_selectivity", "fig4_four_phases", "fig5_six_objects", "fig6_real_clips", "size_profile"]
 
 _MODEL_LABELS = {"lgmd2": "LGMD2", "lplc2": "LPLC2", "slplc2": "sLPLC2", "mlplc2": "mLPLC2"}
@@ -54,26 +56,27 @@ def _colours(k: int):
     return [colormaps["tab20"](order[i % 20]) for i in range(k)]
 
 
-def size_profile(obj: dict, n: int) -> np.ndarray:
-    """Side length (px) of a square object at every frame: its ``sizes`` if given,
-    else from its phases (the paper's squares grow and shrink by 2 px per frame)."""
-    if obj.get("sizes"):
+def size_profile(obj, n: int) -> np.ndarray:
+    """Side length (px) of a square object (:class:`mlplc2.truth.ObjectTruth`) at every frame:
+    its ``sizes`` if given, else from its phases (the paper's squares grow and shrink by 2 px
+    per frame)."""
+    if obj.sizes:
         s = np.zeros(n)
-        v = np.asarray(obj["sizes"], float)[:n]
+        v = np.asarray(obj.sizes, float)[:n]
         s[:v.size] = v
         return s
     s = np.zeros(n)
     side = 0.0
-    if obj.get("approach"):
-        a0, a1 = obj["approach"]
+    if obj.approach:
+        a0, a1 = obj.approach
         t = np.arange(a0, min(a1, n))
         s[t] = 2.0 * (t - a0 + 1)
         side = 2.0 * (a1 - a0)
-    if obj.get("hold"):
-        h0, h1 = obj["hold"]
+    if obj.hold:
+        h0, h1 = obj.hold
         s[h0:min(h1, n)] = side
-    if obj.get("recede"):
-        r0, r1 = obj["recede"]
+    if obj.recede:
+        r0, r1 = obj.recede
         t = np.arange(r0, min(r1, n))
         s[t] = np.maximum(side - 2.0 * (t - r0), 0)
     return s
@@ -89,9 +92,9 @@ def _presence_bars(ax, objects, n: int, colours) -> None:
     for i, (o, c, s) in enumerate(zip(objects, colours, profiles)):
         base = k - 1 - i
         ax.fill_between(x, base, base + 0.85 * s / smax, where=s > 0, color=c, alpha=0.8, step="mid", lw=0,
-                        label=f"object {o['id']} at ({o['center'][0]:.0f}, {o['center'][1]:.0f})")
+                        label=f"object {o.id} at ({o.center[0]:.0f}, {o.center[1]:.0f})")
     ax.set_yticks([k - 1 - i + 0.4 for i in range(k)])
-    ax.set_yticklabels([f"obj {o['id']}" for o in objects], fontsize=7)
+    ax.set_yticklabels([f"obj {o.id}" for o in objects], fontsize=7)
     ax.set_ylim(0, k)
     ax.set_ylabel(f"objects\n(bar height = side,\nmax {smax:.0f} px)", fontsize=8)
     ax.grid(alpha=0.3, axis="x")
@@ -115,7 +118,7 @@ def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, to
         if f.id in shown:
             c = colours_by_id[f.id]
             ls = "--" if any(colours_by_id.get(g) == c for g in trace.fields if g < f.id) else "-"
-            died = "end" if f.last == trace.n - 1 else str(f.last + 1)
+            died = "end" if f.last == trace.n_frames - 1 else str(f.last + 1)
             alarm = "" if f.first_alarm is None else f", alarm {f.first_alarm}"
             ax.plot(fr, val, color=c, lw=1.5, ls=ls, label=f"#{f.id} ({f.x:.0f}, {f.y:.0f}) {f.born}-{died}{alarm}")
             if f.first_alarm is not None:
@@ -138,10 +141,10 @@ def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, to
                   title="field (x, y) born-died", title_fontsize=7)
 
 
-def _field_colours(trace, objects=None, object_colours=None, radius: float = 20.0) -> dict:
-    """Colour per field id: the colour of the object it sits on (within ``radius`` px,
-    born while the object is present) when ``objects`` are given, else a palette;
-    fields on no object get shades of a second palette."""
+def _field_colours(trace, objects=None, object_colours=None, radius: float = DEFAULT_MATCH_RADIUS) -> dict:
+    """Colour per field id: the colour of the object it sits on (born while the object is
+    present, within ``radius`` px: :func:`mlplc2.tracks.fields_near`) when ``objects`` are
+    given, else a palette; fields on no object get shades of a second palette."""
     from matplotlib import colormaps
 
     ids = sorted(trace.fields)
@@ -153,10 +156,8 @@ def _field_colours(trace, objects=None, object_colours=None, radius: float = 20.
         f = trace.fields[fid]
         match = None
         for o, c in zip(objects, object_colours):
-            prof = size_profile(o, trace.n)
-            present = np.nonzero(prof > 0)[0]
-            if (present.size and present[0] <= f.born <= present[-1]
-                    and np.hypot(f.x - o["center"][0], f.y - o["center"][1]) <= radius):
+            present = np.nonzero(size_profile(o, trace.n_frames) > 0)[0]
+            if present.size and fields_near([f], o, present[0], present[-1] + 1, radius):
                 match = c
                 break
         if match is None:
@@ -192,7 +193,7 @@ def _key_frames(fig_row, scene, trace, indices, colours_by_id, objects_colours=N
             for o, c in objects_colours:
                 if size_profile(o, scene.n)[t] <= 0:
                     continue
-                ax.plot([o["center"][0]], [o["center"][1]], marker="x", color=c, ms=6, mew=1.5)
+                ax.plot([o.center[0]], [o.center[1]], marker="x", color=c, ms=6, mew=1.5)
         ax.set_title(f"frame {t}", fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])

@@ -38,8 +38,11 @@ import numpy as np
 
 from ._validation import InputValueError
 from .models.base import REPEAT_THRESHOLD as _REPEAT_THRESHOLD
+from .tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, Record, centre_distance, false_alarms, fields_near,
+                     first_field, record)
+from .truth import ObjectTruth
 
-__all__ = ["reproduce", "ReproduceResult", "Claim", "Trace", "KNOWN_DEVIATIONS", "KnownDeviation", "STATUS_KNOWN",
+__all__ = ["reproduce", "ReproduceResult", "Claim", "KNOWN_DEVIATIONS", "KnownDeviation", "STATUS_KNOWN",
            "FAMILY", "MODELS",
            "PAPER_BASIC_FILES", "FOUR_PHASE_FILE", "SIX_OBJECTS_FILE", "add_arguments", "cli_handler"]
 
@@ -69,8 +72,8 @@ LGMD_PHASE_RISE = 0.05     # LGMD2 "responds to an approach phase": peak >= rest
 LGMD_SLIGHT = 0.005        # LGMD2 "slight response": peak >= rest + 0.005
 MAX_LATENCY = 7            # frames, paper: "within a maximum of 7 frames"
 MAX_ERROR = 10.0           # px between a field centre and the true centre
-MATCH_RADIUS = 20.0        # px: a field belongs to an object within this distance
-ALARM_TAIL = 25            # frames after the approach during which an alarm still counts as the object's
+MATCH_RADIUS = DEFAULT_MATCH_RADIUS  # px (20): a field belongs to an object within this distance
+ALARM_TAIL = DEFAULT_TAIL  # frames (25) after the approach during which an alarm still counts as the object's
 MAX_FIELDS = 20            # "few spurious fields" (the authors' code: 84 on the four-phase scene)
 PERSIST_RANGE = (10, 30)   # frames: "approximately 20 frames"
 BEAR_CONTACT = 60          # frame at which the bear hits the camera (ground_truth.json)
@@ -116,79 +119,21 @@ AUTHORS_SIX_LATENCY = (3, 4, 7, 3, 4, 5)
 # ---------------------------------------------------------------------------
 # running the models
 # ---------------------------------------------------------------------------
-@dataclass
-class FieldTrace:
-    """One attention field over its life."""
-
-    id: int
-    x: float
-    y: float
-    radius: float
-    born: int
-    frames: list = field(default_factory=list)
-    responses: list = field(default_factory=list)
-    alarms: list = field(default_factory=list)
-
-    @property
-    def last(self) -> int:
-        return self.frames[-1]
-
-    @property
-    def first_alarm(self) -> int | None:
-        return self.alarms[0] if self.alarms else None
-
-    @property
-    def peak(self) -> float:
-        return max(self.responses) if self.responses else 0.0
-
-
-@dataclass
-class Trace:
-    """A model's outputs on one input: response and collision per frame, fields."""
-
-    model: str
-    response: np.ndarray
-    collision: np.ndarray
-    fields: dict[int, FieldTrace]
-
-    @property
-    def n(self) -> int:
-        return int(self.response.shape[0])
-
-    def alarmed(self) -> list[FieldTrace]:
-        return [f for f in self.fields.values() if f.alarms]
-
-
 #: Every model of the reproduction holds duplicated frames (``Model.repeat_threshold``): the
 #: paper's real clips repeat many frames (the raptor clip most of them); the synthetic
 #: stimuli change on every frame, so their results are the same with or without it.
 REPEAT_THRESHOLD = _REPEAT_THRESHOLD
 
 
-def run_model(name: str, frames, fps: float, progress=None, params=None) -> Trace:
+def run_model(name: str, frames, fps: float, progress=None, params=None) -> Record:
     """Run model ``name`` (registry name; its default parameters, or ``params``; duplicated
-    frames held: :data:`REPEAT_THRESHOLD`) over ``frames``."""
+    frames held: :data:`REPEAT_THRESHOLD`) over ``frames``; its outputs as a
+    :class:`mlplc2.tracks.Record` with every series (``response``, ``collision``, ``fields``)."""
     from .models import get_model
 
     extra = {} if params is None else {"params": params}
     model = get_model(name)(fps=fps, repeat_threshold=REPEAT_THRESHOLD, **extra)
-    resp, coll = [], []
-    fields: dict[int, FieldTrace] = {}
-    for frame in frames:
-        out = model.step(frame)
-        resp.append(float(out.response))
-        coll.append(bool(out.collision))
-        for f in out.fields:
-            ft = fields.get(f.id)
-            if ft is None:
-                ft = fields[f.id] = FieldTrace(f.id, float(f.x), float(f.y), float(f.radius), int(f.born))
-            ft.frames.append(out.frame)
-            ft.responses.append(float(f.response))
-            if f.collision:
-                ft.alarms.append(out.frame)
-        if progress is not None:
-            progress.update(1)
-    return Trace(name, np.asarray(resp, dtype=float), np.asarray(coll, dtype=bool), fields)
+    return record(model, frames, progress=progress)
 
 
 # ---------------------------------------------------------------------------
@@ -196,12 +141,12 @@ def run_model(name: str, frames, fps: float, progress=None, params=None) -> Trac
 # ---------------------------------------------------------------------------
 @dataclass
 class Scene:
-    """Frames of one input and the ground truth of its objects (ground_truth.json schema)."""
+    """Frames of one input and the ground truth of its objects (:class:`mlplc2.truth.ObjectTruth`)."""
 
     name: str
     frames: Any
     fps: float
-    objects: list
+    objects: list[ObjectTruth]
     source: str
 
     @property
@@ -224,47 +169,27 @@ def _read(path: Path):
     return np.stack(frames), float(src.fps)
 
 
-def load_paper_objects(gt_path: Path) -> dict[str, list]:
-    """The objects of every video of the paper's ``ground_truth.json`` (``{key: [object dict]}``),
-    checked first with the loader of ``mlplc2 evaluate`` (:func:`mlplc2.evaluate.load_ground_truth`):
-    a malformed file raises :class:`~mlplc2.InputValueError` naming the field. Each object is
-    its JSON dict with ``id`` and the phases filled in as that loader reads them; the two scenes
-    must have object-level entries whose objects have a ``center`` (the reproduction does not
-    follow tracks)."""
+def load_paper_objects(gt_path: Path) -> dict[str, list[ObjectTruth]]:
+    """The objects of every video of the paper's ``ground_truth.json`` (``{key: [ObjectTruth]}``),
+    read by the loader of ``mlplc2 evaluate`` (:func:`mlplc2.truth.load`): a malformed file
+    raises :class:`~mlplc2.InputValueError` naming the field. The two scenes must have
+    object-level entries whose objects have a ``center`` (the reproduction does not follow
+    tracks)."""
     from collections.abc import Mapping
 
-    from .truth import PHASES, parse, read_json
+    from .truth import parse, read_json
 
     raw = read_json(gt_path)
     if not isinstance(raw, Mapping) or not isinstance(raw.get("videos"), Mapping):
         raise InputValueError(f"{gt_path}: expected {{\"videos\": {{name: entry}}}} (the paper's ground_truth.json)")
-    truth = parse(raw, str(gt_path))
-    objects: dict[str, list] = {}
-    for key, vt in truth.items():
-        entry = raw["videos"][key] if key in raw["videos"] else {}
-        objs = []
-        for i, (ot, o) in enumerate(zip(vt.objects, entry.get("objects", []))):
-            where = f"{gt_path}: videos[{key!r}].objects[{i}]"
-            d = {k: v for k, v in o.items() if k not in ("kind", "interval")}
-            d["id"] = ot.id
-            if ot.center is not None:
-                d["center"] = list(ot.center)
-            for ph in PHASES:
-                if getattr(ot, ph) is not None:
-                    d[ph] = list(getattr(ot, ph))
-            sizes = o.get("sizes")
-            if sizes is not None and (not isinstance(sizes, list) or not all(
-                    isinstance(v, (int, float)) and not isinstance(v, bool) and math.isfinite(v) for v in sizes)):
-                raise InputValueError(f"{where}.sizes: expected a list of numbers (side per frame), got {sizes!r}")
-            objs.append(d)
-        objects[key] = objs
+    objects = {key: list(vt.objects) for key, vt in parse(raw, str(gt_path)).items()}
     for rel in (FOUR_PHASE_FILE, SIX_OBJECTS_FILE):
         if rel not in objects:
             raise InputValueError(f"{gt_path}: no entry for {rel}")
         if not objects[rel]:
             raise InputValueError(f"{gt_path}: videos[{rel!r}]: no 'objects' (the reproduction needs them)")
-        for i, d in enumerate(objects[rel]):
-            if d.get("center") is None and any(d.get(k) for k in ("approach", "hold", "recede", "sizes")):
+        for i, o in enumerate(objects[rel]):
+            if o.center is None and (o.approach or o.hold or o.recede or o.sizes):
                 raise InputValueError(f"{gt_path}: videos[{rel!r}].objects[{i}]: needs a 'center' [x, y] "
                                       f"(mlplc2 reproduce does not follow a 'track')")
     return objects
@@ -280,12 +205,11 @@ def load_inputs(data: Path | None, *, quick: bool = False, seed: int = 0) -> dic
         out["source"] = f"generated stimuli (mlplc2.stimuli, procedural background, seed {seed})"
         for name in stimuli.BASIC_NAMES:
             st = stimuli.basic(name)
-            out["basic"][name] = Scene(name, st.frames, st.fps, st.to_ground_truth()["objects"], f"stimuli.basic({name!r})")
+            out["basic"][name] = Scene(name, st.frames, st.fps, list(st.objects), f"stimuli.basic({name!r})")
         st = stimuli.four_phase(seed=seed)
-        out["four_phase"] = Scene("four_phase", st.frames, st.fps, st.to_ground_truth()["objects"],
-                                  f"stimuli.four_phase(seed={seed})")
+        out["four_phase"] = Scene("four_phase", st.frames, st.fps, list(st.objects), f"stimuli.four_phase(seed={seed})")
         st = stimuli.six_objects(seed=seed)
-        out["six_objects"] = Scene("six_objects", st.frames, st.fps, st.to_ground_truth()["objects"],
+        out["six_objects"] = Scene("six_objects", st.frames, st.fps, list(st.objects),
                                    f"stimuli.six_objects(seed={seed})")
         return out
     data = Path(data)
@@ -376,44 +300,6 @@ def _fmt(v: float) -> str:
     if abs(v) >= 100:
         return f"{v:.0f}"
     return f"{v:.3g}"
-
-
-def _dist(f: FieldTrace, center) -> float:
-    return math.hypot(f.x - center[0], f.y - center[1])
-
-
-def first_field(trace: Trace, obj: dict, radius: float = MATCH_RADIUS):
-    """``(field, latency, error)`` of the first field born during ``obj``'s approach
-    within ``radius`` px of its centre (``None`` if there is none)."""
-    a0, a1 = obj["approach"]
-    hits = [f for f in trace.fields.values() if a0 <= f.born < a1 and _dist(f, obj["center"]) <= radius]
-    if not hits:
-        return None
-    f = min(hits, key=lambda f: (f.born, _dist(f, obj["center"])))
-    return f, f.born - a0, _dist(f, obj["center"])
-
-
-def _presence(obj: dict) -> tuple[int, int]:
-    spans = [obj[k] for k in ("approach", "hold", "recede", "translate") if obj.get(k)]
-    return min(s[0] for s in spans), max(s[1] for s in spans)
-
-
-def object_fields(trace: Trace, obj: dict, radius: float = MATCH_RADIUS) -> list[FieldTrace]:
-    """Fields born while ``obj`` is present, within ``radius`` px of its centre."""
-    t0, t1 = _presence(obj)
-    return [f for f in trace.fields.values() if t0 <= f.born < t1 and _dist(f, obj["center"]) <= radius]
-
-
-def false_alarms(trace: Trace, objects: list, radius: float = MATCH_RADIUS, tail: int = ALARM_TAIL) -> list:
-    """``(frame, field id)`` of alarms not near an object that approaches (or just did)."""
-    bad = []
-    for f in trace.fields.values():
-        for k in f.alarms:
-            near = any(o.get("approach") and o.get("center") and o["approach"][0] <= k < o["approach"][1] + tail
-                       and _dist(f, o["center"]) <= radius for o in objects)
-            if not near:
-                bad.append((k, f.id))
-    return sorted(bad)
 
 
 def basic_claims(claims: _Claims, peaks: dict, traces: dict) -> None:
@@ -534,17 +420,17 @@ def four_phase_claims(claims: _Claims, traces: dict, scene: Scene) -> None:
     # mLPLC2 localisation
     tr = traces["mlplc2"]
     for o in scene.objects:
-        if not o.get("approach") or o["approach"][0] >= scene.n:
+        if not o.approach or o.approach[0] >= scene.n:
             continue
-        hit = first_field(tr, o)
+        hit = first_field(tr, o, MATCH_RADIUS)
         lat = None if hit is None else hit[1]
         err = None if hit is None else hit[2]
-        where = f"object {o['id']} at ({o['center'][0]:.0f}, {o['center'][1]:.0f}), onset {o['approach'][0]}"
-        claims.add(f"IV-B4.latency.obj{o['id']}", sec, f"mLPLC2 locks onto {where} within {MAX_LATENCY} frames",
+        where = f"object {o.id} at ({o.center[0]:.0f}, {o.center[1]:.0f}), onset {o.approach[0]}"
+        claims.add(f"IV-B4.latency.obj{o.id}", sec, f"mLPLC2 locks onto {where} within {MAX_LATENCY} frames",
                    "no field" if hit is None else f"field #{hit[0].id} born at frame {hit[0].born}: {lat} frames",
                    f"latency <= {MAX_LATENCY} frames", hit is not None and lat <= MAX_LATENCY,
                    paper="all 5 objects localised (authors' outputs, NOTES)", value=lat)
-        claims.add(f"IV-B4.error.obj{o['id']}", sec, f"mLPLC2 localises {where} within {MAX_ERROR:.0f} px",
+        claims.add(f"IV-B4.error.obj{o.id}", sec, f"mLPLC2 localises {where} within {MAX_ERROR:.0f} px",
                    "no field" if hit is None else f"field #{hit[0].id} at ({hit[0].x:.0f}, {hit[0].y:.0f}): {err:.1f} px",
                    f"centre error <= {MAX_ERROR:.0f} px", hit is not None and err <= MAX_ERROR,
                    paper="within ~7 px (authors' outputs, NOTES)", value=err)
@@ -553,16 +439,16 @@ def four_phase_claims(claims: _Claims, traces: dict, scene: Scene) -> None:
                   paper_alarm="5 distinct AFs localise the 5 objects (text)")
 
 
-def _alarm_claims(claims: _Claims, sec: str, prefix: str, tr: Trace, scene: Scene, *, paper_fields: str,
+def _alarm_claims(claims: _Claims, sec: str, prefix: str, tr: Record, scene: Scene, *, paper_fields: str,
                   paper_alarm: str) -> None:
-    objs = [o for o in scene.objects if o.get("approach") and o["approach"][0] < scene.n]
+    objs = [o for o in scene.objects if o.approach and o.approach[0] < scene.n]
     per_obj = []
     for o in objs:
-        t0, t1 = o["approach"][0], o["approach"][1] + ALARM_TAIL
+        t0, t1 = o.approach[0], o.approach[1] + ALARM_TAIL
         alarmed = [f for f in tr.fields.values()
-                   if any(t0 <= k < t1 for k in f.alarms) and _dist(f, o["center"]) <= MATCH_RADIUS]
+                   if any(t0 <= k < t1 for k in f.alarms) and centre_distance(f.x, f.y, o, f.born) <= MATCH_RADIUS]
         per_obj.append((o, min(alarmed, key=lambda f: f.first_alarm) if alarmed else None))
-    parts = [f"{o['id']}: " + ("none" if f is None else f"#{f.id} frame {f.first_alarm}, {_dist(f, o['center']):.1f} px")
+    parts = [f"{o.id}: " + ("none" if f is None else f"#{f.id} frame {f.first_alarm}, {centre_distance(f.x, f.y, o, f.born):.1f} px")
              for o, f in per_obj]
     ok = sum(f is not None for _, f in per_obj)
     claims.add(f"{prefix}.alarm_each", sec, "mLPLC2 raises an alarm (fatal field) on every approaching object",
@@ -574,7 +460,7 @@ def _alarm_claims(claims: _Claims, sec: str, prefix: str, tr: Trace, scene: Scen
     claims.add(f"{prefix}.fields", sec, "mLPLC2 creates few spurious fields",
                f"{n_f} fields created, {n_a} raised an alarm",
                f"fields created <= {MAX_FIELDS}", n_f <= MAX_FIELDS, paper=paper_fields, value=n_f)
-    bad = false_alarms(tr, scene.objects)
+    bad = false_alarms(tr, scene.objects, radius=MATCH_RADIUS, tail=ALARM_TAIL)
     claims.add(f"{prefix}.no_false_alarm", sec, "mLPLC2 raises no false alarm",
                "none" if not bad else f"{len(bad)} alarm frames away from objects, first {bad[:3]}",
                f"no alarm farther than {MATCH_RADIUS:.0f} px from an object approaching (or within "
@@ -582,42 +468,42 @@ def _alarm_claims(claims: _Claims, sec: str, prefix: str, tr: Trace, scene: Scen
                value=len(bad))
 
 
-def six_objects_claims(claims: _Claims, tr: Trace, scene: Scene) -> None:
+def six_objects_claims(claims: _Claims, tr: Record, scene: Scene) -> None:
     """Sec. IV-B, six-object scene (Fig. 5)."""
     sec = "IV-B six objects (Fig. 5)"
-    objs = [o for o in scene.objects if o.get("approach") and o["approach"][0] < scene.n]
+    objs = [o for o in scene.objects if o.approach and o.approach[0] < scene.n]
     for i, o in enumerate(objs):
-        hit = first_field(tr, o)
-        where = f"object {o['id']} at ({o['center'][0]:.0f}, {o['center'][1]:.0f}), onset {o['approach'][0]}"
+        hit = first_field(tr, o, MATCH_RADIUS)
+        where = f"object {o.id} at ({o.center[0]:.0f}, {o.center[1]:.0f}), onset {o.approach[0]}"
         a_lat = AUTHORS_SIX_LATENCY[i] if i < len(AUTHORS_SIX_LATENCY) and len(objs) == 6 else None
-        claims.add(f"IV-B5.latency.obj{o['id']}", sec, f"mLPLC2 creates a field for {where} within {MAX_LATENCY} frames",
+        claims.add(f"IV-B5.latency.obj{o.id}", sec, f"mLPLC2 creates a field for {where} within {MAX_LATENCY} frames",
                    "no field" if hit is None else f"field #{hit[0].id} born at frame {hit[0].born}: {hit[1]} frames",
                    f"latency <= {MAX_LATENCY} frames", hit is not None and hit[1] <= MAX_LATENCY,
                    paper=None if a_lat is None else f"{a_lat} frames (authors' outputs, NOTES)",
                    value=None if hit is None else hit[1])
-        claims.add(f"IV-B5.error.obj{o['id']}", sec, f"mLPLC2 localises {where} within {MAX_ERROR:.0f} px",
+        claims.add(f"IV-B5.error.obj{o.id}", sec, f"mLPLC2 localises {where} within {MAX_ERROR:.0f} px",
                    "no field" if hit is None else f"field #{hit[0].id} at ({hit[0].x:.0f}, {hit[0].y:.0f}): {hit[2]:.1f} px",
                    f"centre error <= {MAX_ERROR:.0f} px", hit is not None and hit[2] <= MAX_ERROR,
                    paper="within 6 px (authors' outputs, NOTES)", value=None if hit is None else hit[2])
     # persistence after the object disappears
     vals, parts = [], []
     for o in objs:
-        gone = _presence(o)[1]
-        fs = object_fields(tr, o)
+        gone = o.span[1]
+        fs = fields_near(tr.fields.values(), o, *o.span, radius=MATCH_RADIUS)
         if gone >= scene.n:
-            parts.append(f"{o['id']}: still present at the end")
+            parts.append(f"{o.id}: still present at the end")
             continue
         if not fs:
-            parts.append(f"{o['id']}: no field")
+            parts.append(f"{o.id}: no field")
             vals.append(-math.inf)
             continue
         last = max(f.last for f in fs)
         p = last + 1 - gone
         if last == scene.n - 1:
-            parts.append(f"{o['id']}: >= {p} (alive at the end)")
+            parts.append(f"{o.id}: >= {p} (alive at the end)")
             vals.append(p)  # censored: at least p
         else:
-            parts.append(f"{o['id']}: {p:+d}")
+            parts.append(f"{o.id}: {p:+d}")
             vals.append(p)
     med = float(np.median(vals)) if vals else math.nan
     claims.add("IV-B5.persistence", sec, "a field persists about 20 frames after its object disappears",

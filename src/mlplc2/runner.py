@@ -35,19 +35,19 @@ import json
 import logging
 import math
 import sys
-import tempfile
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
 from ._signals import interrupts
-from ._validation import InputValueError
+from ._validation import InputTypeError, InputValueError
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
-from .models.base import Model, Output, check_repeat_threshold, get_model
+from .models.base import Model, Output, check_repeat_threshold, get_model, resolve_names
 from .plots import DRAW_FIELDS
+from .tracks import DEFAULT_MATCH_RADIUS, Recorder, _px, _sig, centre_distance
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir",
@@ -172,124 +172,16 @@ class RunResult:
         }
 
 
-class _FieldTracker:
-    """Follows the fields and targets of one model across frames to build their summaries.
-
-    With ``spill`` the summary of a field that died goes to an anonymous temporary file
-    instead of staying in memory (long or live runs with ``keep_rows=False``): memory then
-    holds only the live fields, whatever the length of the run.
-    """
-
-    def __init__(self, offset: int, targets: bool = False, spill: bool = False):
-        self.offset = offset  # source index of model frame 0
-        self.fields: dict[int, dict] = {}
-        self.alive: set[int] = set()
-        self.targets: dict[int, dict] | None = {} if targets else None
-        self._peak: dict[int, float] = {}  # unrounded peak response per field
-        self._spill = tempfile.TemporaryFile("w+", encoding="utf-8") if spill else None
-
-    def update(self, index: int, out: Output, to_input) -> None:
-        present = set()
-        for f in out.fields:
-            present.add(f.id)
-            x, y = to_input(f.x, f.y)
-            s = self.fields.get(f.id)
-            if s is None:
-                s = self.fields[f.id] = {
-                    "id": f.id, "x": _r(x), "y": _r(y), "born": f.born + self.offset, "died": None,
-                    "peak_response": _num(f.response), "peak_frame": index, "first_alarm_frame": None,
-                }
-                self._peak[f.id] = f.response
-            elif f.response > self._peak[f.id]:  # the first frame of a plateau stays the peak
-                self._peak[f.id] = f.response
-                s.update(x=_r(x), y=_r(y), peak_response=_num(f.response), peak_frame=index)
-            if f.collision and s["first_alarm_frame"] is None:
-                s["first_alarm_frame"] = index
-        for fid in self.alive - present:
-            self.fields[fid]["died"] = index
-            if self._spill is not None:
-                self._spill.write(json.dumps(self.fields.pop(fid)) + "\n")
-                del self._peak[fid]
-        self.alive = present
-        if self.targets is not None:
-            self._update_targets(index, out, to_input)
-
-    def _update_targets(self, index: int, out: Output, to_input) -> None:
-        """Per target: life, frames, first estimate and first warning (with the estimate then)."""
-        seen = set()
-        for t in out.targets:
-            seen.add(t.id)
-            s = self.targets.get(t.id)
-            if s is None:
-                s = self.targets[t.id] = {"id": t.id, "born": index, "died": None, "frames": 0,
-                                          "first_ttc_frame": None, "first_warning_frame": None,
-                                          "warning_frames": 0, "at_first_warning": None, "fields": []}
-            s["frames"] += 1
-            s["fields"] = sorted(set(s["fields"]) | set(t.fields))
-            if t.ttc_s is not None and s["first_ttc_frame"] is None:
-                s["first_ttc_frame"] = index
-            if t.warning:
-                s["warning_frames"] += 1
-                if s["first_warning_frame"] is None:
-                    s["first_warning_frame"] = index
-                    s["at_first_warning"] = _target_values(t, to_input)
-            s["last"] = {"frame": index, **_target_values(t, to_input)}
-        for tid, s in self.targets.items():
-            if s["died"] is None and tid not in seen:
-                s["died"] = index
-
-    def close(self) -> None:
-        if self._spill is not None:
-            self._spill.close()
-
-    def summaries(self) -> list[dict]:
-        out = list(self.fields.values())
-        if self._spill is not None:
-            self._spill.seek(0)
-            out += [json.loads(line) for line in self._spill]
-            self._spill.seek(0, 2)
-        return sorted(out, key=lambda d: d["id"])
-
-    def target_summaries(self) -> list[dict] | None:
-        return None if self.targets is None else [self.targets[k] for k in sorted(self.targets)]
-
-
-def _r(v: float) -> float:
-    return round(float(v), 2)
-
-
-def _num(v: float) -> float:
-    v = float(v)
-    return float(f"{v:.7g}") if math.isfinite(v) else v
-
-
 def _rows(index: int, time_s: float, name: str, out: Output, to_input) -> list[dict]:
     if not out.fields:
         return [{"frame": index, "time_s": time_s, "model": name, "field_id": None, "x": None, "y": None,
-                 "response": _num(out.response), "collision": int(bool(out.collision))}]
+                 "response": _sig(out.response), "collision": int(bool(out.collision))}]
     rows = []
     for f in out.fields:
         x, y = to_input(f.x, f.y)
-        rows.append({"frame": index, "time_s": time_s, "model": name, "field_id": f.id, "x": _r(x),
-                     "y": _r(y), "response": _num(f.response), "collision": int(bool(f.collision))})
+        rows.append({"frame": index, "time_s": time_s, "model": name, "field_id": f.id, "x": _px(x),
+                     "y": _px(y), "response": _sig(f.response), "collision": int(bool(f.collision))})
     return rows
-
-
-def _opt(v, digits: int = 4):
-    return None if v is None else round(float(v), digits) + 0.0  # + 0.0: no "-0.0"
-
-
-def _target_values(t, to_input) -> dict:
-    """A target's position, size and estimates in input pixels (``targets.csv`` units)."""
-    x, y = to_input(t.x, t.y)
-    x1, y1 = to_input(t.x + t.width, t.y + t.height)
-    return {"x": _r(x), "y": _r(y), "width": _r(x1 - x), "height": _r(y1 - y), "ttc_s": _opt(t.ttc_s),
-            "miss": _opt(t.miss), "warning": int(bool(t.warning)), "fields": " ".join(map(str, t.fields)),
-            "azimuth_deg": _opt(t.azimuth_deg), "elevation_deg": _opt(t.elevation_deg)}
-
-
-def _target_rows(index: int, name: str, out: Output, to_input) -> list[dict]:
-    return [{"frame": index, "model": name, "target_id": t.id, **_target_values(t, to_input)} for t in out.targets]
 
 
 def default_out_dir(source) -> Path:
@@ -480,13 +372,13 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         and ``result.truncated`` is True.
     """
     # Validate everything cheap before decoding anything.
-    if isinstance(models, str):
-        models = [s for s in models.split(",") if s.strip()]
+    if isinstance(models, (str, Model)):
+        models = [models]
+    if not isinstance(models, Iterable):
+        raise InputTypeError(f"models must be a model, a model name or a list of them, got {type(models).__name__}")
+    models = [n for m in models for n in ([m] if isinstance(m, Model) else resolve_names(m))]
     if draw_fields not in DRAW_FIELDS:
         raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, got {draw_fields!r}")
-    for m in models:
-        if not isinstance(m, Model):
-            get_model(str(m).strip())
     src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
                       keep_original=video, backend=backend)
     try:
@@ -581,7 +473,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
           keep_rows=True, draw_fields="auto") -> RunResult:
     from tqdm import tqdm
 
-    trackers = [_FieldTracker(src.start, targets=m.has_targets, spill=not keep_rows) for m in built]
+    recorder = Recorder(built, fps=src.fps, source=str(src.name), size=src.size, offset=src.start,
+                        to_input=src.to_input, series=False, spill=not keep_rows)
     primary = _primary(built)
     field_shape = getattr(built[primary].params, "field_shape", "square") if primary is not None else "square"
     csv_file = writer = vw = None
@@ -623,26 +516,20 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                 outputs = [m.step(frame) for m in built]
                 time_s = round(index / fps, 6)
                 frame_rows = []
-                target_rows = []
                 for name, out in zip(names, outputs):
                     frame_rows.extend(_rows(index, time_s, name, out, to_input))
-                    target_rows.extend(_target_rows(index, name, out, to_input))
                 if vw is not None:
                     from .plots import annotate_frame
 
                     vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
                                             index=index, field_shape=field_shape, draw_fields=draw_fields))
                 # The frame's share of every output, together (a few dict updates and two writes).
-                for out, tracker in zip(outputs, trackers):
-                    tracker.update(index, out, to_input)
+                target_rows = []
                 for name, out in zip(names, outputs):
                     if out.repeated:
                         result.repeated[name] = result.repeated.get(name, 0) + 1
-                    if out.collision:
-                        a = result.alarms[name]
-                        a["count"] += 1
-                        if a["first"] is None:
-                            a["first"] = index
+                    target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
+                                       for t in recorder.update(index, name, out))
                 if twriter is not None and target_rows:
                     tbuf.seek(0)
                     tbuf.truncate()
@@ -681,13 +568,12 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
         result.truncated = src.truncated
         result.message = src.message
         # Fields still alive at the end keep died = None.
-        try:
-            result.fields = {name: t.summaries() for name, t in zip(names, trackers)}
-            result.target_summaries = {name: t.target_summaries() for name, t in zip(names, trackers)
-                                       if t.targets is not None}
-        finally:
-            for t in trackers:
-                t.close()
+        with recorder:
+            result.fields = {name: recorder.summaries(name) for name in names}
+            result.target_summaries = {name: recorder.target_summaries(name) for name in names
+                                       if recorder.records[name].has_targets}
+            result.alarms = {name: {"count": r.alarm_count, "first": r.first_alarm_frame}
+                             for name, r in recorder.records.items()}
         if out_dir is not None:
             try:
                 _finish(result, out_dir, vw, plot)
@@ -806,32 +692,39 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     return DemoResult(res, truth, video_path, match_fields(res.fields.get("mlplc2", []), truth))
 
 
-def match_fields(fields: list[dict], truth: dict, *, radius: float = 25.0) -> list[dict]:
-    """For each ground-truth object, the field that stands for it.
+def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RADIUS) -> list[dict]:
+    """For each ground-truth object with a centre, the field that stands for it.
 
-    Among the fields born while the object is on screen, the one with the
-    largest peak response within ``radius`` px of the object's centre, else
-    the nearest one (``None`` when no field was born meanwhile).
+    Among the fields born while the object is on screen, the one with the largest peak
+    response whose centre lies within ``radius`` px of the object's
+    (:func:`mlplc2.tracks.centre_distance`, the matcher of the paper's metrics), else the
+    nearest one (``None`` when no field was born meanwhile). ``fields``: field summaries
+    (``fields.json``); ``truth``: the demo's ground truth (a JSON entry) or a
+    :class:`~mlplc2.truth.VideoTruth`.
     """
+    from .truth import VideoTruth, load
+
+    video = truth if isinstance(truth, VideoTruth) else next(iter(load(truth).values()))
     matches = []
-    for obj in truth.get("objects", []):
-        if obj.get("center") is None:
+    for obj in video.objects:
+        if obj.center is None:
             continue
-        cx, cy = obj["center"]
-        spans = [obj[k] for k in ("approach", "hold", "recede", "translate") if obj.get(k)]
-        t0 = min(s[0] for s in spans) if spans else 0
-        t1 = max(s[1] for s in spans) if spans else math.inf
+        t0, t1 = obj.span or (0, math.inf)
         cand = [f for f in fields if t0 <= f["born"] < t1]
-        near = [f for f in cand if math.hypot(f["x"] - cx, f["y"] - cy) <= radius]
+
+        def dist(f):
+            return centre_distance(f["x"], f["y"], obj, f["born"])
+
+        near = [f for f in cand if dist(f) <= radius]
         if near:  # the strongest field near the object (a field may be replaced while it looms)
             best = max(near, key=lambda f: (f["peak_response"], -f["born"]))
         else:
-            best = min(cand, key=lambda f: math.hypot(f["x"] - cx, f["y"] - cy), default=None)
+            best = min(cand, key=dist, default=None)
         matches.append({
-            "object": obj.get("id"), "center": [cx, cy], "frames": [t0, t1],
+            "object": obj.id, "center": list(obj.center), "frames": [t0, t1],
             "field": None if best is None else best["id"],
             "field_center": None if best is None else [best["x"], best["y"]],
-            "distance": None if best is None else round(math.hypot(best["x"] - cx, best["y"] - cy), 1),
+            "distance": None if best is None else round(dist(best), 1),
             "first_alarm_frame": None if best is None else best["first_alarm_frame"],
         })
     return matches

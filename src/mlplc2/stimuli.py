@@ -2,7 +2,8 @@
 
 Every generator returns a :class:`Stimulus`: grey ``uint8`` frames of shape
 ``(T, H, W)`` plus one :class:`ObjectTruth` per object (centre, polarity,
-phase intervals, side length per frame, contact frame). Coordinates are pixels,
+phase intervals, side length per frame, contact frame; the one ground-truth type,
+:class:`mlplc2.truth.ObjectTruth`). Coordinates are pixels,
 ``x`` = column, ``y`` = row, origin at the top-left corner; frame indices are
 0-based and intervals are half-open ``[start, end)``, exactly as in the
 paper's ``ground_truth.json``. Everything is vectorised with NumPy (no loop
@@ -74,6 +75,7 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ._validation import InputValueError, as_gray, check_fps
+from .truth import ObjectTruth, VideoTruth
 
 __all__ = [
     "ObjectTruth",
@@ -114,7 +116,6 @@ DARK_LEVEL = 0
 BRIGHT_LEVEL = 255
 
 _POLARITIES = ("dark", "bright")
-_PHASES = ("approach", "hold", "recede", "translate")
 
 #: Object centres of Fig. 4 (ground_truth.json, outdoor_2_black_4_period).
 FOUR_PHASE_CENTERS: tuple[tuple[tuple[float, float], ...], ...] = (
@@ -128,88 +129,6 @@ SIX_OBJECT_ONSETS: tuple[int, ...] = (5, 15, 25, 45, 55, 65)
 # ---------------------------------------------------------------------------
 # Result types
 # ---------------------------------------------------------------------------
-
-@dataclass(frozen=True)
-class ObjectTruth:
-    """Ground truth of one object of a :class:`Stimulus`.
-
-    Attributes
-    ----------
-    id : int
-        1-based object number.
-    center : tuple of float or None
-        ``(x, y)`` centre in pixels. For a translating object, the centre at
-        the first frame of its ``translate`` interval; ``None`` for a
-        full-field pattern (grating).
-    polarity : {"dark", "bright"}
-        Dark = darker than the background, bright = lighter.
-    approach, hold, recede, translate : tuple of int or None
-        Half-open frame intervals ``(start, end)`` of each phase, ``None``
-        when the object has no such phase.
-    sizes : tuple of float
-        Nominal side length in pixels at every frame of the video (before
-        clipping to the frame), 0 when the object is absent. For the
-        translating bar and the grating: the bar width.
-    contact_frame : float or None
-        For physically correct looming: the (fractional) frame index at which
-        the object would reach the eye. ``None`` otherwise.
-    half_size : float or None
-        Physical half-size ``l`` in metres (physical looming only).
-    speed : float or None
-        Approach speed ``v`` in m/s (physical looming only).
-    velocity : tuple of float or None
-        ``(vx, vy)`` in px per frame during ``translate``.
-    note : str or None
-        Free-text description, copied to the ground-truth dict.
-    """
-
-    id: int
-    center: tuple[float, float] | None
-    polarity: str
-    approach: tuple[int, int] | None = None
-    hold: tuple[int, int] | None = None
-    recede: tuple[int, int] | None = None
-    translate: tuple[int, int] | None = None
-    sizes: tuple[float, ...] = ()
-    contact_frame: float | None = None
-    half_size: float | None = None
-    speed: float | None = None
-    velocity: tuple[float, float] | None = None
-    note: str | None = None
-
-    def center_at(self, frame: int) -> tuple[float, float] | None:
-        """Centre ``(x, y)`` at ``frame`` (moves only during ``translate``)."""
-        if self.center is None:
-            return None
-        if self.velocity is None or self.translate is None:
-            return self.center
-        start, end = self.translate
-        dt = min(max(frame, start), end - 1) - start
-        return (self.center[0] + self.velocity[0] * dt, self.center[1] + self.velocity[1] * dt)
-
-    def to_dict(self) -> dict[str, Any]:
-        """JSON-ready dict in the schema of ``ground_truth.json`` objects (plus extras)."""
-        out: dict[str, Any] = {"id": int(self.id)}
-        if self.center is not None:
-            out["center"] = [_num(self.center[0]), _num(self.center[1])]
-        out["polarity"] = self.polarity
-        for phase in _PHASES:
-            interval = getattr(self, phase)
-            if interval is not None:
-                out[phase] = [int(interval[0]), int(interval[1])]
-        if self.contact_frame is not None:
-            out["contact_frame"] = float(self.contact_frame)
-        if self.half_size is not None:
-            out["half_size"] = float(self.half_size)
-        if self.speed is not None:
-            out["speed"] = float(self.speed)
-        if self.velocity is not None:
-            out["velocity"] = [_num(self.velocity[0]), _num(self.velocity[1])]
-        if self.note is not None:
-            out["note"] = self.note
-        out["sizes"] = [_num(s) for s in self.sizes]
-        return out
-
 
 @dataclass(frozen=True, eq=False)
 class Stimulus:
@@ -240,16 +159,20 @@ class Stimulus:
     def __len__(self) -> int:
         return int(self.frames.shape[0])
 
+    def truth(self) -> VideoTruth:
+        """The ground truth of this stimulus (:class:`mlplc2.truth.VideoTruth`, key ``name``)."""
+        return VideoTruth(key=self.name, size=self.size, frames=len(self), fps=float(self.fps), objects=self.objects)
+
     def to_ground_truth(self) -> dict[str, Any]:
-        """Return a JSON-ready dict in the schema of one ``ground_truth.json`` "videos" entry.
+        """Return a JSON-ready dict in the schema of one ``ground_truth.json`` "videos" entry
+        (:meth:`truth` as JSON, :meth:`mlplc2.truth.VideoTruth.to_dict`).
 
         Keys: ``"size"`` ``[W, H]``, ``"frames"`` ``T``, ``"fps"``, ``"objects"``
         (list of :meth:`ObjectTruth.to_dict`, with only the phases that exist,
         plus ``"sizes"`` per frame and, for physical looming,
         ``"contact_frame"``, ``"half_size"`` and ``"speed"``).
         """
-        return {"size": list(self.size), "frames": len(self), "fps": float(self.fps),
-                "objects": [o.to_dict() for o in self.objects]}
+        return self.truth().to_dict()
 
     def object(self, object_id: int) -> ObjectTruth:
         """Return the :class:`ObjectTruth` with ``id == object_id``."""
@@ -270,8 +193,8 @@ class Stimulus:
 class ApproachStimulus(Stimulus):
     """A :class:`Stimulus` of :func:`mlplc2.approach.approach`, with its camera and background.
 
-    Its ``objects`` are :class:`mlplc2.approach.ObjectTrack` (per-frame track, time to contact,
-    miss) instead of :class:`ObjectTruth`.
+    Its ``objects`` are 3-D :class:`ObjectTruth` (a ``kind``, a per-frame ``track`` of
+    :class:`mlplc2.truth.TrackPoint` with the time to contact and the miss).
 
     Attributes
     ----------
@@ -284,11 +207,10 @@ class ApproachStimulus(Stimulus):
     camera: dict | None = None
     background: str = "plain"
 
-    def to_ground_truth(self) -> dict[str, Any]:
-        """Return the JSON entry of docs/stimuli.md ("Ground truth")."""
-        return {"size": list(self.size), "frames": len(self), "fps": float(self.fps),
-                "camera": dict(self.camera or {}), "background": self.background,
-                "objects": [o.to_dict() for o in self.objects]}
+    def truth(self) -> VideoTruth:
+        """The ground truth of this stimulus, with its camera and background (docs/stimuli.md,
+        "Ground truth"; :meth:`to_ground_truth` gives its JSON)."""
+        return dataclasses.replace(super().truth(), camera=dict(self.camera or {}), background=self.background)
 
 
 @dataclass(frozen=True)
@@ -357,12 +279,6 @@ class SceneObject:
 # ---------------------------------------------------------------------------
 # Helpers
 # ---------------------------------------------------------------------------
-
-def _num(value: float) -> float | int:
-    """Integral floats as int (tidy JSON), others as float."""
-    value = float(value)
-    return int(value) if value.is_integer() else value
-
 
 def _fail(message: str) -> InputValueError:
     return InputValueError(message)
@@ -675,8 +591,8 @@ def basic(name: str, *, size: int = 100, frames: int = 50, fps: float = 30.0) ->
         video = np.where(mask, np.uint8(0), np.uint8(BASIC_WHITE)).astype(np.uint8)
         obj = ObjectTruth(id=1, center=((bar_w - 1) / 2.0, top + (bar_h - 1) / 2.0), polarity="dark",
                           translate=(0, n), sizes=(float(bar_w),) * n, velocity=(float(speed), 0.0),
-                          note=f"{bar_w}x{bar_h} px dark bar (rows {top}-{top + bar_h - 1}) moving right "
-                               f"at {speed} px/frame on white; left edge at x = {speed} t")
+                          extra={"note": f"{bar_w}x{bar_h} px dark bar (rows {top}-{top + bar_h - 1}) moving "
+                                         f"right at {speed} px/frame on white; left edge at x = {speed} t"})
         return Stimulus(video, fps, (obj,), name)
 
     # grating
@@ -689,8 +605,8 @@ def basic(name: str, *, size: int = 100, frames: int = 50, fps: float = 30.0) ->
     video = np.ascontiguousarray(np.broadcast_to(row[:, None, :], (n, size, size)))
     obj = ObjectTruth(id=1, center=None, polarity="dark", translate=(0, n), sizes=(float(bar),) * n,
                       velocity=(1.0, 0.0),
-                      note=f"full-field square-wave grating, bar width {bar} px (period {period} px), "
-                           f"moving right at 1 px/frame")
+                      extra={"note": f"full-field square-wave grating, bar width {bar} px (period {period} px), "
+                                     f"moving right at 1 px/frame"})
     return Stimulus(video, fps, (obj,), name)
 
 
@@ -887,8 +803,7 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
             approach=_interval(a0, obj.approach, n), hold=_interval(a1, obj.hold, n),
             recede=_interval(h1, obj.recede, n), sizes=tuple(float(s) for s in sides),
             contact_frame=contact,
-            half_size=obj.half_size if obj.looming == "physical" else None,
-            speed=obj.speed if obj.looming == "physical" else None))
+            extra={"half_size": float(obj.half_size), "speed": float(obj.speed)} if obj.looming == "physical" else {}))
     for t in range(n):
         for obj, sides in zip(checked, all_sides):
             if sides[t] > 0:

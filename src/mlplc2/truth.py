@@ -29,12 +29,12 @@ import math
 from collections.abc import Mapping
 from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
-from typing import Any
+from typing import Any, NamedTuple
 
 from ._validation import InputValueError
 
 __all__ = ["TrackPoint", "ObjectTruth", "VideoTruth", "GroundTruth", "load", "parse", "read_json", "save",
-           "PHASES", "KINDS", "LEGACY_KINDS", "LABELS", "TRACK_COLUMNS", "APPEARANCES"]
+           "PHASES", "KINDS", "LEGACY_KINDS", "LABELS", "TRACK_COLUMNS", "APPEARANCES", "OBJECT_LAYOUTS"]
 
 #: Phase intervals an object may have, ``[start, end)`` in frames.
 PHASES = ("approach", "hold", "recede", "translate")
@@ -50,16 +50,26 @@ LABELS = ("collision", "no_collision")
 TRACK_COLUMNS = ("frame", "x", "y", "width", "height", "ttc_s", "miss")
 #: Appearance of an object against its background.
 APPEARANCES = ("dark", "bright", "textured")
+#: Key order of an object's JSON (:meth:`ObjectTruth.to_dict`), per flavour: "2d" the paper's
+#: ``ground_truth.json`` and :mod:`mlplc2.stimuli` (``half_size``, ``speed``, ``note`` are
+#: extras of its generators), "3d" (a ``kind``) the entries of :func:`mlplc2.stimuli.approach`
+#: (docs/stimuli.md; ``shape`` ... ``velocity_mps`` are extras). Other keys follow, then
+#: ``track_columns``, ``track`` and ``sizes``.
+OBJECT_LAYOUTS = {
+    "2d": ("id", "kind", "center", "polarity", *PHASES, "contact_frame", "miss", "half_size", "speed", "velocity",
+           "note"),
+    "3d": ("id", "kind", "shape", "appearance", "width_m", "onset", "start_m", "velocity_mps", "contact_frame",
+           "miss", "approach", "hold", "recede", "translate"),
+}
 
 
 # ---------------------------------------------------------------------------
 # types
 # ---------------------------------------------------------------------------
-@dataclass(frozen=True)
-class TrackPoint:
+class TrackPoint(NamedTuple):
     """One frame of an object's track: centre, apparent size (px) and, for 3-D truth, the true
     time to contact (s; None when the object is not approaching) and the predicted miss at
-    contact (object widths; None without a contact)."""
+    contact (object widths; None without a contact). A row of :data:`TRACK_COLUMNS`."""
 
     frame: int
     x: float
@@ -107,7 +117,9 @@ class ObjectTruth:
     miss : float or None
         Lateral miss distance at contact in object widths (0 = dead centre), None without contact.
     extra : dict
-        Everything else the JSON object holds (physical description, notes), kept on save.
+        Everything else the JSON object holds, kept on save: the paper stimuli's ``note`` and,
+        for physical looming, ``half_size`` (m) and ``speed`` (m/s); the 3-D generator's
+        ``shape``, ``width_m``, ``onset``, ``start_m`` and ``velocity_mps`` (docs/stimuli.md).
     """
 
     id: Any
@@ -136,6 +148,13 @@ class ObjectTruth:
         """Whether the object is on a collision course (3-D ``kind == "collision"``, or the
         colliding object of a real clip)."""
         return self.kind == "collision"
+
+    @property
+    def span(self) -> tuple[int, int] | None:
+        """``[start, end)`` from the start of its first phase to the end of its last (the frames
+        a 2-D object is on screen); None without phases."""
+        spans = [getattr(self, p) for p in PHASES if getattr(self, p) is not None]
+        return (min(a for a, _ in spans), max(b for _, b in spans)) if spans else None
 
     def life_end(self) -> int:
         """End of approach + the hold that directly follows it (exclusive)."""
@@ -206,33 +225,45 @@ class ObjectTruth:
         return None
 
     def to_dict(self) -> dict[str, Any]:
-        """The JSON object of this truth (the keys that are set, extras last)."""
+        """The JSON object of this truth, in the layout of its flavour (:data:`OBJECT_LAYOUTS`).
+
+        2-D objects (no ``kind``: the paper's ``ground_truth.json``, :mod:`mlplc2.stimuli`)
+        write the keys that are set. 3-D objects (a ``kind``: :func:`mlplc2.stimuli.approach`,
+        docs/stimuli.md "Ground truth") name the polarity ``appearance``, always write
+        ``contact_frame``, ``miss`` and ``approach`` (``null``: none) and every track column.
+        Numbers are written as they are, except that integral centres, velocities and sizes
+        are written as integers.
+        """
+        three_d = self.kind is not None
         out: dict[str, Any] = {"id": self.id}
         if self.kind is not None:
             out["kind"] = self.kind
         if self.center is not None:
             out["center"] = [_num(self.center[0]), _num(self.center[1])]
         if self.polarity is not None:
-            out["polarity"] = self.polarity
+            out["appearance" if three_d else "polarity"] = self.polarity
         for phase in PHASES:
             interval = getattr(self, phase)
-            if interval is not None:
-                out[phase] = [int(interval[0]), int(interval[1])]
-        if self.contact_frame is not None:
-            out["contact_frame"] = float(self.contact_frame)
-        if self.miss is not None:
-            out["miss"] = float(self.miss)
+            if interval is not None or (three_d and phase == "approach"):
+                out[phase] = None if interval is None else [int(interval[0]), int(interval[1])]
+        for name in ("contact_frame", "miss"):
+            v = getattr(self, name)
+            if v is not None or three_d:
+                out[name] = None if v is None else float(v)
         if self.velocity is not None:
             out["velocity"] = [_num(self.velocity[0]), _num(self.velocity[1])]
         for k, v in self.extra.items():
             out.setdefault(k, v)
         if self.track:
-            n = max(_used_columns(p) for p in self.track)
+            n = len(TRACK_COLUMNS) if three_d else max(_used_columns(p) for p in self.track)
             out["track_columns"] = list(TRACK_COLUMNS[:n])
-            out["track"] = [[_opt(getattr(p, c)) for c in TRACK_COLUMNS[:n]] for p in self.track]
+            out["track"] = [[_opt(v) for v in p[:n]] for p in self.track]
         if self.sizes:
             out["sizes"] = [_num(s) for s in self.sizes]
-        return out
+        head = [k for k in OBJECT_LAYOUTS["3d" if three_d else "2d"] if k in out]
+        last = [k for k in ("track_columns", "track", "sizes") if k in out]
+        rest = [k for k in out if k not in head and k not in last]
+        return {k: out[k] for k in head + rest + last}
 
 
 def _used_columns(p: TrackPoint) -> int:
@@ -394,7 +425,8 @@ def _num(value) -> float | int:
 
 
 def _opt(value):
-    return None if value is None else (int(value) if isinstance(value, int) else _num(value))
+    """A track value: None, an int (frame) or a float, as it is."""
+    return None if value is None else (int(value) if isinstance(value, int) else float(value))
 
 
 def _int(value, where: str, minimum: int | None = None) -> int:

@@ -17,11 +17,11 @@ from typing import Any, ClassVar
 import cv2
 import numpy as np
 
-from .._validation import InputValueError, as_gray, check_fps, check_int, check_unit_scale
+from .._validation import InputTypeError, InputValueError, as_gray, check_fps, check_int, check_unit_scale
 from ..attention import Field
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
-           "get_model", "available_models", "looks_duplicated"]
+           "get_model", "available_models", "resolve_names", "looks_duplicated"]
 
 
 @dataclass(frozen=True)
@@ -154,6 +154,34 @@ def register(name: str):
 
 def available_models() -> list[str]:
     return sorted(REGISTRY)
+
+
+def resolve_names(value, *, what: str = "models") -> list[str]:
+    """The model names in ``value``: a name, a comma-separated string (``"mlplc2,lgmd2"``) or a
+    list of them (the CLI's repeated ``--model``), case-insensitive and stripped, each once in
+    the order given. An unknown name raises :class:`~mlplc2.InputValueError` listing the valid
+    ones; ``what`` names the argument in the messages (``"--model"`` for the CLI)."""
+    if isinstance(value, str):
+        items = [value]
+    elif isinstance(value, Iterable) and not isinstance(value, (bytes, dict)):
+        items = list(value)
+    else:
+        raise InputTypeError(f"{what} must be a model name or a list of names, got {type(value).__name__}")
+    names: list[str] = []
+    for item in items:
+        if not isinstance(item, str):
+            raise InputTypeError(f"{what} must be model names (str), got {item!r}")
+        for part in item.split(","):
+            name = part.strip().lower()
+            if not name:
+                continue
+            if name not in REGISTRY:
+                raise InputValueError(f"unknown model {name!r}; choose from {', '.join(available_models())}")
+            if name not in names:
+                names.append(name)
+    if not names:
+        raise InputValueError(f"{what} needs at least one model name")
+    return names
 
 
 def get_model(name: str) -> type["Model"]:
