@@ -676,12 +676,12 @@ def test_all_fields_option_reaches_the_overlay(data, tmp_path, monkeypatch):
     base = ["run", str(data["avi"]), "--end", "3", "--video", "-q"]
     assert main(base + ["--out", str(tmp_path / "a")]) == 0
     assert main(base + ["--out", str(tmp_path / "b"), "--all-fields"]) == 0
-    assert seen == [("responding", "square")] * 3 + [("all", "square")] * 3
+    assert seen == [("auto", "square")] * 3 + [("all", "square")] * 3
     seen.clear()
     run(data["avi"], out=tmp_path / "c", end=2, video=True, progress=False, params=mlplc2.Params(field_shape="disc"))
-    assert seen == [("responding", "disc")] * 2
+    assert seen == [("auto", "disc")] * 2
     with pytest.raises(mlplc2.InputError, match="draw_fields"):
-        run(data["avi"], out=False, draw_fields="none")
+        run(data["avi"], out=False, draw_fields="some")
 
 
 @pytest.mark.filterwarnings("default::mlplc2.io.VideoCodecWarning")

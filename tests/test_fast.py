@@ -17,7 +17,7 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2 import _fast, attention, frontend, stimuli
+from mlplc2 import _fast, attention, stimuli
 from mlplc2.frontend import FrontEnd, make_frontend
 from mlplc2.lobula_plate import LocalMotion
 

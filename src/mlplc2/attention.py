@@ -23,7 +23,6 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from .lobula_plate import LocalMotion
-from .params import Params
 
 __all__ = ["AttentionField", "Field", "quadrant_sums", "quadrant_areas", "gate_area", "lplc2_response", "field_mask",
            "argmax_outside"]

@@ -431,7 +431,6 @@ def run_task(task: dict) -> dict:
 def _plot_saved(task: dict) -> dict:
     """Draw ``responses.png`` of a finished task from its ``responses.csv`` and
     ``fields.json`` (as :func:`mlplc2.run` would have with ``plot=True``); return its saved row."""
-    out = Path(task["out"])
     row = _done_row(task)
     if row is None:  # its outputs changed meanwhile: run it
         return run_task({**task, "replot": False})

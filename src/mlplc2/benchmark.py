@@ -26,6 +26,7 @@ from __future__ import annotations
 import csv
 import json
 import time
+import warnings
 from collections.abc import Sequence
 from dataclasses import asdict, dataclass, field
 from pathlib import Path
@@ -359,12 +360,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     from .runner import _target_params
 
     t0 = time.perf_counter()
-    if isinstance(models, str):
-        models = [m.strip() for m in models.split(",") if m.strip()]
     models = resolve_names(models) if models else [m for m in MODELS if m in available_models()]
-    for m in models:
-        if m not in available_models():
-            raise InputValueError(f"unknown model {m!r}; choose from {', '.join(available_models())}")
     tp = _target_params(target_params)
     out = Path(out)
     if out.exists() and not out.is_dir():
@@ -381,8 +377,6 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         run_options["target_params"] = changed
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
-    import warnings
-
     failed, seen = [], set()
     for r in res.rows:  # once per task (a task shared by parameter sets has several rows)
         if r.get("status") not in (None, "ok") and r.get("out") not in seen:

@@ -22,7 +22,6 @@ import sys
 import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
-from pathlib import Path
 
 from ._signals import interrupts
 from ._validation import InputError, InputValueError
@@ -700,7 +699,7 @@ def _cmd_benchmark(args) -> int:
     from .batch import BatchInterrupted
     from .benchmark import benchmark
 
-    models = _model_names(args.model) if args.model else None
+    models = resolve_names(args.model, what="--model") if args.model else None
     real = None if args.no_real else (args.real if args.real is not None else "auto")
     try:
         res = benchmark(args.out, quick=args.quick, models=models, real=real, scheduler=args.scheduler,

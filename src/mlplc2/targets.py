@@ -645,6 +645,14 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
     return at(u), at(v)
 
 
+def _even_dft_size(n: int) -> int:
+    """The largest m <= n that is even and its own optimal DFT size (``cv2.getOptimalDFTSize``)."""
+    m = n
+    while m > 2 and (m % 2 or cv2.getOptimalDFTSize(m) != m):
+        m -= 1
+    return m
+
+
 def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
                rel: float = 0.2) -> tuple[float, float, float, float] | None:
     """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y).
@@ -663,6 +671,9 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
     if x1 - x0 < 8 or y1 - y0 < 8:
         return None
+    # OpenCV's phase correlation reports a spurious half-pixel shift of identical windows whose
+    # DFT size is odd (81 px: (0.5, 0.5)); an even DFT size has none
+    x1, y1 = x0 + _even_dft_size(x1 - x0), y0 + _even_dft_size(y1 - y0)
     a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
     b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
     (sx, sy), _ = cv2.phaseCorrelate(a, b, cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F))
