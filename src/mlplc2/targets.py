@@ -514,7 +514,7 @@ def _sample(levels, level: int, cx: float, cy: float, step_x: float, step_y: flo
 
 
 def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
-          box: tuple[float, float], *, n: int = 32, iterations: int = 10) -> Alignment | None:
+          box: tuple[float, float], *, n: int = 32, iterations: int = 10, kernel=None) -> Alignment | None:
     """Scales and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
     ``cur`` (two :func:`pyramid` s), weighted on the object's box (half-width, half-height px).
 
@@ -524,10 +524,18 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     level whose pixel is at most 1.5 samples, so the cost does not depend on the object's size;
     samples outside the frame get no weight. None when the patch has too little texture or the
     iteration does not settle.
+
+    ``kernel``: the compiled version (:func:`mlplc2._fast_targets.align_patch`, the same
+    alignment to ~1e-12; :mod:`mlplc2.backend` chooses it) for float32 pyramids, or None.
     """
-    uu, vv, _ = _grid(n)
     step = 2.0 * half / n
     level = 0 if step <= 1.5 else min(int(math.ceil(math.log2(step / 1.5))), len(prev) - 1)
+    if kernel is not None and prev[level].dtype == cur[level].dtype == np.float32 \
+            and prev[level].ndim == cur[level].ndim == 2:
+        ok, *out = kernel(prev[level], cur[level], level, float(cx), float(cy), step, float(box[0]),
+                          float(box[1]), int(n), int(iterations))
+        return Alignment(*out) if ok else None
+    uu, vv, _ = _grid(n)
     a, inside = _sample(prev, level, cx, cy, step, step, n)
     a = cv2.GaussianBlur(a, (0, 0), 0.8)
     gx = cv2.Sobel(a, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
@@ -537,8 +545,9 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     wgt = (np.clip((1.2 * hw - np.abs(uu)) / (0.2 * hw), 0, 1) * np.clip((1.2 * hh - np.abs(vv)) / (0.2 * hh), 0, 1)
            * inside).astype(np.float32).ravel()
     jac = np.stack([(gx * uu).ravel(), (gy * vv).ravel(), gx.ravel(), gy.ravel()], 1)
-    jw = jac * wgt[:, None]
-    hess = (jw.T @ jac).astype(np.float64)
+    # the normal equations in float64: float32 sums would depend on the BLAS's summation order
+    jw = (jac * wgt[:, None]).astype(np.float64)
+    hess = jw.T @ jac
     if not np.all(np.isfinite(hess)) or np.linalg.cond(hess) > 1e7:
         return None
     hinv = np.linalg.inv(hess)
@@ -750,15 +759,18 @@ class TargetLayer:
         Frame rate (frames -> seconds).
     kernel : callable, optional
         Compiled edge scan for :func:`measure_extent` (:mod:`mlplc2.backend`); None = NumPy.
+    align_kernel : callable, optional
+        Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
     focal : float, optional
         Focal length in px (from the camera's field of view): targets then carry bearings.
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
-                 focal: float | None = None):
+                 align_kernel=None, focal: float | None = None):
         self.params = TargetParams() if params is None else params
         self.fps = float(fps)
         self.kernel = kernel
+        self.align_kernel = align_kernel
         self.focal = focal
         self.reset()
 
@@ -848,7 +860,7 @@ class TargetLayer:
             self._past_levels = pyramid(self._past[0])
         half = p.margin * t.size / 2.0 + 3.0
         al = align(self._past_levels, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                   iterations=p.iterations)
+                   iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return False
         g = math.log(al.scale)
@@ -885,7 +897,7 @@ class TargetLayer:
         for t in self._tracks:
             half = p.margin * t.size / 2.0 + 3.0
             al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                       iterations=p.iterations)
+                       iterations=p.iterations, kernel=self.align_kernel)
             if al is None or al.residual > p.max_residual:
                 t.fails += 1
                 if t.fails < p.max_fails:
