@@ -778,8 +778,7 @@ class TargetLayer:
         self._tracks: list[Track] = []
         self._next = 1
         self._prev: list[np.ndarray] | None = None
-        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # the last grey frames
-        self._past_levels: list[np.ndarray] | None = None                     # pyramid of _past[0]
+        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
@@ -837,8 +836,7 @@ class TargetLayer:
                     t.last_answer = index
             self._tracks.append(t)
         self._prev = levels
-        self._past.append(gray)
-        self._past_levels = None
+        self._past.append(levels)
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
@@ -856,10 +854,8 @@ class TargetLayer:
         p = self.params
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
-        if self._past_levels is None:
-            self._past_levels = pyramid(self._past[0])
         half = p.margin * t.size / 2.0 + 3.0
-        al = align(self._past_levels, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+        al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return False
@@ -882,7 +878,7 @@ class TargetLayer:
         def change():
             if not self._past:
                 return None
-            return change_box(self._past[0], gray, x, y, int(p.max_shift))
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
 
         for find in ((edges, change) if field_seed else (change, edges)):
             box = find()
