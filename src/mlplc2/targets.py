@@ -596,21 +596,21 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
     the contact lies ``-a / b`` frames after the newest frame (t = 0 there, ``1 / S = 1``).
     None with fewer than 3 frames.
     """
-    t = np.asarray(frames, dtype=np.float64)
-    if t.size < 3:
+    n = len(frames)
+    if n < 3:
         return None
-    t = t - t[-1]
-    ls = np.asarray(log_scale, dtype=np.float64)
-    y = np.exp(ls[-1] - ls)
-    tm = t.mean()
-    dt = t - tm
-    sxx = float(dt @ dt)
+    # plain floats: a dozen points, so NumPy's per-call overhead would be most of the cost
+    t_end, ls_end = float(frames[-1]), float(log_scale[-1])
+    t = [float(f) - t_end for f in frames]
+    y = [math.exp(ls_end - float(v)) for v in log_scale]
+    tm, ym = sum(t) / n, sum(y) / n
+    dt = [v - tm for v in t]
+    sxx = sum([d * d for d in dt])
     if sxx <= 0:
         return None
-    b = float(dt @ (y - y.mean())) / sxx
-    a = float(y.mean()) - b * tm
-    res = y - (a + b * t)
-    s2 = float(res @ res) / max(t.size - 2, 1)
+    b = sum([d * (v - ym) for d, v in zip(dt, y)]) / sxx
+    a = ym - b * tm
+    s2 = sum([(v - (a + b * tv)) ** 2 for v, tv in zip(y, t)]) / max(n - 2, 1)
     sb = math.sqrt(s2 / sxx) if s2 > 0 else 1e-12
     tstat = -b / sb
     rate = -b / a if a > 0 else 0.0
@@ -618,7 +618,7 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
         return ContactFit(None, None, tstat, rate)
     ttc = -a / b
     # delta method: var(a) = s2 (1/n + tm^2/sxx), cov(a, b) = -tm s2 / sxx
-    va = s2 * (1.0 / t.size + tm * tm / sxx)
+    va = s2 * (1.0 / n + tm * tm / sxx)
     cab = -tm * s2 / sxx
     ga, gb = -1.0 / b, a / (b * b)
     sigma = math.sqrt(max(ga * ga * va + 2 * ga * gb * cab + gb * gb * s2 / sxx, 0.0))
@@ -629,24 +629,24 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
     """Predicted offset at contact from the heading point, in object widths ``(right, down)``:
     the lines through ``(x - x_h) / w`` and ``(y - y_h) / w`` over ``frames``, evaluated
     ``ttc`` frames after the newest one (its length is the miss distance)."""
-    t = np.asarray(frames, dtype=np.float64)
-    w = np.asarray(widths, dtype=np.float64)
-    if t.size < 2 or np.any(w <= 0):
+    n = len(frames)
+    if n < 2 or any(float(w) <= 0 for w in widths):
         return None
-    t = t - t[-1]
-    u = (np.asarray(xs, dtype=np.float64) - heading[0]) / w
-    v = (np.asarray(ys, dtype=np.float64) - heading[1]) / w
-    tm = t.mean()
-    dt = t - tm
-    sxx = float(dt @ dt)
+    t_end = float(frames[-1])
+    t = [float(f) - t_end for f in frames]
+    tm = sum(t) / n
+    dt = [v - tm for v in t]
+    sxx = sum([d * d for d in dt])
     if sxx <= 0:
         return None
 
-    def at(z):
-        b = float(dt @ (z - z.mean())) / sxx
-        return float(z.mean()) + b * (ttc - tm)
+    def at(pos, origin):
+        z = [(float(q) - origin) / float(w) for q, w in zip(pos, widths)]
+        zm = sum(z) / n
+        b = sum([d * (v - zm) for d, v in zip(dt, z)]) / sxx
+        return zm + b * (ttc - tm)
 
-    return at(u), at(v)
+    return at(xs, heading[0]), at(ys, heading[1])
 
 
 def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
