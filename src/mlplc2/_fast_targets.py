@@ -286,6 +286,19 @@ def _blur(src, pad, tmp, dst, taps):
 
 
 @_jit()
+def _support(wts):
+    """``(first, last + 1)`` of the nonzero entries of a weight profile that is positive on one
+    interval (``(0, 0)`` when all are zero)."""
+    lo = 0
+    while lo < wts.shape[0] and not wts[lo] > 0:
+        lo += 1
+    hi = wts.shape[0]
+    while hi > lo and not wts[hi - 1] > 0:
+        hi -= 1
+    return lo, hi
+
+
+@_jit()
 def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     """:func:`mlplc2.targets.align` on pyramid level ``level`` (``prev`` and ``cur``: that level
     of the two pyramids, float32), patch ``n`` x ``n`` every ``step`` level-0 px.
@@ -322,6 +335,10 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
         au = abs(u[j])
         wx[j] = min(max((cw1 - au) / cw2, zero), one)
         wy[j] = min(max((ch1 - au) / ch2, zero), one)
+    # the samples of zero weight add exact zeros to every sum below: only the rows i0:i1 and
+    # columns j0:j1 of nonzero weight are visited
+    j0, j1 = _support(wx)
+    i0, i1 = _support(wy)
     m = n * n
     jw = np.empty((m, 4), np.float32)
     wgt = np.empty(m, np.float32)
@@ -330,9 +347,9 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     # jw.T @ jac, each of the 16 entries summed over the samples in order
     h00 = h01 = h02 = h03 = h10 = h11 = h12 = h13 = 0.0
     h20 = h21 = h22 = h23 = h30 = h31 = h32 = h33 = 0.0
-    for i in range(n):
+    for i in range(i0, i1):
         im, ip = _reflect101(i - 1, n), _reflect101(i + 1, n)
-        for j in range(n):
+        for j in range(j0, j1):
             jm, jp = _reflect101(j - 1, n), _reflect101(j + 1, n)
             # Sobel x: the row difference, then [1 2 1] down the column (centre first)
             d = a[i, jp] - a[i, jm]
@@ -346,13 +363,13 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
             if not (in_x[j] and in_y[i]):
                 wk = zero
             wgt[k] = wk
-            j0, j1 = gx * u[j], gy * u[i]      # the Jacobian: d/dlog kx, d/dlog ky, d/dx, d/dy
-            w0, w1, w2, w3 = j0 * wk, j1 * wk, gx * wk, gy * wk
+            jx, jy = gx * u[j], gy * u[i]      # the Jacobian: d/dlog kx, d/dlog ky, d/dx, d/dy
+            w0, w1, w2, w3 = jx * wk, jy * wk, gx * wk, gy * wk
             jw[k, 0] = w0
             jw[k, 1] = w1
             jw[k, 2] = w2
             jw[k, 3] = w3
-            f0, f1, f2, f3 = np.float64(j0), np.float64(j1), np.float64(gx), np.float64(gy)
+            f0, f1, f2, f3 = np.float64(jx), np.float64(jy), np.float64(gx), np.float64(gy)
             e0, e1, e2, e3 = np.float64(w0), np.float64(w1), np.float64(w2), np.float64(w3)
             h00 += e0 * f0
             h01 += e0 * f1
@@ -390,8 +407,8 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
         _sample(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n, b0, bx, by)
         _blur(b0, pad, tmp, b, taps)
         g0 = g1 = g2 = g3 = 0.0
-        for i in range(n):
-            for j in range(n):
+        for i in range(i0, i1):
+            for j in range(j0, j1):
                 k = i * n + j
                 rk = b[i, j] - a[i, j]
                 r[k] = rk
@@ -416,9 +433,10 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
             break
     wsum = 0.0
     rr = 0.0
-    for k in range(m):
-        wsum += np.float64(wgt[k])
-        rr += np.float64(wgt[k]) * (np.float64(r[k]) * np.float64(r[k]))
+    for i in range(i0, i1):
+        for k in range(i * n + j0, i * n + j1):
+            wsum += np.float64(wgt[k])
+            rr += np.float64(wgt[k]) * (np.float64(r[k]) * np.float64(r[k]))
     res = math.sqrt(rr / wsum) if wsum > 0 else math.inf
     var = 0.25 * (hinv[0, 0] + hinv[1, 1] + 2 * hinv[0, 1])     # of (log kx + log ky) / 2
     return (True, math.exp(px), math.exp(py), tx * step, ty * step, res, res * math.sqrt(max(var, 0.0)))
