@@ -3,9 +3,10 @@
 A model picks its :class:`Backend` once, at construction (``backend="auto" | "numba" |
 "reference"``), and every per-frame stage that has a compiled version takes it from there:
 the front end (Eq. 1-12, :class:`mlplc2._fast.FastFrontEnd`), the quadrant sums of Eq. 14
-(:func:`mlplc2._fast.quadrant_sums`) and the edge scans of the target layer
-(:func:`mlplc2._fast_targets.edges4`). ``"reference"`` never imports Numba. Both give the
-same fields; the LM maps agree to ~1e-6, the edge scans bit for bit.
+(:func:`mlplc2._fast.quadrant_sums`), the edge scans and the image alignment of the target
+layer (:func:`mlplc2._fast_targets.edges4`, :func:`mlplc2._fast_targets.align_patch`).
+``"reference"`` never imports Numba. Both give the same fields and targets; the LM maps agree
+to ~1e-6, the edge scans bit for bit, the alignments to ~1e-12.
 """
 
 from __future__ import annotations
@@ -46,6 +47,7 @@ class Backend:
     frontend_class: type
     quadrant_sums: Callable
     edge_kernel: Callable | None
+    align_kernel: Callable | None
 
     def frontend(self, params, fps: float):
         """A new front end (Eq. 1-12) for ``params`` at ``fps``."""
@@ -61,7 +63,8 @@ def resolve(backend: str = "auto") -> Backend:
         if fast_available():
             from . import _fast, _fast_targets
 
-            return Backend("numba", _fast.FastFrontEnd, _fast.quadrant_sums, _fast_targets.edges4)
+            return Backend("numba", _fast.FastFrontEnd, _fast.quadrant_sums, _fast_targets.edges4,
+                           _fast_targets.align_patch)
         if backend == "numba":
             raise ImportError(f"the numba backend is unavailable ({_FAST_ERROR})")
         if not _WARNED:
@@ -70,4 +73,4 @@ def resolve(backend: str = "auto") -> Backend:
     from .attention import quadrant_sums
     from .frontend import FrontEnd
 
-    return Backend("reference", FrontEnd, quadrant_sums, None)
+    return Backend("reference", FrontEnd, quadrant_sums, None, None)

@@ -519,7 +519,7 @@ def _sample(levels, level: int, cx: float, cy: float, step_x: float, step_y: flo
 
 
 def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
-          box: tuple[float, float], *, n: int = 32, iterations: int = 10) -> Alignment | None:
+          box: tuple[float, float], *, n: int = 32, iterations: int = 10, kernel=None) -> Alignment | None:
     """Scales and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
     ``cur`` (two :func:`pyramid` s), weighted on the object's box (half-width, half-height px).
 
@@ -529,10 +529,18 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     level whose pixel is at most 1.5 samples, so the cost does not depend on the object's size;
     samples outside the frame get no weight. None when the patch has too little texture or the
     iteration does not settle.
+
+    ``kernel``: the compiled version (:func:`mlplc2._fast_targets.align_patch`, the same
+    alignment to ~1e-12; :mod:`mlplc2.backend` chooses it) for float32 pyramids, or None.
     """
-    uu, vv, _ = _grid(n)
     step = 2.0 * half / n
     level = 0 if step <= 1.5 else min(int(math.ceil(math.log2(step / 1.5))), len(prev) - 1)
+    if kernel is not None and prev[level].dtype == cur[level].dtype == np.float32 \
+            and prev[level].ndim == cur[level].ndim == 2:
+        ok, *out = kernel(prev[level], cur[level], level, float(cx), float(cy), step, float(box[0]),
+                          float(box[1]), int(n), int(iterations))
+        return Alignment(*out) if ok else None
+    uu, vv, _ = _grid(n)
     a, inside = _sample(prev, level, cx, cy, step, step, n)
     a = cv2.GaussianBlur(a, (0, 0), 0.8)
     gx = cv2.Sobel(a, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
@@ -542,8 +550,9 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     wgt = (np.clip((1.2 * hw - np.abs(uu)) / (0.2 * hw), 0, 1) * np.clip((1.2 * hh - np.abs(vv)) / (0.2 * hh), 0, 1)
            * inside).astype(np.float32).ravel()
     jac = np.stack([(gx * uu).ravel(), (gy * vv).ravel(), gx.ravel(), gy.ravel()], 1)
-    jw = jac * wgt[:, None]
-    hess = (jw.T @ jac).astype(np.float64)
+    # the normal equations in float64: float32 sums would depend on the BLAS's summation order
+    jw = (jac * wgt[:, None]).astype(np.float64)
+    hess = jw.T @ jac
     if not np.all(np.isfinite(hess)) or np.linalg.cond(hess) > 1e7:
         return None
     hinv = np.linalg.inv(hess)
@@ -592,21 +601,21 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
     the contact lies ``-a / b`` frames after the newest frame (t = 0 there, ``1 / S = 1``).
     None with fewer than 3 frames.
     """
-    t = np.asarray(frames, dtype=np.float64)
-    if t.size < 3:
+    n = len(frames)
+    if n < 3:
         return None
-    t = t - t[-1]
-    ls = np.asarray(log_scale, dtype=np.float64)
-    y = np.exp(ls[-1] - ls)
-    tm = t.mean()
-    dt = t - tm
-    sxx = float(dt @ dt)
+    # plain floats: a dozen points, so NumPy's per-call overhead would be most of the cost
+    t_end, ls_end = float(frames[-1]), float(log_scale[-1])
+    t = [float(f) - t_end for f in frames]
+    y = [math.exp(ls_end - float(v)) for v in log_scale]
+    tm, ym = sum(t) / n, sum(y) / n
+    dt = [v - tm for v in t]
+    sxx = sum([d * d for d in dt])
     if sxx <= 0:
         return None
-    b = float(dt @ (y - y.mean())) / sxx
-    a = float(y.mean()) - b * tm
-    res = y - (a + b * t)
-    s2 = float(res @ res) / max(t.size - 2, 1)
+    b = sum([d * (v - ym) for d, v in zip(dt, y)]) / sxx
+    a = ym - b * tm
+    s2 = sum([(v - (a + b * tv)) ** 2 for v, tv in zip(y, t)]) / max(n - 2, 1)
     sb = math.sqrt(s2 / sxx) if s2 > 0 else 1e-12
     tstat = -b / sb
     rate = -b / a if a > 0 else 0.0
@@ -614,7 +623,7 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
         return ContactFit(None, None, tstat, rate)
     ttc = -a / b
     # delta method: var(a) = s2 (1/n + tm^2/sxx), cov(a, b) = -tm s2 / sxx
-    va = s2 * (1.0 / t.size + tm * tm / sxx)
+    va = s2 * (1.0 / n + tm * tm / sxx)
     cab = -tm * s2 / sxx
     ga, gb = -1.0 / b, a / (b * b)
     sigma = math.sqrt(max(ga * ga * va + 2 * ga * gb * cab + gb * gb * s2 / sxx, 0.0))
@@ -625,24 +634,24 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
     """Predicted offset at contact from the heading point, in object widths ``(right, down)``:
     the lines through ``(x - x_h) / w`` and ``(y - y_h) / w`` over ``frames``, evaluated
     ``ttc`` frames after the newest one (its length is the miss distance)."""
-    t = np.asarray(frames, dtype=np.float64)
-    w = np.asarray(widths, dtype=np.float64)
-    if t.size < 2 or np.any(w <= 0):
+    n = len(frames)
+    if n < 2 or any(float(w) <= 0 for w in widths):
         return None
-    t = t - t[-1]
-    u = (np.asarray(xs, dtype=np.float64) - heading[0]) / w
-    v = (np.asarray(ys, dtype=np.float64) - heading[1]) / w
-    tm = t.mean()
-    dt = t - tm
-    sxx = float(dt @ dt)
+    t_end = float(frames[-1])
+    t = [float(f) - t_end for f in frames]
+    tm = sum(t) / n
+    dt = [v - tm for v in t]
+    sxx = sum([d * d for d in dt])
     if sxx <= 0:
         return None
 
-    def at(z):
-        b = float(dt @ (z - z.mean())) / sxx
-        return float(z.mean()) + b * (ttc - tm)
+    def at(pos, origin):
+        z = [(float(q) - origin) / float(w) for q, w in zip(pos, widths)]
+        zm = sum(z) / n
+        b = sum([d * (v - zm) for d, v in zip(dt, z)]) / sxx
+        return zm + b * (ttc - tm)
 
-    return at(u), at(v)
+    return at(xs, heading[0]), at(ys, heading[1])
 
 
 def _even_dft_size(n: int) -> int:
@@ -766,15 +775,18 @@ class TargetLayer:
         Frame rate (frames -> seconds).
     kernel : callable, optional
         Compiled edge scan for :func:`measure_extent` (:mod:`mlplc2.backend`); None = NumPy.
+    align_kernel : callable, optional
+        Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
     focal : float, optional
         Focal length in px (from the camera's field of view): targets then carry bearings.
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
-                 focal: float | None = None):
+                 align_kernel=None, focal: float | None = None):
         self.params = TargetParams() if params is None else params
         self.fps = float(fps)
         self.kernel = kernel
+        self.align_kernel = align_kernel
         self.focal = focal
         self.reset()
 
@@ -782,8 +794,7 @@ class TargetLayer:
         self._tracks: list[Track] = []
         self._next = 1
         self._prev: list[np.ndarray] | None = None
-        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # the last grey frames
-        self._past_levels: list[np.ndarray] | None = None                     # pyramid of _past[0]
+        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
@@ -845,8 +856,7 @@ class TargetLayer:
                     t.last_answer = index
             self._tracks.append(t)
         self._prev = levels
-        self._past.append(gray)
-        self._past_levels = None
+        self._past.append(levels)
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
@@ -866,9 +876,7 @@ class TargetLayer:
         p = self.params
         if p.seed_change <= 0 or len(self._past) < p.change_frames or len(levels) < 2:
             return None
-        if self._past_levels is None:
-            self._past_levels = pyramid(self._past[0])
-        d = cv2.blur(cv2.absdiff(levels[1], self._past_levels[1]), (3, 3))
+        d = cv2.blur(cv2.absdiff(levels[1], self._past[0][1]), (3, 3))
         for zx, zy, zr in zones:                 # at half resolution
             x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
             y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
@@ -886,11 +894,9 @@ class TargetLayer:
         p = self.params
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
-        if self._past_levels is None:
-            self._past_levels = pyramid(self._past[0])
         half = p.margin * t.size / 2.0 + 3.0
-        al = align(self._past_levels, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                   iterations=p.iterations)
+        al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                   iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return False
         g = math.log(al.scale)
@@ -912,7 +918,7 @@ class TargetLayer:
         def change():
             if not self._past:
                 return None
-            return change_box(self._past[0], gray, x, y, int(p.max_shift))
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
 
         for find in ((edges, change) if field_seed else (change, edges)):
             box = find()
@@ -927,7 +933,7 @@ class TargetLayer:
         for t in self._tracks:
             half = p.margin * t.size / 2.0 + 3.0
             al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                       iterations=p.iterations)
+                       iterations=p.iterations, kernel=self.align_kernel)
             if al is None or al.residual > p.max_residual:
                 t.fails += 1
                 if t.fails < p.max_fails:

@@ -46,6 +46,7 @@ class _LPLC2Family(Model):
         self.frontend = impl.frontend(params, self.fps)
         self._quadrant_sums = impl.quadrant_sums
         self._edge_kernel = impl.edge_kernel
+        self._align_kernel = impl.align_kernel
         self._fields: list[AttentionField] = []
         self._ids = IdCounter()
         self.maps: LocalMotion | None = None
@@ -84,7 +85,7 @@ class _LPLC2Family(Model):
             if tp.heading is not None and self._work is not None:   # the heading in working pixels
                 sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
                 tp = tp.replace(heading=((tp.heading[0] + 0.5) * sx - 0.5, (tp.heading[1] + 0.5) * sy - 0.5))
-            self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel,
+            self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
         targets = self._layer.step(gray, self.maps, self._fields, index)
         fields = tuple(f.snapshot() for f in self._fields)

@@ -1,0 +1,185 @@
+"""The compiled image alignment (mlplc2._fast_targets.align_patch) against mlplc2.targets.align.
+
+The NumPy ``align`` is the oracle. The kernel samples, blurs and differentiates the patch in
+OpenCV's float32 order (bit for bit here; asserted to a few float32 ulps, the order of
+OpenCV's own SIMD paths) and solves the same float64 normal equations, so the alignments agree
+to ~1e-12 and the targets of a whole scene to ~1e-10 px. No timings here: see ``mlplc2 bench``.
+"""
+
+from __future__ import annotations
+
+import cv2
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2 import _fast_targets, stimuli
+from mlplc2 import targets as T
+from mlplc2.backend import resolve
+
+W, H = 200, 150
+
+
+def texture(seed: int = 0, w: int = W, h: int = H) -> np.ndarray:
+    """A smooth procedural texture (0-255, float32): blurred, upsampled noise."""
+    rng = np.random.default_rng(seed)
+    small = rng.random((h // 6 + 2, w // 6 + 2)).astype(np.float32) * 255.0
+    img = cv2.resize(small, (w, h), interpolation=cv2.INTER_CUBIC)
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+def zoomed(img: np.ndarray, cx: float, cy: float, kx: float, ky: float, dx: float, dy: float) -> np.ndarray:
+    """``img`` grown by (kx, ky) about (cx, cy) and shifted by (dx, dy): ``cur(c + d + K (x - c)) = img(x)``."""
+    m = np.array([[1 / kx, 0.0, cx - (cx + dx) / kx], [0.0, 1 / ky, cy - (cy + dy) / ky]], np.float32)
+    return cv2.warpAffine(img, m, (img.shape[1], img.shape[0]), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                          borderMode=cv2.BORDER_REPLICATE)
+
+
+def both(prev, cur, cx, cy, half, box, n=32, iterations=10):
+    pa, pc = T.pyramid(prev), T.pyramid(cur)
+    ref = T.align(pa, pc, cx, cy, half, box, n=n, iterations=iterations)
+    fast = T.align(pa, pc, cx, cy, half, box, n=n, iterations=iterations, kernel=_fast_targets.align_patch)
+    return ref, fast
+
+
+def assert_same(ref: T.Alignment, fast: T.Alignment) -> None:
+    for name in ("kx", "ky", "dx", "dy"):
+        a, b = getattr(ref, name), getattr(fast, name)
+        assert b == pytest.approx(a, rel=1e-6, abs=1e-6), name
+    # the rms residual and its sigma: the reference sums them in float32
+    assert fast.residual == pytest.approx(ref.residual, rel=1e-5, abs=1e-6)
+    assert fast.sigma == pytest.approx(ref.sigma, rel=1e-5, abs=1e-9)
+
+
+# --- the pieces: sampling and blur ----------------------------------------------------------
+@pytest.mark.parametrize("n", [16, 32, 64])
+def test_sampling_and_inside_mask_match_opencv(n):
+    rng = np.random.default_rng(n)
+    levels = T.pyramid(texture(1) + rng.normal(0, 3, (H, W)).astype(np.float32))
+    out = np.empty((n, n), np.float32)
+    in_x, in_y = np.empty(n, np.bool_), np.empty(n, np.bool_)
+    partial = 0
+    for _ in range(60):
+        level = int(rng.integers(0, len(levels)))
+        cx, cy = rng.uniform(-40, W + 40), rng.uniform(-40, H + 40)     # some patches cross the border
+        sx, sy = rng.uniform(0.3, 4.0, 2)
+        ref, inside = T._sample(levels, level, cx, cy, sx, sy, n)
+        everywhere = _fast_targets._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y)
+        np.testing.assert_array_equal(in_y[:, None] & in_x[None, :], inside)
+        assert everywhere == inside.all()
+        partial += 0 < inside.sum() < inside.size
+        np.testing.assert_allclose(out, ref, rtol=1e-6, atol=1e-4)   # bilinear, replicated border
+    assert partial >= 10
+
+
+@pytest.mark.parametrize("n", [8, 32])
+def test_blur_matches_opencv(n):
+    rng = np.random.default_rng(n)
+    taps = _fast_targets._TAPS
+    np.testing.assert_array_equal(taps, cv2.getGaussianKernel(7, 0.8, cv2.CV_32F).ravel())
+    pad, tmp, out = np.empty(n + taps.size - 1, np.float32), np.empty((n, n), np.float32), np.empty((n, n), np.float32)
+    for _ in range(10):
+        a = (rng.random((n, n)) * 255).astype(np.float32)
+        _fast_targets._blur(a, pad, tmp, out, taps)
+        np.testing.assert_allclose(out, cv2.GaussianBlur(a, (0, 0), 0.8), rtol=1e-6, atol=1e-4)
+
+
+# --- whole alignments ---------------------------------------------------------------------------
+@pytest.mark.parametrize("kx, ky, dx, dy, half", [
+    (1.0, 1.0, 0.0, 0.0, 20.0),
+    (1.04, 1.04, 0.7, -0.4, 20.0),       # an approaching object: growth and a sub-pixel shift
+    (0.96, 0.96, -1.2, 0.3, 16.0),       # receding
+    (1.03, 1.06, 0.2, 0.5, 24.0),        # anisotropic growth
+    (1.05, 1.05, 1.5, -2.0, 70.0),       # a large patch: pyramid level 2
+])
+def test_kernel_matches_reference_on_known_zooms(kx, ky, dx, dy, half):
+    prev = texture(2)
+    cx, cy = 97.3, 71.8
+    cur = zoomed(prev, cx, cy, kx, ky, dx, dy)
+    ref, fast = both(prev, cur, cx, cy, half, (half / 1.5, half / 1.5))
+    assert ref is not None and fast is not None
+    # the reference measures the known warp (the test is not about two wrong answers agreeing)
+    assert ref.kx == pytest.approx(kx, abs=3e-3) and ref.ky == pytest.approx(ky, abs=3e-3)
+    tol = 0.05 * max(1.0, half / 16.0)           # 0.05 samples, or px at level 0
+    assert ref.dx == pytest.approx(dx, abs=tol) and ref.dy == pytest.approx(dy, abs=tol)
+    assert_same(ref, fast)
+
+
+@pytest.mark.parametrize("cx, cy", [(3.0, 70.0), (W - 2.0, 5.0), (-6.0, H + 4.0), (100.0, H - 8.0)])
+def test_kernel_matches_reference_at_the_frame_border(cx, cy):
+    """Patches partly outside the frame (the inside masks of the template and of every
+    resampled patch: samples outside get no weight)."""
+    prev = texture(3)
+    cur = zoomed(prev, cx, cy, 1.04, 1.04, 0.4, -0.3)
+    levels = T.pyramid(prev)
+    _, inside = T._sample(levels, 0, cx, cy, 30.0 / 16, 30.0 / 16, 32)
+    assert 0 < inside.sum() < inside.size
+    ref, fast = both(prev, cur, cx, cy, 30.0, (20.0, 20.0))
+    assert ref is not None and fast is not None
+    assert ref.scale == pytest.approx(1.04, abs=0.01)
+    assert_same(ref, fast)
+
+
+def test_flat_or_one_dimensional_patches_give_none():
+    flat = np.full((H, W), 90.0, np.float32)
+    assert both(flat, flat, 100.0, 75.0, 20.0, (12.0, 12.0)) == (None, None)
+    # vertical stripes: the vertical scale and shift are not observable (singular Hessian)
+    stripes = np.tile((128 + 60 * np.sin(np.arange(W) / 3.0)).astype(np.float32), (H, 1))
+    assert both(stripes, stripes, 100.0, 75.0, 20.0, (12.0, 12.0)) == (None, None)
+
+
+def test_kernel_matches_reference_when_the_iteration_fails():
+    """Unrelated images: the iteration runs away (None) or settles on a poor fit (a large
+    residual, rejected by the layer's ``max_residual``), the same in both; and the iteration
+    limit is the same (stopped after 1, 2, 3 iterations)."""
+    outcomes = set()
+    for s in range(4):
+        for half in (10.0, 20.0):
+            ref, fast = both(texture(10 + s), texture(20 + s), 100.0, 75.0, half, (0.6 * half, 0.6 * half))
+            assert (ref is None) == (fast is None)
+            if ref is not None:
+                assert ref.residual > 25.0
+                assert_same(ref, fast)
+            outcomes.add(ref is None)
+    assert outcomes == {True, False}
+    prev = texture(6)
+    cur = zoomed(prev, 100.0, 75.0, 1.05, 1.05, 1.0, 0.5)
+    last = None
+    for iterations in (1, 2, 3):
+        ref, fast = both(prev, cur, 100.0, 75.0, 20.0, (13.0, 13.0), iterations=iterations)
+        assert ref is not None and fast is not None and ref != last
+        assert_same(ref, fast)
+        last = ref
+
+
+def test_dispatch_and_backend():
+    assert resolve("numba").align_kernel is _fast_targets.align_patch
+    assert resolve("reference").align_kernel is None
+    for backend, kernel in (("numba", _fast_targets.align_patch), ("reference", None)):
+        model = mlplc2.MLPLC2(fps=30.0, backend=backend)
+        model.step(np.zeros((48, 64), np.uint8))
+        assert model._layer.align_kernel is kernel
+
+
+# --- the targets of a whole scene -----------------------------------------------------------------
+@pytest.mark.parametrize("seed, background, duration", [(1, "texture", 2.0), (0, "plain", 3.0)])
+def test_targets_agree_with_the_reference_backend(seed, background, duration):
+    """mLPLC2's targets with the compiled and the reference backend: the same ids, boxes within
+    1e-3 px, times to contact within 1e-3 s (the plain background is the hard case: little
+    texture, so a float32 rounding difference used to change which targets were kept)."""
+    scene = stimuli.random_scene(seed, kinds=["collision", "pass"], background=background,
+                                 duration_s=duration, noise_std=2.0)
+    fast, ref = mlplc2.MLPLC2(fps=30.0, backend="numba"), mlplc2.MLPLC2(fps=30.0, backend="reference")
+    estimates = 0
+    for i, frame in enumerate(scene.frames):
+        a, b = fast.step(frame).targets, ref.step(frame).targets
+        assert [t.id for t in a] == [t.id for t in b], f"frame {i}"
+        for ta, tb in zip(a, b):
+            for name in ("x", "y", "width", "height"):
+                assert getattr(ta, name) == pytest.approx(getattr(tb, name), abs=1e-3), f"frame {i} {name}"
+            assert (ta.ttc_s is None) == (tb.ttc_s is None), f"frame {i}"
+            if ta.ttc_s is not None:
+                estimates += 1
+                assert ta.ttc_s == pytest.approx(tb.ttc_s, abs=1e-3), f"frame {i}"
+            assert ta.warning == tb.warning
+    assert estimates >= 10
