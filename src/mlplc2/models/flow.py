@@ -4,34 +4,38 @@ What a robotics engineer would build instead of a bio-inspired model, measured o
 benchmark with the same targets and warning rule (``docs/flow.md`` has the equations, the
 choices and the figures). Per frame:
 
-1. **Frame flow.** Dense optical flow ``F(x)`` from the previous frame to this one (OpenCV's
-   DIS, Kroeger et al. 2016; ``FlowParams.preset``).
-2. **Camera motion.** A global affine flow ``C(x) = (A - I) x + t`` fitted robustly to a grid
-   of the flow vectors (``cv2.estimateAffine2D``, RANSAC): a pan or a tilt is its
-   translation, forward ego-motion its expansion. The focus of expansion (:attr:`FlowTTC.foe`)
-   is the point the flow lines meet (least squares, robust reweighting), None when the flow
-   does not radiate from one point (a still camera, a pan).
-3. **Candidates.** The divergence ``div F = du/dx + dv/dy`` averaged over cells of ``cell``
-   px; cells that expand faster than the camera's own motion does (``div F - div C >
-   min_divergence``) are joined into regions (8-connected, at least ``min_cells``). A region
-   that no target claims becomes a target when the region that changed around it
-   (:func:`mlplc2.targets.change_box`) grew, alike in both directions, over the last
-   ``TargetParams.change_frames`` frames (the object's own flow, step 4).
-4. **The object's own flow.** Each target's box and a margin are resampled to ``patch`` x
-   ``patch`` samples in both frames (from an image pyramid, so the cost does not grow with the
-   object) and Farneback's flow (2003) is computed there, at the object's own scale: a
-   10-px object then spans 30 samples instead of one DIS patch smoothed over its boundary.
-   The model ``u = tx + kx (x - cx)``, ``v = ty + ky (y - cy)`` (per-axis expansion rates kx,
-   ky per frame) is fitted by weighted least squares to the samples with structure (weight:
-   the grey-level gradient's magnitude; a uniform area has no flow of its own), in two
-   layers: a sample belongs to the object when the object's model explains its flow better
-   than the camera's motion ``C`` does (``layer_iterations`` rounds); the background it
-   leaves out would pull the expansion towards zero.
-5. **Time to contact.** The box moves by (tx, ty) and grows by ``exp(kx)``, ``exp(ky)``; its
-   log-scale accumulates ``(kx + ky) / 2`` per frame and its anisotropy ``ky - kx``. The same
-   estimator as the LPLC2 family's targets (:func:`mlplc2.targets.estimate`: the ``1 / S``
-   line, the course, the horizon, the miss) gives ``ttc_s``, ``miss`` and the warning, with
-   looming evidence = sustained significant growth (``TargetParams.confirm_frames``).
+1. **Frame flow.** Dense optical flow ``F`` (OpenCV's DIS, Kroeger et al. 2016;
+   ``FlowParams.preset``) from the frame ``baseline`` frames back to this one.
+2. **Camera motion** (:func:`camera_motion`). A homography fitted by RANSAC to a grid of the
+   flow vectors, and a second one to its outliers when they are a large share (the ground
+   and the sky of a camera driving forward): the background's flow ``C``. The focus of
+   expansion (:func:`focus_of_expansion`, :attr:`FlowTTC.foe`) is the point the flow lines
+   meet, None when they do not radiate from one point (a still camera, a pan).
+3. **Candidates** (:func:`divergence`). The divergence ``du/dx + dv/dy`` of ``F - C`` where
+   the image has structure, averaged over cells of ``cell`` px; cells above
+   ``min_divergence`` (and the frame's noise) are joined into regions. A region that no
+   growing target claims becomes a target when its box (:func:`mlplc2.targets.change_box`,
+   the camera's motion undone) grew, alike in both directions, over the last
+   ``TargetParams.change_frames`` frames in the object's own flow (step 4), as the LPLC2
+   family's candidates must.
+4. **The object's own flow** (:func:`object_flow`). Each target's box and a margin are
+   resampled to ``patch`` x ``patch`` samples in both frames (from an image pyramid, so the
+   cost does not grow with the object) and Farneback's flow (2003) is computed there, at the
+   object's own scale: a 10-px object spans 30 samples instead of one DIS patch smoothed over
+   its boundary. The model ``u = tx + kx (x - cx)``, ``v = ty + ky (y - cy)`` (per-axis
+   expansion rates per frame) is fitted by weighted least squares to the normal flow (the
+   flow's component along the grey-level gradient, the one an edge determines), weighted by
+   the gradient's magnitude (a uniform area has no flow of its own), in two layers: a sample
+   belongs to the object when the object's model explains it better than the background's
+   ``C`` does (``layer_iterations`` rounds); the still background it leaves out would pull
+   the expansion towards zero.
+5. **Time to contact.** The box moves by (tx, ty), grows by ``exp(kx)``, ``exp(ky)`` and
+   settles on the object's layer (``refit``); its log-scale accumulates ``(kx + ky) / 2`` per
+   frame and its anisotropy ``ky - kx``; its positions are stabilised against the camera's
+   turn. The estimator of the LPLC2 family's targets (:func:`mlplc2.targets.estimate`: the
+   ``1 / S`` line, the course, the horizon, the miss) gives ``ttc_s``, ``miss`` and the
+   warning, with looming evidence = sustained significant growth
+   (``TargetParams.confirm_frames``).
 
 It has no attention fields; its alarm (``Output.collision``) is "any target warns" and its
 response the largest expansion rate (1/s).
@@ -87,9 +91,9 @@ class FlowParams(ParameterSet):
                                 plain background with sensor noise).""", unit="grey levels/px",
                                 valid=Valid.real(minimum=0))
     cell: int = param(8, "Side of the cells the divergence is averaged over.", unit="px", valid=Valid.integer(2))
-    min_divergence: float = param(0.006, """A cell is a candidate when its divergence exceeds the camera's own
-                                  there by this much per frame (0.006 = a time to contact of 11 s at 30 fps)
-                                  ...""", unit="1/frame", valid=Valid.real(minimum=0))
+    min_divergence: float = param(0.006, """A cell is a candidate when the divergence of the flow less the
+                                  camera's exceeds this per frame (0.006 = a time to contact of 11 s at 30
+                                  fps) ...""", unit="1/frame", valid=Valid.real(minimum=0))
     noise_k: float = param(4.0, """... and by this many times the frame's robust spread of the divergence
                            (1.4826 x the median absolute deviation over the cells).""",
                            valid=Valid.real(minimum=0))
@@ -97,8 +101,8 @@ class FlowParams(ParameterSet):
                            valid=Valid.integer(1))
     grid: int = param(8, "Spacing of the flow vectors the camera motion and the FOE are fitted to.", unit="px",
                       valid=Valid.integer(1))
-    camera_tolerance: float = param(0.5, """RANSAC inlier distance of the camera's affine flow
-                                    (``cv2.estimateAffine2D``) per frame of the baseline.""", unit="px",
+    camera_tolerance: float = param(0.5, """RANSAC inlier distance of the camera's homography
+                                    (``cv2.findHomography``) per frame of the baseline.""", unit="px",
                                     valid=Valid.real(minimum=0))
     second_layer: float = param(0.3, """A second background layer (homography) is fitted to the outliers of the
                                 first when it explains at least this fraction of the flow vectors (1 = never):
@@ -127,8 +131,8 @@ class FlowParams(ParameterSet):
                          larger side plus this belongs to the target (no new candidate).""", unit="px",
                          valid=Valid.real(minimum=0))
     max_targets: int = param(12, "Upper bound on simultaneous targets.", unit="targets", valid=Valid.integer(0))
-    idle_frames: int = param(10, """Frames a target lives with neither a candidate region under it nor a time
-                             to contact.""", unit="frames", valid=Valid.integer(0))
+    idle_frames: int = param(10, """Frames a target lives with neither a candidate region under it (while it
+                             grows) nor looming evidence.""", unit="frames", valid=Valid.integer(0))
 
     def __post_init__(self) -> None:
         check_fields(self, "FlowParams")
@@ -138,6 +142,7 @@ class FlowParams(ParameterSet):
 # stage functions
 # ---------------------------------------------------------------------------
 def _homography_flow(h: np.ndarray, xs, ys, k: float):
+    """``k (H(x) - x)`` at the points ``(xs, ys)``."""
     den = h[2, 0] * xs + h[2, 1] * ys + h[2, 2]
     return (k * ((h[0, 0] * xs + h[0, 1] * ys + h[0, 2]) / den - xs),
             k * ((h[1, 0] * xs + h[1, 1] * ys + h[1, 2]) / den - ys))
