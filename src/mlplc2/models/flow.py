@@ -1,23 +1,41 @@
 """A classical optical-flow baseline (not part of the paper): ``flow``.
 
-What a robotics engineer would reach for instead of a bio-inspired model, measured on the
-same benchmark with the same warning rule:
+What a robotics engineer would build instead of a bio-inspired model, measured on the same
+benchmark with the same targets and warning rule (``docs/flow.md`` has the equations, the
+choices and the figures). Per frame:
 
-1. dense optical flow between the previous frame and this one (OpenCV's DIS, Kroeger et al.
-   2016; preset ``FlowParams.preset``);
-2. the camera's own image motion, a global affine flow fitted robustly to a grid of the flow
-   vectors (``cv2.estimateAffine2D``, RANSAC): a pan or tilt is its translation, forward
-   ego-motion its expansion about the focus of expansion (FOE, the fixed point of the affine
-   map, :attr:`FlowTTC.foe`);
-3. the expansion of the flow, its divergence ``du/dx + dv/dy`` averaged over cells of
-   ``cell`` px: an object approaching at constant speed expands at ``d(log s)/dt = div / 2``,
-   i.e. ``ttc = 2 / div``;
-4. candidate regions: connected cells that expand faster than the camera's own motion does
-   there (by ``min_divergence`` per frame); each is followed from frame to frame (the box
-   moves with the mean flow in it and is re-fitted to the region), its log-scale accumulates
-   ``div / 2`` per frame, and the same estimator as the LPLC2 family's targets
-   (:func:`mlplc2.targets.estimate`: ``1 / S`` line, course, horizon, miss) gives ``ttc_s``,
-   ``miss`` and the warning, with looming evidence = sustained growth (``confirm_frames``).
+1. **Frame flow.** Dense optical flow ``F`` (OpenCV's DIS, Kroeger et al. 2016;
+   ``FlowParams.preset``) from the frame ``baseline`` frames back to this one.
+2. **Camera motion** (:func:`camera_motion`). A homography fitted by RANSAC to a grid of the
+   flow vectors, and a second one to its outliers when they are a large share (the ground
+   and the sky of a camera driving forward): the background's flow ``C``. The focus of
+   expansion (:func:`focus_of_expansion`, :attr:`FlowTTC.foe`) is the point the flow lines
+   meet, None when they do not radiate from one point (a still camera, a pan).
+3. **Candidates** (:func:`divergence`). The divergence ``du/dx + dv/dy`` of ``F - C`` where
+   the image has structure, averaged over cells of ``cell`` px; cells above
+   ``min_divergence`` (and the frame's noise) are joined into regions. A region that no
+   growing target claims becomes a target when its box (:func:`mlplc2.targets.change_box`,
+   the camera's motion undone) grew, alike in both directions, over the last
+   ``TargetParams.change_frames`` frames in the object's own flow (step 4), as the LPLC2
+   family's candidates must.
+4. **The object's own flow** (:func:`object_flow`). Each target's box and a margin are
+   resampled to ``patch`` x ``patch`` samples in both frames (from an image pyramid, so the
+   cost does not grow with the object) and Farneback's flow (2003) is computed there, at the
+   object's own scale: a 10-px object spans 30 samples instead of one DIS patch smoothed over
+   its boundary. The model ``u = tx + kx (x - cx)``, ``v = ty + ky (y - cy)`` (per-axis
+   expansion rates per frame) is fitted by weighted least squares to the normal flow (the
+   flow's component along the grey-level gradient, the one an edge determines), weighted by
+   the gradient's magnitude (a uniform area has no flow of its own), in two layers: a sample
+   belongs to the object when the object's model explains it better than the background's
+   ``C`` does (``layer_iterations`` rounds); the still background it leaves out would pull
+   the expansion towards zero.
+5. **Time to contact.** The box moves by (tx, ty), grows by ``exp(kx)``, ``exp(ky)`` and
+   settles on the object's layer (``refit``); its log-scale accumulates ``(kx + ky) / 2`` per
+   frame and its anisotropy ``ky - kx``; its positions are stabilised against the camera's
+   turn. The estimator of the LPLC2 family's targets (:func:`mlplc2.targets.estimate`: the
+   ``1 / S`` line, the course, the horizon, the miss) gives ``ttc_s``, ``miss`` and the
+   warning, with looming evidence = sustained significant growth
+   (``TargetParams.confirm_frames``).
 
 It has no attention fields; its alarm (``Output.collision``) is "any target warns" and its
 response the largest expansion rate (1/s).
@@ -34,15 +52,25 @@ import numpy as np
 
 from .._validation import InputTypeError, Valid, check_fields
 from ..params import ParameterSet, document_parameters, param
-from ..targets import Target, TargetParams, Track, check_hfov, count_down, estimate, focal_length
+from ..targets import (Target, TargetParams, Track, _overlap, change_box, check_hfov, count_down, estimate,
+                       focal_length, pyramid)
 from .base import WORK_WIDTH, Model, Output, register
 
-__all__ = ["FlowTTC", "FlowParams"]
+__all__ = ["FlowTTC", "FlowParams", "ObjectFlow", "object_flow", "camera_motion", "CameraMotion",
+           "focus_of_expansion", "divergence"]
 
 #: Smallest frame side (px) DIS computes a flow for; smaller frames give no targets.
 MIN_FLOW_SIZE = 12
 _PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
             "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
+#: Farneback's settings on the resampled patch, except its window (``FlowParams.window``):
+#: pyramid scale, levels, iterations, polynomial neighbourhood and its Gaussian sigma (OpenCV's
+#: recommended values for poly_n = 5).
+FARNEBACK = {"pyr_scale": 0.5, "levels": 3, "iterations": 3, "poly_n": 5, "poly_sigma": 1.1}
+#: Samples added around the patch on each side and left out of the fit: Farneback's flow is
+#: unreliable within a few samples of the patch's border (up to 0.5 sample between two equal
+#: images; below 1e-4 from 6 samples in).
+PAD = 6
 
 
 @document_parameters("Parameters")
@@ -51,44 +79,365 @@ class FlowParams(ParameterSet):
     """Parameters of the optical-flow baseline (:class:`FlowTTC`); the warning and TTC
     settings are the targets' (:class:`mlplc2.targets.TargetParams`)."""
 
-    preset: str = param("medium", "DIS optical flow preset (speed against accuracy).",
+    preset: str = param("medium", "DIS optical flow preset of the frame flow (speed against accuracy).",
                         valid=Valid.choice(*_PRESETS))
+    baseline: int = param(4, """The frame flow is computed from the frame this many frames back to this one:
+                          an object far away grows by a small fraction of a pixel per frame, four frames
+                          make its flow four times larger than DIS's noise.""", unit="frames",
+                          valid=Valid.integer(1, 30))
+    min_gradient: float = param(3.0, """Frame flow where the grey level's gradient (Sobel, locally averaged
+                                energy) is weaker than this is left out of the divergence: a uniform
+                                area has no flow of its own (DIS returns noise there, several px on a
+                                plain background with sensor noise).""", unit="grey levels/px",
+                                valid=Valid.real(minimum=0))
     cell: int = param(8, "Side of the cells the divergence is averaged over.", unit="px", valid=Valid.integer(2))
-    min_divergence: float = param(0.006, """A cell is a candidate when its divergence exceeds the camera's own
-                                  there by this much (per frame; 0.006 = a time to contact of 11 s at 30 fps).""",
-                                  unit="1/frame", valid=Valid.real(minimum=0))
-    min_cells: int = param(3, "Fewest connected cells that make a candidate region.", unit="cells",
+    min_divergence: float = param(0.006, """A cell is a candidate when the divergence of the flow less the
+                                  camera's exceeds this per frame (0.006 = a time to contact of 11 s at 30
+                                  fps) ...""", unit="1/frame", valid=Valid.real(minimum=0))
+    noise_k: float = param(4.0, """... and by this many times the frame's robust spread of the divergence
+                           (1.4826 x the median absolute deviation over the cells).""",
+                           valid=Valid.real(minimum=0))
+    min_cells: int = param(2, "Fewest connected cells that make a candidate region.", unit="cells",
                            valid=Valid.integer(1))
-    grid: int = param(8, "Spacing of the flow vectors the global (camera) motion is fitted to.", unit="px",
+    grid: int = param(8, "Spacing of the flow vectors the camera motion and the FOE are fitted to.", unit="px",
                       valid=Valid.integer(1))
+    camera_tolerance: float = param(0.5, """RANSAC inlier distance of the camera's homography
+                                    (``cv2.findHomography``) per frame of the baseline.""", unit="px",
+                                    valid=Valid.real(minimum=0))
+    second_layer: float = param(0.3, """A second background layer (homography) is fitted to the outliers of the
+                                first when it explains at least this fraction of the flow vectors (1 = never):
+                                the ground and the sky of a camera driving forward.""",
+                                valid=Valid.real(minimum=0, maximum=1))
+    min_foe_flow: float = param(0.2, """Frame-flow vectors shorter than this per frame of the baseline are left
+                                out of the focus of expansion.""", unit="px/frame", valid=Valid.real(minimum=0))
+    patch: int = param(48, "Side of the resampled patch a target's own flow is computed on (step 4).",
+                       unit="samples", valid=Valid.integer(16, 256))
+    margin: float = param(1.5, "Patch half-side = ``margin`` x half the box's larger side + 3 px.",
+                          valid=Valid.real(minimum=1))
+    window: int = param(5, """Averaging window of Farneback's flow on the patch (odd): smaller follows the
+                        object's boundary more closely (less of the still background blended into its
+                        flow), larger is smoother.""", unit="samples", valid=Valid.integer(3, 31))
+    layer_iterations: int = param(3, "Rounds of the object / camera layer assignment of the patch's samples.",
+                                  valid=Valid.integer(0, 20))
+    max_expansion: float = param(0.3, """Largest expansion rate of an accepted fit (log-scale per frame; 0.3 =
+                                 35 % per frame, a time to contact of 0.1 s at 30 fps): beyond it the fit
+                                 failed.""", unit="1/frame", valid=Valid.real(minimum=0))
+    refit: float = param(0.1, """Each frame a target's box moves this fraction of the way (geometrically
+                         for its size) towards the box of its object's layer in the patch (the 2-98 %
+                         weighted quantiles of its samples' positions): a box that started too large,
+                         too small or on one edge of the object settles on the object. 0 = the box only
+                         follows the flow.""", valid=Valid.real(minimum=0, maximum=1))
+    claim: float = param(8.0, """A region whose centre lies within a target's box widened by a quarter of its
+                         larger side plus this belongs to the target (no new candidate).""", unit="px",
+                         valid=Valid.real(minimum=0))
     max_targets: int = param(12, "Upper bound on simultaneous targets.", unit="targets", valid=Valid.integer(0))
-    idle_frames: int = param(10, "Frames a target lives without a candidate region under it.", unit="frames",
-                             valid=Valid.integer(0))
+    idle_frames: int = param(10, """Frames a target lives with neither a candidate region under it (while it
+                             grows) nor looming evidence.""", unit="frames", valid=Valid.integer(0))
 
     def __post_init__(self) -> None:
         check_fields(self, "FlowParams")
 
 
-def _expansion(flow: np.ndarray, cx: float, cy: float, hw: float, hh: float):
-    """Least-squares ``u = sx (x - cx) + tx``, ``v = sy (y - cy) + ty`` over the box of half-sizes
-    (hw, hh) around (cx, cy): the horizontal and vertical expansion rates (d log size per frame)
-    and the shift (tx, ty)."""
+# ---------------------------------------------------------------------------
+# stage functions
+# ---------------------------------------------------------------------------
+def _homography_flow(h: np.ndarray, xs, ys, k: float):
+    """``k (H(x) - x)`` at the points ``(xs, ys)``."""
+    den = h[2, 0] * xs + h[2, 1] * ys + h[2, 2]
+    return (k * ((h[0, 0] * xs + h[0, 1] * ys + h[0, 2]) / den - xs),
+            k * ((h[1, 0] * xs + h[1, 1] * ys + h[1, 2]) / den - ys))
+
+
+@dataclass(frozen=True)
+class CameraMotion:
+    """The camera's own image motion over ``frames`` frames: homographies that map a pixel of
+    the earlier frame to the later one, the dominant one ``H`` (3 x 3) and possibly a second
+    background layer ``H2``. A homography is exact for a turning camera (pan, tilt:
+    ``K R K^-1``) and for a plane seen from a moving one: a camera driving forward sees two,
+    the ground and the far scene (the sky, which does not move). The background's flow is
+    ``H(x) - x``."""
+
+    H: np.ndarray
+    frames: float
+    H2: np.ndarray | None = None
+
+    def flow(self, xs, ys, frames: float = 1.0) -> tuple[np.ndarray, np.ndarray]:
+        """The dominant layer's flow (px) at the points ``(xs, ys)`` (broadcast) over ``frames``
+        frames (the homography's flow scaled linearly: small motions)."""
+        return _homography_flow(self.H, xs, ys, frames / self.frames)
+
+    def flows(self, xs, ys, frames: float = 1.0) -> list[tuple[np.ndarray, np.ndarray]]:
+        """The flow of every layer (:meth:`flow`), the dominant one first."""
+        hs = [self.H] + ([self.H2] if self.H2 is not None else [])
+        return [_homography_flow(h, xs, ys, frames / self.frames) for h in hs]
+
+    def turning(self, cx: float, cy: float, width: float, ratio: float = 0.25) -> bool:
+        """Whether the dominant motion is a turn (pan, tilt) rather than the camera's
+        translation: its flow at the principal point (cx, cy) exceeds, ``1 / ratio`` times
+        over, the flow its expansion there makes at the image's side (``width / 2`` px away). A
+        turn moves the whole image alike to first order; a translation over the ground or
+        towards a wall expands it about the focus of expansion."""
+        d = width / 4.0
+        u0, v0 = self.flow(np.float64(cx), np.float64(cy), self.frames)
+        ur, _ = self.flow(np.float64(cx + d), np.float64(cy), self.frames)
+        ul, _ = self.flow(np.float64(cx - d), np.float64(cy), self.frames)
+        _, vd = self.flow(np.float64(cx), np.float64(cy + d), self.frames)
+        _, vu = self.flow(np.float64(cx), np.float64(cy - d), self.frames)
+        div = (ur - ul + vd - vu) / (2.0 * d)
+        return bool(abs(div) * width / 2.0 < ratio * math.hypot(u0, v0))
+
+
+def _fit_homography(src: np.ndarray, dst: np.ndarray, tolerance: float):
+    if len(src) < 8:
+        return None, None
+    m, inl = cv2.findHomography(src, dst, cv2.RANSAC, tolerance, maxIters=200, confidence=0.99)
+    if m is None or not np.isfinite(m).all() or abs(m[2, 2]) < 1e-12:
+        return None, None
+    return m / m[2, 2], inl.ravel().astype(bool)
+
+
+def camera_motion(flow: np.ndarray, frames: float = 1.0, grid: int = 8, tolerance: float = 0.5,
+                  second_layer: float = 0.3) -> CameraMotion | None:
+    """The camera's own image motion (:class:`CameraMotion`) from the flow vectors on a grid of
+    spacing ``grid``: the homography fitted by RANSAC (``cv2.findHomography``, inliers within
+    ``tolerance`` px), and a second one fitted to its outliers when it explains at least
+    ``second_layer`` of all the vectors (a moving object rarely covers that much before its
+    contact); None without a fit. ``frames``: the frames the flow spans."""
     h, w = flow.shape[:2]
-    x0, x1 = int(max(round(cx - hw), 0)), int(min(round(cx + hw) + 1, w))
-    y0, y1 = int(max(round(cy - hh), 0)), int(min(round(cy + hh) + 1, h))
-    if x1 - x0 < 2 or y1 - y0 < 2:
-        return 0.0, 0.0, (0.0, 0.0)
-    f = flow[y0:y1, x0:x1]
-    xs = np.arange(x0, x1, dtype=np.float32) - np.float32(cx)
-    ys = np.arange(y0, y1, dtype=np.float32) - np.float32(cy)
-    u, v = f[..., 0], f[..., 1]
-    mx, my = float(xs.mean()), float(ys.mean())
-    mu, mv = float(u.mean()), float(v.mean())
-    dx, dy = xs - mx, ys - my
-    den_x, den_y = float((dx * dx).sum()) * len(ys), float((dy * dy).sum()) * len(xs)
-    sx = float((u * dx[None, :]).sum()) / den_x if den_x > 0 else 0.0
-    sy = float((v * dy[:, None]).sum()) / den_y if den_y > 0 else 0.0
-    return sx, sy, (mu - sx * mx, mv - sy * my)
+    ys, xs = np.mgrid[grid // 2:h:grid, grid // 2:w:grid]
+    src = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float32)
+    dst = src + flow[ys.ravel(), xs.ravel()]
+    m, inl = _fit_homography(src, dst, tolerance)
+    if m is None:
+        return None
+    m2 = None
+    out = ~inl
+    if second_layer < 1 and out.sum() >= second_layer * len(src):
+        m2, inl2 = _fit_homography(src[out], dst[out], tolerance)
+        if m2 is not None and inl2.sum() < second_layer * len(src):
+            m2 = None
+    return CameraMotion(m, float(frames), m2)
+
+
+def focus_of_expansion(flow: np.ndarray, grid: int = 8, min_flow: float = 0.2,
+                       iterations: int = 5) -> tuple[float, float] | None:
+    """The point the flow lines radiate from (px), or None.
+
+    Every grid vector longer than ``min_flow`` defines a line; the point ``q`` minimising the
+    weighted squared distances to the lines, ``sum w_i (n_i . (q - p_i))^2`` (``n_i`` the
+    unit normal of vector i at ``p_i``, ``w_i`` its length), is refitted ``iterations`` times
+    with Cauchy weights on the distances (independently moving objects are outliers). None
+    with fewer than 20 vectors, when the lines are nearly parallel (a pan: the smaller
+    eigenvalue of the normal matrix below a tenth of the larger) or when most vectors point
+    towards ``q`` (a focus of contraction).
+    """
+    h, w = flow.shape[:2]
+    ys, xs = np.mgrid[grid // 2:h:grid, grid // 2:w:grid]
+    f = flow[ys.ravel(), xs.ravel()].astype(np.float64)
+    p = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float64)
+    mag = np.hypot(f[:, 0], f[:, 1])
+    keep = mag > min_flow
+    if keep.sum() < 20:
+        return None
+    f, p, mag = f[keep], p[keep], mag[keep]
+    n = np.stack([-f[:, 1], f[:, 0]], 1) / mag[:, None]
+    c = np.einsum("ij,ij->i", n, p)                  # n . p
+    wt = mag.copy()
+    q = None
+    for _ in range(iterations + 1):
+        a = (n * wt[:, None]).T @ n
+        ev = np.linalg.eigvalsh(a)
+        if ev[0] < 0.1 * ev[1]:
+            return None
+        q = np.linalg.solve(a, (n * (wt * c)[:, None]).sum(0))
+        d = np.abs(n @ q - c)
+        scale = max(float(np.median(d)), 0.5)
+        wt = mag / (1.0 + (d / (2.0 * scale)) ** 2)
+    if float(np.average(np.sign(np.einsum("ij,ij->i", f, p - q)), weights=wt)) < 0.5:
+        return None
+    return float(q[0]), float(q[1])
+
+
+@dataclass(frozen=True)
+class ObjectFlow:
+    """What :func:`object_flow` measured in a patch: per-axis expansion rates ``kx``, ``ky``
+    (log-scale per frame), the shift ``dx``, ``dy`` of the patch's centre (px), and the box of
+    the object's layer in the later frame (centre ``x``, ``y`` and size ``width``, ``height``
+    in px; None when it has too few samples)."""
+
+    kx: float
+    ky: float
+    dx: float
+    dy: float
+    box: tuple[float, float, float, float] | None = None
+
+
+def _sample(levels: list[np.ndarray], cx: float, cy: float, half: float, n: int) -> tuple[np.ndarray, float, int]:
+    """The ``n + 2 PAD`` square of samples centred on (cx, cy), spacing ``s = 2 half / n`` px,
+    bilinear from the pyramid level whose pixel is at most 1.5 samples; returns it, ``s`` and
+    the level."""
+    s = 2.0 * half / n
+    level = 0
+    while level + 1 < len(levels) and 2 ** (level + 1) <= 1.5 * s:
+        level += 1
+    k = 2.0 ** level
+    m = n + 2 * PAD
+    x0 = cx - half - PAD * s + 0.5 * s               # centre of sample 0 (px of the frame)
+    y0 = cy - half - PAD * s + 0.5 * s
+    warp = np.array([[s / k, 0.0, (x0 + 0.5) / k - 0.5], [0.0, s / k, (y0 + 0.5) / k - 0.5]], np.float32)
+    out = cv2.warpAffine(levels[level], warp, (m, m), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                         borderMode=cv2.BORDER_REPLICATE)
+    return out, s, level
+
+
+def object_flow(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
+                camera: CameraMotion | None, *, frames: float = 1.0, n: int = 48, window: int = 5, layer_iterations: int = 3,
+                max_expansion: float = 0.3, min_gradient: float = 3.0) -> ObjectFlow | None:
+    """The expansion and shift of the object in the square of half-side ``half`` px around
+    (cx, cy) from ``prev`` to ``cur`` (two :func:`mlplc2.targets.pyramid` s): step 4 of the
+    module docstring. ``camera``: the camera's motion (:func:`camera_motion`) or None (a still
+    one); ``frames``: the frames from ``prev`` to ``cur``. None when the patch has too little structure, lies outside the frame, or the
+    fit exceeds ``max_expansion``.
+    """
+    h, w = cur[0].shape
+    a, s, _ = _sample(prev, cx, cy, half, n)
+    b, _, _ = _sample(cur, cx, cy, half, n)
+    m = n + 2 * PAD
+    # sample coordinates: centred on the patch (samples), and in the frame (px)
+    j = np.arange(m, dtype=np.float64) - (m - 1) / 2.0
+    xs, ys = cx + s * j, cy + s * j
+    inside_x = (xs >= -0.5) & (xs <= w - 0.5)
+    inside_y = (ys >= -0.5) & (ys <= h - 0.5)
+    inner = np.zeros(m, bool)
+    inner[PAD:m - PAD] = True
+    valid = (inside_y & inner)[:, None] & (inside_x & inner)[None, :]
+    if not valid.any():
+        return None
+    if np.array_equal(a, b):                         # nothing changed: no motion (exactly)
+        return ObjectFlow(0.0, 0.0, 0.0, 0.0)
+    flow = cv2.calcOpticalFlowFarneback(a, b, None, winsize=window, flags=0, **FARNEBACK)
+    # the normal flow: the flow's component along the grey level's gradient (of the mean of
+    # the two patches), the one the aperture problem leaves determined at an edge
+    mean = 0.5 * (a + b)
+    gx = cv2.Sobel(mean, cv2.CV_32F, 1, 0, ksize=3).astype(np.float64)
+    gy = cv2.Sobel(mean, cv2.CV_32F, 0, 1, ksize=3).astype(np.float64)
+    g = np.hypot(gx, gy)
+    nx, ny = gx / np.maximum(g, 1e-9), gy / np.maximum(g, 1e-9)
+    # weight: the gradient's magnitude (grey levels per px of the frame) above min_gradient
+    w0 = np.where(valid, np.maximum(g * (0.125 / s) - min_gradient, 0.0), 0.0)
+    if w0.sum() <= 1e-6 * w0.size:
+        return None
+    normal = nx * flow[..., 0] + ny * flow[..., 1]
+    # the camera's normal flow at the samples, in samples per frame
+    if camera is None:
+        rc = np.abs(normal)
+    else:                                    # the background layer that explains it best
+        rc = np.min([np.abs(normal - (nx * uc + ny * vc) / s)
+                     for uc, vc in camera.flows(xs[None, :], ys[:, None], frames)], axis=0)
+    dj = np.broadcast_to(j[None, :], g.shape)
+    di = np.broadcast_to(j[:, None], g.shape)
+    rows = np.stack([nx, nx * dj, ny, ny * di], -1)          # (tx, kx, ty, ky)
+    wt = w0
+    for it in range(layer_iterations + 1):
+        par = _solve(rows, normal, wt)
+        if par is None:
+            return None
+        if it == layer_iterations:
+            break
+        wt = w0 * (np.abs(normal - rows @ par) <= rc)
+    tx, kx, ty, ky = (float(v) for v in par)
+    if not (abs(kx) <= max_expansion and abs(ky) <= max_expansion):
+        return None
+    # the object's layer, earlier frame: the samples the object's motion explains at least
+    # twice as well as the camera's (where the two nearly agree a sample could be either)
+    box = None
+    support = w0 * (np.abs(normal - rows @ par) <= 0.5 * rc)
+    ex, ey = _extent(j, support.sum(0)), _extent(j, support.sum(1))
+    if ex is not None and ey is not None:
+        (x0, x1), (y0, y1) = ex, ey
+        # moved to the later frame with the object's motion
+        box = (cx + s * (0.5 * (x0 + x1) * (1.0 + kx) + tx), cy + s * (0.5 * (y0 + y1) * (1.0 + ky) + ty),
+               s * (x1 - x0) * (1.0 + kx), s * (y1 - y0) * (1.0 + ky))
+    return ObjectFlow(float(kx), float(ky), float(tx * s), float(ty * s), box)
+
+
+def _extent(x: np.ndarray, w: np.ndarray, tail: float = 0.02) -> tuple[float, float] | None:
+    """The ``tail`` and ``1 - tail`` weighted quantiles of the sample positions ``x`` (each
+    sample one unit wide), or None without weight."""
+    total = float(w.sum())
+    if total <= 0:
+        return None
+    cum = np.concatenate([[0.0], np.cumsum(w) / total])
+    edges = np.concatenate([x - 0.5, [x[-1] + 0.5]])
+    return float(np.interp(tail, cum, edges)), float(np.interp(1.0 - tail, cum, edges))
+
+
+def _solve(rows: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray | None:
+    """Weighted least squares ``rows @ p = y`` (rows: (..., k)), or None when ill-conditioned
+    (the smallest eigenvalue of the normal matrix below 1e-6 of the largest: e.g. one straight
+    edge cannot tell expansion from shift)."""
+    r = rows.reshape(-1, rows.shape[-1])
+    ww = w.ravel()
+    keep = ww > 0
+    if keep.sum() < rows.shape[-1]:
+        return None
+    r, ww, yy = r[keep], ww[keep], y.ravel()[keep]
+    a = (r * ww[:, None]).T @ r
+    ev = np.linalg.eigvalsh(a)
+    if not ev[-1] > 0 or ev[0] < 1e-6 * ev[-1]:
+        return None
+    return np.linalg.solve(a, (r * (ww * yy)[:, None]).sum(0))
+
+
+def divergence(flow: np.ndarray, gray: np.ndarray, camera: CameraMotion | None, frames: float, cell: int,
+               min_gradient: float) -> np.ndarray:
+    """The divergence ``du/dx + dv/dy`` (Sobel) of the flow left after the camera's motion,
+    ``F - C``, averaged over cells of ``cell`` px; zero where ``gray`` has no structure (the
+    Gaussian-averaged gradient energy below ``min_gradient ** 2``; DIS's flow there is noise)."""
+    h, w = flow.shape[:2]
+    res = flow
+    if camera is not None:                   # less the background layer nearest to it
+        best = None
+        for uc, vc in camera.flows(np.arange(w, dtype=np.float32)[None, :], np.arange(h, dtype=np.float32)[:, None],
+                                   frames):
+            r = np.stack(np.broadcast_arrays(flow[..., 0] - uc, flow[..., 1] - vc), -1).astype(np.float32)
+            if best is None:
+                best = r
+            else:
+                closer = (r * r).sum(-1) < (best * best).sum(-1)
+                best[closer] = r[closer]
+        res = best
+    g = np.asarray(gray, np.float32)
+    gx = cv2.Sobel(g, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
+    gy = cv2.Sobel(g, cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
+    energy = cv2.GaussianBlur(gx * gx + gy * gy, (0, 0), 1.0)
+    res = res * (energy >= np.float32(min_gradient) ** 2)[..., None]
+    du = cv2.Sobel(res[..., 0], cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
+    dv = cv2.Sobel(res[..., 1], cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
+    return cv2.resize(du + dv, (max(w // cell, 1), max(h // cell, 1)), interpolation=cv2.INTER_AREA)
+
+
+@dataclass
+class _FlowTrack(Track):
+    """A target's state (:class:`mlplc2.targets.Track`) plus the camera's turn accumulated at its
+    box since its birth (px): the history's positions are the box's less it, so that the
+    course (:func:`mlplc2.targets.fit_course`) is the object's own, not the pan's."""
+
+    ox: float = 0.0
+    oy: float = 0.0
+    # the frames processed (repeated frames skipped, Model.repeat_threshold) when a candidate
+    # region was last found under it, and when it last showed looming evidence
+    seen: int = 0
+    loomed: int = -(10 ** 9)
+
+
+def _grew(t: Track, tp: TargetParams) -> bool:
+    """Whether the track grew by ``min_growth`` over its history, alike in both directions
+    (``max_anisotropy``); True while it is younger than ``change_frames``."""
+    if len(t.history) < tp.change_frames:
+        return True
+    g = t.history[-1][1] - t.history[0][1]
+    return g >= tp.min_growth and abs(t.history[-1][5] - t.history[0][5]) <= tp.max_anisotropy * g
 
 
 @register("flow")
@@ -128,32 +477,25 @@ class FlowTTC(Model):
         self._reset()
 
     def _reset(self) -> None:
-        self._prev: np.ndarray | None = None
+        self._frames: deque = deque(maxlen=max(self.params.baseline, self.target_params.change_frames))
+        self._levels: list[np.ndarray] | None = None      # pyramid of the previous frame
+        self._past_levels: list[np.ndarray] | None = None   # pyramid of the frame change_frames back
+        self._past_warped: np.ndarray | None = None        # that frame, the camera's motion undone
         self._dis = None
-        self._tracks: list[Track] = []
+        self._tracks: list[_FlowTrack] = []
         self._next = 1
+        self._steps = 0                                    # frames processed with a flow
         self.foe: tuple[float, float] | None = None
-        """The focus of expansion of the camera's own motion in the last frame (px), None without one."""
+        """The focus of expansion of the last frame flow (px), None without one."""
+        self.camera: CameraMotion | None = None
+        """The camera's own image motion in the last frame flow, None without one."""
         self.flow: np.ndarray | None = None
-        """The last frame's dense flow (H, W, 2), for inspection."""
+        """The last frame flow (H, W, 2): from ``baseline`` frames back (fewer in the first frames)."""
 
     def __getstate__(self):
         state = dict(self.__dict__)
         state["_dis"] = None                 # OpenCV objects do not pickle; rebuilt on the next frame
         return state
-
-    def _camera_motion(self, flow: np.ndarray):
-        """The global affine flow (2 x 3, ``x' = A x + t``) of a grid of flow vectors, or None."""
-        g = self.params.grid
-        h, w = flow.shape[:2]
-        ys, xs = np.mgrid[g // 2:h:g, g // 2:w:g]
-        src = np.stack([xs.ravel(), ys.ravel()], 1).astype(np.float32)
-        dst = src + flow[ys.ravel(), xs.ravel()]
-        if len(src) < 6:
-            return None
-        m, _ = cv2.estimateAffine2D(src, dst, method=cv2.RANSAC, ransacReprojThreshold=0.5, maxIters=200,
-                                    confidence=0.99, refineIters=5)
-        return m
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p, tp = self.params, self.target_params
@@ -161,89 +503,168 @@ class FlowTTC(Model):
         h, w = cur.shape
         if min(h, w) < MIN_FLOW_SIZE:            # DIS needs 12 px: no flow, no targets
             return Output(frame=index, response=0.0)
-        if self._prev is None or self._prev.shape != cur.shape:
-            self._prev = cur
+        levels = pyramid(gray)
+        if not self._frames or self._frames[-1][0].shape != cur.shape:
+            self._frames.clear()
+            self._tracks = []
+            self._frames.append((cur, gray))
+            self._levels = levels
             return Output(frame=index, response=0.0)
         if self._dis is None:
             self._dis = cv2.DISOpticalFlow_create(_PRESETS[p.preset])
-        flow = self._dis.calc(self._prev, cur, None)
-        self._prev = cur
-        self.flow = flow
-        # expansion per cell: divergence of the flow, and of the camera's own (affine) motion
-        du = cv2.Sobel(flow[..., 0], cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
-        dv = cv2.Sobel(flow[..., 1], cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
-        c = p.cell
-        gh, gw = max(h // c, 1), max(w // c, 1)
-        div = cv2.resize(du + dv, (gw, gh), interpolation=cv2.INTER_AREA)
-        m = self._camera_motion(flow)
-        own = 0.0
-        self.foe = None
-        if m is not None:
-            a = m[:, :2] - np.eye(2)
-            own = float(a[0, 0] + a[1, 1])
-            try:
-                self.foe = tuple(float(v) for v in np.linalg.solve(a, -m[:, 2]))
-            except np.linalg.LinAlgError:
-                self.foe = None
-        mask = (div - own > p.min_divergence).astype(np.uint8)
-        n, labels, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
-        regions = []
-        for k in range(1, n):
-            x0, y0, bw, bh, area = (int(v) for v in stats[k])
-            if area < p.min_cells:
-                continue
-            d = float(div[labels == k].mean())
-            regions.append(((x0 + bw / 2.0) * c - 0.5, (y0 + bh / 2.0) * c - 0.5, bw * c, bh * c, d))
-        # follow the tracks: move with the mean flow in the box, grow by exp(div / 2)
-        used = set()
-        kept = []
-        for t in self._tracks:
-            best = None
-            for i, r in enumerate(regions):
-                if i in used:
-                    continue
-                if abs(r[0] - t.cx) <= (r[2] + t.w) / 2 and abs(r[1] - t.cy) <= (r[3] + t.h) / 2:
-                    if best is None or r[2] * r[3] > regions[best][2] * regions[best][3]:
-                        best = i
-            # the flow in the box's inner part, fitted by a similarity: u = s (x - cx) + tx (and v):
-            # the divergence averaged over a box that holds the whole object would be ~0 (the
-            # flux through a border where the background is still)
-            rx, ry, shift = _expansion(flow, t.cx, t.cy, 0.375 * t.w, 0.375 * t.h)
-            rate = 0.5 * (rx + ry)
-            t.cx += shift[0]
-            t.cy += shift[1]
-            t.w *= math.exp(rx)
-            t.h *= math.exp(ry)
-            if best is not None:
-                used.add(best)
-                r = regions[best]
-                t.cx, t.cy = 0.7 * t.cx + 0.3 * r[0], 0.7 * t.cy + 0.3 * r[1]
-                t.w, t.h = 0.7 * t.w + 0.3 * r[2], 0.7 * t.h + 0.3 * r[3]
-                t.last_seen = index
-            t.log_s += rate
-            t.aniso += ry - rx
-            t.rate = rate * self.fps
-            t.history.append((index, t.log_s, t.cx, t.cy, t.w, t.aniso))
-            if not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1) or index - t.last_seen > p.idle_frames:
-                continue
-            kept.append(t)
-        self._tracks = kept
-        for i, r in enumerate(regions):
-            if i in used or len(self._tracks) >= p.max_targets:
-                continue
-            t = Track(self._next, index, r[0], r[1], r[2], r[3])
-            t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)
-            t.last_seen = index
-            self._next += 1
-            self._tracks.append(t)
+        k = min(p.baseline, len(self._frames))
+        flow = self._dis.calc(self._frames[-k][0], cur, None)
+        cam = camera_motion(flow, k, p.grid, p.camera_tolerance * k, p.second_layer)
+        self.flow, self.camera = flow, cam
+        self.foe = focus_of_expansion(flow, p.grid, p.min_foe_flow * k)
+        self._steps += 1
+        self._follow(levels, cam, index, w, h)
+        self._merge()
+        self._past_levels = self._past_warped = None
+        self._candidates(divergence(flow, gray, cam, k, p.cell, p.min_gradient) / k, cam, gray, levels, index)
+        self._frames.append((cur, gray))
+        self._levels = levels
         focal = focal_length(w, self.hfov_deg)
-        # looming evidence is sustained growth only (no attention field can answer)
-        targets = tuple(sorted((estimate(t, tp, self.fps, index, (h, w), focal) for t in self._tracks),
-                               key=Target.urgency))
+        out = [estimate(t, tp, self.fps, index, (h, w), focal) for t in self._tracks]
+        for t, o in zip(self._tracks, out):
+            if o.looming:
+                t.loomed = self._steps
+        alive = [self._steps - max(t.seen, t.loomed) <= p.idle_frames for t in self._tracks]
+        self._tracks = [t for t, a in zip(self._tracks, alive) if a]
+        targets = tuple(sorted((o for o, a in zip(out, alive) if a), key=Target.urgency))
         response = max((t.expansion or 0.0 for t in targets), default=0.0)
         warn = any(t.warning for t in targets)
         return Output(frame=index, response=float(max(response, 0.0)), collision=warn, spike=warn, targets=targets)
 
+    def _half(self, t: Track) -> float:
+        return self.params.margin * t.size / 2.0 + 3.0
+
+    def _follow(self, levels, cam, index: int, w: int, h: int) -> None:
+        """Move and grow every target with its own flow (step 4); drop the lost ones."""
+        p, tp = self.params, self.target_params
+        turning = cam is not None and cam.turning((w - 1) / 2.0, (h - 1) / 2.0, w)
+        kept = []
+        for t in self._tracks:
+            of = object_flow(self._levels, levels, t.cx, t.cy, self._half(t), cam, n=p.patch, window=p.window,
+                             layer_iterations=p.layer_iterations, max_expansion=p.max_expansion,
+                             min_gradient=p.min_gradient)
+            if of is None:
+                t.fails += 1
+                if t.fails < tp.max_fails:
+                    kept.append(t)
+                continue
+            t.fails = 0
+            t.cx += of.dx
+            t.cy += of.dy
+            t.w *= math.exp(of.kx)
+            t.h *= math.exp(of.ky)
+            if of.box is not None and p.refit > 0:     # towards the object's layer
+                b = p.refit
+                t.cx += b * (of.box[0] - t.cx)
+                t.cy += b * (of.box[1] - t.cy)
+                t.w *= min(max(of.box[2], 1.0) / t.w, 1.0) ** b
+                t.h *= min(max(of.box[3], 1.0) / t.h, 1.0) ** b
+            rate = 0.5 * (of.kx + of.ky)
+            t.log_s += rate
+            t.aniso += of.ky - of.kx
+            t.rate = rate * self.fps
+            if turning:                  # the camera's share of the box's motion: stabilised course
+                du, dv = cam.flow(t.cx - of.dx, t.cy - of.dy)
+                t.ox += float(du)
+                t.oy += float(dv)
+            t.history.append((index, t.log_s, t.cx - t.ox, t.cy - t.oy, t.w, t.aniso))
+            if t.size < 2.0 or t.size > 4.0 * max(w, h) or not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1):
+                continue
+            kept.append(t)
+        self._tracks = kept
+
+    def _merge(self) -> None:
+        """Two targets are one object when most of the smaller box lies in the larger: keep the
+        one with the latest looming evidence, else the older."""
+        out: list[Track] = []
+        for t in sorted(self._tracks, key=lambda t: (-t.loomed, t.id)):
+            host = next((o for o in out if _overlap(o, t) >= 0.5), None)
+            if host is None:
+                out.append(t)
+            else:
+                host.seen = max(host.seen, t.seen)
+        self._tracks = out
+
+    def _candidates(self, div: np.ndarray, cam, gray, levels, index: int) -> None:
+        """Regions that expand faster than the camera's motion (step 3; ``div``: per frame, the
+        camera's removed): claimed by a target, or new ones."""
+        p, tp = self.params, self.target_params
+        c = p.cell
+        spread = 1.4826 * float(np.median(np.abs(div - np.median(div))))
+        mask = (div > max(p.min_divergence, p.noise_k * spread)).astype(np.uint8)
+        # the outermost cells: new content enters there when the camera turns, and DIS's
+        # flow at the frame's border is least reliable
+        mask[0] = mask[-1] = 0
+        mask[:, 0] = mask[:, -1] = 0
+        n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+        regions = []
+        for r in range(1, n):
+            x0, y0, bw, bh, area = (int(v) for v in stats[r])
+            if area >= p.min_cells:
+                regions.append((area, (x0 + bw / 2.0) * c - 0.5, (y0 + bh / 2.0) * c - 0.5, bw * c, bh * c))
+        ready = len(self._frames) >= tp.change_frames
+        # a target claims the regions around it while it grows alike in both directions (one
+        # on the background, or on the ground ahead, neither hides nor keeps alive an object's
+        # regions)
+        growing = [t for t in self._tracks if _grew(t, tp)]
+        for _, x, y, bw, bh in sorted(regions, reverse=True):       # the largest first
+            owners = [t for t in growing if t.contains(x, y, 0.25 * t.size + p.claim)]
+            if owners:
+                for t in owners:
+                    t.seen = self._steps
+                continue
+            if not ready or len(self._tracks) >= p.max_targets:
+                continue
+            box = change_box(self._still_past(cam), gray, int(round(x)), int(round(y)), int(tp.max_shift))
+            if box is None or max(abs(box[0] - x), abs(box[1] - y)) > tp.max_shift:
+                if max(bw, bh) > 2 * tp.max_shift:      # no compact object (change_box's window)
+                    continue
+                box = (x, y, float(bw), float(bh))
+            t = _FlowTrack(self._next, index, *box)
+            if any(_overlap(o, t) >= 0.5 for o in self._tracks) or not self._grows(t, levels, cam):
+                continue
+            t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
+            t.seen = self._steps
+            self._next += 1
+            self._tracks.append(t)
+
+    def _still_past(self, cam: CameraMotion | None) -> np.ndarray:
+        """The frame ``change_frames`` back, warped by the camera's motion since (once per frame):
+        what changed between it and this frame is the objects' own motion."""
+        if self._past_warped is None:
+            c = self.target_params.change_frames
+            past = self._frames[-c][1]
+            self._past_warped = past
+            if cam is not None:
+                h, w = past.shape
+                xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
+                uc, vc = cam.flow(xs, ys, c)
+                if max(float(np.abs(uc).max()), float(np.abs(vc).max())) > 0.05:
+                    self._past_warped = cv2.remap(past, (xs - uc).astype(np.float32), (ys - vc).astype(np.float32),
+                                                  cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        return self._past_warped
+
+    def _grows(self, t: Track, levels, cam) -> bool:
+        """Whether the candidate's own flow over the last ``change_frames`` frames grew by
+        ``min_growth``, alike in both directions (``max_anisotropy``), as the LPLC2 family's
+        candidates must (:class:`mlplc2.targets.TargetParams`)."""
+        p, tp = self.params, self.target_params
+        if tp.min_growth <= 0:
+            return True
+        if self._past_levels is None:
+            self._past_levels = pyramid(self._frames[-tp.change_frames][1])
+        of = object_flow(self._past_levels, levels, t.cx, t.cy, self._half(t), cam, frames=tp.change_frames,
+                         n=p.patch, window=p.window, layer_iterations=p.layer_iterations,
+                         max_expansion=tp.change_frames * p.max_expansion, min_gradient=p.min_gradient)
+        if of is None:
+            return False
+        g = 0.5 * (of.kx + of.ky)
+        return g >= tp.min_growth and abs(of.ky - of.kx) <= tp.max_anisotropy * g
+
     def _hold(self, last: Output, elapsed: float) -> Output:
         return replace(last, targets=count_down(last.targets, elapsed))
-

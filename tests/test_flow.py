@@ -1,0 +1,236 @@
+"""The optical-flow baseline (``flow``, :mod:`mlplc2.models.flow`): time to contact, no
+warning for what does not approach, the course of a pass-by, the focus of expansion of a
+camera driving forward, the stage functions, pickling and reset, and its documentation.
+
+The generic per-frame contract is in ``test_contract.py`` (every registered model)."""
+
+from __future__ import annotations
+
+import doctest
+import math
+import pickle
+from pathlib import Path
+
+import cv2
+import numpy as np
+import pytest
+
+import mlplc2.models.flow as flow_module
+from mlplc2.models.flow import FlowParams, FlowTTC, camera_motion, divergence, focus_of_expansion, object_flow
+from mlplc2.params import parameter_table
+from mlplc2.stimuli import ApproachObject, approach
+from mlplc2.targets import pyramid
+
+DOCS = Path(__file__).resolve().parents[1] / "docs"
+
+
+def _run(stim, model=None):
+    model = FlowTTC(fps=stim.fps) if model is None else model
+    return model, [model.step(f) for f in stim.frames]
+
+
+def _on(out, row):
+    """The targets of ``out`` whose centre lies on the object of truth row ``row``."""
+    _, x, y, w, h, _, _ = row
+    return [t for t in out.targets if abs(t.x - x) <= max(w / 2, 4) and abs(t.y - y) <= max(h / 2, 4)]
+
+
+def _ttc_errors(stim, outs, lo=1.0, hi=3.0):
+    """Relative errors of the estimates on object 1 in the frames whose true TTC is in [lo, hi)."""
+    errs = []
+    for row in stim.objects[0].track:
+        frame, ttc = row[0], row[5]
+        if ttc is None or not lo <= ttc < hi:
+            continue
+        est = [t.ttc_s for t in _on(outs[frame], row) if t.ttc_s is not None]
+        if est:
+            errs.append(abs(est[0] - ttc) / ttc)
+    return errs
+
+
+# -- time to contact -------------------------------------------------------------------
+@pytest.mark.parametrize("appearance, noise", [("dark", 0.0), ("textured", 2.0)])
+def test_ttc_within_15_percent_on_a_plain_background(appearance, noise):
+    """A constant-speed approach on a plain background, true TTC 3.2 s down to 0.9 s: the
+    median relative error over the frames of the 1-3 s bin is below 15 %, in most of them."""
+    obj = ApproachObject.collision(ttc_s=3.2, at=(150, 110), width_px=8.0, speed_mps=4.0, appearance=appearance)
+    stim = approach([obj], background="plain", duration_s=2.3, noise_std=noise, seed=1)
+    _, outs = _run(stim)
+    errs = _ttc_errors(stim, outs)
+    in_bin = sum(1 for r in stim.objects[0].track if r[5] is not None and 1.0 <= r[5] < 3.0)
+    assert len(errs) >= 0.6 * in_bin, (len(errs), in_bin)
+    assert np.median(errs) < 0.15, np.median(errs)
+
+
+def test_a_collision_on_a_textured_background_warns_in_time():
+    """The still background around the object is left out of its expansion: the estimate is
+    not pulled towards zero, and the warning comes before the horizon has half passed."""
+    obj = ApproachObject.collision(ttc_s=2.5, at=(170, 100), width_px=10.0, speed_mps=4.0, appearance="dark")
+    stim = approach([obj], background="texture", duration_s=2.4, seed=2)
+    _, outs = _run(stim)
+    assert np.median(_ttc_errors(stim, outs, 0.5, 3.0)) < 0.2
+    first = next(r for r in stim.objects[0].track if any(t.warning for t in _on(outs[r[0]], r)))
+    assert first[5] >= 0.5                     # true TTC at the first warning (horizon 1 s)
+
+
+@pytest.mark.parametrize("background", ["plain", "texture"])
+def test_one_object_is_one_target(background):
+    """The regions of an approaching object are claimed by its target: one id follows it from
+    its detection to its contact (the frames where it still fits in the view)."""
+    obj = ApproachObject.collision(ttc_s=2.5, at=(150, 110), width_px=8.0, speed_mps=4.0, appearance="dark")
+    stim = approach([obj], background=background, duration_s=2.4, noise_std=2.0, seed=9)
+    _, outs = _run(stim)
+    ids = {t.id for r in stim.objects[0].track if r[3] <= 240 for t in _on(outs[r[0]], r)}
+    assert len(ids) == 1, ids
+
+
+# -- what does not approach --------------------------------------------------------------
+@pytest.mark.parametrize("kind", ["receding", "static"])
+def test_receding_and_static_objects_give_no_warning(kind):
+    make = ApproachObject.receding if kind == "receding" else ApproachObject.static
+    obj = make(at=(160, 120), distance_m=3.0, width_px=40.0, appearance="dark")
+    stim = approach([obj], background="texture", frames=60, noise_std=2.0, seed=3)
+    _, outs = _run(stim)
+    assert not any(o.warning or o.collision for o in outs)
+    assert not any(t.ttc_s is not None for o in outs for t in o.targets)
+
+
+def test_a_pass_by_gives_no_warning_and_misses_by_more_than_a_width():
+    obj = ApproachObject.pass_by(ttc_s=2.5, miss_widths=3.0, side="right", at=(150, 120), width_px=10.0,
+                                 speed_mps=4.0, appearance="dark")
+    stim = approach([obj], background="texture", duration_s=2.2, seed=4)
+    _, outs = _run(stim)
+    assert not any(o.warning for o in outs)
+    misses = [t.miss for r in stim.objects[0].track for t in _on(outs[r[0]], r) if t.miss is not None]
+    assert len(misses) >= 10
+    assert np.median(misses) > 1.0, np.median(misses)
+
+
+# -- the camera's own motion ---------------------------------------------------------------
+def test_focus_of_expansion_of_forward_ego_motion_is_near_the_principal_point():
+    stim = approach([], background="ground", camera="forward", camera_speed=3.0, frames=12, seed=5)
+    model, _ = _run(stim)
+    assert model.foe is not None
+    cx, cy = (320 - 1) / 2.0, (240 - 1) / 2.0
+    assert math.hypot(model.foe[0] - cx, model.foe[1] - cy) < 8.0, model.foe
+    assert not model.camera.turning(cx, cy, 320)
+
+
+def test_a_pan_has_no_focus_of_expansion_and_is_a_turn():
+    stim = approach([], background="texture", camera="pan", camera_speed=20.0, frames=8, seed=6)
+    model, outs = _run(stim)
+    assert model.foe is None
+    assert model.camera.turning((320 - 1) / 2.0, (240 - 1) / 2.0, 320)
+    u, _ = model.camera.flow(159.5, 119.5)
+    assert u < -1.0                            # turning right: the scene moves left
+    assert not any(o.targets for o in outs)     # the background does not become a target
+
+
+def test_a_pan_does_not_bend_the_course():
+    """The camera's turn is taken out of the course: a collision seen from a panning camera
+    slides across the image but is predicted to hit (miss within max_miss) and warns."""
+    obj = ApproachObject.collision(ttc_s=2.5, at=(200, 120), width_px=10.0, speed_mps=4.0, appearance="dark")
+    stim = approach([obj], background="texture", camera="pan", camera_speed=15.0, duration_s=2.4, seed=7)
+    _, outs = _run(stim)
+    late = [t for r in stim.objects[0].track if r[5] is not None and 0.3 <= r[5] < 1.0
+            for t in _on(outs[r[0]], r) if t.miss is not None]
+    assert late and np.median([t.miss for t in late]) <= 1.0
+    assert any(t.warning for t in late)
+
+
+# -- stage functions -------------------------------------------------------------------------
+@pytest.mark.parametrize("background", ["plain", "texture"])
+@pytest.mark.parametrize("width", [12.0, 20.0])
+def test_object_flow_measures_a_small_disc_s_expansion(background, width):
+    """Two frames of a dark disc 12 or 20 px wide growing 2.2 %: the patch's fit finds kx and
+    ky within 15 % of it, on a uniform background (only the edge has flow: the normal flow)
+    and on a textured still one (left out by the layers), and the object's layer gives its box."""
+    obj = ApproachObject.collision(ttc_s=1.5, at=(80.3, 60.6), width_px=width, speed_mps=4.0, appearance="dark",
+                                   size=(160, 120))
+    stim = approach([obj], size=(160, 120), background=background, frames=2, seed=0)
+    (_, x, y, w0, _, _, _), (_, _, _, w1, _, _, _) = stim.objects[0].track[:2]
+    k = math.log(w1 / w0)
+    a, b = (pyramid(f.astype(np.float32)) for f in stim.frames)
+    of = object_flow(a, b, x, y, 1.5 * w0 / 2 + 3.0, None)
+    assert of is not None
+    assert of.kx == pytest.approx(k, rel=0.15) and of.ky == pytest.approx(k, rel=0.15)
+    assert abs(of.dx) < 0.1 and abs(of.dy) < 0.1
+    assert of.box is not None and of.box[2] == pytest.approx(w1, rel=0.15)
+
+
+def test_object_flow_of_two_equal_patches_is_exactly_still():
+    img = np.random.default_rng(1).uniform(0, 255, (60, 80)).astype(np.float32)
+    of = object_flow(pyramid(img), pyramid(img.copy()), 40.0, 30.0, 10.0, None)
+    assert (of.kx, of.ky, of.dx, of.dy) == (0.0, 0.0, 0.0, 0.0)
+
+
+def test_divergence_ignores_the_noise_flow_of_a_uniform_background():
+    """DIS returns px-sized noise flow on a uniform background with sensor noise; the divergence
+    is taken only where the image has structure, so it stays below the candidate threshold."""
+    rng = np.random.default_rng(2)
+    a = np.clip(128 + rng.normal(0, 2, (120, 160)), 0, 255).astype(np.uint8)
+    b = np.clip(128 + rng.normal(0, 2, (120, 160)), 0, 255).astype(np.uint8)
+    flow = cv2.DISOpticalFlow_create(cv2.DISOPTICAL_FLOW_PRESET_MEDIUM).calc(a, b, None)
+    assert np.abs(flow).max() > 0.5                                # DIS's flow there is noise ...
+    div = divergence(flow, b.astype(np.float32), camera_motion(flow), 1.0, 8, FlowParams().min_gradient)
+    assert np.abs(div).max() < FlowParams().min_divergence          # ... and no candidate
+
+
+def test_camera_motion_and_foe_of_a_synthetic_expansion():
+    h, w = 120, 160
+    ys, xs = np.mgrid[0:h, 0:w].astype(np.float32)
+    flow = np.stack([0.02 * (xs - 100.0), 0.02 * (ys - 40.0)], -1).astype(np.float32)
+    cam = camera_motion(flow)
+    u, v = cam.flow(np.float64(130.0), np.float64(70.0))
+    assert (u, v) == (pytest.approx(0.6, abs=1e-3), pytest.approx(0.6, abs=1e-3))
+    foe = focus_of_expansion(flow)
+    assert foe == (pytest.approx(100.0, abs=0.1), pytest.approx(40.0, abs=0.1))
+    assert focus_of_expansion(-flow) is None                        # a focus of contraction
+
+
+# -- state -----------------------------------------------------------------------------------
+def _looming():
+    obj = ApproachObject.collision(ttc_s=2.0, at=(140, 100), width_px=10.0, speed_mps=4.0, appearance="textured")
+    return approach([obj], background="texture", duration_s=1.8, noise_std=2.0, seed=8)
+
+
+def test_pickled_mid_track_continues_identically_and_reset_starts_afresh():
+    stim = _looming()
+    half = len(stim.frames) // 2
+    model = FlowTTC(fps=stim.fps)
+    first = [model.step(f) for f in stim.frames[:half]]
+    assert first[-1].targets                                        # a target is being tracked
+    copy = pickle.loads(pickle.dumps(model))
+    rest = [model.step(f) for f in stim.frames[half:]]
+    assert [copy.step(f) for f in stim.frames[half:]] == rest
+    model.reset()
+    assert model.foe is None and model.camera is None and model.flow is None
+    assert [model.step(f) for f in stim.frames] == first + rest
+
+
+def test_bad_parameters_are_one_line_errors():
+    from mlplc2 import InputError
+
+    with pytest.raises(InputError, match="FlowParams.window"):
+        FlowParams(window=1)
+    with pytest.raises(InputError, match="FlowParams.preset"):
+        FlowParams(preset="slow")
+    with pytest.raises(InputError, match="params must be mlplc2.models.flow.FlowParams"):
+        FlowTTC(params={"window": 5})
+
+
+# -- documentation -----------------------------------------------------------------------------
+def test_docstring_examples():
+    result = doctest.testmod(flow_module, optionflags=doctest.ELLIPSIS | doctest.NORMALIZE_WHITESPACE)
+    assert result.attempted > 0 and result.failed == 0
+
+
+def test_parameter_table_in_docs_is_the_generated_one():
+    """docs/flow.md's table is ``parameter_table(FlowParams, markdown=True)`` between the markers."""
+    text = (DOCS / "flow.md").read_text(encoding="utf-8")
+    begin = "<!-- BEGIN generated by `mlplc2.params.parameter_table(FlowParams, markdown=True)` -->\n"
+    end = "<!-- END generated -->"
+    assert text.count(begin) == 1 and text.count(end) == 1
+    assert text.split(begin)[1].split(end)[0] == parameter_table(FlowParams, markdown=True)
+    readme = (DOCS.parent / "README.md").read_text(encoding="utf-8")
+    assert "(docs/flow.md)" in readme
