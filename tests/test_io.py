@@ -302,3 +302,44 @@ def test_mp4_falls_back_to_opencv_with_one_warning(tmp_path, monkeypatch, why):
     assert len(caught) == 1
     arr, _ = read_video(p)
     assert arr.shape == (6, H, W, 3)
+
+
+# -- atomic writes (mlplc2._files) --------------------------------------------------
+def test_atomic_writes_from_many_threads_to_one_path_never_collide(tmp_path):
+    """Each writer gets its own temporary file (mkstemp), so the final file is always one
+    writer's whole text, never a mix, and no temporary file is left behind."""
+    from concurrent.futures import ThreadPoolExecutor
+
+    from mlplc2._files import write_text
+
+    path = tmp_path / "out.json"
+    texts = [str(i) * 20000 for i in range(10)]
+    with ThreadPoolExecutor(8) as ex:
+        list(ex.map(lambda s: write_text(path, s), texts * 4))
+    assert path.read_text() in texts
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["out.json"]
+
+
+def test_a_failed_atomic_write_keeps_the_old_file_and_leaves_no_temporary(tmp_path):
+    from mlplc2._files import atomic_path
+
+    path = tmp_path / "fields.json"
+    path.write_text("old")
+    with pytest.raises(RuntimeError):
+        with atomic_path(path) as tmp:
+            tmp.write_text("half")
+            raise RuntimeError("disk full")
+    assert path.read_text() == "old"
+    assert [p.name for p in tmp_path.iterdir()] == ["fields.json"]
+
+
+def test_atomic_files_get_the_usual_mode(tmp_path):
+    import os
+    import stat
+
+    from mlplc2._files import write_text
+
+    write_text(tmp_path / "a.txt", "x")
+    (tmp_path / "b.txt").write_text("x")
+    mode = lambda name: stat.S_IMODE(os.stat(tmp_path / name).st_mode)  # noqa: E731
+    assert mode("a.txt") == mode("b.txt")

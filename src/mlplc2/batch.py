@@ -22,7 +22,6 @@ after the other in this process without it.
 
 from __future__ import annotations
 
-import csv
 import dataclasses
 import functools
 import glob
@@ -349,10 +348,9 @@ def _one_line(text: str) -> str:
 
 
 def _write_json_atomic(path: Path, data) -> None:
-    from .io import atomic_path
+    from ._files import write_json
 
-    with atomic_path(path) as tmp:
-        tmp.write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    write_json(path, data)
 
 
 _MALLOC_TUNED = False
@@ -555,14 +553,11 @@ def _video_keys(videos: list[str]) -> dict[str, str]:
 
 def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
     """``results.csv`` (and ``results.parquet``), atomically."""
-    from .io import atomic_path
+    from ._files import atomic_path, write_csv
 
     table = out / "results.csv"
-    with atomic_path(table) as tmp, open(tmp, "w", newline="", encoding="utf-8") as f:
-        w = csv.DictWriter(f, fieldnames=RESULT_COLUMNS, lineterminator="\n", extrasaction="ignore")
-        w.writeheader()
-        for r in rows:
-            w.writerow({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS})
+    write_csv(table, ({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS} for r in rows),
+              RESULT_COLUMNS)
     if parquet:
         import pandas as pd
 

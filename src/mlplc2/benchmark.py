@@ -23,7 +23,6 @@ the test suite runs it.
 
 from __future__ import annotations
 
-import csv
 import json
 import time
 import warnings
@@ -105,7 +104,8 @@ def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[li
     description are kept."""
     from tqdm import tqdm
 
-    from .io import atomic_path, write_video
+    from ._files import write_json
+    from .io import write_video
 
     folder.mkdir(parents=True, exist_ok=True)
     gt_path = folder / SUITE_GT
@@ -127,9 +127,8 @@ def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[li
             write_video(path, stim.frames, stim.fps, quality=SCENE_CRF)
             entries[key] = {"scene": spec, **stim.to_ground_truth()}
         videos.append(path)
-    with atomic_path(gt_path) as tmp:
-        Path(tmp).write_text(json.dumps({"about": "mlplc2 benchmark: generated suite (mlplc2.benchmark.suite)",
-                                         "videos": entries}) + "\n", encoding="utf-8")
+    write_json(gt_path, {"about": "mlplc2 benchmark: generated suite (mlplc2.benchmark.suite)",
+                         "videos": entries}, indent=None)
     return videos, gt_path
 
 
@@ -415,7 +414,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
 
 
 def _write(res: BenchmarkResult, out: Path) -> None:
-    from .io import atomic_path
+    from ._files import write_csv, write_text
 
     files = {}
     text = "# mlplc2 benchmark\n\n" + res.to_markdown()
@@ -424,14 +423,9 @@ def _write(res: BenchmarkResult, out: Path) -> None:
                                                          "scenes": res.scenes, "clips": res.clips,
                                                          "failed": res.failed,
                                                          "seconds": round(res.seconds, 1)}, indent=1) + "\n")):
-        with atomic_path(out / name) as tmp:
-            Path(tmp).write_text(content, encoding="utf-8")
+        write_text(out / name, content)
         files[name] = out / name
-    with atomic_path(out / "benchmark.csv") as tmp:
-        with open(tmp, "w", newline="", encoding="utf-8") as f:
-            w = csv.DictWriter(f, fieldnames=COLUMNS, lineterminator="\n")
-            w.writeheader()
-            w.writerows(res.rows)
+    write_csv(out / "benchmark.csv", res.rows, COLUMNS)
     files["benchmark.csv"] = out / "benchmark.csv"
     files.update(res.evaluation.write(out))
     files.update(_plots(res, out))

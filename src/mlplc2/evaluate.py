@@ -984,7 +984,7 @@ class Evaluation:
 
     def write(self, out) -> dict[str, Path]:
         """Write ``evaluation.md`` and ``evaluation.json`` into folder ``out``."""
-        from .io import atomic_path
+        from ._files import write_text
 
         out = Path(out)
         out.mkdir(parents=True, exist_ok=True)
@@ -996,8 +996,7 @@ class Evaluation:
         files = {}
         for name, text in (("evaluation.md", md), ("evaluation.json", self.to_json() + "\n")):
             path = out / name
-            with atomic_path(path) as tmp:
-                Path(tmp).write_text(text, encoding="utf-8")
+            write_text(path, text)
             files[name] = path
         return files
 

@@ -31,7 +31,7 @@ def _figure(w: float, h: float):
 
 
 def _save(fig, path, dpi: int) -> Path:
-    from .io import atomic_path
+    from ._files import atomic_path
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)

@@ -31,9 +31,10 @@ from pathlib import Path
 
 import numpy as np
 
+from ._files import check_output_file, replace, temporary_path
 from ._validation import InputError, InputTypeError, InputValueError, check_fps
 
-__all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter", "atomic_path",
+__all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter",
            "TruncatedInputWarning", "VideoCodecWarning",
            "parse_resize", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]
 
@@ -655,12 +656,20 @@ class VideoWriter:
                     warnings.warn(f"{self.path.name}: written as MP4 'mp4v' by OpenCV, which browsers do not "
                                   f"play, not H.264: {why}", VideoCodecWarning, stacklevel=3)
         self.backend = backend
-        self.tmp = self.path.with_name(f".{self.path.stem}.partial-{os.getpid()}{self.path.suffix}")
+        if backend not in ("pyav", "opencv"):
+            raise InputValueError(f"unknown backend {backend!r}; choose 'opencv' or 'pyav'")
+        self.tmp = temporary_path(self.path)
         self.n_frames = 0
         self._closed = False
-        if self.path.parent and not self.path.parent.exists():
-            self.path.parent.mkdir(parents=True, exist_ok=True)
-        if backend == "pyav":
+        try:
+            self._open(quality)
+        except BaseException:
+            self._remove_tmp()
+            raise
+
+    def _open(self, quality) -> None:
+        w, h = self.size
+        if self.backend == "pyav":
             import av
 
             self.enc_size = (w + w % 2, h + h % 2)
@@ -671,7 +680,7 @@ class VideoWriter:
             self._stream.width, self._stream.height = self.enc_size
             self._stream.pix_fmt = "yuv420p"
             self._stream.options = {"crf": str(quality), "preset": "veryfast"}
-        elif backend == "opencv":
+        else:
             import cv2
 
             self._cv2 = cv2
@@ -686,8 +695,6 @@ class VideoWriter:
                 wr.release()
             if self._writer is None:
                 raise OSError(f"{self.path}: OpenCV cannot open a video writer ({'/'.join(fourccs)})")
-        else:
-            raise InputValueError(f"unknown backend {backend!r}; choose 'opencv' or 'pyav'")
 
     def write(self, frame: np.ndarray) -> None:
         """Append one frame: (H, W) grey or (H, W, 3) RGB uint8 at :attr:`size`."""
@@ -726,7 +733,7 @@ class VideoWriter:
         if self.n_frames == 0 or not self.tmp.exists():
             self._remove_tmp()
             raise InputValueError(f"{self.path}: no frames to write")
-        _move_into_place(self.tmp, self.path)
+        replace(self.tmp, self.path)
         return self.path
 
     def abort(self) -> None:
@@ -792,27 +799,6 @@ def _chain_first(first, rest):
     yield from rest
 
 
-def _move_into_place(tmp: Path, path: Path) -> None:
-    """``os.replace(tmp, path)``; on failure delete ``tmp`` and raise an OSError that names
-    ``path`` (not the hidden temporary name)."""
-    try:
-        os.replace(tmp, path)
-    except OSError as exc:
-        try:
-            tmp.unlink()
-        except OSError:
-            pass
-        raise OSError(exc.errno, exc.strerror, str(path)) from None
-
-
-def check_output_file(path, *, what: str = "output") -> Path:
-    """Return ``path`` as a Path, or raise if it names an existing directory."""
-    path = Path(path)
-    if path.is_dir():
-        raise InputValueError(f"{path}: is a directory, expected a file name for the {what}")
-    return path
-
-
 def check_video_output(path) -> Path:
     """Return ``path`` as a Path, or raise unless it can name a video :class:`VideoWriter` writes."""
     path = check_output_file(path, what="video")
@@ -820,30 +806,3 @@ def check_video_output(path) -> Path:
         raise InputValueError(f"{path}: cannot write {path.suffix or 'a file without a suffix'}; "
                               f"name the video .mp4 (H.264) or .avi (MJPG)")
     return path
-
-
-class _AtomicPath:
-    """Context manager yielding a hidden temporary path next to ``path``;
-    renamed to ``path`` on success, deleted on failure."""
-
-    def __init__(self, path):
-        self.path = Path(path)
-        self.tmp = self.path.with_name(f".{self.path.stem}.partial-{os.getpid()}{self.path.suffix}")
-
-    def __enter__(self) -> Path:
-        return self.tmp
-
-    def __exit__(self, exc_type, exc, tb) -> None:
-        if exc_type is None:
-            _move_into_place(self.tmp, self.path)
-        else:
-            try:
-                self.tmp.unlink()
-            except FileNotFoundError:
-                pass
-
-
-def atomic_path(path) -> _AtomicPath:
-    """``with atomic_path('out/fields.json') as tmp: write(tmp)`` - the final
-    name appears only once the write succeeded (``os.replace``)."""
-    return _AtomicPath(path)

@@ -94,7 +94,7 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
     from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
 
-    from .io import atomic_path
+    from ._files import atomic_path
 
     if isinstance(rows, (str, Path)):
         rows = read_responses(rows)

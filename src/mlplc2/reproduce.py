@@ -26,7 +26,6 @@ defaults with another parameter set, the same for every input.
 
 from __future__ import annotations
 
-import json
 import math
 import sys
 import time
@@ -694,7 +693,7 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
 # report files
 # ---------------------------------------------------------------------------
 def write_json(result: ReproduceResult, path: Path) -> Path:
-    from .io import atomic_path
+    from . import _files
 
     doc = {
         "command": "mlplc2 reproduce",
@@ -710,8 +709,7 @@ def write_json(result: ReproduceResult, path: Path) -> Path:
         "claims": [c.to_dict() for c in result.claims],
     }
     path = Path(path)
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(json.dumps(doc, indent=2) + "\n", encoding="utf-8")
+    _files.write_json(path, doc, indent=2)
     return path
 
 
@@ -720,7 +718,7 @@ def _cell(text) -> str:
 
 
 def write_markdown(result: ReproduceResult, path: Path) -> Path:
-    from .io import atomic_path
+    from ._files import write_text
 
     lines = ["# mLPLC2 reproduction of Sec. IV", "",
              f"Input: {result.source}. Parameters: {result.parameters}, one set for every input; "
@@ -750,8 +748,7 @@ def write_markdown(result: ReproduceResult, path: Path) -> Path:
     lines += ["Claim ids, values and flags are in `report.json`. Thresholds and the meaning of each line: "
               "docs/reproduce.md.", ""]
     path = Path(path)
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text("\n".join(lines), encoding="utf-8")
+    write_text(path, "\n".join(lines))
     return path
 
 

@@ -44,7 +44,8 @@ from typing import Any
 
 from ._signals import interrupts
 from ._validation import InputTypeError, InputValueError
-from .io import FrameSource, TruncatedInputWarning, VideoWriter, atomic_path, open_source
+from ._files import write_json
+from .io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from .models.base import Model, Output, check_repeat_threshold, get_model, resolve_names
 from .plots import DRAW_FIELDS
 from .tracks import DEFAULT_MATCH_RADIUS, Recorder, _px, _sig, centre_distance
@@ -590,10 +591,7 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
 
 def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool) -> None:
     path = out_dir / "fields.json"
-    with atomic_path(path) as tmp:
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(result.summary(), f, indent=1)
-            f.write("\n")
+    write_json(path, result.summary())
     result.files["fields.json"] = path
     if vw is not None:
         if vw.n_frames:
@@ -626,7 +624,8 @@ def write_stimulus(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     Returns ``(video_path, gt_path)``.
     """
     from . import stimuli
-    from .io import check_output_file, check_video_output, write_video
+    from ._files import check_output_file
+    from .io import check_video_output, write_video
 
     out = check_video_output(out)
     gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),
@@ -638,10 +637,7 @@ def write_stimulus(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     write_video(out, stim.frames, stim.fps, stim.size)
     truth = dict(stim.to_ground_truth())
     truth = {"name": name, "video": out.name, **truth}
-    with atomic_path(gt_path) as tmp:
-        with open(tmp, "w", encoding="utf-8") as f:
-            json.dump(truth, f, indent=1, default=_json_default)
-            f.write("\n")
+    write_json(gt_path, truth, default=_json_default)
     return out, gt_path
 
 

@@ -684,11 +684,8 @@ def load(gt) -> GroundTruth:
 
 def save(truth: GroundTruth | VideoTruth, path) -> Path:
     """Write ``truth`` as JSON to ``path`` (atomically: a file with its final name is complete)."""
-    from .io import atomic_path
+    from ._files import write_json
 
-    data = truth.to_dict()
     path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        Path(tmp).write_text(json.dumps(data, indent=1) + "\n", encoding="utf-8")
+    write_json(path, truth.to_dict())
     return path
