@@ -9,7 +9,8 @@ import mlplc2
 from mlplc2 import stimuli, tracks, truth
 from mlplc2.attention import Field
 from mlplc2.evaluate import evaluate
-from mlplc2.runner import RunResult, match_fields
+from mlplc2.runner import RunResult
+from mlplc2.tracks import match_fields
 
 OBJ = truth.ObjectTruth(id=1, center=(50.0, 50.0), polarity="dark", approach=(10, 50), hold=(50, 60))
 RECEDING = truth.ObjectTruth(id=2, center=(150.0, 50.0), polarity="dark", recede=(0, 40))

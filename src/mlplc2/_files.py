@@ -82,10 +82,17 @@ def write_text(path, text: str) -> None:
         tmp.write_text(text, encoding="utf-8")
 
 
-def write_json(path, data, *, indent: int = 1, default=None, end: str = "\n") -> None:
-    """Write ``data`` as JSON (``indent``, ``default`` as :func:`json.dumps`; ``end`` after
-    the last line) to ``path`` atomically."""
-    write_text(path, json.dumps(data, indent=indent, default=default) + end)
+def _numpy_default(obj):
+    """NumPy scalars and arrays as JSON (their Python values)."""
+    if hasattr(obj, "tolist"):          # numpy.generic, numpy.ndarray
+        return obj.tolist()
+    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
+
+
+def write_json(path, data, *, indent: int | None = 1, end: str = "\n") -> None:
+    """Write ``data`` as JSON (``indent`` as :func:`json.dumps`; NumPy values as their Python
+    values; ``end`` after the last line) to ``path`` atomically."""
+    write_text(path, json.dumps(data, indent=indent, default=_numpy_default) + end)
 
 
 def write_csv(path, rows, columns, *, extrasaction: str = "raise") -> None:

@@ -78,6 +78,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._validation import (InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals)
+from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, check_size, focal_length_px, plain_level,
+                        procedural_background)
 from .truth import ObjectTruth, TrackPoint
 
 __all__ = [
@@ -337,7 +339,7 @@ def _side_angle(side) -> float:
 
 def _place(at, distance, width_m, width_px, size, hfov_deg):
     """Ray ``(X/Z, Y/Z, 1)`` through image point ``at``, depth and physical width."""
-    w, h = _check_size(size)
+    w, h = check_size(size)
     f = focal_length_px(w, hfov_deg)
     z = check_real(distance, "distance_m", positive=True)
     if at is None:
@@ -831,7 +833,7 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     for i, o in enumerate(objects):
         if not isinstance(o, ApproachObject):
             raise InputTypeError(f"objects[{i}] must be an ApproachObject, got {type(o).__name__}")
-    w, h = _check_size(size)
+    w, h = check_size(size)
     fps = check_fps(fps)
     focal_length_px(w, hfov_deg)                  # checks hfov_deg
     hfov = float(hfov_deg)
@@ -980,7 +982,7 @@ def approach_scene(*, kind: str = "collision", n_objects: int | None = None, app
     camera = _choice(camera, "camera", CAMERA_MOTIONS)
     cam_speed = DEFAULT_CAMERA_SPEED[camera] if camera_speed is None else check_real(camera_speed, "camera_speed")
     ego = cam_speed if camera == "forward" else 0.0
-    w, h = _check_size(size)
+    w, h = check_size(size)
     ttc = check_real(ttc_s, "ttc_s", positive=True)
     speed = check_real(speed_mps, "speed_mps", positive=True)
     seed = check_int(seed, "seed")
@@ -1062,7 +1064,7 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     camera = _choice(camera, "camera", CAMERA_MOTIONS)
     cam_speed = DEFAULT_CAMERA_SPEED[camera] if camera_speed is None else check_real(camera_speed, "camera_speed")
     ego = cam_speed if camera == "forward" else 0.0
-    w, h = _check_size(size)
+    w, h = check_size(size)
     fps = check_fps(fps)
     dur = check_real(duration_s, "duration_s", minimum=2.0)
     n = int(round(dur * fps))
@@ -1115,10 +1117,3 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
                     camera=camera, camera_speed=cam_speed, camera_height_m=camera_height_m,
                     noise_std=noise_std, blur_px=blur_px, supersample=supersample, seed=seed,
                     name=f"random_scene_{seed}")
-
-
-# mlplc2.stimuli holds the result type and the shared helpers, and re-exports this module's
-# names: each module imports the other at its end, once its own names exist, so either may be
-# imported first.
-from .stimuli import (MAX_STIMULUS_BYTES, ApproachStimulus, _check_size, focal_length_px,  # noqa: E402
-                      plain_level, procedural_background)

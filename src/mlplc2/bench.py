@@ -1,4 +1,4 @@
-"""Speed benchmark of the LPLC2 family: ``mlplc2 bench`` / ``python -m mlplc2.bench``.
+"""Speed benchmark of the LPLC2 family (``mlplc2 bench``; its options are in :mod:`mlplc2.cli`).
 
 For every model and frame size it reports, measured in the same run:
 
@@ -26,9 +26,7 @@ keeps a few attention fields; the table reports the largest number of fields see
 
 from __future__ import annotations
 
-import argparse
 import statistics
-import sys
 import time
 import tracemalloc
 from dataclasses import dataclass
@@ -38,7 +36,7 @@ import numpy as np
 from .params import Params
 
 __all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
-           "run_bench", "format_table", "add_arguments", "cli_handler", "main"]
+           "run_bench", "format_table", "describe", "DEFAULT_SIZES"]
 
 DEFAULT_SIZES = "100x100,320x240,640x480,1280x720"
 
@@ -258,70 +256,16 @@ def format_table(rows) -> str:
     return "\n".join(lines)
 
 
-# ---------------------------------------------------------------------------
-# command line (mlplc2 bench, python -m mlplc2.bench)
-# ---------------------------------------------------------------------------
-def _positive_int(text: str) -> int:
-    from .cli import number_type
+def describe(frames: int, rounds: int) -> str:
+    """What the columns of :func:`format_table` measure (printed under the table)."""
+    import os
 
-    return number_type(int, lambda v: v >= 1, "a positive integer")(text)
+    from . import _fast
 
-
-def add_arguments(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--sizes", default=DEFAULT_SIZES, metavar="WxH,...",
-                   help=f"frame sizes (default {DEFAULT_SIZES})")
-    p.add_argument("--models", "--model", "-m", dest="models", action="append", metavar="NAME",
-                   help="LPLC2-family model(s), repeatable or comma-separated (default: mlplc2)")
-    p.add_argument("--threads", type=_positive_int, metavar="N",
-                   help="threads for the fast front end and OpenCV (default: Numba's, i.e. all cores)")
-    p.add_argument("--frames", type=_positive_int, default=100, metavar="N",
-                   help="timed frames per model and size after 10 warm-up frames (default 100)")
-    p.add_argument("--ref-frames", type=_positive_int, default=12, metavar="N",
-                   help="timed frames of the reference front end (default 12)")
-    p.add_argument("--rounds", type=_positive_int, default=1, metavar="R",
-                   help="repeat every measurement R times and keep the smallest median (default 1)")
-    p.add_argument("--no-reference", action="store_true", help="skip the reference front end")
-    p.add_argument("--quiet", "-q", action="store_true", help="only the table")
-
-
-def cli_handler(args) -> int:
-    from ._validation import InputValueError
-    from .models.base import available_models, resolve_names
-
-    names = resolve_names(args.models or ["mlplc2"], what="--models")
-    family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
-    bad = [n for n in names if n not in family]
-    if bad:
-        raise InputValueError(f"--models: {', '.join(bad)} not benchmarked; choose from {', '.join(family)}")
-    sizes = parse_sizes(args.sizes)
-
-    def progress(msg):
-        if not args.quiet:
-            print(msg, file=sys.stderr, flush=True)
-
-    rows = run_bench(sizes, names, threads=args.threads, frames=args.frames, ref_frames=args.ref_frames,
-                     reference=not args.no_reference, rounds=args.rounds, progress=progress)
-    print(format_table(rows))
-    if not args.quiet:
-        from . import _fast
-
-        traffic = sum(_fast.plane_traffic(Params().n_floor > 0).values())
-        import os
-
-        load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
-        print(f"\nms/frame: median of model.step over {args.frames} in-memory uint8 frames (no decoding; "
-              f"smallest of {args.rounds} round(s)): front end, attention fields and target estimates. "
-              f"front end: Eq. 1-12 alone. probe: fastest copy of the N float32 planes one stream touches "
-              f"({traffic} plane reads+writes per frame in the kernels), same threads; 'x probe' = "
-              f"ms/frame / probe. Load average after the run: {load}.")
-    return 0
-
-
-def main(argv=None) -> int:
-    p = argparse.ArgumentParser(prog="python -m mlplc2.bench", description=__doc__.splitlines()[0])
-    add_arguments(p)
-    return cli_handler(p.parse_args(argv))
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    traffic = sum(_fast.plane_traffic(Params().n_floor > 0).values())
+    load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
+    return (f"ms/frame: median of model.step over {frames} in-memory uint8 frames (no decoding; "
+            f"smallest of {rounds} round(s)): front end, attention fields and target estimates. "
+            f"front end: Eq. 1-12 alone. probe: fastest copy of the N float32 planes one stream touches "
+            f"({traffic} plane reads+writes per frame in the kernels), same threads; 'x probe' = "
+            f"ms/frame / probe. Load average after the run: {load}.")

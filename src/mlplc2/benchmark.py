@@ -356,11 +356,11 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     from .batch import batch
     from .evaluate import evaluate
     from .models.base import available_models, resolve_names
-    from .runner import _target_params
+    from .targets import TargetParams
 
     t0 = time.perf_counter()
     models = resolve_names(models) if models else [m for m in MODELS if m in available_models()]
-    tp = _target_params(target_params)
+    tp = TargetParams.coerce(target_params, "target_params")
     out = Path(out)
     if out.exists() and not out.is_dir():
         raise InputValueError(f"{out}: is a file, expected a folder for the benchmark")

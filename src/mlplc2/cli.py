@@ -1,7 +1,7 @@
 """Command line: ``mlplc2 run | stimulus | demo | evaluate | batch | benchmark | ...`` (see docs/cli.md).
 
 Thin by design: each subcommand parses its arguments and calls one public
-function (:func:`mlplc2.run`, :func:`mlplc2.runner.write_stimulus`,
+function (:func:`mlplc2.run`, :func:`mlplc2.stimuli.write`,
 :func:`mlplc2.runner.demo`). Subcommands live in the :data:`SUBCOMMANDS`
 table; adding one (``reproduce``, ``bench``, ``evaluate``, ``batch``) is one
 :class:`Subcommand` entry, or a call to :func:`add_subcommand` from the
@@ -25,7 +25,7 @@ from dataclasses import dataclass
 
 from ._signals import interrupts
 from ._validation import InputError, InputValueError
-from .models.base import MAX_REPEATS, REPEAT_THRESHOLD, resolve_names
+from .models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "add_subcommand",
            "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
@@ -93,6 +93,7 @@ def number_type(cast, ok, expected: str):
 
 
 _nonneg_int = number_type(int, lambda v: v >= 0, "an integer >= 0")
+_pos_int = number_type(int, lambda v: v >= 1, "a positive integer")
 _pos_float = number_type(float, lambda v: math.isfinite(v) and v > 0, "a positive number")
 _hfov = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees in (0, 180)")
 _nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
@@ -494,7 +495,7 @@ def _cmd_stimulus(args) -> int:
     import re
 
     from . import stimuli
-    from .runner import write_stimulus
+    from .stimuli import write as write_stimulus
 
     if args.name not in stimuli.NAMES:
         raise InputValueError(f"unknown stimulus {args.name!r}; choose from {', '.join(stimuli.NAMES)} "
@@ -747,18 +748,47 @@ def _cmd_params(args) -> int:
 
 
 # ---------------------------------------------------------------------------
-# bench (implemented in mlplc2.bench; benchmarks/README.md)
+# bench (timing in mlplc2.bench; benchmarks/README.md)
 # ---------------------------------------------------------------------------
 def _add_bench(p: argparse.ArgumentParser) -> None:
-    from .bench import add_arguments
+    from .bench import DEFAULT_SIZES
 
-    add_arguments(p)
+    p.add_argument("--sizes", default=DEFAULT_SIZES, metavar="WxH,...",
+                   help=f"frame sizes (default {DEFAULT_SIZES})")
+    p.add_argument("--models", "--model", "-m", dest="models", action="append", metavar="NAME",
+                   help="LPLC2-family model(s), repeatable or comma-separated (default: mlplc2)")
+    p.add_argument("--threads", type=_pos_int, metavar="N",
+                   help="threads for the fast front end and OpenCV (default: Numba's, i.e. all cores)")
+    p.add_argument("--frames", type=_pos_int, default=100, metavar="N",
+                   help="timed frames per model and size after 10 warm-up frames (default 100)")
+    p.add_argument("--ref-frames", type=_pos_int, default=12, metavar="N",
+                   help="timed frames of the reference front end (default 12)")
+    p.add_argument("--rounds", type=_pos_int, default=1, metavar="R",
+                   help="repeat every measurement R times and keep the smallest median (default 1)")
+    p.add_argument("--no-reference", action="store_true", help="skip the reference front end")
+    p.add_argument("--quiet", "-q", action="store_true", help="only the table")
 
 
 def _cmd_bench(args) -> int:
-    from .bench import cli_handler
+    from .bench import describe, format_table, parse_sizes, run_bench
 
-    return cli_handler(args)
+    names = resolve_names(args.models or ["mlplc2"], what="--models")
+    family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
+    bad = [n for n in names if n not in family]
+    if bad:
+        raise InputValueError(f"--models: {', '.join(bad)} not benchmarked; choose from {', '.join(family)}")
+    sizes = parse_sizes(args.sizes)
+
+    def progress(msg):
+        if not args.quiet:
+            print(msg, file=sys.stderr, flush=True)
+
+    rows = run_bench(sizes, names, threads=args.threads, frames=args.frames, ref_frames=args.ref_frames,
+                     reference=not args.no_reference, rounds=args.rounds, progress=progress)
+    print(format_table(rows))
+    if not args.quiet:
+        print("\n" + describe(args.frames, args.rounds))
+    return EXIT_OK
 
 
 # ---------------------------------------------------------------------------

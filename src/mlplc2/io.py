@@ -133,7 +133,7 @@ def _to_rgb(frame: np.ndarray) -> np.ndarray:
     raise InputValueError(f"frame must be (H, W), (H, W, 3) or (H, W, 4), got shape {frame.shape}")
 
 
-def _is_camera(source) -> bool:
+def is_camera(source) -> bool:
     if isinstance(source, bool):
         return False
     if isinstance(source, (int, np.integer)):
@@ -306,7 +306,7 @@ def _open_decoder(source, backend: str) -> tuple[_Decoder, str]:
     """Return (decoder, kind) with kind in {'video', 'images', 'camera'}."""
     if backend not in ("opencv", "pyav"):
         raise InputValueError(f"unknown backend {backend!r}; choose 'opencv' or 'pyav'")
-    if _is_camera(source):
+    if is_camera(source):
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
     if isinstance(source, os.PathLike):
@@ -593,7 +593,7 @@ def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
     :class:`TruncatedInputWarning` naming the frame where decoding stopped.
     Use :func:`open_source` for long videos (memory independent of length).
     """
-    if _is_camera(path):
+    if is_camera(path):
         raise InputValueError("read_video reads files; use open_source for a camera")
     src = open_source(path, backend=backend)
     frames = [f for _, f in src]

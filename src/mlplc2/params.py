@@ -14,6 +14,7 @@ from __future__ import annotations
 import dataclasses
 import inspect
 import textwrap
+from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
@@ -33,7 +34,19 @@ LM_SCALE_MAX = 1e15
 
 class ParameterSet:
     """What every frozen parameter dataclass offers (:class:`Params`, ``TargetParams``, the LGMD
-    and flow parameters): a validated :meth:`replace` and :meth:`to_dict`."""
+    and flow parameters): a validated :meth:`replace`, :meth:`to_dict` and :meth:`coerce`."""
+
+    @classmethod
+    def coerce(cls, value, name: str):
+        """``value`` as this parameter set: None stays None, an instance is returned as it is,
+        a mapping gives the defaults with those fields replaced; anything else raises
+        InputValueError naming the argument ``name``."""
+        if value is None or isinstance(value, cls):
+            return value
+        if isinstance(value, Mapping):
+            return cls().replace(**{str(k): v for k, v in value.items()})
+        raise InputValueError(f"{name} must be {cls.__module__}.{cls.__qualname__} or a dict of its fields, "
+                              f"got {type(value).__name__}")
 
     def replace(self, **changes):
         """Return a copy with ``changes`` applied (validated like the constructor)."""

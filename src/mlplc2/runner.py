@@ -33,7 +33,6 @@ import csv
 import io
 import json
 import logging
-import math
 import sys
 import time
 import warnings
@@ -46,13 +45,13 @@ from ._signals import interrupts
 from ._validation import InputTypeError, InputValueError
 from ._files import write_json
 from .io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
-from .models.base import Model, Output, check_repeat_threshold, get_model, resolve_names
+from .models.base import Model, check_repeat_threshold, get_model, resolve_names
 from .plots import DRAW_FIELDS
-from .tracks import DEFAULT_MATCH_RADIUS, Recorder, _px, _sig, centre_distance
+from .targets import TargetParams
+from .tracks import Recorder, match_fields, response_rows
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
-           "default_out_dir",
-           "write_stimulus", "demo", "DemoResult", "match_fields"]
+           "default_out_dir", "demo", "DemoResult"]
 
 log = logging.getLogger(__name__)
 
@@ -173,23 +172,11 @@ class RunResult:
         }
 
 
-def _rows(index: int, time_s: float, name: str, out: Output, to_input) -> list[dict]:
-    if not out.fields:
-        return [{"frame": index, "time_s": time_s, "model": name, "field_id": None, "x": None, "y": None,
-                 "response": _sig(out.response), "collision": int(bool(out.collision))}]
-    rows = []
-    for f in out.fields:
-        x, y = to_input(f.x, f.y)
-        rows.append({"frame": index, "time_s": time_s, "model": name, "field_id": f.id, "x": _px(x),
-                     "y": _px(y), "response": _sig(f.response), "collision": int(bool(f.collision))})
-    return rows
-
-
 def default_out_dir(source) -> Path:
     """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``)."""
-    from .io import _is_camera
+    from .io import is_camera
 
-    if _is_camera(source):
+    if is_camera(source):
         return Path.cwd() / f"camera{int(source)}_mlplc2"
     p = Path(source)
     if p.is_dir():
@@ -204,21 +191,9 @@ def default_out_dir(source) -> Path:
     return p.parent / f"{p.stem}_mlplc2"
 
 
-def _target_params(value):
-    """``run(target_params=...)``: None, a TargetParams, or a dict of its fields."""
-    from .targets import TargetParams
-
-    if value is None or isinstance(value, TargetParams):
-        return value
-    if isinstance(value, Mapping):
-        return TargetParams().replace(**{str(k): v for k, v in value.items()})
-    raise InputValueError(f"target_params must be mlplc2.targets.TargetParams or a dict of its fields, "
-                          f"got {type(value).__name__}")
-
-
 def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold="model default",
                   target_params=None) -> list[Model]:
-    target_params = _target_params(target_params)
+    target_params = TargetParams.coerce(target_params, "target_params")
     if isinstance(models, (str, Model)):
         models = [models]
     names = [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
@@ -518,7 +493,7 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                 time_s = round(index / fps, 6)
                 frame_rows = []
                 for name, out in zip(names, outputs):
-                    frame_rows.extend(_rows(index, time_s, name, out, to_input))
+                    frame_rows.extend(response_rows(index, time_s, name, out, to_input))
                 if vw is not None:
                     from .plots import annotate_frame
 
@@ -613,44 +588,8 @@ def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool
 
 
 # ---------------------------------------------------------------------------
-# stimulus files and the demo (the `mlplc2 stimulus` and `mlplc2 demo` commands)
+# the demo (the `mlplc2 demo` command)
 # ---------------------------------------------------------------------------
-def write_stimulus(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
-    """Generate stimulus ``name`` (:func:`mlplc2.stimuli.generate`) and write it.
-
-    Writes the video to ``out`` (``.mp4`` H.264, or ``.avi`` MJPG) and its
-    ground truth to ``gt`` (default: ``<out stem>_gt.json`` beside it).
-    ``options`` go to the generator (e.g. ``seed``, ``background``).
-    Returns ``(video_path, gt_path)``.
-    """
-    from . import stimuli
-    from ._files import check_output_file
-    from .io import check_video_output, write_video
-
-    out = check_video_output(out)
-    gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),
-                                what="ground truth")
-    if gt_path.resolve() == out.resolve():
-        raise InputValueError(f"the video and its ground truth would both be written to {out}")
-    stim = stimuli.generate(name, **options)
-    gt_path.parent.mkdir(parents=True, exist_ok=True)
-    write_video(out, stim.frames, stim.fps, stim.size)
-    truth = dict(stim.to_ground_truth())
-    truth = {"name": name, "video": out.name, **truth}
-    write_json(gt_path, truth, default=_json_default)
-    return out, gt_path
-
-
-def _json_default(obj):
-    import numpy as np
-
-    if isinstance(obj, np.generic):
-        return obj.item()
-    if isinstance(obj, np.ndarray):
-        return obj.tolist()
-    raise TypeError(f"not JSON serialisable: {type(obj).__name__}")
-
-
 #: Models the demo runs (those registered).
 DEMO_MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2")
 
@@ -676,51 +615,14 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     ``matches`` has one entry per ground-truth object (see :func:`match_fields`):
     the mLPLC2 field that stands for it and the distance in pixels.
     """
+    from . import stimuli
     from .models.base import available_models
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
-    video_path, gt_path = write_stimulus(scene, out / "demo.mp4")
+    video_path, gt_path = stimuli.write(scene, out / "demo.mp4")
     with open(gt_path, encoding="utf-8") as f:
         truth = json.load(f)
     names = [m for m in DEMO_MODELS if m in available_models()]
     res = run(video_path, names, out=out / "demo_mlplc2", video=video, quiet=quiet, progress=progress)
     return DemoResult(res, truth, video_path, match_fields(res.fields.get("mlplc2", []), truth))
-
-
-def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RADIUS) -> list[dict]:
-    """For each ground-truth object with a centre, the field that stands for it.
-
-    Among the fields born while the object is on screen, the one with the largest peak
-    response whose centre lies within ``radius`` px of the object's
-    (:func:`mlplc2.tracks.centre_distance`, the matcher of the paper's metrics), else the
-    nearest one (``None`` when no field was born meanwhile). ``fields``: field summaries
-    (``fields.json``); ``truth``: the demo's ground truth (a JSON entry) or a
-    :class:`~mlplc2.truth.VideoTruth`.
-    """
-    from .truth import VideoTruth, load
-
-    video = truth if isinstance(truth, VideoTruth) else next(iter(load(truth).values()))
-    matches = []
-    for obj in video.objects:
-        if obj.center is None:
-            continue
-        t0, t1 = obj.span or (0, math.inf)
-        cand = [f for f in fields if t0 <= f["born"] < t1]
-
-        def dist(f):
-            return centre_distance(f["x"], f["y"], obj, f["born"])
-
-        near = [f for f in cand if dist(f) <= radius]
-        if near:  # the strongest field near the object (a field may be replaced while it looms)
-            best = max(near, key=lambda f: (f["peak_response"], -f["born"]))
-        else:
-            best = min(cand, key=dist, default=None)
-        matches.append({
-            "object": obj.id, "center": list(obj.center), "frames": [t0, t1],
-            "field": None if best is None else best["id"],
-            "field_center": None if best is None else [best["x"], best["y"]],
-            "distance": None if best is None else round(dist(best), 1),
-            "first_alarm_frame": None if best is None else best["first_alarm_frame"],
-        })
-    return matches

@@ -70,12 +70,16 @@ import os
 import typing
 import warnings
 from dataclasses import dataclass
+from pathlib import Path
 from typing import Any, Callable, Sequence
 
 import numpy as np
 
 from ._validation import InputValueError, as_gray, check_fps
-from .truth import ObjectTruth, VideoTruth
+from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, Stimulus, check_count, check_number, check_size,
+                        focal_length_px, plain_level, procedural_background)
+from .approach import ApproachObject, ObjectTrack, approach, approach_scene, random_scene
+from .truth import ObjectTruth
 
 __all__ = [
     "ObjectTruth",
@@ -90,6 +94,7 @@ __all__ = [
     "looming",
     "procedural_background",
     "generate",
+    "write",
     "parameters",
     "focal_length_px",
     "plain_level",
@@ -129,88 +134,6 @@ SIX_OBJECT_ONSETS: tuple[int, ...] = (5, 15, 25, 45, 55, 65)
 # ---------------------------------------------------------------------------
 # Result types
 # ---------------------------------------------------------------------------
-
-@dataclass(frozen=True, eq=False)
-class Stimulus:
-    """Frames of a synthetic stimulus and their ground truth.
-
-    Attributes
-    ----------
-    frames : numpy.ndarray
-        ``uint8`` array of shape ``(T, H, W)``, grey levels 0-255.
-    fps : float
-        Frame rate (frames per second).
-    objects : tuple of ObjectTruth
-        Ground truth of every object.
-    name : str
-        Name of the stimulus (one of :data:`NAMES`, or "scene").
-    """
-
-    frames: np.ndarray
-    fps: float = 30.0
-    objects: tuple[ObjectTruth, ...] = ()
-    name: str = "stimulus"
-
-    @property
-    def size(self) -> tuple[int, int]:
-        """``(W, H)`` in pixels."""
-        return (int(self.frames.shape[2]), int(self.frames.shape[1]))
-
-    def __len__(self) -> int:
-        return int(self.frames.shape[0])
-
-    def truth(self) -> VideoTruth:
-        """The ground truth of this stimulus (:class:`mlplc2.truth.VideoTruth`, key ``name``)."""
-        return VideoTruth(key=self.name, size=self.size, frames=len(self), fps=float(self.fps), objects=self.objects)
-
-    def to_ground_truth(self) -> dict[str, Any]:
-        """Return a JSON-ready dict in the schema of one ``ground_truth.json`` "videos" entry
-        (:meth:`truth` as JSON, :meth:`mlplc2.truth.VideoTruth.to_dict`).
-
-        Keys: ``"size"`` ``[W, H]``, ``"frames"`` ``T``, ``"fps"``, ``"objects"``
-        (list of :meth:`ObjectTruth.to_dict`, with only the phases that exist,
-        plus ``"sizes"`` per frame and, for physical looming,
-        ``"contact_frame"``, ``"half_size"`` and ``"speed"``).
-        """
-        return self.truth().to_dict()
-
-    def object(self, object_id: int) -> ObjectTruth:
-        """Return the :class:`ObjectTruth` with ``id == object_id``."""
-        for obj in self.objects:
-            if obj.id == object_id:
-                return obj
-        raise InputValueError(
-            f"no object with id {object_id!r}; valid ids: {[o.id for o in self.objects]}")
-
-    def center_at(self, frame: int, object_id: int = 1) -> tuple[float, float] | None:
-        """Centre ``(x, y)`` of object ``object_id`` at ``frame`` (``None`` for a grating)."""
-        if not 0 <= int(frame) < len(self):
-            raise InputValueError(f"frame {frame} is outside the video (0..{len(self) - 1})")
-        return self.object(object_id).center_at(int(frame))
-
-
-@dataclass(frozen=True, eq=False)
-class ApproachStimulus(Stimulus):
-    """A :class:`Stimulus` of :func:`mlplc2.approach.approach`, with its camera and background.
-
-    Its ``objects`` are 3-D :class:`ObjectTruth` (a ``kind``, a per-frame ``track`` of
-    :class:`mlplc2.truth.TrackPoint` with the time to contact and the miss).
-
-    Attributes
-    ----------
-    camera : dict
-        ``{"hfov_deg", "focal_px", "motion", "speed"}``.
-    background : str
-        ``"plain"``, ``"texture"`` or ``"ground"``.
-    """
-
-    camera: dict | None = None
-    background: str = "plain"
-
-    def truth(self) -> VideoTruth:
-        """The ground truth of this stimulus, with its camera and background (docs/stimuli.md,
-        "Ground truth"; :meth:`to_ground_truth` gives its JSON)."""
-        return dataclasses.replace(super().truth(), camera=dict(self.camera or {}), background=self.background)
 
 
 @dataclass(frozen=True)
@@ -280,46 +203,10 @@ class SceneObject:
 # Helpers
 # ---------------------------------------------------------------------------
 
-def _fail(message: str) -> InputValueError:
-    return InputValueError(message)
-
-
-def _check_int(value, name: str, minimum: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        if isinstance(value, (float, np.floating)) and float(value).is_integer():
-            value = int(value)
-        else:
-            raise _fail(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise _fail(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
-
-
-def _check_float(value, name: str, *, positive: bool = False, nonneg: bool = False) -> float:
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise _fail(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(out):
-        raise _fail(f"{name} must be finite, got {value!r}")
-    if positive and out <= 0:
-        raise _fail(f"{name} must be > 0, got {value!r}")
-    if nonneg and out < 0:
-        raise _fail(f"{name} must be >= 0, got {value!r}")
-    return out
-
-
-def _check_size(size) -> tuple[int, int]:
-    try:
-        w, h = size
-    except (TypeError, ValueError):
-        raise _fail(f"size must be (width, height), got {size!r}") from None
-    return _check_int(w, "width", 1), _check_int(h, "height", 1)
-
 
 def _check_polarity(polarity) -> str:
     if polarity not in _POLARITIES:
-        raise _fail(f"polarity must be one of {', '.join(_POLARITIES)}, got {polarity!r}")
+        raise InputValueError(f"polarity must be one of {', '.join(_POLARITIES)}, got {polarity!r}")
     return polarity
 
 
@@ -344,21 +231,6 @@ def _draw_square(frame: np.ndarray, center: tuple[float, float], side: float, le
         frame[y0:y1, x0:x1] = level
 
 
-def focal_length_px(width: int, hfov_deg: float) -> float:
-    """Focal length in pixels of a pinhole camera: ``(width / 2) / tan(hfov / 2)``."""
-    hfov = _check_float(hfov_deg, "hfov_deg", positive=True)
-    if hfov >= 180:
-        raise _fail(f"hfov_deg must be in (0, 180), got {hfov_deg!r}")
-    return (width / 2.0) / math.tan(math.radians(hfov) / 2.0)
-
-
-def plain_level(appearances: Sequence[str]) -> float:
-    """Grey level of a plain background for objects of these appearances: 250 (the paper's
-    "white") if every one is dark, 0 if every one is bright, else mid-grey 128."""
-    kinds = set(appearances)
-    return 250.0 if kinds == {"dark"} else 0.0 if kinds == {"bright"} else 128.0
-
-
 def _physical_sides(frames_idx: np.ndarray, contact_frame: float, fps: float, half_size: float,
                     speed: float, focal: float) -> np.ndarray:
     """Side length in px of a constant-speed approach at (absolute) frame indices."""
@@ -371,89 +243,6 @@ def _physical_sides(frames_idx: np.ndarray, contact_frame: float, fps: float, ha
 # ---------------------------------------------------------------------------
 # Backgrounds
 # ---------------------------------------------------------------------------
-
-#: Standard deviation (px) of the blur standing for the camera optics in procedural backgrounds.
-OPTICS_BLUR_PX = 1.0
-
-
-def procedural_background(width: int, height: int, seed: int = 0, *, periodic: bool = False) -> np.ndarray:
-    """Natural-like grey texture: 1/f noise plus a few blurred blobs, seen through
-    slightly blurring optics (``OPTICS_BLUR_PX``).
-
-    The amplitude spectrum of the noise falls as ``1/f`` (power ``1/f^2``, as
-    in natural images); a handful of soft blobs adds large-scale structure.
-    Grey levels are mapped so that the 2nd and 98th percentiles land on 60 and
-    220 (mean about 140, standard deviation about 40, like the paper's
-    ``outdoor_2.jpg`` scaled to 240 rows: mean 146, std 40), then clipped to
-    30-240.
-
-    Parameters
-    ----------
-    width, height : int
-        Size in pixels. For a scrolling scene use
-        ``width >= W + frames * scroll``.
-    seed : int
-        Seed of :func:`numpy.random.default_rng`; the same seed gives the same
-        texture.
-    periodic : bool
-        Make the texture tile seamlessly (blobs wrap around the borders and the
-        blurs are circular; the noise is periodic anyway): for the ground plane
-        of :func:`mlplc2.approach.approach`. ``False`` gives the texture as
-        before (the same for a seed).
-
-    Returns
-    -------
-    numpy.ndarray
-        ``uint8`` array of shape ``(height, width)``.
-    """
-    import cv2
-
-    width = _check_int(width, "width", 1)
-    height = _check_int(height, "height", 1)
-    rng = np.random.default_rng(seed)
-    noise = rng.standard_normal((height, width))
-    fy = np.fft.fftfreq(height)[:, None]
-    fx = np.fft.rfftfreq(width)[None, :]
-    f = np.sqrt(fx * fx + fy * fy)
-    f[0, 0] = 1.0
-    amp = 1.0 / np.maximum(f, 1.0 / max(width, height))
-    amp[0, 0] = 0.0
-    tex = np.fft.irfft2(np.fft.rfft2(noise) * amp, s=(height, width))
-    tex /= tex.std() + 1e-12
-    # a few soft blobs (bushes, clouds, ...)
-    blobs = np.zeros((height, width), np.float32)
-    n_blobs = max(3, int(round(width * height / 20000)))
-    for _ in range(n_blobs):
-        cx, cy = int(rng.integers(0, width)), int(rng.integers(0, height))
-        ax = int(rng.integers(max(2, height // 16), max(3, height // 4)))
-        ay = int(rng.integers(max(2, height // 16), max(3, height // 4)))
-        angle = float(rng.uniform(0, 180))
-        value = float(rng.choice([-1.0, 1.0]) * rng.uniform(0.8, 1.6))
-        for dx, dy in ([(dx, dy) for dx in (-width, 0, width) for dy in (-height, 0, height)]
-                       if periodic else [(0, 0)]):
-            cv2.ellipse(blobs, (cx + dx, cy + dy), (ax, ay), angle, 0, 360, value, -1)
-    sigma = max(1.0, height / 40.0)
-    blobs = _blur(blobs, sigma, periodic)
-    tex = tex + blobs.astype(np.float64)
-    # Camera optics: a 1-px Gaussian blur. Without it the 1/f texture changes by ~16 grey
-    # levels per pixel of scroll, far busier than the paper's photographs (2.7 for
-    # outdoor_2.jpg, 8.8 for outdoor_3.jpg); with it ~5.
-    tex = _blur(tex, OPTICS_BLUR_PX, periodic)
-    lo, hi = np.percentile(tex, [2.0, 98.0])
-    tex = 60.0 + (tex - lo) * (160.0 / max(hi - lo, 1e-12))
-    return np.clip(np.rint(tex), 30, 240).astype(np.uint8)
-
-
-def _blur(image: np.ndarray, sigma: float, periodic: bool) -> np.ndarray:
-    """Gaussian blur; circular (the image wrapped around its borders) if ``periodic``."""
-    import cv2
-
-    if not periodic:
-        return cv2.GaussianBlur(image, (0, 0), sigma)
-    pad = int(math.ceil(4 * sigma))
-    h, w = image.shape
-    big = np.pad(image, ((pad, pad), (pad, pad)), mode="wrap")
-    return cv2.GaussianBlur(big, (0, 0), sigma, borderType=cv2.BORDER_REFLECT)[pad:pad + h, pad:pad + w]
 
 
 def _fit_height(image: np.ndarray, height: int) -> np.ndarray:
@@ -478,27 +267,27 @@ def _background_strip(background, width: int, height: int, need: int, seed: int)
     import cv2
 
     if isinstance(background, (int, float, np.integer, np.floating)) and not isinstance(background, bool):
-        level = _check_float(background, "background level")
+        level = check_number(background, "background level")
         if not 0 <= level <= 255:
-            raise _fail(f"a uniform background level must be in 0..255, got {background!r}")
+            raise InputValueError(f"a uniform background level must be in 0..255, got {background!r}")
         return np.full((height, need), level, np.float32)
     if isinstance(background, str) and background == "procedural":
         return procedural_background(need, height, seed).astype(np.float32)
     if isinstance(background, (str, os.PathLike)):
         path = os.fspath(background)
         if not os.path.isfile(path):
-            raise _fail(
+            raise InputValueError(
                 f"background must be 'procedural', 'plain', a grey level, an image path or an array; "
                 f"no such file: {path!r}")
         image = cv2.imread(path, cv2.IMREAD_GRAYSCALE)
         if image is None:
-            raise _fail(f"cannot read background image {path!r}")
+            raise InputValueError(f"cannot read background image {path!r}")
         strip = _fit_height(image, height).astype(np.float32)
     elif isinstance(background, np.ndarray):
         gray = as_gray(background, name="background")
         strip = _fit_height(np.clip(gray, 0, 255).astype(np.float32), height)
     else:
-        raise _fail(
+        raise InputValueError(
             "background must be 'procedural', 'plain', a grey level (0-255), an image path or an array, "
             f"got {background!r}")
     if strip.shape[1] < need:
@@ -557,9 +346,9 @@ def basic(name: str, *, size: int = 100, frames: int = 50, fps: float = 30.0) ->
     40 px moving right 1 px/frame).
     """
     if name not in BASIC_NAMES:
-        raise _fail(f"unknown basic stimulus {name!r}; valid names: {', '.join(BASIC_NAMES)}")
-    size = _check_int(size, "size", 1)
-    n = _check_int(frames, "frames", 1)
+        raise InputValueError(f"unknown basic stimulus {name!r}; valid names: {', '.join(BASIC_NAMES)}")
+    size = check_count(size, "size", 1)
+    n = check_count(frames, "frames", 1)
     fps = check_fps(fps)
     t = np.arange(n)
     scale = size / 100.0
@@ -645,12 +434,12 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
         elif obj.approach > 0:
             peak = float(approach_sides[-1])
         else:
-            raise _fail("a physical object with no approach needs peak_side")
+            raise InputValueError("a physical object with no approach needs peak_side")
         if obj.approach == 0:
             # No approach to reverse: recede at ``speed`` from the distance at which the square
             # spans ``peak_side`` (side = 2 f l / distance, as in _physical_sides).
             if not peak > 0:
-                raise _fail("a physical object with no approach needs peak_side > 0")
+                raise InputValueError("a physical object with no approach needs peak_side > 0")
             start = obj.half_size * 2.0 * focal / peak
             recede_sides = 2.0 * focal * obj.half_size / (start + obj.speed * np.arange(obj.recede) / fps)
         else:
@@ -670,38 +459,38 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
 
 def _check_object(obj, n: int, i: int) -> SceneObject:
     if not isinstance(obj, SceneObject):
-        raise _fail(f"objects[{i}] must be a SceneObject, got {type(obj).__name__}")
+        raise InputValueError(f"objects[{i}] must be a SceneObject, got {type(obj).__name__}")
     try:
         cx, cy = obj.center
-        cx = _check_float(cx, f"objects[{i}].center x")
-        cy = _check_float(cy, f"objects[{i}].center y")
+        cx = check_number(cx, f"objects[{i}].center x")
+        cy = check_number(cy, f"objects[{i}].center y")
     except (TypeError, ValueError):
-        raise _fail(f"objects[{i}].center must be (x, y), got {obj.center!r}") from None
-    onset = _check_int(obj.onset, f"objects[{i}].onset", 0)
+        raise InputValueError(f"objects[{i}].center must be (x, y), got {obj.center!r}") from None
+    onset = check_count(obj.onset, f"objects[{i}].onset", 0)
     if onset >= n:
-        raise _fail(f"objects[{i}].onset {onset} is outside the video (0..{n - 1})")
-    approach = _check_int(obj.approach, f"objects[{i}].approach", 0)
-    hold = _check_int(obj.hold, f"objects[{i}].hold", 0)
-    recede = _check_int(obj.recede, f"objects[{i}].recede", 0)
+        raise InputValueError(f"objects[{i}].onset {onset} is outside the video (0..{n - 1})")
+    approach = check_count(obj.approach, f"objects[{i}].approach", 0)
+    hold = check_count(obj.hold, f"objects[{i}].hold", 0)
+    recede = check_count(obj.recede, f"objects[{i}].recede", 0)
     if approach + hold + recede == 0:
-        raise _fail(f"objects[{i}] has no frames: approach, hold and recede are all 0")
+        raise InputValueError(f"objects[{i}] has no frames: approach, hold and recede are all 0")
     _check_polarity(obj.polarity)
     if obj.looming not in ("linear", "physical"):
-        raise _fail(f"objects[{i}].looming must be one of linear, physical, got {obj.looming!r}")
-    _check_float(obj.growth, f"objects[{i}].growth", nonneg=True)
-    _check_float(obj.start_side, f"objects[{i}].start_side", nonneg=True)
+        raise InputValueError(f"objects[{i}].looming must be one of linear, physical, got {obj.looming!r}")
+    check_number(obj.growth, f"objects[{i}].growth", nonneg=True)
+    check_number(obj.start_side, f"objects[{i}].start_side", nonneg=True)
     if obj.peak_side is not None:
-        _check_float(obj.peak_side, f"objects[{i}].peak_side", nonneg=True)
+        check_number(obj.peak_side, f"objects[{i}].peak_side", nonneg=True)
     if obj.max_side is not None:
-        _check_float(obj.max_side, f"objects[{i}].max_side", positive=True)
+        check_number(obj.max_side, f"objects[{i}].max_side", positive=True)
     if obj.looming == "physical":
-        _check_float(obj.half_size, f"objects[{i}].half_size", positive=True)
-        _check_float(obj.speed, f"objects[{i}].speed", positive=True)
+        check_number(obj.half_size, f"objects[{i}].half_size", positive=True)
+        check_number(obj.speed, f"objects[{i}].speed", positive=True)
         if obj.contact_frame is not None:
-            c = _check_float(obj.contact_frame, f"objects[{i}].contact_frame")
+            c = check_number(obj.contact_frame, f"objects[{i}].contact_frame")
             if approach and c <= onset + approach - 1:
-                raise _fail(f"objects[{i}].contact_frame {c} must be after the last approach frame "
-                            f"{onset + approach - 1}")
+                raise InputValueError(f"objects[{i}].contact_frame {c} must be after the last approach frame "
+                                      f"{onset + approach - 1}")
     return SceneObject(center=(cx, cy), onset=onset, approach=approach, hold=hold, recede=recede,
                        polarity=obj.polarity, growth=float(obj.growth), start_side=float(obj.start_side),
                        peak_side=obj.peak_side, max_side=obj.max_side, looming=obj.looming,
@@ -714,10 +503,6 @@ def _interval(start: int, length: int, n: int) -> tuple[int, int] | None:
     return (start, min(start + length, n))
 
 
-#: Largest generated video (bytes of uint8 grey frames) and background shift (px) ``scene``
-#: accepts: a typo (a million frames, a scroll of 1e6 px per frame) fails at once instead of
-#: trying to allocate many GiB.
-MAX_STIMULUS_BYTES = 4 * 2**30
 MAX_SCROLL_PX = 100_000
 
 
@@ -761,11 +546,11 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     -------
     Stimulus
     """
-    w, h = _check_size(size)
-    n = _check_int(frames, "frames", 1)
+    w, h = check_size(size)
+    n = check_count(frames, "frames", 1)
     fps = check_fps(fps)
-    scroll = _check_float(scroll, "scroll")
-    seed = _check_int(seed, "seed", 0)
+    scroll = check_number(scroll, "scroll")
+    seed = check_count(seed, "seed", 0)
     focal = focal_length_px(w, hfov_deg)
     if isinstance(objects, SceneObject):
         objects = [objects]
@@ -774,13 +559,13 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     if isinstance(background, str) and background == "plain":
         background = plain_level([o.polarity for o in checked])
     if n * w * h > MAX_STIMULUS_BYTES:
-        raise _fail(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
-                    f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
+        raise InputValueError(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
+                              f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
     offsets = np.arange(n, dtype=np.float64) * scroll
     offsets -= offsets.min()
     if offsets.max() > MAX_SCROLL_PX:
-        raise _fail(f"scroll {scroll!r} px per frame over {n} frames moves the background "
-                    f"{offsets.max():.0f} px; at most {MAX_SCROLL_PX}")
+        raise InputValueError(f"scroll {scroll!r} px per frame over {n} frames moves the background "
+                              f"{offsets.max():.0f} px; at most {MAX_SCROLL_PX}")
     need = w + int(math.ceil(offsets.max())) + 1
     strip = _background_strip(background, w, h, need, seed)
     video = np.clip(np.rint(_scrolled(strip, offsets, w)), 0, 255).astype(np.uint8)
@@ -836,12 +621,12 @@ def four_phase(*, background: Any = "procedural", seed: int = 0, fps: float = 30
     -------
     Stimulus
     """
-    approach = _check_int(approach, "approach", 0)
-    hold = _check_int(hold, "hold", 0)
-    recede = _check_int(recede, "recede", 0)
+    approach = check_count(approach, "approach", 0)
+    hold = check_count(hold, "hold", 0)
+    recede = check_count(recede, "recede", 0)
     if approach + hold + recede > 100:
-        raise _fail(f"approach + hold + recede must be at most 100 frames (one phase), "
-                    f"got {approach + hold + recede}")
+        raise InputValueError(f"approach + hold + recede must be at most 100 frames (one phase), "
+                              f"got {approach + hold + recede}")
     _check_polarity(polarity)
     objs = [SceneObject(center=c, onset=100 * k, approach=approach, hold=hold, recede=recede,
                         polarity=polarity)
@@ -921,11 +706,11 @@ def looming(*, size: tuple[int, int] = (320, 240), center: tuple[float, float] |
     -------
     Stimulus
     """
-    w, h = _check_size(size)
+    w, h = check_size(size)
     fps = check_fps(fps)
-    half_size = _check_float(half_size, "half_size", positive=True)
-    speed = _check_float(speed, "speed", positive=True)
-    contact_time = _check_float(contact_time, "contact_time", positive=True)
+    half_size = check_number(half_size, "half_size", positive=True)
+    speed = check_number(speed, "speed", positive=True)
+    contact_time = check_number(contact_time, "contact_time", positive=True)
     _check_polarity(polarity)
     focal = focal_length_px(w, hfov_deg)
     if center is None:
@@ -935,15 +720,15 @@ def looming(*, size: tuple[int, int] = (320, 240), center: tuple[float, float] |
     sides = _physical_sides(np.arange(n_before, dtype=np.float64), contact, fps, half_size, speed, focal)
     n_approach = int(np.count_nonzero(sides <= max(w, h)))
     if n_approach == 0:
-        raise _fail(f"the object already exceeds the frame at frame 0 (side {sides[0]:.0f} px > {max(w, h)} px); "
-                    f"use a smaller half_size or a larger speed * contact_time")
+        raise InputValueError(f"the object already exceeds the frame at frame 0 (side {sides[0]:.0f} px > {max(w, h)} px); "
+                              f"use a smaller half_size or a larger speed * contact_time")
     if duration is None:
         n = n_approach
     else:
-        duration = _check_float(duration, "duration", positive=True)
+        duration = check_number(duration, "duration", positive=True)
         n = int(round(duration * fps))
         if n < 1:
-            raise _fail(f"duration {duration} s is shorter than one frame at {fps} fps")
+            raise InputValueError(f"duration {duration} s is shorter than one frame at {fps} fps")
     obj = SceneObject(center=center, onset=0, approach=min(n_approach, n), hold=0, recede=0,
                       polarity=polarity, looming="physical", half_size=half_size, speed=speed,
                       contact_frame=contact)
@@ -963,7 +748,7 @@ def _basic_factory(name: str) -> Callable[..., Stimulus]:
 
 
 _GENERATORS: dict[str, Callable[..., Stimulus]] = {name: _basic_factory(name) for name in BASIC_NAMES}
-_GENERATORS.update(four_phase=four_phase, six_objects=six_objects, looming=looming)
+_GENERATORS.update(four_phase=four_phase, six_objects=six_objects, looming=looming, approach=approach_scene)
 
 
 def parameters(name: str) -> dict[str, inspect.Parameter]:
@@ -974,7 +759,7 @@ def parameters(name: str) -> dict[str, inspect.Parameter]:
     generator added to ``_GENERATORS`` gets its command-line options without CLI code.
     """
     if name not in _GENERATORS:
-        raise _fail(f"unknown stimulus {name!r}; valid names: {', '.join(NAMES)}")
+        raise InputValueError(f"unknown stimulus {name!r}; valid names: {', '.join(NAMES)}")
     func = _GENERATORS[name]
     try:
         hints = typing.get_type_hints(func)
@@ -1011,15 +796,32 @@ def generate(name: str, **options: Any) -> Stimulus:
     unknown = [k for k in options if k not in valid]
     if unknown:
         flags = ", ".join("--" + k.replace("_", "-") for k in valid)
-        raise _fail(f"unknown option(s) {', '.join(map(repr, unknown))} for stimulus {name!r}; "
-                    f"valid options: {', '.join(valid) or 'none'} (command line: {flags or 'none'}; "
-                    f"see 'mlplc2 stimulus --help')")
+        raise InputValueError(f"unknown option(s) {', '.join(map(repr, unknown))} for stimulus {name!r}; "
+                              f"valid options: {', '.join(valid) or 'none'} (command line: {flags or 'none'}; "
+                              f"see 'mlplc2 stimulus --help')")
     return _GENERATORS[name](**options)
 
 
-# 3-D approaches live in mlplc2.approach, which builds on ApproachStimulus and
-# procedural_background above: it is imported here, at the end, so that either module may be
-# imported first.
-from .approach import ApproachObject, ObjectTrack, approach, approach_scene, random_scene  # noqa: E402
+def write(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
+    """Generate stimulus ``name`` (:func:`generate`) and write it (``mlplc2 stimulus``).
 
-_GENERATORS["approach"] = approach_scene
+    Writes the video to ``out`` (``.mp4`` H.264, or ``.avi`` MJPG) and its
+    ground truth to ``gt`` (default: ``<out stem>_gt.json`` beside it).
+    ``options`` go to the generator (e.g. ``seed``, ``background``).
+    Returns ``(video_path, gt_path)``.
+    """
+    from ._files import check_output_file, write_json
+    from .io import check_video_output, write_video
+
+    out = check_video_output(out)
+    gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),
+                                what="ground truth")
+    if gt_path.resolve() == out.resolve():
+        raise InputValueError(f"the video and its ground truth would both be written to {out}")
+    stim = generate(name, **options)
+    gt_path.parent.mkdir(parents=True, exist_ok=True)
+    write_video(out, stim.frames, stim.fps, stim.size)
+    truth = dict(stim.to_ground_truth())
+    truth = {"name": name, "video": out.name, **truth}
+    write_json(gt_path, truth)
+    return out, gt_path

@@ -42,11 +42,11 @@ from typing import Any
 
 import numpy as np
 
-from .truth import ObjectTruth, VideoTruth
+from .truth import ObjectTruth, VideoTruth, load
 
 __all__ = ["FieldTrack", "TargetRow", "TargetTrack", "Record", "Recorder", "record", "centre_distance",
            "fields_near", "first_field", "box_distance", "on_object", "alarm_explained", "false_alarms",
-           "warning_cause", "episodes", "DEFAULT_MATCH_RADIUS", "DEFAULT_TAIL", "CAUSES"]
+           "warning_cause", "episodes", "response_rows", "match_fields", "DEFAULT_MATCH_RADIUS", "DEFAULT_TAIL", "CAUSES"]
 
 #: Match radius in ground-truth pixels (a field or target this close stands for the object).
 DEFAULT_MATCH_RADIUS = 20.0
@@ -68,6 +68,20 @@ def _sig(v: float) -> float:
     """A response in the output files: 7 significant digits."""
     v = float(v)
     return float(f"{v:.7g}") if math.isfinite(v) else v
+
+
+def response_rows(index: int, time_s: float, name: str, out, to_input) -> list[dict]:
+    """The ``responses.csv`` rows of one model's :class:`~mlplc2.models.Output` at frame ``index``:
+    one per field (centre mapped to input pixels by ``to_input(x, y)``), or one frame-wide row."""
+    if not out.fields:
+        return [{"frame": index, "time_s": time_s, "model": name, "field_id": None, "x": None, "y": None,
+                 "response": _sig(out.response), "collision": int(bool(out.collision))}]
+    rows = []
+    for f in out.fields:
+        x, y = to_input(f.x, f.y)
+        rows.append({"frame": index, "time_s": time_s, "model": name, "field_id": f.id, "x": _px(x),
+                     "y": _px(y), "response": _sig(f.response), "collision": int(bool(f.collision))})
+    return rows
 
 
 def _opt4(v: float | None) -> float | None:
@@ -526,3 +540,38 @@ def episodes(frames: Iterable[int]) -> int:
         prev = f
     return n
 
+
+def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RADIUS) -> list[dict]:
+    """For each ground-truth object with a centre, the field that stands for it.
+
+    Among the fields born while the object is on screen, the one with the largest peak
+    response whose centre lies within ``radius`` px of the object's
+    (:func:`mlplc2.tracks.centre_distance`, the matcher of the paper's metrics), else the
+    nearest one (``None`` when no field was born meanwhile). ``fields``: field summaries
+    (``fields.json``); ``truth``: the demo's ground truth (a JSON entry) or a
+    :class:`~mlplc2.truth.VideoTruth`.
+    """
+    video = truth if isinstance(truth, VideoTruth) else next(iter(load(truth).values()))
+    matches = []
+    for obj in video.objects:
+        if obj.center is None:
+            continue
+        t0, t1 = obj.span or (0, math.inf)
+        cand = [f for f in fields if t0 <= f["born"] < t1]
+
+        def dist(f):
+            return centre_distance(f["x"], f["y"], obj, f["born"])
+
+        near = [f for f in cand if dist(f) <= radius]
+        if near:  # the strongest field near the object (a field may be replaced while it looms)
+            best = max(near, key=lambda f: (f["peak_response"], -f["born"]))
+        else:
+            best = min(cand, key=dist, default=None)
+        matches.append({
+            "object": obj.id, "center": list(obj.center), "frames": [t0, t1],
+            "field": None if best is None else best["id"],
+            "field_center": None if best is None else [best["x"], best["y"]],
+            "distance": None if best is None else round(dist(best), 1),
+            "first_alarm_frame": None if best is None else best["first_alarm_frame"],
+        })
+    return matches
