@@ -16,7 +16,7 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2.cli import SUBCOMMANDS, add_subcommand, main
+from mlplc2.cli import SUBCOMMANDS, Subcommand, main
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, RunInterrupted, TruncatedInputWarning, run
 
@@ -341,8 +341,8 @@ def test_to_dataframe_without_pandas(data, monkeypatch):
 def test_subcommand_table_is_extensible(capsys):
     saved = list(SUBCOMMANDS)
     try:
-        add_subcommand("hello", "say hello", lambda p: p.add_argument("--name", default="fly"),
-                       lambda a: print(f"hello {a.name}") or 0)
+        SUBCOMMANDS.append(Subcommand("hello", "say hello", lambda p: p.add_argument("--name", default="fly"),
+                                      lambda a: print(f"hello {a.name}") or 0))
         assert main(["hello", "--name", "lplc2"]) == 0
         assert capsys.readouterr().out == "hello lplc2\n"
     finally:

@@ -3,9 +3,8 @@
 Thin by design: each subcommand parses its arguments and calls one public
 function (:func:`mlplc2.run`, :func:`mlplc2.stimuli.write`,
 :func:`mlplc2.runner.demo`). Subcommands live in the :data:`SUBCOMMANDS`
-table; adding one (``reproduce``, ``bench``, ``evaluate``, ``batch``) is one
-:class:`Subcommand` entry, or a call to :func:`add_subcommand` from the
-module that implements it.
+table; adding one is one :class:`Subcommand` entry (its options and its handler, which
+calls the public function of the module that implements it).
 
 Exit codes: 0 success; 2 bad input (one line ``mlplc2: error: ...`` on
 stderr, no traceback) and also a truncated or damaged video (after writing
@@ -27,7 +26,7 @@ from ._signals import interrupts
 from ._validation import InputError, InputValueError
 from .models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 
-__all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS", "add_subcommand",
+__all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
            "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
 
 EXIT_OK = 0
@@ -815,13 +814,6 @@ SUBCOMMANDS: list[Subcommand] = [
     Subcommand("bench", "time the LPLC2 models per frame size: ms/frame, reference, bandwidth probe, memory",
                _add_bench, _cmd_bench),
 ]
-
-
-def add_subcommand(name: str, help: str, add_arguments, handler) -> Subcommand:
-    """Register a subcommand (replacing one of the same name)."""
-    cmd = Subcommand(name, help, add_arguments, handler)
-    SUBCOMMANDS[:] = [c for c in SUBCOMMANDS if c.name != name] + [cmd]
-    return cmd
 
 
 def build_parser() -> argparse.ArgumentParser:
