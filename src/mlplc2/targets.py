@@ -770,18 +770,12 @@ class Track:
 
     def follow(self, move: tuple | None, index: int, fps: float, shape: tuple[int, int], max_fails: int, *,
                box: tuple | None = None, refit: float = 0.0, camera=None) -> bool:
-        """Move and grow the box by this frame's measurement of it (step 2 of the module
-        docstring); whether the track is kept.
-
-        ``move``: ``(dx, dy, fx, fy, growth, skew)``, the shift of the box (px), the factors on
-        its width and height, and the log-scale and log-anisotropy gained; None when the
-        measurement failed: ``fails`` counts, and the track is kept for ``max_fails - 1``
-        failures in a row. With ``box`` (cx, cy, width, height) the box then moves the fraction
-        ``refit`` of the way towards it (shrinking only). ``camera`` (an object with
-        ``flow(x, y)``, the camera's image motion): its motion at the box is added to ``ox``,
-        ``oy``. Lost (False): the box's centre left the frame (``shape`` = (h, w)), or the box
-        is under 2 px or over 4 times the frame.
-        """
+        """Move and grow the box by this frame's measurement (step 2); False when it is lost: its
+        centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
+        the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
+        (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
+        the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
+        the box (the camera's image motion) adds to ``ox``, ``oy``."""
         if move is None:
             self.fails += 1
             return self.fails < max_fails
