@@ -18,7 +18,8 @@ import pytest
 
 import mlplc2
 from mlplc2 import _fast, attention, stimuli
-from mlplc2.frontend import FrontEnd, make_frontend
+from mlplc2.backend import make_frontend
+from mlplc2.frontend import FrontEnd
 from mlplc2.lobula_plate import LocalMotion
 
 from .conftest import read_gray
@@ -320,7 +321,7 @@ def test_jit_without_a_writable_cache(monkeypatch):
 
     monkeypatch.setattr(numba, "njit", njit)
 
-    @_fast._jit()
+    @_fast.jit()
     def add_one(x):
         return x + 1
 

@@ -8,6 +8,7 @@ import os
 import numpy as np
 import pytest
 
+from mlplc2.medulla import lowpass_alpha
 from mlplc2.models.base import REGISTRY
 from mlplc2.models.lgmd import (
     LGMD1,
@@ -15,7 +16,6 @@ from mlplc2.models.lgmd import (
     RESTING_POTENTIAL,
     LGMD1Params,
     LGMD2Params,
-    lowpass_alpha,
     stable_sigmoid,
 )
 

@@ -9,6 +9,7 @@ from __future__ import annotations
 
 import math
 import pickle
+from collections import deque
 
 import cv2
 import numpy as np
@@ -18,8 +19,8 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2._validation import InputTypeError, InputValueError
 from mlplc2.stimuli import ApproachObject, approach
-from mlplc2.targets import (Target, TargetParams, align, bearing, change_box, edge_distance, fit_contact, fit_course,
-                            focal_length, pyramid)
+from mlplc2.targets import (Target, TargetParams, Track, align, bearing, change_box, edge_distance, fit_contact,
+                            fit_course, focal_length, pyramid)
 from mlplc2.truth import parse
 
 FPS = 30.0
@@ -305,3 +306,24 @@ def test_targets_pickle_reset_and_order():
         assert list(out.targets) == sorted(out.targets, key=Target.urgency)
         for t in out.targets:                         # a field of view given: every target has its bearing
             assert t.azimuth_deg is not None and t.elevation_deg is not None
+
+
+def test_track_follow_counts_fails_moves_refits_and_loses():
+    t = Track(1, 0, 50.0, 40.0, 10.0, 10.0, history=deque(maxlen=8))
+    assert t.follow(None, 1, 30.0, (100, 100), 3) and t.follow(None, 2, 30.0, (100, 100), 3)
+    assert t.fails == 2 and not t.history
+    assert t.follow((2.0, -1.0, 1.1, 1.2, 0.1, 0.05), 3, 30.0, (100, 100), 3)
+    assert t.fails == 0 and (t.cx, t.cy) == (52.0, 39.0) and t.w == 10.0 * 1.1 and t.h == 10.0 * 1.2
+    assert t.rate == 0.1 * 30.0 and t.history[-1] == (3, 0.1, 52.0, 39.0, t.w, 0.05)
+
+    class Pan:                                       # the camera's image motion: 1 px right
+        def flow(self, x, y):
+            return 1.0, 0.0
+
+    # refit: half way towards a smaller box (a larger one does not widen it); the pan leaves the course
+    t.follow((0.0, 0.0, 1.0, 1.0, 0.0, 0.0), 4, 30.0, (100, 100), 3, box=(60.0, 39.0, 2.75, 100.0), refit=0.5,
+             camera=Pan())
+    assert t.cx == 56.0 and t.w == 11.0 * 0.5 and t.h == 12.0 and t.ox == 1.0
+    assert t.history[-1][2:4] == (55.0, 39.0)
+    assert not t.follow((60.0, 0.0, 1.0, 1.0, 0.0, 0.0), 5, 30.0, (100, 100), 3)   # the centre left the frame
+    assert t.overlap(Track(2, 0, t.cx, t.cy, t.w, t.h)) == 1.0 and t.overlap(Track(3, 0, 0.0, 0.0, 1.0, 1.0)) == 0.0

@@ -56,14 +56,14 @@ from .lobula_plate import LocalMotion
 from .medulla import local_max
 from .params import Params
 
-__all__ = ["FastFrontEnd", "quadrant_sums", "quadrant_sums_all", "set_threads", "PLANES",
+__all__ = ["FastFrontEnd", "quadrant_sums", "quadrant_sums_all", "set_threads", "jit", "PLANES",
            "plane_traffic"]
 
 _F32 = np.float32
 U64 = np.uint64
 
 
-def _jit(**options):
+def jit(**options):
     """``numba.njit`` with an on-disk cache when one can be written, without one otherwise.
 
     Numba caches next to the source (``__pycache__``) or, when that is read-only (a
@@ -85,7 +85,7 @@ def _jit(**options):
 # ---------------------------------------------------------------------------
 # Phase 1: retina and lamina (Eq. 1-5)
 # ---------------------------------------------------------------------------
-@_jit()
+@jit()
 def _retina_rows(gray, p_prev, p_next, l_band, ys, ye, y0, y1):
     """L = P(t) - P(t-1) on rows [ys, ye) into ``l_band``; P(t) rows [y0, y1) into ``p_next``."""
     w = gray.shape[1]
@@ -102,7 +102,7 @@ def _retina_rows(gray, p_prev, p_next, l_band, ys, ye, y0, y1):
             q[x] = g[x]
 
 
-@_jit()
+@jit()
 def _vdog_rows(e_band, e_off, i_band, i_off, on, off, y0, y1, w_i, after, use_prev):
     """Eq. 4-5 on rows [y0, y1): sign(E) max(|E| - w_i |I|, 0), split into ON and OFF.
 
@@ -131,7 +131,7 @@ def _vdog_rows(e_band, e_off, i_band, i_off, on, off, y0, y1, w_i, after, use_pr
             offr[x] = b
 
 
-@_jit()
+@jit()
 def _ratio_rows(sig, k_band, k_off, n_pad, c, pad, y0, y1, eps):
     """Eq. 6 before the tanh: N = sig / (epsilon + K_c * sig) on rows [y0, y1), written to
     channel ``c`` of the zero-padded planes ``n_pad`` (frame pixel (y, x) at (y + pad, x + pad))."""
@@ -147,7 +147,7 @@ def _ratio_rows(sig, k_band, k_off, n_pad, c, pad, y0, y1, eps):
             n_pad[cu, yo, x + pu] = sig[yu, x] / (eps + k_band[yk, x])
 
 
-@_jit()
+@jit()
 def _ratio_band(sig, k_band, k_off, out, o_off, y0, y1, eps):
     """Eq. 6 before the tanh on rows [y0, y1) into ``out[y - o_off]`` (a band's scratch, for
     the relative floor of ``Params.n_floor``); same operation as :func:`_ratio_rows`."""
@@ -160,7 +160,7 @@ def _ratio_band(sig, k_band, k_off, out, o_off, y0, y1, eps):
             o[x] = s[x] / (eps + k[x])
 
 
-@_jit()
+@jit()
 def _floor_rows(nb, lmax, off, n_pad, c, pad, y0, y1, floor):
     """The relative floor of ``Params.n_floor`` (``medulla.contrast_normalise``) on rows
     [y0, y1): N = 0 where N < floor * (local maximum of N), else N; from ``nb[y - off]`` (with
@@ -191,7 +191,7 @@ def _floor_rows(nb, lmax, off, n_pad, c, pad, y0, y1, floor):
 # of a tuple, a compile-time constant), so the sums over s stay in registers and each pixel's
 # D_s is formed once for the centre and the horizontal far points; Eq. 10 is applied in the
 # same loop (:func:`_eq10`). Then the power (:func:`_power`) and Eq. 11-12 (:func:`_lobula_row`).
-@_jit(fastmath={"contract"})
+@jit(fastmath={"contract"})
 def _power(t, base, n, g, mode, mb, kb, pb):
     """Eq. 11: t[base:base + n] = t ** g in place (t >= 0), vectorised.
 
@@ -246,7 +246,7 @@ def _power(t, base, n, g, mode, mb, kb, pb):
         ti[base + j] = v
 
 
-@_jit()
+@jit()
 def _lobula_row(t, lm_flat, row, plane, gain, slope, w):
     """Eq. 11-12 on one row, fused: r - l and d - u with r = T4_r^g1 + T5_r^g2 etc. (``t``: the
     8 rows of powered T), LM_r = g f(r - l), LM_l = g f(l - r), LM_d, LM_u likewise (f the
@@ -272,7 +272,7 @@ def _lobula_row(t, lm_flat, row, plane, gain, slope, w):
         lm_flat[j + U64(4) * plane] = np.sqrt(hh * hh + vv * vv)
 
 
-@_jit()
+@jit()
 def _d_rows(flat_n, flat_p, row, a, b, drow, wp):
     """Eq. 8 on one padded row: drow[s * wp + x] = a_s N(t) + b_s N(t-1) at ``row + x``, every
     distance s, the whole padded width (zero in the border)."""
@@ -284,7 +284,7 @@ def _d_rows(flat_n, flat_p, row, a, b, drow, wp):
             drow[o + x] = a_s * flat_n[row + x] + b_s * flat_p[row + x]
 
 
-@_jit(inline="always")
+@jit(inline="always")
 def _eq10(total, m_flat, j, t, k, ao, bo, nc_div, average):
     """Eq. 10 for one pixel and direction: mean over the distances, two-tap filter with
     M-hat(t-1) = ``m_flat[j]`` (replaced by M-hat(t)), rectified T into ``t[k]``."""
@@ -294,7 +294,7 @@ def _eq10(total, m_flat, j, t, k, ao, bo, nc_div, average):
     t[k] = tv if tv > _F32(0.0) else _F32(0.0)
 
 
-@_jit()
+@jit()
 def _corr_h(flat_n, centre, wp, drow, pad, a, beta, m_flat, m1, m2, t, t1, t2, ao, bo, nc_div, average, w):
     """Eq. 8-9 for one row of one channel, directions right (``o1``) and left (``o2``), all
     distances at once.
@@ -326,7 +326,7 @@ def _corr_h(flat_n, centre, wp, drow, pad, a, beta, m_flat, m1, m2, t, t1, t2, a
         _eq10(sl, m_flat, m2 + x, t, t2 + x, ao, bo, nc_div, average)
 
 
-@_jit()
+@jit()
 def _corr_v(flat_n, flat_p, centre, wp, drow, pad, a, b, beta, m_flat, m1, m2, t, t1, t2, ao, bo, nc_div,
             average, w):
     """Like :func:`_corr_h` for directions down (``m1``, ``t1``) and up (``m2``, ``t2``): the
@@ -354,7 +354,7 @@ def _corr_v(flat_n, flat_p, centre, wp, drow, pad, a, b, beta, m_flat, m1, m2, t
         _eq10(su, m_flat, m2 + x, t, t2 + x, ao, bo, nc_div, average)
 
 
-@_jit()
+@jit()
 def _motion_rows(n_cur, n_prev, pad, m, lm, y0, y1, a, b, ao, bo, beta, nc_div, average,
                  g_on, g_off, mode_on, mode_off, gain, slope):
     """Eq. 8-12 for rows [y0, y1), both channels, all directions and distances, fused.
@@ -415,7 +415,7 @@ def _motion_rows(n_cur, n_prev, pad, m, lm, y0, y1, a, b, ao, bo, beta, nc_div, 
 # Attention-field helper (Eq. 14). Eq. 13 stays mlplc2.attention.argmax_outside: its copy and
 # NumPy's SIMD argmax measured 2-3x faster than a masked argmax kernel here.
 # ---------------------------------------------------------------------------
-@_jit()
+@jit()
 def _quadrant_sums_kernel(a_r, a_l, a_d, a_u, fields, disc, out):
     """Eq. 14 for every field (x, y, r): Q1..Q4 in float64 (square or disc quadrants)."""
     h, w = a_r.shape
@@ -536,7 +536,7 @@ _POLLS = 20000
 _sched_yield = numba.types.ExternalFunction("sched_yield", numba.types.int32())
 
 
-@_jit()
+@jit()
 def _spin(arrive, stage, polls):
     """Poll (``sched_yield`` between polls, which also keeps LLVM from hoisting the loads) until
     every entry of ``arrive`` is at least ``stage``, at most ``polls`` times; True when reached."""

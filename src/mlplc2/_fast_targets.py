@@ -26,12 +26,12 @@ import numpy as np
 from llvmlite import ir as llvm_ir
 from numba.extending import intrinsic
 
-from ._fast import _jit  # the same njit options and on-disk cache fallback as the front end
+from ._fast import jit  # the same njit options and on-disk cache fallback as the front end
 
 __all__ = ["edges4", "align_patch"]
 
 
-@_jit()
+@jit()
 def _edge_of(prof, n, scale, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals):
     """:func:`mlplc2.targets._edge_distances` of one profile ``prof[:n]``; -1.0 for None.
 
@@ -106,7 +106,7 @@ def _edge_of(prof, n, scale, min_peak, noise_k, rel_start, rel_edge, gap, local,
     return -1.0
 
 
-@_jit()
+@jit()
 def edges4(r, l, u, d, x, y, band, min_peak, noise_k, rel_start, rel_edge, gap, local):  # noqa: E741
     """The four edge distances (right, left, up, down; -1.0 for None) around (x, y).
 
@@ -186,7 +186,7 @@ def _fma32(typingctx, a, b, c):
     return sig, codegen
 
 
-@_jit()
+@jit()
 def _reflect101(i, n):
     """``cv2.BORDER_REFLECT_101`` index (``n >= 2``, ``-n < i < 2 n - 1``)."""
     if i < 0:
@@ -196,7 +196,7 @@ def _reflect101(i, n):
     return i
 
 
-@_jit()
+@jit()
 def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
     """:func:`mlplc2.targets._sample` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
     inside mask per column / row (the mask is their outer product). True when all inside.
@@ -252,7 +252,7 @@ def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
     return everywhere
 
 
-@_jit()
+@jit()
 def _blur(src, pad, tmp, dst, taps):
     """``cv2.GaussianBlur(src, (0, 0), 0.8)`` of a float32 patch (``BORDER_REFLECT_101``), in
     OpenCV's order: along the rows tap by tap (``fma``), then along the columns with the
@@ -285,7 +285,7 @@ def _blur(src, pad, tmp, dst, taps):
                 dst[i, j] = _fma32(c, tmp[im, j] + tmp[ip, j], dst[i, j])
 
 
-@_jit()
+@jit()
 def _support(wts):
     """``(first, last + 1)`` of the nonzero entries of a weight profile that is positive on one
     interval (``(0, 0)`` when all are zero)."""
@@ -298,7 +298,7 @@ def _support(wts):
     return lo, hi
 
 
-@_jit()
+@jit()
 def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     """:func:`mlplc2.targets.align` on pyramid level ``level`` (``prev`` and ``cur``: that level
     of the two pyramids, float32), patch ``n`` x ``n`` every ``step`` level-0 px.

@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from ._validation import InputValueError
 
-__all__ = ["BACKENDS", "Backend", "resolve", "fast_available"]
+__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available"]
 
 #: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
 #: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
@@ -74,3 +74,12 @@ def resolve(backend: str = "auto") -> Backend:
     from .frontend import FrontEnd
 
     return Backend("reference", FrontEnd, quadrant_sums, None, None)
+
+
+def make_frontend(params, fps: float, backend: str = "auto"):
+    """The front end of ``backend`` (:data:`BACKENDS`), built as ``(params, fps)``.
+
+    "auto" gives the fast front end, or the reference with a logged warning (once per
+    process) when Numba is unavailable; "numba" raises ImportError then.
+    """
+    return resolve(backend).frontend(params, fps)

@@ -157,7 +157,7 @@ def time_model(name: str, frames: np.ndarray, backend: str, warmup: int, fps: fl
 
 def time_frontend(frames: np.ndarray, backend: str, warmup: int, fps: float = 30.0) -> float:
     """Median ms of the front end alone (Eq. 1-12) on float32 frames."""
-    from .frontend import make_frontend
+    from .backend import make_frontend
     from .params import Params
 
     fe = make_frontend(Params(), fps, backend)

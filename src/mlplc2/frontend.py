@@ -5,8 +5,9 @@ one grey frame (float32, 0-255) and returns the :class:`LocalMotion` maps.
 All state between frames is held explicitly in :class:`FrontEndState`.
 
 :class:`FrontEnd` is the plain reference implementation (the tests' oracle);
-:func:`make_frontend` picks the fast one (:class:`mlplc2._fast.FastFrontEnd`:
-OpenCV + fused Numba kernels, same results to ~1e-6) by default (:mod:`mlplc2.backend`).
+:func:`mlplc2.backend.make_frontend` picks the fast one (:class:`mlplc2._fast.FastFrontEnd`:
+OpenCV + fused Numba kernels, same results to ~1e-6) by default. This module imports
+neither: the fast one imports :func:`set_coefficients` from here.
 """
 
 from __future__ import annotations
@@ -17,22 +18,11 @@ import numpy as np
 
 from .lamina import gaussian_kernel_1d, on_off, vdog
 from .lobula_plate import LocalMotion, local_motion
-from .medulla import DIRECTIONS, contrast_normalise, motion_detectors
+from .medulla import DIRECTIONS, contrast_normalise, lowpass_alpha, motion_detectors
 from .params import Params
 from .retina import photoreceptors
 
-__all__ = ["FrontEnd", "FrontEndState", "make_frontend"]
-
-
-def make_frontend(params: Params, fps: float, backend: str = "auto"):
-    """The front end of ``backend`` (:data:`mlplc2.backend.BACKENDS`), built as ``(params, fps)``.
-
-    "auto" gives the fast front end, or the reference with a logged warning (once per
-    process) when Numba is unavailable; "numba" raises ImportError then.
-    """
-    from .backend import resolve
-
-    return resolve(backend).frontend(params, fps)
+__all__ = ["FrontEnd", "FrontEndState", "set_coefficients"]
 
 
 @dataclass
@@ -52,13 +42,12 @@ class FrontEndState:
 def set_coefficients(front_end, params: Params, fps: float) -> None:
     """Give a front end its ``params``, ``fps`` and the filter coefficients both
     implementations share: the delay coefficients ``alphas`` (Eq. 8, one per sampling
-    distance) and ``alpha_out`` (Eq. 10), alpha = tau_i / (tau_i + tau) with
-    tau_i = 1000 / fps ms, and the 1-D Gaussian factors ``k_e``, ``k_i``, ``k_c`` (Eq. 3)."""
+    distance) and ``alpha_out`` (Eq. 10) (:func:`mlplc2.medulla.lowpass_alpha`), and the 1-D
+    Gaussian factors ``k_e``, ``k_i``, ``k_c`` (Eq. 3)."""
     front_end.params = params
     front_end.fps = float(fps)
-    tau_i = 1000.0 / front_end.fps
-    front_end.alphas = tuple(tau_i / (tau_i + tau) for tau in params.delays_ms())
-    front_end.alpha_out = tau_i / (tau_i + params.tau_nc)
+    front_end.alphas = tuple(lowpass_alpha(tau, front_end.fps) for tau in params.delays_ms())
+    front_end.alpha_out = lowpass_alpha(params.tau_nc, front_end.fps)
     front_end.k_e = gaussian_kernel_1d(params.r_e, params.sigma_e, normalise=params.normalise_kernels)
     front_end.k_i = gaussian_kernel_1d(params.r_i, params.sigma_i, normalise=params.normalise_kernels)
     front_end.k_c = gaussian_kernel_1d(params.r_c, params.sigma_c, normalise=params.normalise_kernels)

@@ -22,7 +22,7 @@ import numpy as np
 
 from .lamina import gaussian_filter
 
-__all__ = ["DIRECTIONS", "contrast_normalise", "local_max", "delayed", "shift", "correlator", "motion_detectors"]
+__all__ = ["DIRECTIONS", "contrast_normalise", "local_max", "lowpass_alpha", "delayed", "shift", "correlator", "motion_detectors"]
 
 #: Unit steps (dx, dy) of the four cardinal directions: right, left, down, up.
 DIRECTIONS: dict[str, tuple[int, int]] = {"r": (1, 0), "l": (-1, 0), "d": (0, 1), "u": (0, -1)}
@@ -44,6 +44,13 @@ def local_max(a: np.ndarray, radius: int) -> np.ndarray:
     """Largest value of ``a`` in the (2 radius + 1)^2 square around each pixel (0 outside the frame)."""
     k = np.ones((2 * radius + 1, 2 * radius + 1), np.uint8)
     return cv2.dilate(a, k, borderType=cv2.BORDER_CONSTANT, borderValue=0)
+
+
+def lowpass_alpha(tau_ms: float, fps: float) -> float:
+    """Coefficient of the delays of Eq. 8 and 10 (a first-order low-pass with time constant
+    ``tau_ms``): alpha = tau_i / (tau_i + tau), tau_i = 1000 / fps (the frame interval, ms)."""
+    tau_i = 1000.0 / fps
+    return tau_i / (tau_i + tau_ms)
 
 
 def delayed(n: np.ndarray, n_prev: np.ndarray, alpha: float) -> np.ndarray:

@@ -729,7 +729,9 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
 class Track:
     """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
     ``(frame, log_scale, cx, cy, width, anisotropy)`` history the fits use, and the evidence
-    counters."""
+    counters. ``ox``, ``oy``: the camera's turn accumulated at the box since its birth (px; 0
+    unless the model measures the camera's motion): the history's positions are the box's less
+    it, so that the course (:func:`fit_course`) is the object's own, not the pan's."""
 
     id: int
     born: int
@@ -747,6 +749,8 @@ class Track:
     streak: int = 0
     fields: set = field(default_factory=set)
     rate: float | None = None
+    ox: float = 0.0
+    oy: float = 0.0
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
@@ -755,14 +759,48 @@ class Track:
     def size(self) -> float:
         return max(self.w, self.h)
 
+    def overlap(self, other: Track) -> float:
+        """Area of the intersection of the two boxes over the area of the smaller."""
+        a, b = self, other
+        ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
+        iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
+        if ix <= 0 or iy <= 0:
+            return 0.0
+        return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
 
-def _overlap(a: Track, b: Track) -> float:
-    """Area of the intersection of two boxes over the area of the smaller."""
-    ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
-    iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
-    if ix <= 0 or iy <= 0:
-        return 0.0
-    return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+    def follow(self, move: tuple | None, index: int, fps: float, shape: tuple[int, int], max_fails: int, *,
+               box: tuple | None = None, refit: float = 0.0, camera=None) -> bool:
+        """Move and grow the box by this frame's measurement (step 2); False when it is lost: its
+        centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
+        the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
+        (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
+        the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
+        the box (the camera's image motion) adds to ``ox``, ``oy``."""
+        if move is None:
+            self.fails += 1
+            return self.fails < max_fails
+        dx, dy, fx, fy, growth, skew = move
+        self.fails = 0
+        self.cx += dx
+        self.cy += dy
+        self.w *= fx
+        self.h *= fy
+        if box is not None and refit > 0:
+            self.cx += refit * (box[0] - self.cx)
+            self.cy += refit * (box[1] - self.cy)
+            self.w *= min(max(box[2], 1.0) / self.w, 1.0) ** refit
+            self.h *= min(max(box[3], 1.0) / self.h, 1.0) ** refit
+        self.log_s += growth
+        self.aniso += skew
+        self.rate = growth * fps
+        if camera is not None:
+            du, dv = camera.flow(self.cx - dx, self.cy - dy)
+            self.ox += float(du)
+            self.oy += float(dv)
+        self.history.append((index, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w, self.aniso))
+        h, w = shape
+        return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
+                    or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
 
 class TargetLayer:
@@ -839,7 +877,7 @@ class TargetLayer:
             if box is None:
                 continue
             t = Track(self._next, index, *box)
-            host = next((o for o in self._tracks if _overlap(o, t) >= 0.5), None)
+            host = next((o for o in self._tracks if o.overlap(t) >= 0.5), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     host.fields.add(f.id)
@@ -934,24 +972,10 @@ class TargetLayer:
             half = p.margin * t.size / 2.0 + 3.0
             al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                        iterations=p.iterations, kernel=self.align_kernel)
-            if al is None or al.residual > p.max_residual:
-                t.fails += 1
-                if t.fails < p.max_fails:
-                    kept.append(t)
-                continue
-            t.fails = 0
-            t.cx += al.dx
-            t.cy += al.dy
-            t.w *= al.kx
-            t.h *= al.ky
-            t.log_s += math.log(al.scale)
-            t.aniso += al.anisotropy
-            t.rate = math.log(al.scale) * self.fps
-            t.history.append((index, t.log_s, t.cx, t.cy, t.w, t.aniso))
-            # The object's centre has left the frame (a pass-by leaving the view) or it is tiny: lost.
-            if t.size < 2.0 or t.size > 4.0 * max(w, h) or not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1):
-                continue
-            kept.append(t)
+            move = None if al is None or al.residual > p.max_residual else \
+                (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+            if t.follow(move, index, self.fps, (h, w), p.max_fails):
+                kept.append(t)
         self._tracks = kept
 
     def _merge(self) -> None:
@@ -959,7 +983,7 @@ class TargetLayer:
         tracks = sorted(self._tracks, key=lambda t: t.id)
         out: list[Track] = []
         for t in tracks:
-            host = next((o for o in out if _overlap(o, t) >= 0.5), None)
+            host = next((o for o in out if o.overlap(t) >= 0.5), None)
             if host is None:
                 out.append(t)
             else:

@@ -52,7 +52,7 @@ import numpy as np
 
 from .._validation import InputTypeError, Valid, check_fields
 from ..params import ParameterSet, document_parameters, param
-from ..targets import (Target, TargetParams, Track, _overlap, change_box, check_hfov, count_down, estimate,
+from ..targets import (Target, TargetParams, Track, change_box, check_hfov, count_down, estimate,
                        focal_length, pyramid)
 from .base import WORK_WIDTH, Model, Output, register
 
@@ -419,12 +419,9 @@ def divergence(flow: np.ndarray, gray: np.ndarray, camera: CameraMotion | None, 
 
 @dataclass
 class _FlowTrack(Track):
-    """A target's state (:class:`mlplc2.targets.Track`) plus the camera's turn accumulated at its
-    box since its birth (px): the history's positions are the box's less it, so that the
-    course (:func:`mlplc2.targets.fit_course`) is the object's own, not the pan's."""
+    """A target's state (:class:`mlplc2.targets.Track`, whose ``ox``, ``oy`` accumulate the
+    camera's turn at its box) plus its evidence in processed frames."""
 
-    ox: float = 0.0
-    oy: float = 0.0
     # the frames processed (repeated frames skipped, Model.repeat_threshold) when a candidate
     # region was last found under it, and when it last showed looming evidence
     seen: int = 0
@@ -548,34 +545,12 @@ class FlowTTC(Model):
             of = object_flow(self._levels, levels, t.cx, t.cy, self._half(t), cam, n=p.patch, window=p.window,
                              layer_iterations=p.layer_iterations, max_expansion=p.max_expansion,
                              min_gradient=p.min_gradient)
-            if of is None:
-                t.fails += 1
-                if t.fails < tp.max_fails:
-                    kept.append(t)
-                continue
-            t.fails = 0
-            t.cx += of.dx
-            t.cy += of.dy
-            t.w *= math.exp(of.kx)
-            t.h *= math.exp(of.ky)
-            if of.box is not None and p.refit > 0:     # towards the object's layer
-                b = p.refit
-                t.cx += b * (of.box[0] - t.cx)
-                t.cy += b * (of.box[1] - t.cy)
-                t.w *= min(max(of.box[2], 1.0) / t.w, 1.0) ** b
-                t.h *= min(max(of.box[3], 1.0) / t.h, 1.0) ** b
-            rate = 0.5 * (of.kx + of.ky)
-            t.log_s += rate
-            t.aniso += of.ky - of.kx
-            t.rate = rate * self.fps
-            if turning:                  # the camera's share of the box's motion: stabilised course
-                du, dv = cam.flow(t.cx - of.dx, t.cy - of.dy)
-                t.ox += float(du)
-                t.oy += float(dv)
-            t.history.append((index, t.log_s, t.cx - t.ox, t.cy - t.oy, t.w, t.aniso))
-            if t.size < 2.0 or t.size > 4.0 * max(w, h) or not (0 <= t.cx <= w - 1 and 0 <= t.cy <= h - 1):
-                continue
-            kept.append(t)
+            move = None if of is None else \
+                (of.dx, of.dy, math.exp(of.kx), math.exp(of.ky), 0.5 * (of.kx + of.ky), of.ky - of.kx)
+            # refit: towards the object's layer; the camera's share of the box's motion: a stabilised course
+            if t.follow(move, index, self.fps, (h, w), tp.max_fails, box=None if of is None else of.box,
+                        refit=p.refit, camera=cam if turning else None):
+                kept.append(t)
         self._tracks = kept
 
     def _merge(self) -> None:
@@ -583,7 +558,7 @@ class FlowTTC(Model):
         one with the latest looming evidence, else the older."""
         out: list[Track] = []
         for t in sorted(self._tracks, key=lambda t: (-t.loomed, t.id)):
-            host = next((o for o in out if _overlap(o, t) >= 0.5), None)
+            host = next((o for o in out if o.overlap(t) >= 0.5), None)
             if host is None:
                 out.append(t)
             else:
@@ -626,7 +601,7 @@ class FlowTTC(Model):
                     continue
                 box = (x, y, float(bw), float(bh))
             t = _FlowTrack(self._next, index, *box)
-            if any(_overlap(o, t) >= 0.5 for o in self._tracks) or not self._grows(t, levels, cam):
+            if any(o.overlap(t) >= 0.5 for o in self._tracks) or not self._grows(t, levels, cam):
                 continue
             t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
             t.seen = self._steps

@@ -29,11 +29,13 @@ import numpy as np
 
 from .._validation import (FLOAT32_MAX, InputTypeError, InputValueError, check_bool, check_int, check_real,
                            check_reals)
+from ..lamina import on_off
+from ..medulla import delayed, lowpass_alpha
 from ..params import ParameterSet
 from ..retina import photoreceptors
 from .base import WORK_WIDTH, Model, Output, register
 
-__all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "lowpass_alpha", "highpass_coeff",
+__all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "highpass_coeff",
            "stable_sigmoid", "RESTING_POTENTIAL"]
 
 #: Sigmoid membrane potential with no input (sigmoid(0)); both models rest here.
@@ -46,13 +48,6 @@ SUM_WEIGHT_MAX = 1e6
 T_PM_MIN = 255.0 / FLOAT32_MAX
 
 _BORDER = cv2.BORDER_REPLICATE
-
-
-def lowpass_alpha(tau_ms: float, fps: float) -> float:
-    """Coefficient of a first-order low-pass with time constant ``tau_ms``:
-    alpha = tau_i / (tau_i + tau), tau_i = 1000 / fps (frame interval, ms)."""
-    tau_i = 1000.0 / fps
-    return tau_i / (tau_i + tau_ms)
 
 
 def highpass_coeff(tau_ms: float, fps: float) -> float:
@@ -241,14 +236,13 @@ class LGMD2(Model):
 
     def _inhibition(self, x, x_prev, delayed_prev, alphas, kernels):
         total = None
-        delayed = []
+        out = []
         for a, k, y_prev in zip(alphas, kernels, delayed_prev):
-            a = np.float32(a)
-            d = a * x + (np.float32(1) - a) * (y_prev if self.params.recursive_delay else x_prev)
-            delayed.append(d)
+            d = delayed(x, y_prev if self.params.recursive_delay else x_prev, a)   # the lamina's Eq. 8 delay
+            out.append(d)
             conv = cv2.filter2D(d, cv2.CV_32F, k, borderType=_BORDER)
             total = conv if total is None else total + conv
-        return total, delayed
+        return total, out
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
@@ -265,10 +259,8 @@ class LGMD2(Model):
         w_on = max(p.w_on_base, self._pm / p.t_pm)
         w_off = max(p.w_off_base, self._pm / p.t_pm)
 
-        # ON/OFF half-wave rectification with after-image
-        dc = np.float32(p.dc)
-        on = np.maximum(pr, 0) + dc * self._on_prev
-        off = np.maximum(-pr, 0) + dc * self._off_prev
+        # ON/OFF half-wave rectification with after-image (the lamina's Eq. 5)
+        on, off = on_off(pr, (self._on_prev, self._off_prev), p.dc)
 
         inh_on, self._on_delay = self._inhibition(on, self._on_prev, self._on_delay, self.alpha_on, self._k_on)
         inh_off, self._off_delay = self._inhibition(off, self._off_prev, self._off_delay, self.alpha_off,
