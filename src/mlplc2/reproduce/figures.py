@@ -11,6 +11,7 @@ from pathlib import Path
 
 import numpy as np
 
+from .._validation import LUMA_RGB
 from ..plots import colours as _colours
 from ..tracks import DEFAULT_MATCH_RADIUS, fields_near
 from .claims import LABELS, MODELS, STIMULUS_LABELS
@@ -40,7 +41,7 @@ def _save(fig, path, dpi: int) -> Path:
 def _gray(frame) -> np.ndarray:
     a = np.asarray(frame)
     if a.ndim == 3:
-        a = a[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
+        a = a[..., :3].astype(np.float32) @ LUMA_RGB
     return a
 
 
@@ -72,7 +73,7 @@ def size_profile(obj, n: int) -> np.ndarray:
 
 def _presence_bars(ax, objects, n: int, colours) -> None:
     """Object presence: one lane per object; the bar spans the frames where the
-    object is visible and its height follows the object's side length."""
+    object is visible and its height follows the object's side length (legend: the centres)."""
     profiles = [size_profile(o, n) for o in objects]
     smax = max((float(p.max()) for p in profiles), default=1.0) or 1.0
     x = np.arange(n)
@@ -86,6 +87,7 @@ def _presence_bars(ax, objects, n: int, colours) -> None:
     ax.set_ylim(0, k)
     ax.set_ylabel(f"objects\n(bar height = side,\nmax {smax:.0f} px)", fontsize=8)
     ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
 
 
 def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, top: int = 14) -> None:
@@ -271,7 +273,6 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
     _key_frames(sub[0], scene, tr, keys, cols, ocol)
     axes = sub[1].subplots(len(models) + 1, 1, sharex=True, height_ratios=[0.8] + [1.0] * len(models))
     _presence_bars(axes[0], scene.objects, n, ocol)
-    axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     for k in range(1, n // 100):
         for ax in axes:
             ax.axvline(100 * k, color="0.5", lw=0.8, ls=":")
@@ -318,7 +319,6 @@ def fig5_six_objects(scene, trace, path, *, source: str = "", dpi: int = 110) ->
     ax0, ax1 = sub[1].subplots(2, 1, sharex=True, height_ratios=[0.8, 1.4])
     _presence_bars(ax0, scene.objects, n, ocol)
     ax0.set_title("objects present (each disappears after a 10-frame hold)", fontsize=9, loc="left")
-    ax0.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     _field_lines(ax1, trace, cols)
     ax1.set_ylabel("mLPLC2 field response (a.u.)")
     ax1.set_title("mLPLC2: every attention field (colour = the object it sits on, dashed = a later field "
