@@ -3,6 +3,7 @@ known deviations (marked "FAIL (known deviation)" only while they still fail).""
 
 from __future__ import annotations
 
+import ast
 import contextlib
 import io
 import json
@@ -81,6 +82,16 @@ def test_known_deviations_in_docs_are_the_list_in_the_code():
     for file, heading in set(code.values()):
         text = (ROOT / file).read_text(encoding="utf-8")
         assert re.search(rf"^#+ {re.escape(heading)}$", text, re.M), f"{file} has no heading {heading!r}"
+
+
+def test_the_package_does_not_know_the_command_line():
+    """mlplc2.reproduce returns a result or raises; its options, printed summary, warnings and
+    exit codes are mlplc2.cli's, which imports it (no import cycle)."""
+    for path in sorted((ROOT / "src" / "mlplc2" / "reproduce").glob("*.py")):
+        for node in ast.walk(ast.parse(path.read_text(encoding="utf-8"))):
+            if isinstance(node, ast.ImportFrom):
+                names = [node.module] if node.module else [a.name for a in node.names]
+                assert "cli" not in names and "mlplc2.cli" not in names, f"{path.name} imports the cli"
 
 
 @pytest.fixture(scope="module")

@@ -714,18 +714,41 @@ def _cmd_benchmark(args) -> int:
 
 
 # ---------------------------------------------------------------------------
-# reproduce (implemented in mlplc2.reproduce, imported only when used)
+# reproduce (implemented in mlplc2.reproduce, imported only when used; docs/reproduce.md)
 # ---------------------------------------------------------------------------
 def _add_reproduce(p: argparse.ArgumentParser) -> None:
-    from .reproduce import add_arguments
-
-    add_arguments(p)
+    p.add_argument("--data", metavar="DIR",
+                   help="the paper's data folder (basic/, scenes/, uav/, ground_truth.json); "
+                        "default: generated stimuli")
+    p.add_argument("--out", "-o", default="mlplc2_reproduce", metavar="DIR",
+                   help="output folder for the figures and report (default: ./mlplc2_reproduce)")
+    p.add_argument("--quick", action="store_true",
+                   help="reduced set for CI: no real clips (Fig. 6), low-resolution figures")
+    p.add_argument("--params", metavar="FILE.json",
+                   help="JSON object of Params fields overriding the defaults for every input (the format of "
+                        "'mlplc2 batch --params'; 'mlplc2 params' lists the fields)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
 def _cmd_reproduce(args) -> int:
-    from .reproduce import cli_handler
+    """The summary and every failing claim on stdout; a damaged clip (skipped) is a warning
+    line, also under ``--quiet``, and exit 2."""
+    from pathlib import Path
 
-    return cli_handler(args)
+    from .reproduce import reproduce
+
+    if args.data is not None and not Path(args.data).is_dir():
+        raise InputValueError(f"--data {args.data}: not a folder")
+    res = reproduce(args.data, args.out, quick=args.quick, quiet=args.quiet, params=args.params)
+    for s in res.damaged:
+        _warn(s)
+    failing = [f"  {c.status}  {c.claim}: {c.measured}"
+               + (f" ({c.docs['file']}, \"{c.docs['section']}\")" if c.docs else "")
+               for c in res.claims if not c.passed]
+    _say(args, f"{len(res.claims)} claims: {res.summary}", f"  parameters: {res.parameters}", *failing,
+         *(f"  note: {s}" for s in res.skipped if s not in res.damaged),
+         f"outputs in {res.out}: {', '.join(sorted(res.files))}")
+    return EXIT_TRUNCATED if res.damaged else EXIT_OK
 
 
 # ---------------------------------------------------------------------------

@@ -110,7 +110,7 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
         if d["fields"]:
             ranked = sorted(d["fields"], key=lambda k: -max(d["fields"][k][1]))
             shown = sorted(ranked[:top])  # legend in id (= birth) order
-            cmap = _colours(len(shown))
+            cmap = colours(len(shown))
             for fid in ranked[top:]:
                 fr, val = _segments(*d["fields"][fid])
                 ax.plot(fr, val, color="0.7", lw=0.7, zorder=1)
@@ -150,7 +150,8 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
     return path
 
 
-def _colours(k: int):
+def colours(k: int) -> list:
+    """``k`` distinct matplotlib colours: tab10, or tab20 (dark shades first) beyond 10."""
     from matplotlib import colormaps
 
     if k <= 10:

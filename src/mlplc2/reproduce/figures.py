@@ -1,5 +1,5 @@
 """The figures of ``mlplc2 reproduce`` (the paper's Fig. 3-6), from the traces of
-:mod:`mlplc2.reproduce`.
+:func:`mlplc2.reproduce.reproduce`.
 
 Matplotlib is imported inside the functions (Agg canvas, no pyplot, no global
 backend change), so importing :mod:`mlplc2` stays light.
@@ -11,14 +11,12 @@ from pathlib import Path
 
 import numpy as np
 
-from .tracks import DEFAULT_MATCH_RADIUS, fields_near
+from .._validation import LUMA_RGB
+from ..plots import colours as _colours
+from ..tracks import DEFAULT_MATCH_RADIUS, fields_near
+from .claims import LABELS, MODELS, STIMULUS_LABELS
 
 __all__ = ["fig3_selectivity", "fig4_four_phases", "fig5_six_objects", "fig6_real_clips", "size_profile"]
-
-_MODEL_LABELS = {"lgmd2": "LGMD2", "lplc2": "LPLC2", "slplc2": "sLPLC2", "mlplc2": "mLPLC2"}
-_STIM_LABELS = {"dark_approach": "dark approach", "dark_recede": "dark recede",
-                "bright_approach": "bright approach", "bright_recede": "bright recede",
-                "translating": "translating", "grating": "grating"}
 
 
 def _figure(w: float, h: float):
@@ -31,7 +29,7 @@ def _figure(w: float, h: float):
 
 
 def _save(fig, path, dpi: int) -> Path:
-    from ._files import atomic_path
+    from .._files import atomic_path
 
     path = Path(path)
     path.parent.mkdir(parents=True, exist_ok=True)
@@ -43,17 +41,8 @@ def _save(fig, path, dpi: int) -> Path:
 def _gray(frame) -> np.ndarray:
     a = np.asarray(frame)
     if a.ndim == 3:
-        a = a[..., :3].astype(np.float32) @ np.array([0.299, 0.587, 0.114], np.float32)
+        a = a[..., :3].astype(np.float32) @ LUMA_RGB
     return a
-
-
-def _colours(k: int):
-    from matplotlib import colormaps
-
-    if k <= 10:
-        return [colormaps["tab10"](i) for i in range(k)]
-    order = list(range(0, 20, 2)) + list(range(1, 20, 2))
-    return [colormaps["tab20"](order[i % 20]) for i in range(k)]
 
 
 def size_profile(obj, n: int) -> np.ndarray:
@@ -84,7 +73,7 @@ def size_profile(obj, n: int) -> np.ndarray:
 
 def _presence_bars(ax, objects, n: int, colours) -> None:
     """Object presence: one lane per object; the bar spans the frames where the
-    object is visible and its height follows the object's side length."""
+    object is visible and its height follows the object's side length (legend: the centres)."""
     profiles = [size_profile(o, n) for o in objects]
     smax = max((float(p.max()) for p in profiles), default=1.0) or 1.0
     x = np.arange(n)
@@ -98,6 +87,7 @@ def _presence_bars(ax, objects, n: int, colours) -> None:
     ax.set_ylim(0, k)
     ax.set_ylabel(f"objects\n(bar height = side,\nmax {smax:.0f} px)", fontsize=8)
     ax.grid(alpha=0.3, axis="x")
+    ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
 
 
 def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, top: int = 14) -> None:
@@ -173,7 +163,6 @@ def _draw_fields(ax, trace, frame_index: int, colours_by_id) -> None:
     for f in trace.fields.values():
         if frame_index not in f.frames:
             continue
-        k = f.frames.index(frame_index)
         alarm = frame_index in f.alarms
         ax.add_patch(Rectangle((f.x - f.radius, f.y - f.radius), 2 * f.radius, 2 * f.radius, fill=False,
                                ec=colours_by_id.get(f.id, "w"), lw=2.2 if alarm else 1.2,
@@ -181,22 +170,24 @@ def _draw_fields(ax, trace, frame_index: int, colours_by_id) -> None:
         ax.plot([f.x], [f.y], marker="+", color=colours_by_id.get(f.id, "w"), ms=8, mew=1.5)
         ax.text(f.x + 3, f.y - 3, f"#{f.id}" + (" ALARM" if alarm else ""), color="w", fontsize=6,
                 bbox=dict(boxstyle="square,pad=0.1", fc=colours_by_id.get(f.id, "k"), ec="none", alpha=0.8))
-        del k
 
 
-def _key_frames(fig_row, scene, trace, indices, colours_by_id, objects_colours=None) -> None:
-    for ax, t in zip(fig_row, indices):
+def _key_frames(subfig, scene, trace, indices, colours_by_id, object_colours) -> None:
+    """One row of key frames ``indices`` on ``subfig``: the fields of ``trace`` and the true
+    centres of the objects present (``x``, in their ``object_colours``)."""
+    for ax, t in zip(np.atleast_1d(subfig.subplots(1, len(indices))), indices):
         ax.imshow(_gray(scene.frames[t]), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
         if trace is not None:
             _draw_fields(ax, trace, t, colours_by_id)
-        if objects_colours is not None:
-            for o, c in objects_colours:
-                if size_profile(o, scene.n)[t] <= 0:
-                    continue
-                ax.plot([o.center[0]], [o.center[1]], marker="x", color=c, ms=6, mew=1.5)
+        for o, c in zip(scene.objects, object_colours):
+            if size_profile(o, scene.n)[t] <= 0:
+                continue
+            ax.plot([o.center[0]], [o.center[1]], marker="x", color=c, ms=6, mew=1.5)
         ax.set_title(f"frame {t}", fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
+    subfig.suptitle("key frames with the mLPLC2 fields (dashed square; solid = in alarm; x = true object centre)",
+                    fontsize=9)
 
 
 # ---------------------------------------------------------------------------
@@ -206,7 +197,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
     """Fig. 3: 6 basic stimuli (columns) x LGMD2, LPLC2, sLPLC2, mLPLC2 (rows),
     response against frame, stimulus snapshots (frames 5, 25, 45) on top."""
     names = list(basic)
-    models = [m for m in ("lgmd2", "lplc2", "slplc2", "mlplc2") if m in traces]
+    models = [m for m in MODELS if m in traces]
     fig = _figure(2.5 * len(names) + 0.6, 1.4 + 1.9 * len(models) + 0.9)
     gs = fig.add_gridspec(len(models) + 1, len(names), height_ratios=[0.9] + [1.0] * len(models))
     from matplotlib.lines import Line2D
@@ -222,7 +213,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
         ax.imshow(np.hstack(strip[:-1]), cmap="gray", vmin=0, vmax=255, interpolation="nearest")
         ax.set_xticks([])
         ax.set_yticks([])
-        ax.set_title(_STIM_LABELS.get(name, name), fontsize=10, fontweight="bold")
+        ax.set_title(STIMULUS_LABELS.get(name, name), fontsize=10, fontweight="bold")
         ax.set_xlabel("frames " + ", ".join(map(str, picks)), fontsize=7)
     for i, m in enumerate(models):
         ymax = max(float(traces[m][n].response.max()) for n in names)
@@ -243,7 +234,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
             ax.tick_params(labelsize=7)
             if j == 0:
                 unit = "membrane potential" if m.startswith("lgmd") else "response (a.u.)"
-                ax.set_ylabel(f"{_MODEL_LABELS[m]}\n{unit}", fontsize=9)
+                ax.set_ylabel(f"{LABELS[m]}\n{unit}", fontsize=9)
             else:
                 ax.set_yticklabels([])
             if i == len(models) - 1:
@@ -269,7 +260,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
 def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 110, note: str | None = None) -> Path:
     """Fig. 4: four-phase scene; key frames, object presence, LGMD2, LPLC2, sLPLC2
     and every mLPLC2 field (centre in the legend)."""
-    models = [m for m in ("lgmd2", "lplc2", "slplc2", "mlplc2") if m in traces]
+    models = [m for m in MODELS if m in traces]
     n = scene.n
     tr = traces.get("mlplc2")
     ocol = _colours(len(scene.objects))
@@ -279,14 +270,9 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
         keys = [min(30 + 100 * k, n - 1) for k in range(max(1, n // 100))]
     fig = _figure(13.5, 3.0 + 1.1 + 2.0 * len(models))
     sub = fig.subfigures(2, 1, height_ratios=[2.4, 1.1 + 2.0 * len(models)])
-    kax = sub[0].subplots(1, len(keys))
-    kax = np.atleast_1d(kax)
-    _key_frames(kax, scene, tr, keys, cols, list(zip(scene.objects, ocol)))
-    sub[0].suptitle("key frames with the mLPLC2 fields (dashed square; solid = in alarm; x = true object centre)",
-                    fontsize=9)
+    _key_frames(sub[0], scene, tr, keys, cols, ocol)
     axes = sub[1].subplots(len(models) + 1, 1, sharex=True, height_ratios=[0.8] + [1.0] * len(models))
     _presence_bars(axes[0], scene.objects, n, ocol)
-    axes[0].legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     for k in range(1, n // 100):
         for ax in axes:
             ax.axvline(100 * k, color="0.5", lw=0.8, ls=":")
@@ -297,14 +283,14 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
         else:
             r = traces[m].response
             unit = "membrane potential" if m.startswith("lgmd") else "response (a.u.)"
-            ax.plot(np.arange(r.size), r, color="k", lw=1.2, label=_MODEL_LABELS[m])
+            ax.plot(np.arange(r.size), r, color="k", lw=1.2, label=LABELS[m])
             if m.startswith("lgmd"):
                 ax.axhline(0.5, color="tab:blue", lw=0.8, ls=":", label="resting potential")
                 ax.set_ylim(0.49, max(0.8, float(r.max()) + 0.02))
-            ax.set_ylabel(f"{_MODEL_LABELS[m]}\n{unit}", fontsize=8)
+            ax.set_ylabel(f"{LABELS[m]}\n{unit}", fontsize=8)
             ax.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
         ax.grid(alpha=0.3)
-        ax.set_title(_MODEL_LABELS[m] + (": every attention field (colour = the object it sits on, "
+        ax.set_title(LABELS[m] + (": every attention field (colour = the object it sits on, "
                                           "dashed = a later field on the same object)" if m == "mlplc2" else ""),
                      fontsize=9, loc="left")
     for k in range(max(1, n // 100)):
@@ -329,14 +315,10 @@ def fig5_six_objects(scene, trace, path, *, source: str = "", dpi: int = 110) ->
     keys = [t for t in (20, 50, 80, 110) if t < n] or [n - 1]
     fig = _figure(13.5, 8.2)
     sub = fig.subfigures(2, 1, height_ratios=[2.4, 4.4])
-    kax = np.atleast_1d(sub[0].subplots(1, len(keys)))
-    _key_frames(kax, scene, trace, keys, cols, list(zip(scene.objects, ocol)))
-    sub[0].suptitle("key frames with the mLPLC2 fields (dashed square; solid = in alarm; x = true object centre)",
-                    fontsize=9)
+    _key_frames(sub[0], scene, trace, keys, cols, ocol)
     ax0, ax1 = sub[1].subplots(2, 1, sharex=True, height_ratios=[0.8, 1.4])
     _presence_bars(ax0, scene.objects, n, ocol)
     ax0.set_title("objects present (each disappears after a 10-frame hold)", fontsize=9, loc="left")
-    ax0.legend(fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0), frameon=False)
     _field_lines(ax1, trace, cols)
     ax1.set_ylabel("mLPLC2 field response (a.u.)")
     ax1.set_title("mLPLC2: every attention field (colour = the object it sits on, dashed = a later field "
