@@ -112,21 +112,12 @@ class _Run:
     has_targets: bool = False
 
 
-def _model_class(model: str):
+def _model_says(model: str, flag: str) -> bool:
+    """The registered model's class attribute ``flag`` (``Model.localises``, ``Model.has_targets``);
+    False for a model not registered. evaluate keeps no rule of its own."""
     from .models.base import REGISTRY
 
-    return REGISTRY.get(model)
-
-
-def _localises(model: str) -> bool:
-    """Whether the model's fields have meaningful positions (``Model.localises``: mLPLC2, sLPLC2)."""
-    cls = _model_class(model)
-    return cls is not None and bool(cls.localises)
-
-
-def _has_targets(model: str) -> bool:
-    cls = _model_class(model)
-    return cls is not None and bool(getattr(cls, "has_targets", False))
+    return bool(getattr(REGISTRY.get(model), flag, False))
 
 
 def _target_row(r) -> TargetRow:
@@ -154,7 +145,7 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
             label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
                     dict(params or {}), origin or str(source), ident, incomplete, video_known,
-                    has_targets=_has_targets(m) and targets_known)
+                    has_targets=_model_says(m, "has_targets") and targets_known)
 
     for r in rows:
         m = r["model"]
@@ -354,7 +345,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
     sx = sy = 1.0
     if truth.size and run.size and tuple(run.size) != tuple(truth.size):
         sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
-    localises = _localises(run.model)
+    localises = _model_says(run.model, "localises")
 
     def fields_at(f):
         return [(fid, x * sx, y * sy, c) for fid, x, y, c in run.frame_fields.get(f, ())]
@@ -528,7 +519,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     early_before = None
     if clip and truth.danger_onset_frame is not None:
         early_before = truth.danger_onset_frame - EARLY_S * fps
-    localises = _localises(run.model)
+    localises = _model_says(run.model, "localises")
 
     def targets(f):
         rows = run.frame_targets.get(f, ())

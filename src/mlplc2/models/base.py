@@ -44,8 +44,8 @@ class Output:
         A spike this frame (LGMD models; the LPLC2 family spikes when it alarms).
     repeated : bool
         The frame repeated the last processed one (see ``Model.repeat_threshold``): the
-        model did not step, and this output is the previous one with this frame's index
-        (each target's ``ttc_s`` counted down by the time since the processed frame).
+        model did not step, and this output is the previous one with this frame's index, as
+        the model's ``_hold`` ages it (models with targets count each ``ttc_s`` down).
     targets : tuple of Target
         The approaching objects (:class:`mlplc2.targets.Target`: size, time to contact,
         miss, warning), most urgent first; empty for models without targets (LGMD).
@@ -202,18 +202,15 @@ class Model(abc.ABC):
 
     name: ClassVar[str] = "model"
     #: Smallest frame side (pixels) the model accepts; smaller frames raise
-    #: :class:`~mlplc2.InputError` naming this minimum. 3 for every model: an
-    #: LPLC2 field needs a centre row and column plus one pixel per quadrant, and
-    #: the LGMD lateral inhibition and grouping are 3x3 neighbourhoods. Frames
-    #: smaller than the LPLC2 filter windows (11 and 23 px) or than a field
-    #: (2 R_AF + 1 = 81 px) are numerically safe (zero borders; every output
-    #: finite, tested), but the default parameters are meant for about 320x240.
+    #: :class:`~mlplc2.InputError` naming this minimum. Every frame of at least this size must
+    #: give finite outputs (``mlplc2.testing.check_minimum_size``).
     min_size: ClassVar[int] = 3
-    #: True for models whose fields have meaningful positions (mLPLC2, sLPLC2); False for whole-field
-    #: neurons (LGMD) and the frame-wide LPLC2 cell.
-    localises: ClassVar[bool] = False
     #: True for models whose outputs carry attention fields (``Output.fields``).
     has_fields: ClassVar[bool] = False
+    #: True for models whose fields' positions mean something: a field sits where what it answers
+    #: to is (evaluation scores them against the objects); False without fields, or for fields
+    #: that stay put whatever moves.
+    localises: ClassVar[bool] = False
     #: True for models whose outputs carry targets (``Output.targets``): their warning is the
     #: targets' warning; models without targets warn with their alarm (``Output.collision``).
     has_targets: ClassVar[bool] = False

@@ -353,6 +353,8 @@ class LGMD1(Model):
     0.5
     """
 
+    # min_size 3 (the base's): the lateral inhibition and grouping here and in LGMD2 are 3x3 neighbourhoods.
+
     def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None, *,
                  repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
         params = LGMD1Params() if params is None else params

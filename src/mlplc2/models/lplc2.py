@@ -22,8 +22,12 @@ __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
 class _LPLC2Family(Model):
     """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping + the target layer."""
 
-    localises = True
+    # min_size 3 (the base's): a field needs a centre row and column plus one pixel per quadrant.
+    # Frames smaller than the filter windows (11 and 23 px) or than a field (2 R_AF + 1 = 81 px)
+    # are numerically safe (zero borders; every output finite, tested), but the default
+    # parameters are meant for about 320x240.
     has_fields = True
+    localises = True
     has_targets = True
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
