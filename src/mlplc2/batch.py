@@ -766,6 +766,16 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     used = "sync"
     finished: set[int] = set()  # jobs done in this call
     prepared = False
+
+    def result() -> BatchResult:  # of the tasks done (read back, or finished now)
+        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
+        ran = [i for i in todo if i in finished]
+        return BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
+                           ran=len(ran), skipped=skipped, failed=sum(r["status"] == "error" for r in ordered),
+                           seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
+                           plotted=sum(i in finished for i in replot),
+                           failed_runs=sum(rows[i]["status"] == "error" for i in ran))
+
     try:
         with contextlib.nullcontext((None, "sync")) if sequential or not jobs else \
                 _client(scheduler, workers, client) as (c, used):
@@ -778,28 +788,17 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
                 finished.add(i)
                 bar.update()
     except KeyboardInterrupt:
-        done = list(rows)  # read back, or finished now
-        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in done]
-        result = BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
-                             ran=sum(1 for i in todo if i in finished), skipped=skipped,
-                             failed=sum(1 for r in ordered if r["status"] == "error"),
-                             seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
-                             plotted=sum(1 for i in replot if i in finished),
-                             failed_runs=sum(1 for i in todo if i in finished and rows[i]["status"] == "error"))
+        res = result()
         if prepared:
-            _write_table(ordered, out, parquet)
-            message = f"interrupted with {len(done)} of {len(tasks)} task(s) done; their rows are in {result.table}"
+            _write_table(res.rows, out, parquet)
+            message = f"interrupted with {len(rows)} of {len(tasks)} task(s) done; their rows are in {res.table}"
         else:
             message = f"interrupted before any task ran; nothing written to {out}"
         if progress:
             bar.write(f"batch: {message}", file=sys.stderr)
-        raise BatchInterrupted(message, result) from None
+        raise BatchInterrupted(message, res) from None
     finally:
         bar.close()
-    seconds = time.perf_counter() - t0
-    ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
-    table = _write_table(ordered, out, parquet)
-    failed = sum(1 for r in ordered if r["status"] == "error")
-    return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
-                       skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks),
-                       plotted=len(replot), failed_runs=sum(1 for i in todo if rows[i]["status"] == "error"))
+    res = result()
+    _write_table(res.rows, out, parquet)
+    return res
