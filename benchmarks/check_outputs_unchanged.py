@@ -1,10 +1,11 @@
 """Do two versions of mlplc2 write the same outputs? (a refactoring check, not a test)
 
-``record`` runs every command that writes files (``mlplc2 stimulus``, ``run``, ``batch``,
-``evaluate``, ``reproduce``, ``demo``, and :func:`mlplc2.run` from Python, whose rows stay in
-memory) on the paper's videos and on generated stimuli, into one folder; ``compare`` diffs two
-such folders byte for byte, after masking what holds a wall time (``"seconds"`` in JSON and
-CSV, ``in 1.2 s (34.5 frames/s)`` and ``Run time 12 s`` in text). Record with the old code
+``record`` runs every command that writes files (``mlplc2 stimulus``, ``run``, ``batch`` here
+and on two Dask workers, ``evaluate``, ``reproduce``, ``demo``, and :func:`mlplc2.run` from
+Python, whose rows stay in memory) on the paper's videos and on generated stimuli, into one
+folder; ``compare`` diffs two such folders byte for byte, after masking what holds a wall
+time (``"seconds"`` in JSON and CSV, ``in 1.2 s (34.5 frames/s)`` and ``Run time 12 s`` in
+text). Record with the old code
 (e.g. ``git archive BASE | tar -x -C /tmp/old`` and ``PYTHONPATH=/tmp/old/src``), record with
 the new one, compare::
 
@@ -73,6 +74,9 @@ def record(out: Path, data: Path | None) -> None:
     bin_ = [str(stim / "six_objects.avi")] + [str(p) for p in paper[-2:]]
     _cli(out, "batch", "batch", *bin_, "--models", "mlplc2,lgmd2", "--workers", "0", "--out",
          str(out / "batch"), "--sweep", "t_a=8,12", "-q")
+    # the same on a local Dask cluster of two workers (the rows and task outputs of a worker)
+    _cli(out, "batch_dask", "batch", *bin_[:2], "--models", "mlplc2,lgmd2", "--workers", "2", "--out",
+         str(out / "batch_dask"), "--sweep", "t_a=8,12", "-q")
     evals = [(f"eval_{v.stem}", [str(runs / v.stem)], stim / f"{v.stem}_gt.json") for v in videos]
     evals += [("eval_offset", [str(out / "run_offset")], stim / "six_objects_gt.json"),
               ("eval_api", [str(out / "api_run")], stim / "approach_gt.json"),

@@ -59,6 +59,21 @@ def client():
         cluster.close()
 
 
+def test_local_cluster_workers(client):
+    """The workers of start_local_cluster ignore Ctrl-C (this process closes them), run without
+    Dask's MALLOC_TRIM_THRESHOLD_ (which makes the models several times slower) and share the
+    cores between their Numba threads."""
+    def worker_state():
+        import numba
+
+        return (signal.getsignal(signal.SIGINT) == signal.SIG_IGN, os.environ.get("MALLOC_TRIM_THRESHOLD_"),
+                numba.get_num_threads())
+
+    threads = int(os.environ.get("NUMBA_NUM_THREADS") or max(1, (os.cpu_count() or 1) // 2))
+    assert list(client.run(worker_state).values()) == [(True, None, threads)] * 2
+    assert signal.getsignal(signal.SIGINT) is signal.default_int_handler  # here: Ctrl-C still interrupts
+
+
 def _comparable(rows):
     return [{k: r[k] for k in RESULT_COLUMNS if k != "seconds"} for r in rows]
 
@@ -225,7 +240,7 @@ def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
     pfile = tmp_path / "params.json"
     pfile.write_text('{"t_a": 12}')
     code = main(["batch", *videos["paths"][:2], "--out", str(tmp_path / "o"), "--models", "mlplc2,lgmd2",
-                 "--params", str(pfile), "--sweep", "d=5,10", "--scheduler", client.scheduler.address, "-q"])
+                 "--params", str(pfile), "--sweep", "d=5,10", "--scheduler", client.scheduler_info()["address"], "-q"])
     assert code == 0
     rows = _read_table(tmp_path / "o" / "results.csv")
     assert len(rows) == 2 * 2 * 2 and {r["status"] for r in rows} == {"ok"}

@@ -4,9 +4,10 @@ Every combination is one task: :func:`mlplc2.run` on one video with one model
 and one parameter set, writing ``responses.csv`` and ``fields.json`` into
 ``OUT/<video>/<param set>/<model>/`` and then, last, a ``done.json`` marker
 holding the task's summary row. :func:`batch` submits the tasks to a
-``distributed`` cluster (by default a :class:`distributed.LocalCluster` it
-starts and stops itself; or an existing scheduler), shows progress as they
-finish, and writes one row per (video, model, parameter set) to
+``distributed`` cluster through Dask's public API (``Client.submit``,
+``distributed.as_completed``; by default on a :class:`distributed.LocalCluster`
+it starts and stops itself, or ``Client(address)`` of an existing scheduler),
+shows progress as they finish, and writes one row per (video, model, parameter set) to
 ``OUT/results.csv`` (a model shares one task between parameter sets that
 differ only in parameters it does not use). A rerun skips the
 tasks whose ``done.json`` exists (with ``plot=True`` it draws their missing
@@ -22,6 +23,7 @@ after the other in this process without it.
 
 from __future__ import annotations
 
+import contextlib
 import dataclasses
 import functools
 import glob
@@ -34,13 +36,15 @@ import os
 import sys
 import time
 import warnings
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
+from urllib.parse import urlsplit
 
+from ._files import atomic_path, write_csv, write_json
 from ._signals import interrupts
-from ._validation import InputTypeError, InputValueError, check_int
+from ._validation import InputError, InputTypeError, InputValueError, check_int
 
 __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep", "expand_inputs",
            "start_local_cluster", "param_label", "RESULT_COLUMNS", "DONE_MARKER"]
@@ -137,10 +141,10 @@ def _param_class(model: str):
 
 
 def _lplc2_family(model: str) -> bool:
-    from .models.base import get_model
-    from .models.lplc2 import _LPLC2Family
+    """Whether ``model`` takes :class:`~mlplc2.params.Params` (the LPLC2 family): the flat overrides apply to it."""
+    from .params import Params
 
-    return issubclass(get_model(model), _LPLC2Family)
+    return _param_class(model) is Params
 
 
 def _model_overrides(pset: Mapping, model: str) -> dict:
@@ -347,39 +351,6 @@ def _one_line(text: str) -> str:
     return " ".join(str(text).split()) or "unknown error"
 
 
-def _write_json_atomic(path: Path, data) -> None:
-    from ._files import write_json
-
-    write_json(path, data)
-
-
-_MALLOC_TUNED = False
-
-
-def _tune_malloc() -> None:
-    """Undo a 5x slowdown in Dask workers (Linux, glibc).
-
-    The Dask nanny starts workers with ``MALLOC_TRIM_THRESHOLD_=65536``. Setting
-    any glibc malloc variable freezes the mmap threshold at 128 KiB, so every
-    frame-sized array (320x240 float32 = 300 KB; the models allocate many per
-    frame) is mmap'd, zero-filled by page faults and unmapped again: mLPLC2 runs
-    about 5x slower. When that variable is set, raise the mmap threshold to
-    16 MiB (``mallopt(M_MMAP_THRESHOLD)``); trimming stays on. No-op elsewhere.
-    """
-    global _MALLOC_TUNED
-    if _MALLOC_TUNED or not sys.platform.startswith("linux") or "MALLOC_TRIM_THRESHOLD_" not in os.environ \
-            or "MALLOC_MMAP_THRESHOLD_" in os.environ:
-        return
-    _MALLOC_TUNED = True
-    try:
-        import ctypes
-
-        libc = ctypes.CDLL("libc.so.6")
-        libc.mallopt(-3, 16 * 1024 * 1024)  # M_MMAP_THRESHOLD
-    except (OSError, AttributeError):  # pragma: no cover - not glibc
-        pass
-
-
 def run_task(task: dict) -> dict:
     """Run one (video, model, parameter set) task; return its results row.
 
@@ -390,11 +361,7 @@ def run_task(task: dict) -> dict:
     if task.get("replot"):
         return _plot_saved(task)
     out = Path(task["out"])
-    row = {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
-           "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
-           "alarms": None, "first_alarm_frame": None, "seconds": None, "status": "error", "error": "",
-           "out": task["rel_out"]}
-    _tune_malloc()
+    row = _error_row(task)
     t0 = time.perf_counter()
     try:
         from .io import TruncatedInputWarning
@@ -418,12 +385,20 @@ def run_task(task: dict) -> dict:
         msg = str(exc)
         if isinstance(exc, OSError) and getattr(exc, "filename", None) and exc.strerror:
             msg = f"{exc.filename}: {exc.strerror}"
-        row["error"] = _one_line(f"{type(exc).__name__}: {msg}" if not _is_input_error(exc) else msg)
+        row["error"] = _one_line(msg if isinstance(exc, InputError) else f"{type(exc).__name__}: {msg}")
         row["seconds"] = round(time.perf_counter() - t0, 3)
         return row
     row["seconds"] = round(time.perf_counter() - t0, 3)
-    _write_json_atomic(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
+    write_json(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
     return row
+
+
+def _error_row(task: dict, error: str = "") -> dict:
+    """The row of a task that failed with the one-line message ``error``."""
+    return {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
+            "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
+            "alarms": None, "first_alarm_frame": None, "seconds": None, "status": "error", "error": error,
+            "out": task["rel_out"]}
 
 
 def _plot_saved(task: dict) -> dict:
@@ -455,12 +430,6 @@ def _plot(task: dict, note: str = "") -> None:
                         tag=task["param_set"])
     plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"),
                    title=f"{video}: {label}{note}", fps=summary.get("fps"))
-
-
-def _is_input_error(exc) -> bool:
-    from ._validation import InputError
-
-    return isinstance(exc, InputError)
 
 
 def _done_row(task: dict) -> dict | None:
@@ -553,8 +522,6 @@ def _video_keys(videos: list[str]) -> dict[str, str]:
 
 def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
     """``results.csv`` (and ``results.parquet``), atomically."""
-    from ._files import atomic_path, write_csv
-
     table = out / "results.csv"
     write_csv(table, ({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS} for r in rows),
               RESULT_COLUMNS)
@@ -571,96 +538,95 @@ def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
 
 
 def start_local_cluster(workers: int, **kwargs):
-    """``distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)``
-    (no dashboard unless ``dashboard_address`` is given) and a Client on it: ``(cluster, client)``.
+    """``distributed.LocalCluster(n_workers=workers, threads_per_worker=1, processes=True)`` and a
+    Client on it: ``(cluster, client)``. ``kwargs`` go to ``LocalCluster``.
 
-    The workers get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set) and not
-    Dask's ``MALLOC_TRIM_THRESHOLD_`` (see :func:`_tune_malloc`). The cluster
-    logs critical messages only (``silence_logs=logging.CRITICAL`` unless given: a task's
-    failure is reported in its row; the workers' own errors, such as a heartbeat that fails
-    while the cluster shuts down, are noise here), and its
-    worker processes ignore Ctrl-C (SIGINT): this process handles it and shuts
-    them down, so an interrupt prints no worker tracebacks or cancelled-task
-    warnings."""
+    The scheduler's HTTP server (the dashboard, if bokeh is installed) takes a free port
+    (``dashboard_address=":0"``) and the cluster logs critical messages only
+    (``silence_logs=logging.CRITICAL``: a task's failure is in its row), unless given. The
+    workers
+
+    * ignore Ctrl-C (SIGINT, ignored while they start: they inherit it). This process handles
+      it and closes the cluster, so an interrupt prints no worker tracebacks;
+    * run without Dask's ``MALLOC_TRIM_THRESHOLD_`` (``distributed.nanny.pre-spawn-environ``):
+      any glibc malloc variable freezes the mmap threshold at 128 KiB, and every frame-sized
+      array is then mmap'd and zero-filled anew (measured: LGMD2 10x, mLPLC2 2x slower);
+    * get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set), so that the fast front end's
+      bands of all workers share the cores.
+    """
     try:
         from distributed import Client, LocalCluster
     except ImportError:
         raise InputValueError(_DASK_MISSING) from None
     import dask
 
-    kwargs.setdefault("dashboard_address", None)
+    kwargs.setdefault("dashboard_address", ":0")
     kwargs.setdefault("silence_logs", logging.CRITICAL)
-    # Dask's default MALLOC_TRIM_THRESHOLD_ makes the models ~5x slower (see _tune_malloc): not for ours.
-    # Each worker's Numba threads (the fast front end's bands) share the cores with the other workers.
-    environ = {"MALLOC_TRIM_THRESHOLD_": None}
-    if "NUMBA_NUM_THREADS" not in os.environ:
-        environ["NUMBA_NUM_THREADS"] = str(max(1, (os.cpu_count() or 1) // max(1, workers)))
-    # The nanny applies its pre-spawn environment in *this* process too; put ours back after,
-    # or a later Numba compile here fails ("Cannot set NUMBA_NUM_THREADS ...").
-    saved = {k: os.environ.get(k) for k in environ}
-    # A worker process inherits an ignored SIGINT (a handler would be reset by exec): started so,
-    # it leaves Ctrl-C to this process, which closes the cluster. Ctrl-C is ignored while it starts.
-    try:
-        with interrupts(ignore=True), \
-                dask.config.set({f"distributed.nanny.pre-spawn-environ.{k}": v for k, v in environ.items()}), \
-                warnings.catch_warnings():
-            # the scheduler's HTTP server (no dashboard) takes another port when 8787 is taken: not news
-            warnings.filterwarnings("ignore", r"Port \d+ is already in use", UserWarning)
-            cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, **kwargs)
-    finally:
-        for k, v in saved.items():
-            if v is None:
-                os.environ.pop(k, None)
-            else:
-                os.environ[k] = v
-    try:
-        client = Client(cluster)
-    except BaseException:
-        cluster.close()
-        raise
-    return cluster, client
+    env = {} if "NUMBA_NUM_THREADS" in os.environ else \
+        {"NUMBA_NUM_THREADS": str(max(1, (os.cpu_count() or 1) // max(1, workers)))}
+    no_trim = {"distributed.nanny.pre-spawn-environ.MALLOC_TRIM_THRESHOLD_": None}
+    with interrupts(ignore=True), dask.config.set(no_trim):
+        cluster = LocalCluster(n_workers=workers, threads_per_worker=1, processes=True, env=env, **kwargs)
+    return cluster, Client(cluster)
+
+
+def _bad_address(address, why) -> InputValueError:
+    return InputValueError(f"scheduler address {address!r} is not valid ({_one_line(str(why))}); "
+                           f"expected tcp://HOST:PORT")
 
 
 def _check_scheduler(address) -> None:
-    """A one-line error unless ``address`` reads as a Dask scheduler address (before anything runs)."""
+    """A one-line error for a scheduler address without a host or a port 1-65535 (before anything
+    runs; ``Client(address)`` would wait for it until it times out)."""
     if not isinstance(address, str):
         raise InputTypeError(f"scheduler must be an address such as tcp://HOST:8786, got {address!r}")
     try:
-        from distributed.comm.addressing import parse_address, parse_host_port
-        from distributed.comm.registry import get_backend
-    except ImportError:
-        raise InputValueError(_DASK_MISSING) from None
-    try:
-        scheme, location = parse_address(address)
-        get_backend(scheme)  # unknown scheme
-        if scheme in ("tcp", "tls", "ws", "wss"):
-            host, port = parse_host_port(location)
-            if not host:
-                raise ValueError("missing host")
-            if not 0 < port < 65536:
-                raise ValueError(f"port {port} out of range 1-65535")
-    except (TypeError, ValueError) as exc:
-        raise InputValueError(f"scheduler address {address!r} is not valid ({_one_line(str(exc))}); "
-                              f"expected tcp://HOST:PORT") from None
+        url = urlsplit(address)
+        if url.scheme in ("tcp", "tls", "ws", "wss") and not (url.hostname and url.port):
+            raise ValueError("no host or port 1-65535")
+    except ValueError as exc:
+        raise _bad_address(address, exc) from None
 
 
-def _mute_dask_logs() -> list:
-    """Silence this process's ``distributed`` and ``tornado`` loggers while a cluster
-    shuts down after Ctrl-C (closing workers mid-task logs warnings, and an interrupted
-    ``distributed.utils.sync`` an error); :func:`_unmute` restores them."""
-    roots = ("distributed", "tornado")
-    names = [n for n in list(logging.root.manager.loggerDict) if n.split(".")[0] in roots]
-    saved = []
-    for name in dict.fromkeys([*roots, *names]):
-        logger = logging.getLogger(name)
-        saved.append((logger, logger.level))
-        logger.setLevel(logging.CRITICAL + 1)
-    return saved
+@contextlib.contextmanager
+def _client(scheduler: str | None, workers: int | None, client) -> Iterator[tuple[Any, str]]:
+    """``(client, name of its scheduler)`` for the tasks: ``client`` (left running), a Client
+    on the scheduler at ``scheduler``, or one on a local cluster of ``workers`` (both closed after)."""
+    from distributed import Client
+
+    if client is not None:
+        yield client, client.scheduler_info()["address"]
+    elif scheduler:
+        try:
+            own = Client(scheduler)
+        except ValueError as exc:  # not an address (unknown scheme, no port, ...)
+            raise _bad_address(scheduler, exc) from None
+        with own:
+            yield own, scheduler
+    else:
+        n = workers or min(4, os.cpu_count() or 1)
+        cluster, own = start_local_cluster(n)
+        with cluster, own:
+            yield own, f"LocalCluster({n} workers)"
 
 
-def _unmute(saved: list) -> None:
-    for logger, level in saved:
-        logger.setLevel(level)
+def _completed(jobs: list[tuple[int, dict]], client) -> Iterator[tuple[int, dict]]:
+    """``(index, row)`` of each job as it finishes: run here one after the other (``client`` None),
+    or on ``client``'s cluster."""
+    if client is None:
+        for i, t in jobs:
+            yield i, run_task(t)
+        return
+    from distributed import as_completed
+
+    futures = {client.submit(run_task, t, pure=False): (i, t) for i, t in jobs}
+    for fut in as_completed(futures):
+        i, t = futures[fut]
+        try:
+            row = fut.result()
+        except Exception as exc:  # noqa: BLE001 - a worker died, ...
+            row = _error_row(t, _one_line(f"{type(exc).__name__}: {exc}"))
+        yield i, row
 
 
 def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
@@ -739,13 +705,13 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         raise InputValueError("--scheduler and --workers cannot be combined: --workers N starts a local cluster "
                               "(0: runs the tasks here without Dask), --scheduler ADDRESS uses a running one")
     sequential = scheduler == "sync" or (workers == 0 and scheduler is None and client is None)
-    if scheduler is not None and scheduler != "sync":
-        _check_scheduler(scheduler)
-    elif not sequential and client is None:
+    if not sequential and client is None:
         try:
             import distributed  # noqa: F401
         except ImportError:
             raise InputValueError(_DASK_MISSING) from None
+    if scheduler not in (None, "sync"):
+        _check_scheduler(scheduler)
     if parquet:
         try:
             import pandas  # noqa: F401
@@ -801,101 +767,38 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     finished: set[int] = set()  # jobs done in this call
     prepared = False
 
-    def prepare() -> None:  # the output folder, once the cluster is up (nothing is written before)
-        nonlocal prepared
-        out.mkdir(parents=True, exist_ok=True)
-        for pid, pset in ids.items():  # what each parameter set id stands for
-            _write_json_atomic(out / f"param_set_{pid}.json", pset)
-        prepared = True
+    def result() -> BatchResult:  # of the tasks done (read back, or finished now)
+        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
+        ran = [i for i in todo if i in finished]
+        return BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
+                           ran=len(ran), skipped=skipped, failed=sum(r["status"] == "error" for r in ordered),
+                           seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
+                           plotted=sum(i in finished for i in replot),
+                           failed_runs=sum(rows[i]["status"] == "error" for i in ran))
 
     try:
-        if sequential or not jobs:
-            prepare()
-            for i, t in jobs:
-                rows[i] = run_task(t)
+        with contextlib.nullcontext((None, "sync")) if sequential or not jobs else \
+                _client(scheduler, workers, client) as (c, used):
+            out.mkdir(parents=True, exist_ok=True)  # once the cluster is up: nothing is written before
+            for pid, pset in ids.items():  # what each parameter set id stands for
+                write_json(out / f"param_set_{pid}.json", pset)
+            prepared = True
+            for i, row in _completed(jobs, c):
+                rows[i] = row
                 finished.add(i)
                 bar.update()
-        else:
-            from distributed import Client, as_completed
-
-            cluster = own = None
-            muted: list = []
-
-            def mute() -> None:
-                if not muted:
-                    muted.extend(_mute_dask_logs())
-
-            # Ctrl-C / SIGTERM mute Dask first: the unwinding interrupt makes it log at once.
-            try:
-                with interrupts(before=mute):
-                    try:
-                        if client is None:
-                            if scheduler:
-                                try:
-                                    own = Client(scheduler)
-                                except (TypeError, ValueError) as exc:
-                                    raise InputValueError(f"scheduler {scheduler}: {_one_line(str(exc))}") from None
-                                used = scheduler
-                            else:
-                                n = workers if workers else min(4, os.cpu_count() or 1)
-                                cluster, own = start_local_cluster(n)
-                                used = f"LocalCluster({n} workers)"
-                            c = own
-                        else:
-                            c = client
-                            used = str(getattr(client, "scheduler", None) and client.scheduler.address)
-                        prepare()
-                        futures = {}
-                        for i, t in jobs:
-                            key = f"mlplc2-{Path(t['out']).relative_to(out.resolve()).as_posix()}-" \
-                                  f"{hashlib.sha1(t['out'].encode()).hexdigest()[:6]}-{time.time_ns()}"
-                            futures[c.submit(run_task, t, key=key, pure=False)] = i
-                        for fut in as_completed(futures):
-                            i = futures[fut]
-                            try:
-                                rows[i] = fut.result()
-                            except Exception as exc:  # noqa: BLE001 - a worker died, ...
-                                t = tasks[i]
-                                rows[i] = {"video": t["video"], "model": t["model"], "param_set": t["param_set"],
-                                           "params": json.dumps(t["overrides"], sort_keys=True), "n_frames": None,
-                                           "fields": None, "alarms": None, "first_alarm_frame": None, "seconds": None,
-                                           "status": "error", "error": _one_line(f"{type(exc).__name__}: {exc}"),
-                                           "out": t["rel_out"]}
-                            finished.add(i)
-                            bar.update()
-                    except KeyboardInterrupt:
-                        mute()  # workers stopped mid-task make the cluster log warnings
-                        raise
-                    finally:
-                        if own is not None:
-                            own.close()
-                        if cluster is not None:
-                            cluster.close()
-            finally:
-                _unmute(muted)
     except KeyboardInterrupt:
-        done = list(rows)  # read back, or finished now
-        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in done]
-        result = BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
-                             ran=sum(1 for i in todo if i in finished), skipped=skipped,
-                             failed=sum(1 for r in ordered if r["status"] == "error"),
-                             seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
-                             plotted=sum(1 for i in replot if i in finished),
-                             failed_runs=sum(1 for i in todo if i in finished and rows[i]["status"] == "error"))
+        res = result()
         if prepared:
-            _write_table(ordered, out, parquet)
-            message = f"interrupted with {len(done)} of {len(tasks)} task(s) done; their rows are in {result.table}"
+            _write_table(res.rows, out, parquet)
+            message = f"interrupted with {len(rows)} of {len(tasks)} task(s) done; their rows are in {res.table}"
         else:
             message = f"interrupted before any task ran; nothing written to {out}"
         if progress:
             bar.write(f"batch: {message}", file=sys.stderr)
-        raise BatchInterrupted(message, result) from None
+        raise BatchInterrupted(message, res) from None
     finally:
         bar.close()
-    seconds = time.perf_counter() - t0
-    ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
-    table = _write_table(ordered, out, parquet)
-    failed = sum(1 for r in ordered if r["status"] == "error")
-    return BatchResult(rows=ordered, table=table, out=out, videos=videos, param_sets=ids, ran=len(todo),
-                       skipped=skipped, failed=failed, seconds=seconds, scheduler=used, tasks=len(tasks),
-                       plotted=len(replot), failed_runs=sum(1 for i in todo if rows[i]["status"] == "error"))
+    res = result()
+    _write_table(res.rows, out, parquet)
+    return res
