@@ -11,8 +11,7 @@ ahead of another. Every place that changes what a signal does goes through
   arrives while a frame is in progress waits until the frame is finished. A second one
   interrupts at once.
 * :mod:`mlplc2.batch`: ``interrupts(ignore=True)`` while Dask's worker processes start
-  (they inherit the ignored SIGINT), and ``interrupts(before=mute)`` around the cluster,
-  which silences Dask's logs before the interrupt unwinds.
+  (they inherit the ignored SIGINT).
 
 An *interrupting* signal is one whose handler raises ``KeyboardInterrupt``: SIGINT
 under Python's default handler, and SIGTERM inside ``interrupts(sigterm=True)``. The
@@ -27,7 +26,7 @@ from __future__ import annotations
 
 import signal
 import threading
-from collections.abc import Callable, Iterable, Iterator
+from collections.abc import Iterable, Iterator
 from typing import TypeVar
 
 __all__ = ["interrupts"]
@@ -58,9 +57,6 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
         safe. A second signal interrupts at once. If the block ends normally with an
         interrupt still pending and not yet raised, it is raised on exit: an interrupt is
         never lost.
-    before : callable, optional
-        Called with no arguments when an interrupting signal arrives, before it
-        interrupts (or is deferred).
     ignore : bool
         SIGINT is ignored (``SIG_IGN``). Processes started inside the block inherit
         this. SIGTERM is left alone, so that they can still be terminated.
@@ -74,13 +70,11 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
     ([0, 1, 2], None)
     """
 
-    def __init__(self, *, sigterm: bool = False, defer: bool = False, before: Callable[[], object] | None = None,
-                 ignore: bool = False):
-        if ignore and (defer or sigterm or before is not None):
-            raise ValueError("interrupts(ignore=True) cannot be combined with sigterm, defer or before")
+    def __init__(self, *, sigterm: bool = False, defer: bool = False, ignore: bool = False):
+        if ignore and (defer or sigterm):
+            raise ValueError("interrupts(ignore=True) cannot be combined with sigterm or defer")
         self.sigterm = sigterm
         self.defer = defer
-        self.before = before
         self.ignore = ignore
         self.pending: int | None = None
         """The number of the first signal deferred in this block (None: none)."""
@@ -93,8 +87,6 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
     # -- the handler ----------------------------------------------------------------
     def _wrap(self, base):
         def handler(signum, frame):
-            if self.before is not None:
-                self.before()
             if self.defer and self.pending is None and not self._waiting:
                 self.pending = signum
                 return
@@ -115,7 +107,7 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
                     new = signal.SIG_IGN
                 elif self.sigterm and sig == getattr(signal, "SIGTERM", None) and not _interrupting(previous):
                     new = self._wrap(signal.default_int_handler)
-                elif _interrupting(previous) and (self.defer or self.before is not None):
+                elif _interrupting(previous) and self.defer:
                     new = self._wrap(previous)
                 else:
                     continue
