@@ -17,7 +17,8 @@ import pytest
 
 from mlplc2 import stimuli
 from mlplc2._validation import InputTypeError, InputValueError
-from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, expand_inputs, param_label,
+from mlplc2.io import expand_inputs
+from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, param_label,
                           param_set_id, param_sets, parse_sweep, start_local_cluster)
 from mlplc2.cli import main
 from mlplc2.evaluate import evaluate

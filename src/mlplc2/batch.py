@@ -26,7 +26,6 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import functools
-import glob
 import hashlib
 import itertools
 import json
@@ -46,7 +45,7 @@ from ._files import atomic_path, write_csv, write_json
 from ._signals import interrupts
 from ._validation import InputError, InputTypeError, InputValueError, check_int
 
-__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep", "expand_inputs",
+__all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep",
            "start_local_cluster", "param_label", "RESULT_COLUMNS", "DONE_MARKER"]
 
 #: Columns of ``results.csv``, in order.
@@ -60,46 +59,6 @@ _DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]
 # ---------------------------------------------------------------------------
 # inputs and parameter sets
 # ---------------------------------------------------------------------------
-def expand_inputs(inputs) -> list[str]:
-    """Videos to process: files as given; a folder holding video files gives
-    each of them (sorted); a folder of images is one image-sequence input;
-    glob patterns are expanded. Missing paths raise InputValueError."""
-    from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
-
-    if isinstance(inputs, (str, Path)):
-        inputs = [inputs]
-    out: list[str] = []
-    for item in inputs:
-        s = str(item)
-        p = Path(s)
-        if p.is_dir():
-            vids = sorted(str(q) for q in p.iterdir() if q.is_file() and q.suffix.lower() in VIDEO_EXTENSIONS)
-            if vids:
-                out.extend(vids)
-            elif any(q.suffix.lower() in IMAGE_EXTENSIONS for q in p.iterdir() if q.is_file()):
-                out.append(s)
-            else:
-                raise InputValueError(f"{s}: folder has neither videos nor images")
-        elif p.exists():
-            out.append(s)
-        elif any(ch in s for ch in "*?["):
-            matches = sorted(glob.glob(s))
-            if not matches:
-                raise InputValueError(f"{s}: pattern matches no file")
-            out.extend(matches)
-        else:
-            raise InputValueError(f"{s}: no such file or folder")
-    seen, unique = set(), []
-    for s in out:
-        key = os.path.abspath(s)
-        if key not in seen:
-            seen.add(key)
-            unique.append(s)
-    if not unique:
-        raise InputValueError("no input videos")
-    return unique
-
-
 def _parse_value(text: str):
     text = text.strip()
     try:
@@ -651,7 +610,7 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     Parameters
     ----------
     inputs : path or list of paths
-        Videos, image folders, folders of videos, glob patterns (see :func:`expand_inputs`).
+        Videos, image folders, folders of videos, glob patterns (see :func:`mlplc2.io.expand_inputs`).
     out : path
         Output folder: ``results.csv`` plus ``<video>/<param set>/<model>/``
         with each task's ``responses.csv``, ``fields.json`` and ``done.json``.
@@ -718,6 +677,8 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
             import pyarrow  # noqa: F401
         except ImportError:
             raise InputValueError("parquet=True needs pandas and pyarrow: pip install pandas pyarrow") from None
+    from .io import expand_inputs
+
     videos = expand_inputs(inputs)
     sets = param_sets(params, sweep, names)
     ids = {param_set_id(s): s for s in sets}

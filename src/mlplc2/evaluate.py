@@ -273,7 +273,7 @@ def _path_key(path) -> str:
 
 def _expand_inputs(results, notes: list[str]) -> list:
     """The inputs, with folders holding results replaced by the result folders they
-    contain, and other folders by the videos in them (:func:`mlplc2.batch.expand_inputs`:
+    contain, and other folders by the videos in them (:func:`mlplc2.io.expand_inputs`:
     a folder of images stays one input); an item given twice (the same folder, video or
     RunResult) is kept once, with a note in ``notes``."""
     from .runner import RunResult
@@ -293,7 +293,7 @@ def _expand_inputs(results, notes: list[str]) -> list:
                 if found:
                     cands = found
                 else:  # no results: its videos (or the folder, of images), as mlplc2 batch reads it
-                    from .batch import expand_inputs
+                    from .io import expand_inputs
 
                     try:
                         cands = expand_inputs([r])

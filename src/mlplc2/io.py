@@ -36,7 +36,7 @@ from ._validation import InputError, InputTypeError, InputValueError, check_fps
 
 __all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter",
            "TruncatedInputWarning", "VideoCodecWarning",
-           "parse_resize", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]
+           "parse_resize", "expand_inputs", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]
 
 log = logging.getLogger(__name__)
 
@@ -280,6 +280,44 @@ class _ImageDecoder(_Decoder):
             return None
         self._i += 1
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
+
+
+def expand_inputs(inputs) -> list[str]:
+    """Videos to process: files as given; a folder holding video files gives
+    each of them (sorted); a folder of images is one image-sequence input;
+    glob patterns are expanded. Missing paths raise InputValueError."""
+    if isinstance(inputs, (str, Path)):
+        inputs = [inputs]
+    out: list[str] = []
+    for item in inputs:
+        s = str(item)
+        p = Path(s)
+        if p.is_dir():
+            vids = sorted(str(q) for q in p.iterdir() if q.is_file() and q.suffix.lower() in VIDEO_EXTENSIONS)
+            if vids:
+                out.extend(vids)
+            elif any(q.suffix.lower() in IMAGE_EXTENSIONS for q in p.iterdir() if q.is_file()):
+                out.append(s)
+            else:
+                raise InputValueError(f"{s}: folder has neither videos nor images")
+        elif p.exists():
+            out.append(s)
+        elif any(ch in s for ch in "*?["):
+            matches = sorted(_glob.glob(s))
+            if not matches:
+                raise InputValueError(f"{s}: pattern matches no file")
+            out.extend(matches)
+        else:
+            raise InputValueError(f"{s}: no such file or folder")
+    seen, unique = set(), []
+    for s in out:
+        key = os.path.abspath(s)
+        if key not in seen:
+            seen.add(key)
+            unique.append(s)
+    if not unique:
+        raise InputValueError("no input videos")
+    return unique
 
 
 def _image_files(source: str) -> tuple[list[str], str]:
