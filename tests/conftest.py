@@ -1,19 +1,26 @@
-"""Shared fixtures: the paper's data folder (tests skip cleanly without it)."""
+"""Shared fixtures: the paper's data folder (tests skip cleanly without it) and ``data``, a
+small clip of a dark square approaching at a known centre (an AVI, an MP4 and a folder of
+images; ``tests/test_cli.py`` and ``tests/test_runner.py``)."""
 
 from __future__ import annotations
 
 import json
 from pathlib import Path
 
+import cv2
 import numpy as np
 import pytest
 
+from mlplc2.io import write_video
+
 PAPER = Path(__file__).resolve().parents[1].parent / "shared" / "data" / "paper"
+
+# A dark square approaching (growing 4 px/frame) at a known centre, 320x240.
+CX, CY = 200, 100
+W, H, T = 320, 240, 60
 
 
 def read_gray(path: Path) -> list[np.ndarray]:
-    import cv2
-
     cap = cv2.VideoCapture(str(path))
     frames = []
     while True:
@@ -35,3 +42,27 @@ def paper_dir() -> Path:
 @pytest.fixture(scope="session")
 def paper_truth(paper_dir) -> dict:
     return json.loads((paper_dir / "ground_truth.json").read_text())["videos"]
+
+
+def _square_frames(n=T, w=W, h=H, cx=CX, cy=CY):
+    rng = np.random.default_rng(0)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (h, w)).astype(np.float32), (0, 0), 4)
+    bg = cv2.normalize(bg, None, 90, 230, cv2.NORM_MINMAX).astype(np.uint8)
+    for i in range(n):
+        f = bg.copy()
+        side = 0 if i < 5 else 4 * (i - 5) + 2
+        if side:
+            cv2.rectangle(f, (cx - side // 2, cy - side // 2), (cx + side // 2, cy + side // 2), 0, -1)
+        yield cv2.cvtColor(f, cv2.COLOR_GRAY2RGB)
+
+
+@pytest.fixture(scope="module")
+def data(tmp_path_factory):
+    d = tmp_path_factory.mktemp("cli")
+    out = {"avi": d / "square.avi", "mp4": d / "square.mp4", "images": d / "frames"}
+    write_video(out["avi"], _square_frames(), 30.0)
+    write_video(out["mp4"], _square_frames(), 30.0)
+    out["images"].mkdir()
+    for i, f in enumerate(_square_frames(40, 160, 120, 100, 50)):
+        cv2.imwrite(str(out["images"] / f"img{i}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
+    return out

@@ -1,10 +1,13 @@
 """Helpers shared by the tests (not part of the package API): the check that the outputs of an
-interrupted run agree. (Recording and scoring model outputs: :mod:`mlplc2.tracks`.)"""
+interrupted run agree, small noise clips, and clips with duplicated frames. (Recording and
+scoring model outputs: :mod:`mlplc2.tracks`.)"""
 
 from __future__ import annotations
 
 import csv
 import json
+
+import numpy as np
 
 
 def _read_csv(path):
@@ -33,3 +36,29 @@ def check_outputs_agree(out, models, *, localising="mlplc2") -> int:
         assert t["born"] < n and (t["died"] is None or t["died"] <= n) and counts.get(t["id"], 0) == t["frames"]
     assert set(counts) == {t["id"] for t in summary["targets"][localising]}
     return n
+
+
+#: The size of :func:`noise_frames` (the small clips of the input checks).
+NOISE_W, NOISE_H = 64, 48
+
+
+def noise_frames(n, w=NOISE_W, h=NOISE_H, seed=0):
+    """``n`` RGB frames of uniform noise, ``h`` x ``w``."""
+    rng = np.random.default_rng(seed)
+    return [rng.integers(0, 256, (h, w, 3), dtype=np.uint8) for _ in range(n)]
+
+
+def duplicated(frames, every=3, copies=2, noise=6, seed=0):
+    """Each ``every``-th frame repeated ``copies`` times with +-``noise`` grey levels of jitter
+    (a frame-rate conversion of a compressed video); returns (frames, index of the original)."""
+    rng = np.random.default_rng(seed)
+    out, origin = [], []
+    for i, f in enumerate(frames):
+        out.append(f)
+        origin.append(i)
+        if i % every == 0:
+            for _ in range(copies):
+                jitter = rng.integers(-noise, noise + 1, f.shape)
+                out.append(np.clip(f.astype(np.int16) + jitter, 0, 255).astype(np.uint8))
+                origin.append(i)
+    return out, origin

@@ -1,4 +1,9 @@
-"""End-to-end tests of the ``mlplc2`` command line (in-process via ``main``)."""
+"""mlplc2.cli: end-to-end tests of the ``mlplc2`` command line (in-process via ``main``, and the
+console script): ``run`` on videos and image folders, bad input (exit 2 and one line, also for
+zero-frame and tiny videos, corrupt images, bad options), truncated input and Ctrl-C,
+``stimulus`` and ``demo``, output folders, ``--skip-repeats`` and the repeat options of ``run``,
+``evaluate`` and ``batch``. (``mlplc2.run`` called directly: ``tests/test_runner.py``; a real
+signal to the console script: ``tests/test_signals.py``.)"""
 
 from __future__ import annotations
 
@@ -16,39 +21,18 @@ import numpy as np
 import pytest
 
 import mlplc2
+from mlplc2 import cli, stimuli
 from mlplc2.cli import SUBCOMMANDS, Subcommand, main
 from mlplc2.io import write_video
-from mlplc2.runner import COLUMNS, RunInterrupted, TruncatedInputWarning, run
+from mlplc2.models import REGISTRY
+from mlplc2.models.base import REPEAT_THRESHOLD
+from mlplc2.runner import COLUMNS, RunInterrupted, run
 
-from .helpers import check_outputs_agree
+from .conftest import CX, CY, H, T, W
+from .helpers import NOISE_H, NOISE_W, check_outputs_agree, duplicated, noise_frames
 
-# A dark square approaching (growing 4 px/frame) at a known centre, 320x240.
-CX, CY = 200, 100
-W, H, T = 320, 240, 60
+NAMES = sorted(REGISTRY)
 
-
-def _square_frames(n=T, w=W, h=H, cx=CX, cy=CY):
-    rng = np.random.default_rng(0)
-    bg = cv2.GaussianBlur(rng.uniform(0, 255, (h, w)).astype(np.float32), (0, 0), 4)
-    bg = cv2.normalize(bg, None, 90, 230, cv2.NORM_MINMAX).astype(np.uint8)
-    for i in range(n):
-        f = bg.copy()
-        side = 0 if i < 5 else 4 * (i - 5) + 2
-        if side:
-            cv2.rectangle(f, (cx - side // 2, cy - side // 2), (cx + side // 2, cy + side // 2), 0, -1)
-        yield cv2.cvtColor(f, cv2.COLOR_GRAY2RGB)
-
-
-@pytest.fixture(scope="module")
-def data(tmp_path_factory):
-    d = tmp_path_factory.mktemp("cli")
-    out = {"avi": d / "square.avi", "mp4": d / "square.mp4", "images": d / "frames"}
-    write_video(out["avi"], _square_frames(), 30.0)
-    write_video(out["mp4"], _square_frames(), 30.0)
-    out["images"].mkdir()
-    for i, f in enumerate(_square_frames(40, 160, 120, 100, 50)):
-        cv2.imwrite(str(out["images"] / f"img{i}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
-    return out
 
 
 def _read_csv(path):
@@ -234,15 +218,6 @@ def test_truncated_video_keeps_outputs_and_exits_nonzero(data, tmp_path, capsys)
     assert (out / "responses.png").exists()
 
 
-def test_truncated_video_warns_in_python(data, tmp_path):
-    cut = tmp_path / "cut.avi"
-    raw = data["avi"].read_bytes()
-    cut.write_bytes(raw[: int(len(raw) * 0.5)])
-    with pytest.warns(TruncatedInputWarning, match="stopped at frame"):
-        res = run(cut, out=False, quiet=True)
-    assert res.truncated and 0 < res.n_frames < T
-
-
 def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     k = 12
     original = mlplc2.MLPLC2.step
@@ -269,75 +244,7 @@ def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     assert info.value.result.n_frames == k
 
 
-# -- the Python API behind `run` --------------------------------------------------------
-def test_run_api_without_outputs_and_dataframe(data, tmp_path):
-    res = run(str(data["images"]), ["mlplc2", "lplc2"], out=False, progress=False)
-    assert res.out is None and res.files == {} and res.n_frames == 40
-    assert not (data["images"].parent / "nothing").exists()
-    pd = pytest.importorskip("pandas")
-    df = res.to_dataframe()
-    assert list(df.columns) == list(COLUMNS) and len(df) == len(res.rows)
-    assert isinstance(df, pd.DataFrame) and str(df["field_id"].dtype) == "Int64"
-
-
-def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
-    """Long/live runs: rows go to the CSV only, the result keeps no per-frame rows."""
-    kept = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "a", progress=False)
-    lean = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "b", progress=False, keep_rows=False)
-    assert lean.rows == [] and lean.targets == [] and kept.rows
-    assert (tmp_path / "a" / "responses.csv").read_text() == (tmp_path / "b" / "responses.csv").read_text()
-    assert (tmp_path / "b" / "responses.png").stat().st_size > 10_000
-    for name in ("mlplc2", "lgmd2"):
-        frames = sorted({r["frame"] for r in kept.rows if r["model"] == name and r["collision"]})
-        assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
-    # the summaries of dead fields wait on disk, and come back complete and in order
-    assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
-    a, b = (json.loads((tmp_path / d / "fields.json").read_text()) for d in "ab")
-    assert a.pop("seconds") > 0 and b.pop("seconds") > 0  # the measured wall time differs from run to run
-    assert json.dumps(a) == json.dumps(b)  # the rest identical, in the same order
-    # the table is read back from responses.csv
-    pytest.importorskip("pandas")
-    a, b = kept.to_dataframe(), lean.to_dataframe()
-    assert a.equals(b), (a.dtypes, b.dtypes)
-
-
-def test_field_summaries_keep_only_live_fields_in_memory():
-    """keep_rows=False: a field that died leaves memory (it is spilled to a temporary file)."""
-    from mlplc2.attention import Field
-    from mlplc2.tracks import Recorder
-
-    tracker = Recorder(["m"], series=False, spill=True)
-    for k in range(200):   # a new field every frame, each living 3 frames
-        fields = tuple(Field(i, 10.0, 10.0, 40.0, 1.0, False, i) for i in range(max(0, k - 2), k + 1))
-        tracker.update(k, "m", mlplc2.Output(frame=k, response=1.0, fields=fields))
-    assert len(tracker.records["m"].fields) == 3
-    summaries = tracker.summaries("m")
-    assert [s["id"] for s in summaries] == list(range(200))
-    assert all(s["died"] == s["id"] + 3 for s in summaries[:-3])
-    tracker.close()
-
-
-def test_peak_frame_is_the_first_frame_of_a_plateau():
-    """A response held on later frames (duplicates) leaves the peak at its first frame, also when
-    the stored value is rounded (it used to move to the last frame of the plateau)."""
-    from mlplc2.attention import Field
-    from mlplc2.tracks import Recorder
-
-    tracker = Recorder(["m"])
-    for k, r in enumerate((5.0, 12058.344999, 12058.344999, 12058.344999, 100.0)):
-        f = Field(1, 10.0, 10.0, 40.0, r, False, 0)
-        tracker.update(k, "m", mlplc2.Output(frame=k, response=r, fields=(f,)))
-    (s,) = tracker.summaries("m")
-    assert s["peak_frame"] == 1 and s["peak_response"] == pytest.approx(12058.34, abs=0.01)
-
-
-def test_to_dataframe_without_pandas(data, monkeypatch):
-    res = run(str(data["images"]), end=3, out=False, quiet=True)
-    monkeypatch.setitem(sys.modules, "pandas", None)
-    with pytest.raises(ImportError, match=r"pip install 'mlplc2\[pandas\]'"):
-        res.to_dataframe()
-
-
+# -- the subcommand table and the console script ----------------------------------------
 def test_subcommand_table_is_extensible(capsys):
     saved = list(SUBCOMMANDS)
     try:
@@ -595,46 +502,6 @@ def test_bench_rejects_more_threads_than_the_machine_allows(capsys):
     assert f"got {n}" in _one_error_line(capsys.readouterr().err)
 
 
-def test_run_api_rejects_ambiguous_models_and_params(data):
-    from mlplc2._validation import InputError
-
-    with pytest.raises(InputError, match="t_a is not a model of this run"):
-        run(data["avi"], ["mlplc2"], out=False, end=5, params={"t_a": 1000})
-    with pytest.raises(InputError, match="mlpcl2 is not a model"):
-        run(data["avi"], ["mlplc2"], out=False, end=5, params={"mlpcl2": mlplc2.Params()})
-    with pytest.raises(InputError, match="two models named 'mlplc2'"):
-        run(data["avi"], [mlplc2.MLPLC2(fps=30.0), mlplc2.MLPLC2(fps=30.0, params=mlplc2.Params(t_a=20.0))],
-            out=False, end=5)
-    with pytest.warns(UserWarning, match="built for 60 fps but the input runs at 30 fps"):
-        run(data["avi"], [mlplc2.MLPLC2(fps=60.0)], out=False, end=3)
-    res = run(data["avi"], ["mlplc2", "lgmd2"], out=False, end=5, params={"mlplc2": mlplc2.Params(t_a=20.0)})
-    assert res.models == ["mlplc2", "lgmd2"]
-    # keys are model names in any case or spacing, and they are applied (not only accepted)
-    from mlplc2.models.lgmd import LGMD2Params
-
-    calls = []
-    real = mlplc2.models.lgmd.LGMD2.__init__
-
-    def spy(self, *a, **k):
-        calls.append(k.get("params"))
-        real(self, *a, **k)
-
-    import unittest.mock
-    with unittest.mock.patch.object(mlplc2.models.lgmd.LGMD2, "__init__", spy):
-        run(data["avi"], ["lgmd2"], out=False, end=3, params={" LGMD2": LGMD2Params(dc=0.5)})
-    assert calls and calls[0].dc == 0.5
-
-
-def test_run_api_on_an_array_says_what_to_do():
-    from mlplc2._validation import InputError
-
-    frames = np.zeros((10, 40, 40), np.uint8)
-    with pytest.raises(InputError) as exc:
-        run(frames, ["mlplc2"], out=False)
-    msg = str(exc.value)
-    assert "\n" not in msg and len(msg) < 200 and "ndarray of shape (10, 40, 40)" in msg and "model.run(frames)" in msg
-
-
 def test_run_backend_option_reaches_the_decoder(data, tmp_path, monkeypatch, capsys):
     """--backend pyav decodes with PyAV: without PyAV importable it is a one-line error (it used
     to be ignored, and the run decoded with OpenCV)."""
@@ -693,3 +560,230 @@ def test_video_without_h264_is_one_warning_line(data, tmp_path, monkeypatch, cap
     assert err == ("mlplc2: warning: annotated.mp4: written as MP4 'mp4v' by OpenCV, which browsers do not "
                    "play, not H.264: PyAV is not installed (pip install av)\n")
     assert _frame_count(out / "annotated.mp4")[0] == 4
+
+
+# -- more bad input: empty, tiny and corrupt videos and images, bad options (64x48 noise clips)
+def _one_line(err: str, kind: str = "error") -> str:
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1, err
+    assert lines[0].startswith(f"mlplc2: {kind}: "), err
+    assert "Traceback" not in err
+    return lines[0]
+
+
+def _written(out: Path) -> list[str]:
+    return sorted(p.name for p in out.iterdir()) if out.exists() else []
+
+
+def test_cli_zero_frame_video(tmp_path, capsys):
+    p = tmp_path / "zero.avi"
+    w = cv2.VideoWriter(str(p), cv2.VideoWriter_fourcc(*"MJPG"), 30, (NOISE_W, NOISE_H))
+    w.release()
+    out = tmp_path / "o"
+    assert main(["run", str(p), "--out", str(out), "--quiet"]) == 2
+    line = _one_line(capsys.readouterr().err)
+    assert line == f"mlplc2: error: {p}: video has no frames (empty or undecodable)"
+    assert _written(out) == []
+
+
+def test_cli_zero_byte_file(tmp_path, capsys):
+    p = tmp_path / "empty.mp4"
+    p.write_bytes(b"")
+    assert main(["run", str(p), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert "not a video file" in _one_line(capsys.readouterr().err)
+    assert _written(tmp_path / "o") == []
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_cli_one_and_two_frame_videos_are_valid(tmp_path, capsys, n):
+    """One frame has no motion (every model at rest) but is a valid input: exit 0, all outputs."""
+    p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)
+    out = tmp_path / "o"
+    models = ",".join(NAMES)
+    assert main(["run", str(p), "--out", str(out), "--model", models, "--quiet"]) == 0
+    assert capsys.readouterr().err == ""
+    written = _written(out)
+    assert {"fields.json", "responses.csv", "responses.png"} <= set(written)
+    assert not [name for name in written if name.startswith(".")]  # no temporary file left
+    header, rows = _read_csv(out / "responses.csv")
+    assert header == list(COLUMNS)
+    for name in NAMES:
+        mine = [r for r in rows if r["model"] == name]
+        assert sorted({int(r["frame"]) for r in mine}) == list(range(n))
+        first = [r for r in mine if r["frame"] == "0"]
+        rest = 0.5 if name.startswith("lgmd") else 0.0  # no change yet: at rest
+        assert all(float(r["response"]) == rest and r["collision"] == "0" for r in first)
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["n_frames"] == n and summary["complete"] and not summary["truncated"]
+
+
+@pytest.mark.parametrize("how", ["images", "resize", "scale"])
+def test_cli_frames_smaller_than_the_models_minimum(tmp_path, capsys, how):
+    if how == "images":
+        d = tmp_path / "tiny"
+        d.mkdir()
+        for i in range(3):
+            cv2.imwrite(str(d / f"f{i}.png"), np.full((2, 2, 3), 40 * i, np.uint8))
+        argv, expect = [str(d)], f"mlplc2: error: {d}: frames are 2x2 pixels; the models need at least 3x3"
+    else:
+        p = write_video(tmp_path / "v.avi", noise_frames(4), 30.0)
+        opt = ["--resize", "2x40"] if how == "resize" else ["--scale", "0.03"]
+        size = "2x40" if how == "resize" else "2x1"
+        argv = [str(p), *opt]
+        expect = f"mlplc2: error: {p}: frames are {size} pixels after resizing; the models need at least 3x3"
+    out = tmp_path / "o"
+    assert main(["run", *argv, "--out", str(out), "--quiet"]) == 2
+    assert _one_line(capsys.readouterr().err) == expect
+    assert _written(out) == []  # checked before any output exists
+
+
+def test_cli_corrupt_image_in_sequence_keeps_frames_before(tmp_path, capsys):
+    d = tmp_path / "seq"
+    d.mkdir()
+    for i, f in enumerate(noise_frames(8)):
+        cv2.imwrite(str(d / f"f{i}.png"), f)
+    (d / "f5.png").write_bytes(b"\x89PNG garbage")
+    out = tmp_path / "o"
+    assert main(["run", str(d), "--out", str(out), "--model", "mlplc2,lgmd2", "--quiet"]) == 2
+    line = _one_line(capsys.readouterr().err, kind="warning")
+    assert "f5.png" in line and "(frame 5)" in line
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["n_frames"] == 5 and summary["truncated"] and not summary["complete"]
+    _, rows = _read_csv(out / "responses.csv")
+    assert sorted({int(r["frame"]) for r in rows}) == list(range(5))
+    assert not [p for p in out.iterdir() if p.name.startswith(".")]  # no temporary files left
+
+
+def test_cli_image_of_another_size_in_sequence(tmp_path, capsys):
+    """Exit 2 and one line naming the image; the CSV holds whole rows for the frames before it."""
+    d = tmp_path / "seq"
+    d.mkdir()
+    for i, f in enumerate(noise_frames(6)):
+        cv2.imwrite(str(d / f"f{i}.png"), f)
+    cv2.imwrite(str(d / "f6.png"), np.zeros((NOISE_H + 2, NOISE_W, 3), np.uint8))
+    out = tmp_path / "o"
+    assert main(["run", str(d), "--out", str(out), "--model", "lgmd2", "--quiet"]) == 2
+    err = capsys.readouterr().err
+    lines = [ln for ln in err.splitlines() if ln.strip()]
+    assert len(lines) == 1 and "Traceback" not in err
+    assert lines[0].startswith(("mlplc2: error: ", "mlplc2: warning: "))
+    assert "f6.png" in lines[0] and "64x50" in lines[0] and "64x48" in lines[0]
+    header, rows = _read_csv(out / "responses.csv")
+    assert header == list(COLUMNS)
+    assert [int(r["frame"]) for r in rows] == list(range(6))  # lgmd2: one row per frame
+
+
+def test_cli_only_undecodable_images(tmp_path, capsys):
+    d = tmp_path / "bad"
+    d.mkdir()
+    (d / "a.png").write_bytes(b"not a png")
+    assert main(["run", str(d), "--out", str(tmp_path / "o"), "--quiet"]) == 2
+    assert _one_line(capsys.readouterr().err) == f"mlplc2: error: {d / 'a.png'}: not an image OpenCV can read"
+    assert _written(tmp_path / "o") == []
+
+
+@pytest.mark.parametrize("argv, expect", [
+    (["--model", ""], "--model needs at least one model name"),
+    (["--model", ",,"], "--model needs at least one model name"),
+    (["--fps", "nan"], "argument --fps: expected a positive number, got 'nan'"),
+    (["--fps", "inf"], "argument --fps: expected a positive number, got 'inf'"),
+    (["--scale", "0"], "argument --scale: expected a positive number, got '0'"),
+    (["--start", "-1"], "argument --start: expected an integer >= 0, got '-1'"),
+    (["--start", "99"], "start frame 99 is past the end (4 frames)"),
+    (["--end", "0"], "--end (0) must be larger than --start (0)"),
+    (["--resize", "320x"], "bad --resize '320x': expected WxH with positive integers, e.g. 320x240"),
+    (["--backend", "gstreamer"], "argument --backend: invalid choice: 'gstreamer'"),
+])
+def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
+    p = write_video(tmp_path / "v.avi", noise_frames(4), 30.0)
+    out = tmp_path / "o"
+    assert main(["run", str(p), *argv, "--out", str(out), "--quiet"]) == 2
+    assert expect in _one_line(capsys.readouterr().err)
+    assert _written(out) == []
+
+
+def test_cli_out_is_a_file(tmp_path, capsys):
+    p = write_video(tmp_path / "v.avi", noise_frames(4), 30.0)
+    f = tmp_path / "taken"
+    f.write_text("x")
+    assert main(["run", str(p), "--out", str(f), "--quiet"]) == 2
+    assert str(f) in _one_line(capsys.readouterr().err)
+    assert f.read_text() == "x"
+
+
+# -- repeated frames: --skip-repeats, --repeat-level, --every-frame ------------------------
+def test_cli_skip_repeats(tmp_path, capsys):
+    video = tmp_path / "dup.avi"
+    frames, _ = duplicated(stimuli.four_phase(seed=0).frames[:20])
+    from mlplc2.io import write_video
+
+    write_video(video, np.stack(frames), 30.0)
+    assert cli.main(["run", str(video), "--skip-repeats", "--out", str(tmp_path / "o"), "-q"]) == 0
+    assert (tmp_path / "o" / "responses.csv").exists()
+    # a plain flag: the file after it is the source, not a level
+    assert cli.main(["run", "--skip-repeats", str(video), "--out", str(tmp_path / "q"), "-q"]) == 0
+    held = (tmp_path / "q" / "responses.csv").read_text()
+    assert held == (tmp_path / "o" / "responses.csv").read_text()
+    assert cli.main(["run", str(video), "--out", str(tmp_path / "r"), "-q"]) == 0
+    assert held != (tmp_path / "r" / "responses.csv").read_text()  # holding changed the responses
+    assert cli.main(["run", str(video), "--repeat-level", "-1", "--out", str(tmp_path / "p"), "-q"]) == 2
+    assert "--repeat-level" in capsys.readouterr().err
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
+@pytest.mark.parametrize("argv, level", [([], "auto"), (["--skip-repeats"], REPEAT_THRESHOLD),
+                                         (["--repeat-level", "4"], 4.0),
+                                         (["--skip-repeats", "--repeat-level", "0"], 0.0),
+                                         (["--every-frame"], None)])
+def test_repeat_options_reach_the_run(command, argv, level, monkeypatch):
+    """--skip-repeats is a flag (threshold REPEAT_THRESHOLD), --repeat-level N sets the level
+    and implies it, on run, evaluate and batch."""
+    import importlib
+
+    seen = []
+
+    class Stop(Exception):
+        pass
+
+    def fake(*args, **kw):
+        opts = kw if command == "run" else kw.get("run_options") or {}
+        seen.append(opts.get("repeat_threshold"))
+        raise Stop
+
+    module, name = {"run": ("mlplc2.runner", "run"), "evaluate": ("mlplc2.evaluate", "evaluate"),
+                    "batch": ("mlplc2.batch", "batch")}[command]
+    monkeypatch.setattr(importlib.import_module(module), name, fake)
+    extra = {"run": [], "evaluate": ["--gt", "gt.json"], "batch": ["--out", "b"]}[command]
+    with pytest.raises(Stop):
+        cli.main([command, *argv, "clip.avi", *extra])
+    # run() gets the models' duplicate detection ("auto") by default; evaluate and batch leave
+    # it to run()'s default (nothing in run_options)
+    assert seen == [None if (level == "auto" and command != "run") else level]
+
+
+def test_batch_passes_skip_repeats(tmp_path):
+    frames, _ = duplicated(stimuli.four_phase(seed=0).frames[:12])
+    from mlplc2.io import write_video
+
+    write_video(tmp_path / "v.avi", np.stack(frames), 30.0)
+    assert cli.main(["batch", str(tmp_path / "v.avi"), "--out", str(tmp_path / "b"), "--workers", "0",
+                     "--skip-repeats", "-q"]) == 0
+    import json
+
+    done = list((tmp_path / "b").rglob("*.json"))
+    assert any(json.loads(p.read_text()).get("run_options", {}).get("repeat_threshold") == REPEAT_THRESHOLD
+               for p in done)
+
+
+def test_evaluate_passes_skip_repeats(tmp_path):
+    st = stimuli.four_phase(seed=0)
+    frames, origin = duplicated(st.frames[:40])
+    from mlplc2.io import write_video
+
+    write_video(tmp_path / "v.avi", np.stack(frames), 30.0)
+    import json
+
+    gt = {"videos": {"v.avi": {"size": [320, 240], "frames": len(frames), "objects": []}}}
+    (tmp_path / "gt.json").write_text(json.dumps(gt))
+    assert cli.main(["evaluate", str(tmp_path / "v.avi"), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2",
+                     "--skip-repeats", "-q"]) == 0

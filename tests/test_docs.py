@@ -1,5 +1,6 @@
-"""The docstring examples run (numpydoc Examples are doctests); the parameter tables of
-help() and of the docs are the ones the code generates."""
+"""The documentation, across the package: the docstring examples of every module run (numpydoc
+Examples are doctests); the parameter tables of help() and of docs/*.md are the ones the code
+generates (mlplc2.params, mlplc2.targets, mlplc2.cli)."""
 
 from __future__ import annotations
 

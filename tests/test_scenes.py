@@ -1,5 +1,9 @@
 """Sec. IV-B: multi-object scenes on a scrolling background (Fig. 4 and Fig. 5 designs),
-generated here and, when present, the paper's own videos. One parameter set throughout."""
+generated here and, when present, the paper's own videos. One parameter set throughout.
+
+A cross-cutting suite of the paper's results (the sibling of ``test_selectivity.py``): the
+LPLC2 family (mlplc2.models.lplc2) on scenes of mlplc2.stimuli, localisation scored by
+mlplc2.tracks against mlplc2.truth."""
 
 from __future__ import annotations
 

@@ -1,4 +1,8 @@
-"""Sec. IV-A: the selectivity matrix of the LPLC2 family on the six basic stimuli."""
+"""Sec. IV-A: the selectivity matrix of the LPLC2 family on the six basic stimuli.
+
+A cross-cutting suite of the paper's results: the LPLC2 family (mlplc2.models.lplc2, with the
+front end and attention beneath it) on the stimuli of mlplc2.stimuli and, when present, the
+paper's own videos."""
 
 from __future__ import annotations
 

@@ -4,16 +4,20 @@
 SIGTERM do: the CLI makes SIGTERM interrupt like Ctrl-C, the frame loop of ``run``
 defers an interrupt to the end of the frame in progress, batch ignores SIGINT while
 Dask's workers start. Signals are raised in this process (``signal.raise_signal``), at
-chosen points of a frame. A real signal sent to a child process is tested in
-``test_robustness.py::test_real_signal_leaves_valid_outputs``.
+chosen points of a frame; at the end, a real signal is sent to the console script
+running in a child process.
 """
 
 from __future__ import annotations
 
+import csv
 import json
 import signal
+import subprocess
 import sys
 import threading
+import time
+from pathlib import Path
 
 import numpy as np
 import pytest
@@ -22,10 +26,10 @@ import mlplc2
 from mlplc2._signals import interrupts
 from mlplc2.cli import main
 from mlplc2.io import VideoWriter, write_video
-from mlplc2.runner import RunInterrupted, run
+from mlplc2.runner import COLUMNS, RunInterrupted, run
 from mlplc2.tracks import Recorder
 
-from .helpers import check_outputs_agree
+from .helpers import check_outputs_agree, noise_frames
 
 pytestmark = pytest.mark.skipif(sys.platform == "win32", reason="POSIX signals")
 
@@ -203,3 +207,62 @@ def test_run_from_another_thread(clip, tmp_path):
     t.start()
     t.join()
     assert box["res"].n_frames == 20 and check_outputs_agree(tmp_path / "t", ["mlplc2", "lgmd2"]) == 20
+
+
+# -- a real signal to the console script ------------------------------------------------
+def _csv_rows(path):
+    with open(path, newline="") as f:
+        reader = csv.reader(f)
+        header = next(reader)
+        return header, [dict(zip(header, r)) for r in reader]
+
+
+def _console_script() -> list[str]:
+    exe = Path(sys.executable).with_name("mlplc2")
+    return [str(exe)] if exe.exists() else [sys.executable, "-m", "mlplc2.cli"]
+
+
+@pytest.mark.skipif(sys.platform == "win32", reason="signals to a child process are POSIX")
+@pytest.mark.parametrize("sig", ["SIGINT", "SIGTERM"])
+def test_real_signal_leaves_valid_outputs(tmp_path, sig):
+    """A real Ctrl-C (SIGINT), or SIGTERM as sent by `timeout` and batch schedulers, to the
+    console script mid-run with the decoder thread busy: the frames done are saved.
+    (test_cli.py raises KeyboardInterrupt in-process; this sends the signal.)"""
+    n = 900
+    p = write_video(tmp_path / "long.avi", noise_frames(n, 160, 120), 30.0)
+    out = tmp_path / "o"
+    # SIGINT as in a terminal, even when pytest runs in the background (which ignores it, and
+    # an ignored SIGINT is inherited: the run would not stop).
+    proc = subprocess.Popen(_console_script() + ["run", str(p), "--out", str(out), "-m", "mlplc2,lgmd2",
+                                                 "--quiet"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, text=True,
+                            preexec_fn=lambda: signal.signal(signal.SIGINT, signal.SIG_DFL))
+    csv_path = out / "responses.csv"
+    deadline = time.monotonic() + 60
+    try:
+        while time.monotonic() < deadline:  # wait until it is inside the frame loop
+            if csv_path.exists() and csv_path.stat().st_size > 3000:
+                break
+            if proc.poll() is not None:
+                pytest.fail(f"finished before the interrupt: {proc.communicate()}")
+            time.sleep(0.02)
+        proc.send_signal(getattr(signal, sig))
+        _, err = proc.communicate(timeout=60)
+    finally:
+        if proc.poll() is None:
+            proc.kill()
+    assert proc.returncode == 130, err
+    assert "Traceback" not in err
+    summary = json.loads((out / "fields.json").read_text())
+    k = summary["n_frames"]
+    assert 0 < k < n and summary["interrupted"] and not summary["complete"]
+    assert f"interrupted after {k} frames" in err
+    header, rows = _csv_rows(csv_path)
+    assert header == list(COLUMNS)
+    assert all(len(r) == len(COLUMNS) and None not in r.values() for r in rows)
+    for name in ("mlplc2", "lgmd2"):  # every processed frame complete, none beyond
+        assert sorted({int(r["frame"]) for r in rows if r["model"] == name}) == list(range(k))
+    assert [int(r["frame"]) for r in rows if r["model"] == "lgmd2"] == list(range(k))
+    # the three outputs agree: no frame in responses.csv or targets.csv at or past n_frames
+    assert check_outputs_agree(out, ["mlplc2", "lgmd2"]) == k
+    assert not [q for q in out.iterdir() if q.name.startswith(".")]

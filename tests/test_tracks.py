@@ -130,3 +130,34 @@ def test_flat_recorder_keeps_no_series_and_counts_alarms():
     (s,) = rec.summaries("m")
     assert s == {"id": 1, "x": 10.0, "y": 10.0, "born": 5, "died": None, "peak_response": 8.0, "peak_frame": 8,
                  "first_alarm_frame": 7}
+
+
+# -- the recorder of a run: dead fields spilled to disk, the peak of a plateau ------------
+def test_field_summaries_keep_only_live_fields_in_memory():
+    """keep_rows=False: a field that died leaves memory (it is spilled to a temporary file)."""
+    from mlplc2.attention import Field
+    from mlplc2.tracks import Recorder
+
+    tracker = Recorder(["m"], series=False, spill=True)
+    for k in range(200):   # a new field every frame, each living 3 frames
+        fields = tuple(Field(i, 10.0, 10.0, 40.0, 1.0, False, i) for i in range(max(0, k - 2), k + 1))
+        tracker.update(k, "m", mlplc2.Output(frame=k, response=1.0, fields=fields))
+    assert len(tracker.records["m"].fields) == 3
+    summaries = tracker.summaries("m")
+    assert [s["id"] for s in summaries] == list(range(200))
+    assert all(s["died"] == s["id"] + 3 for s in summaries[:-3])
+    tracker.close()
+
+
+def test_peak_frame_is_the_first_frame_of_a_plateau():
+    """A response held on later frames (duplicates) leaves the peak at its first frame, also when
+    the stored value is rounded (it used to move to the last frame of the plateau)."""
+    from mlplc2.attention import Field
+    from mlplc2.tracks import Recorder
+
+    tracker = Recorder(["m"])
+    for k, r in enumerate((5.0, 12058.344999, 12058.344999, 12058.344999, 100.0)):
+        f = Field(1, 10.0, 10.0, 40.0, r, False, 0)
+        tracker.update(k, "m", mlplc2.Output(frame=k, response=r, fields=(f,)))
+    (s,) = tracker.summaries("m")
+    assert s["peak_frame"] == 1 and s["peak_response"] == pytest.approx(12058.34, abs=0.01)

@@ -1,4 +1,4 @@
-"""The overlay of ``annotated.mp4`` (``mlplc2.plots.annotate_frame``, issue 14 item 2): fields
+"""mlplc2.plots: the overlay of ``annotated.mp4`` (``annotate_frame``, issue 14 item 2): fields
 in their real shape, only those that respond unless asked, labels on boxes that scale with
 the frame."""
 

@@ -1,0 +1,104 @@
+"""mlplc2.runner.run called directly (not through the CLI): results without outputs, the
+DataFrame, rows streamed to disk only, a truncated input's warning, and the checks of its
+arguments. (``mlplc2 run``: ``tests/test_cli.py``; interrupts: ``tests/test_signals.py``; the
+clip ``data`` is the square approach of ``tests/conftest.py``.)"""
+
+from __future__ import annotations
+
+import json
+import sys
+
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2.runner import COLUMNS, TruncatedInputWarning, run
+
+from .conftest import T
+
+
+def test_truncated_video_warns_in_python(data, tmp_path):
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.5)])
+    with pytest.warns(TruncatedInputWarning, match="stopped at frame"):
+        res = run(cut, out=False, quiet=True)
+    assert res.truncated and 0 < res.n_frames < T
+
+
+def test_run_api_without_outputs_and_dataframe(data, tmp_path):
+    res = run(str(data["images"]), ["mlplc2", "lplc2"], out=False, progress=False)
+    assert res.out is None and res.files == {} and res.n_frames == 40
+    assert not (data["images"].parent / "nothing").exists()
+    pd = pytest.importorskip("pandas")
+    df = res.to_dataframe()
+    assert list(df.columns) == list(COLUMNS) and len(df) == len(res.rows)
+    assert isinstance(df, pd.DataFrame) and str(df["field_id"].dtype) == "Int64"
+
+
+def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
+    """Long/live runs: rows go to the CSV only, the result keeps no per-frame rows."""
+    kept = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "a", progress=False)
+    lean = run(str(data["avi"]), ["mlplc2", "lgmd2"], out=tmp_path / "b", progress=False, keep_rows=False)
+    assert lean.rows == [] and lean.targets == [] and kept.rows
+    assert (tmp_path / "a" / "responses.csv").read_text() == (tmp_path / "b" / "responses.csv").read_text()
+    assert (tmp_path / "b" / "responses.png").stat().st_size > 10_000
+    for name in ("mlplc2", "lgmd2"):
+        frames = sorted({r["frame"] for r in kept.rows if r["model"] == name and r["collision"]})
+        assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
+    # the summaries of dead fields wait on disk, and come back complete and in order
+    assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
+    a, b = (json.loads((tmp_path / d / "fields.json").read_text()) for d in "ab")
+    assert a.pop("seconds") > 0 and b.pop("seconds") > 0  # the measured wall time differs from run to run
+    assert json.dumps(a) == json.dumps(b)  # the rest identical, in the same order
+    # the table is read back from responses.csv
+    pytest.importorskip("pandas")
+    a, b = kept.to_dataframe(), lean.to_dataframe()
+    assert a.equals(b), (a.dtypes, b.dtypes)
+
+
+def test_to_dataframe_without_pandas(data, monkeypatch):
+    res = run(str(data["images"]), end=3, out=False, quiet=True)
+    monkeypatch.setitem(sys.modules, "pandas", None)
+    with pytest.raises(ImportError, match=r"pip install 'mlplc2\[pandas\]'"):
+        res.to_dataframe()
+
+
+def test_run_api_rejects_ambiguous_models_and_params(data):
+    from mlplc2._validation import InputError
+
+    with pytest.raises(InputError, match="t_a is not a model of this run"):
+        run(data["avi"], ["mlplc2"], out=False, end=5, params={"t_a": 1000})
+    with pytest.raises(InputError, match="mlpcl2 is not a model"):
+        run(data["avi"], ["mlplc2"], out=False, end=5, params={"mlpcl2": mlplc2.Params()})
+    with pytest.raises(InputError, match="two models named 'mlplc2'"):
+        run(data["avi"], [mlplc2.MLPLC2(fps=30.0), mlplc2.MLPLC2(fps=30.0, params=mlplc2.Params(t_a=20.0))],
+            out=False, end=5)
+    with pytest.warns(UserWarning, match="built for 60 fps but the input runs at 30 fps"):
+        run(data["avi"], [mlplc2.MLPLC2(fps=60.0)], out=False, end=3)
+    res = run(data["avi"], ["mlplc2", "lgmd2"], out=False, end=5, params={"mlplc2": mlplc2.Params(t_a=20.0)})
+    assert res.models == ["mlplc2", "lgmd2"]
+    # keys are model names in any case or spacing, and they are applied (not only accepted)
+    from mlplc2.models.lgmd import LGMD2Params
+
+    calls = []
+    real = mlplc2.models.lgmd.LGMD2.__init__
+
+    def spy(self, *a, **k):
+        calls.append(k.get("params"))
+        real(self, *a, **k)
+
+    import unittest.mock
+    with unittest.mock.patch.object(mlplc2.models.lgmd.LGMD2, "__init__", spy):
+        run(data["avi"], ["lgmd2"], out=False, end=3, params={" LGMD2": LGMD2Params(dc=0.5)})
+    assert calls and calls[0].dc == 0.5
+
+
+def test_run_api_on_an_array_says_what_to_do():
+    from mlplc2._validation import InputError
+
+    frames = np.zeros((10, 40, 40), np.uint8)
+    with pytest.raises(InputError) as exc:
+        run(frames, ["mlplc2"], out=False)
+    msg = str(exc.value)
+    assert "\n" not in msg and len(msg) < 200 and "ndarray of shape (10, 40, 40)" in msg and "model.run(frames)" in msg
