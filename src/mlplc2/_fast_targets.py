@@ -12,7 +12,7 @@
   AVX2 for a patch side that is a multiple of 16 (the default 32), and within a float32 ulp or
   so otherwise (OpenCV's scalar tail rounds differently). Then the same float32 weights and
   Jacobian, the same float64 normal equations, iteration and stopping rules: the alignments
-  agree to ~1e-12 (``tests/test_fast_targets_align.py``).
+  agree to ~1e-12 (``tests/test_fast_targets.py``).
 Every kernel is ``nogil`` and cached on disk where possible; nothing here is public API.
 """
 

@@ -5,7 +5,7 @@ checks (zero-argument callables named ``check_...``; each raises :class:`Asserti
 one-line message when the model breaks the contract), so a test suite can parametrise over them;
 :func:`run_checks` runs them all and names the first that fails. The checks make their own frames
 (a dark square looming on a blurred texture, 64x48 RGB), so a model needs no data. The test suite
-runs them on every registered model (``tests/test_contract.py``); ``docs/testing.md`` shows a model
+runs them on every registered model (``tests/test_testing.py``); ``docs/testing.md`` shows a model
 written from scratch and checked. Plain Python: pytest is not needed.
 
 Examples

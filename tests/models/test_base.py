@@ -3,7 +3,7 @@
 * The input checks of ``Model.step``: the full table of bad frames, each with its exception
   class and exact message, and the accepted dtypes giving identical outputs. (The scaling of
   ``as_gray`` itself: ``tests/test_validation.py``; the per-model contract:
-  ``tests/test_contract.py``; the CLI's input checks: ``tests/test_cli.py``.)
+  ``tests/test_testing.py``; the CLI's input checks: ``tests/test_cli.py``.)
 * Numerical safety with Hypothesis: random sequences of noise, constant frames,
   black/white flashes, extreme contrast and out-of-range values; every model stays finite
   and bounded and falls silent on a still scene.

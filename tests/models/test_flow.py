@@ -2,7 +2,7 @@
 warning for what does not approach, the course of a pass-by, the focus of expansion of a
 camera driving forward, the stage functions, pickling and reset, and its documentation.
 
-The generic per-frame contract is in ``test_contract.py`` (every registered model)."""
+The generic per-frame contract is in ``tests/test_testing.py`` (every registered model)."""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ from mlplc2.models.lgmd import (
 
 SIZE = 100
 N_FRAMES = 50
-from .conftest import PAPER, read_gray
+from ..conftest import PAPER, read_gray
 
 SCENE = str(PAPER / "scenes" / "outdoor_2_black_4_period.avi")
 BASIC = str(PAPER / "basic")
