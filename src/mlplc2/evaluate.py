@@ -1,19 +1,15 @@
 """Score model outputs against ground truth (the ``mlplc2 evaluate`` command).
 
-Two kinds of truth (schema in ``docs/evaluation.md``):
+Two kinds of truth (:mod:`mlplc2.truth`; schema in ``docs/evaluation.md``):
 
 object level
-    per video, the objects with their centre (or a per-frame track) and the
-    frame intervals of their phases (``approach``, ``hold``, ``recede``,
-    ``translate``), as in the paper's ``ground_truth.json``. Scored per
-    approaching object: detected or not, latency to the first field within
-    the match radius and to the first alarm, localisation error, fields
-    created; and false alarms per minute of video.
+    the objects and their phases (the paper's ``ground_truth.json``), scored per approaching
+    object: detected or not, latency to the first field within the match radius and to the
+    first alarm, localisation error, fields created; and false alarms per minute of video.
 clip level
-    ``"label": "collision" | "no_collision"`` with an optional
-    ``collision_frame``. Scored as a binary classification (alarm before the
-    collision frame = true positive, alarm in a no-collision clip = false
-    positive): accuracy, precision, recall and warning time.
+    ``"label": "collision" | "no_collision"`` with an optional ``collision_frame``, scored as a
+    binary classification (alarm before the collision frame = true positive, alarm in a
+    no-collision clip = false positive): accuracy, precision, recall and warning time.
 
 Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
 collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
@@ -111,6 +107,14 @@ class _Run:
     # frame -> the targets of that frame (models with targets: their warning is the targets' warning)
     frame_targets: dict[int, list[TargetRow]] = field(default_factory=dict)
     has_targets: bool = False
+    localises: bool = False  # its fields have meaningful positions (Model.localises)
+
+    def alarms_at(self, f: int) -> list[tuple]:
+        """``(field id, x, y)`` of every field in alarm in frame ``f``; for a model that does not localise,
+        ``(None, None, None)`` for the frame's alarm."""
+        if self.localises:
+            return [(fid, x, y) for fid, x, y, c in self.frame_fields.get(f, ()) if c]
+        return [(None, None, None)] if self.frame_alarm.get(f) else []
 
     def in_pixels_of(self, truth: VideoTruth) -> "_Run":
         """The run with its field and target positions in ``truth``'s pixels (when its size differs)."""
@@ -158,7 +162,7 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
             label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
                     dict(params or {}), origin or str(source), ident, incomplete, video_known,
-                    has_targets=_model_says(m, "has_targets") and targets_known)
+                    has_targets=_model_says(m, "has_targets") and targets_known, localises=_model_says(m, "localises"))
 
     for r in rows:
         m = r["model"]
@@ -349,7 +353,7 @@ def _with_approach(o: ObjectTruth) -> ObjectTruth | None:
 def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tuple[dict, list[dict]]:
     run = run.in_pixels_of(truth)
     first, last = run.start, run.start + run.n_frames  # processed frames [first, last)
-    localises = _model_says(run.model, "localises")
+    localises = run.localises
 
     def fields_at(f):
         return run.frame_fields.get(f, ())
@@ -389,15 +393,10 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                 rec["error_life"] = round(sum(errs) / len(errs), 2) if errs else None
             rec["fields"] = sum(1 for b, x, y in births.values()
                                 if w0 <= b < w1 and centre_distance(x, y, o, b) <= radius)
-            for f in range(w0, w1):
-                if any(cl and centre_distance(x, y, o, f) <= radius for _, x, y, cl in fields_at(f)):
-                    rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
-                    break
-        else:
-            for f in range(w0, w1):
-                if run.frame_alarm.get(f):
-                    rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
-                    break
+        for f in range(w0, w1):
+            if any(x is None or centre_distance(x, y, o, f) <= radius for _, x, y in run.alarms_at(f)):
+                rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
+                break
         objects.append(rec)
 
     # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
@@ -407,30 +406,13 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
 
     fa_events = fa_frames = 0
     alarm_frames = sorted(f for f, a in run.frame_alarm.items() if a)
-    if localises:
-        prev: set[int] = set()
-        for f in range(first, last):
-            now = set()
-            bad_frame = False
-            for fid, x, y, c in fields_at(f):
-                if not c:
-                    continue
-                now.add(fid)
-                if not explained(f, x, y):
-                    bad_frame = True
-                    if fid not in prev:
-                        fa_events += 1
-            fa_frames += bad_frame
-            prev = now
-    else:
-        prev_alarm = False
-        for f in range(first, last):
-            a = bool(run.frame_alarm.get(f))
-            if a and not explained(f):
-                fa_frames += 1
-                if not prev_alarm:
-                    fa_events += 1
-            prev_alarm = a
+    prev: set = set()   # the alarms of the frame before
+    for f in range(first, last):
+        now = run.alarms_at(f)
+        bad = [fid for fid, x, y in now if not explained(f, x, y)]
+        fa_frames += bool(bad)
+        fa_events += sum(fid not in prev for fid in bad)
+        prev = {fid for fid, _, _ in now}
     if not truth.object_level:  # a clip-level label only: no object-level false alarms
         fa_events = fa_frames = None
     video = {"model": run.label, "video": truth.key, "source": run.source, "frames": run.n_frames,
@@ -512,7 +494,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     early_before = None
     if clip and truth.danger_onset_frame is not None:
         early_before = truth.danger_onset_frame - EARLY_S * fps
-    localises = _model_says(run.model, "localises")
+    localises = run.localises
 
     def targets(f):
         return run.frame_targets.get(f, ())
@@ -524,9 +506,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         """(key, x, y) of every warning in frame f (key: target or field id; x None: a global alarm)."""
         if run.has_targets:
             return [(t.id, t.x, t.y) for t in targets(f) if t.warning]
-        if localises:
-            return [(fid, x, y) for fid, x, y, c in fields(f) if c]
-        return [(None, None, None)] if run.frame_alarm.get(f) else []
+        return run.alarms_at(f)
 
     objects = []
     outside = 0

@@ -309,18 +309,10 @@ class VideoTruth:
     def to_dict(self) -> dict[str, Any]:
         """The JSON entry of this video (the keys that are set)."""
         out: dict[str, Any] = {}
-        if self.size is not None:
-            out["size"] = list(self.size)
-        if self.frames is not None:
-            out["frames"] = int(self.frames)
-        if self.fps is not None:
-            out["fps"] = float(self.fps)
-        if self.camera is not None:
-            out["camera"] = dict(self.camera)
-        if self.background is not None:
-            out["background"] = self.background
-        if self.label is not None:
-            out["label"] = self.label
+        for name, as_json in (("size", list), ("frames", int), ("fps", float), ("camera", dict), ("background", str),
+                              ("label", str)):
+            if getattr(self, name) is not None:
+                out[name] = as_json(getattr(self, name))
         for name in ("contact_frame", "danger_onset_frame", "first_visible_frame"):
             v = getattr(self, name)
             if v is not None or (self.label is not None and name == "contact_frame"):
@@ -629,11 +621,8 @@ def parse(data, source: str = "<dict>") -> GroundTruth:
     if not isinstance(data, Mapping):
         raise InputValueError(f"{source}: ground truth must be a JSON object, got {type(data).__name__}")
     parsed: dict[str, VideoTruth] = {}
-    found = False
-    for top in ("videos", "clips"):
-        if top not in data:
-            continue
-        found = True
+    tops = [top for top in ("videos", "clips") if top in data]
+    for top in tops:
         videos = data[top]
         if not isinstance(videos, Mapping) or not videos:
             raise InputValueError(f"{source}: '{top}' must be a non-empty object {{name: entry}}")
@@ -641,7 +630,7 @@ def parse(data, source: str = "<dict>") -> GroundTruth:
             if str(k) in parsed:
                 raise InputValueError(f"{source}: {k!r} is both in 'videos' and in 'clips'")
             parsed[str(k)] = parse_entry(str(k), v, f"{source}: {top}[{k!r}]")
-    if not found:
+    if not tops:
         key = str(data.get("video") or "*")
         parsed = {key: parse_entry(key, data, source)}
     return GroundTruth(parsed, source)
