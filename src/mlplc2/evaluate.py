@@ -496,16 +496,10 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
         early_before = truth.danger_onset_frame - EARLY_S * fps
     localises = run.localises
 
-    def targets(f):
-        return run.frame_targets.get(f, ())
-
-    def fields(f):
-        return run.frame_fields.get(f, ())
-
     def warnings_at(f):
         """(key, x, y) of every warning in frame f (key: target or field id; x None: a global alarm)."""
         if run.has_targets:
-            return [(t.id, t.x, t.y) for t in targets(f) if t.warning]
+            return [(t.id, t.x, t.y) for t in run.frame_targets.get(f, ()) if t.warning]
         return run.alarms_at(f)
 
     objects = []
@@ -542,7 +536,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
             # contact it covers the view, and every target anywhere lies on it
             fits = width is None or truth.size is None or width <= max(truth.size)
             if run.has_targets:
-                on = [t for t in targets(f) if on_object(t.x, t.y, o, f, radius)]
+                on = [t for t in run.frame_targets.get(f, ()) if on_object(t.x, t.y, o, f, radius)]
                 if fits:
                     ids.update(t.id for t in on)
                 true = o.ttc_at(f, fps)
@@ -556,7 +550,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                         rec["ttc_estimated"] += 1
                         rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
             elif localises and fits:
-                ids.update(fid for fid, x, y, _ in fields(f) if on_object(x, y, o, f, radius))
+                ids.update(fid for fid, x, y, _ in run.frame_fields.get(f, ()) if on_object(x, y, o, f, radius))
         rec["targets"] = len(ids) if (run.has_targets or localises) else None
         objects.append(rec)
 
