@@ -1,19 +1,15 @@
 """Score model outputs against ground truth (the ``mlplc2 evaluate`` command).
 
-Two kinds of truth (schema in ``docs/evaluation.md``):
+Two kinds of truth (:mod:`mlplc2.truth`; schema in ``docs/evaluation.md``):
 
 object level
-    per video, the objects with their centre (or a per-frame track) and the
-    frame intervals of their phases (``approach``, ``hold``, ``recede``,
-    ``translate``), as in the paper's ``ground_truth.json``. Scored per
-    approaching object: detected or not, latency to the first field within
-    the match radius and to the first alarm, localisation error, fields
-    created; and false alarms per minute of video.
+    the objects and their phases (the paper's ``ground_truth.json``), scored per approaching
+    object: detected or not, latency to the first field within the match radius and to the
+    first alarm, localisation error, fields created; and false alarms per minute of video.
 clip level
-    ``"label": "collision" | "no_collision"`` with an optional
-    ``collision_frame``. Scored as a binary classification (alarm before the
-    collision frame = true positive, alarm in a no-collision clip = false
-    positive): accuracy, precision, recall and warning time.
+    ``"label": "collision" | "no_collision"`` with an optional ``collision_frame``, scored as a
+    binary classification (alarm before the collision frame = true positive, alarm in a
+    no-collision clip = false positive): accuracy, precision, recall and warning time.
 
 Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
 collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
@@ -34,6 +30,7 @@ import csv
 import json
 import math
 import os
+import statistics
 import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field, replace
@@ -65,9 +62,9 @@ def mid_error(true_ttc: float, est_ttc: float, interval: float = MID_INTERVAL_S)
     ``|ln s(est) - ln s(true)| x 10^4`` (positive TTCs)."""
     return abs(math.log(est_ttc / (est_ttc + interval)) - math.log(true_ttc / (true_ttc + interval))) * 1e4
 
-from .tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance, episodes,
-                     on_object, warning_cause)
-from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth
+from .tracks import (CAUSES, DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance,
+                     episodes, on_object, warning_cause)
+from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
 from .truth import load as load_ground_truth
 
 #: Row order of the comparison table (other registered models follow, alphabetically).
@@ -110,6 +107,26 @@ class _Run:
     # frame -> the targets of that frame (models with targets: their warning is the targets' warning)
     frame_targets: dict[int, list[TargetRow]] = field(default_factory=dict)
     has_targets: bool = False
+    localises: bool = False  # its fields have meaningful positions (Model.localises)
+
+    def alarms_at(self, f: int) -> list[tuple]:
+        """``(field id, x, y)`` of every field in alarm in frame ``f``; for a model that does not localise,
+        ``(None, None, None)`` for the frame's alarm."""
+        if self.localises:
+            return [(fid, x, y) for fid, x, y, c in self.frame_fields.get(f, ()) if c]
+        return [(None, None, None)] if self.frame_alarm.get(f) else []
+
+    def in_pixels_of(self, truth: VideoTruth) -> "_Run":
+        """The run with its field and target positions in ``truth``'s pixels (when its size differs)."""
+        if not (truth.size and self.size and tuple(self.size) != tuple(truth.size)):
+            return self
+        sx, sy = truth.size[0] / self.size[0], truth.size[1] / self.size[1]
+        return replace(self, frame_fields={f: [(fid, x * sx, y * sy, c) for fid, x, y, c in rows]
+                                           for f, rows in self.frame_fields.items()},
+                       frame_targets={f: [replace(t, x=t.x * sx, y=t.y * sy,
+                                                  width=None if t.width is None else t.width * sx,
+                                                  height=None if t.height is None else t.height * sy) for t in rows]
+                                      for f, rows in self.frame_targets.items()})
 
 
 def _model_says(model: str, flag: str) -> bool:
@@ -145,7 +162,7 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
             label = f"{m}@{param_set}"
         return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
                     dict(params or {}), origin or str(source), ident, incomplete, video_known,
-                    has_targets=_model_says(m, "has_targets") and targets_known)
+                    has_targets=_model_says(m, "has_targets") and targets_known, localises=_model_says(m, "localises"))
 
     for r in rows:
         m = r["model"]
@@ -201,24 +218,17 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
                 int(r["frame"]), int(r["collision"])
         except (TypeError, ValueError):
             raise InputValueError(f"{csv_path}: malformed row") from None
-    info: dict = {}
     fj = folder / "fields.json"
-    if fj.is_file():
-        try:
-            info = json.loads(fj.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError) as exc:
-            raise InputValueError(f"{fj}: not valid JSON ({exc})") from None
-        if not isinstance(info, Mapping):
-            raise InputValueError(f"{fj}: not a fields.json of mlplc2 run (expected a JSON object)")
-    done: dict = {}
+    info = read_json(fj) if fj.is_file() else {}
+    if not isinstance(info, Mapping):
+        raise InputValueError(f"{fj}: not a fields.json of mlplc2 run (expected a JSON object)")
     dj = folder / "done.json"
-    if dj.is_file():
-        try:
-            done = json.loads(dj.read_text(encoding="utf-8"))
-        except (json.JSONDecodeError, UnicodeDecodeError):
-            done = {}
-        if not isinstance(done, Mapping):
-            done = {}
+    try:  # the batch's record of the task, if any (unreadable: none)
+        done = json.loads(dj.read_text(encoding="utf-8")) if dj.is_file() else {}
+    except (json.JSONDecodeError, UnicodeDecodeError):
+        done = {}
+    if not isinstance(done, Mapping):
+        done = {}
     frames = sorted({int(r["frame"]) for r in rows})
     try:
         fps = info.get("fps")
@@ -341,14 +351,12 @@ def _with_approach(o: ObjectTruth) -> ObjectTruth | None:
 
 
 def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tuple[dict, list[dict]]:
+    run = run.in_pixels_of(truth)
     first, last = run.start, run.start + run.n_frames  # processed frames [first, last)
-    sx = sy = 1.0
-    if truth.size and run.size and tuple(run.size) != tuple(truth.size):
-        sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
-    localises = _model_says(run.model, "localises")
+    localises = run.localises
 
     def fields_at(f):
-        return [(fid, x * sx, y * sy, c) for fid, x, y, c in run.frame_fields.get(f, ())]
+        return run.frame_fields.get(f, ())
 
     births: dict[int, tuple[int, float, float]] = {}
     for f in sorted(run.frame_fields):
@@ -357,13 +365,10 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
 
     approaching = [a for a in (_with_approach(o) for o in truth.objects if o.approaching) if a is not None]
 
-    def window(o):
-        return max(o.approach[0], first), min(o.approach[1] + tail, last)
-
     objects = []
     outside = 0
     for o in approaching:
-        w0, w1 = window(o)
+        w0, w1 = max(o.approach[0], first), min(o.approach[1] + tail, last)
         if w0 >= w1:
             outside += 1  # outside the processed frames: not scored, counted
             continue
@@ -383,23 +388,15 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
                                error_detect=round(d, 2))
                     break
             if rec["detected"]:
-                errs = []
-                for f in range(rec["detect_frame"], min(o.life_end(), last)):
-                    for fid, x, y, _ in fields_at(f):
-                        if fid == rec["field"]:
-                            errs.append(centre_distance(x, y, o, f))
+                errs = [centre_distance(x, y, o, f) for f in range(rec["detect_frame"], min(o.life_end(), last))
+                        for fid, x, y, _ in fields_at(f) if fid == rec["field"]]
                 rec["error_life"] = round(sum(errs) / len(errs), 2) if errs else None
             rec["fields"] = sum(1 for b, x, y in births.values()
                                 if w0 <= b < w1 and centre_distance(x, y, o, b) <= radius)
-            for f in range(w0, w1):
-                if any(cl and centre_distance(x, y, o, f) <= radius for _, x, y, cl in fields_at(f)):
-                    rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
-                    break
-        else:
-            for f in range(w0, w1):
-                if run.frame_alarm.get(f):
-                    rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
-                    break
+        for f in range(w0, w1):
+            if any(x is None or centre_distance(x, y, o, f) <= radius for _, x, y in run.alarms_at(f)):
+                rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
+                break
         objects.append(rec)
 
     # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
@@ -409,30 +406,13 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
 
     fa_events = fa_frames = 0
     alarm_frames = sorted(f for f, a in run.frame_alarm.items() if a)
-    if localises:
-        prev: set[int] = set()
-        for f in range(first, last):
-            now = set()
-            bad_frame = False
-            for fid, x, y, c in fields_at(f):
-                if not c:
-                    continue
-                now.add(fid)
-                if not explained(f, x, y):
-                    bad_frame = True
-                    if fid not in prev:
-                        fa_events += 1
-            fa_frames += bad_frame
-            prev = now
-    else:
-        prev_alarm = False
-        for f in range(first, last):
-            a = bool(run.frame_alarm.get(f))
-            if a and not explained(f):
-                fa_frames += 1
-                if not prev_alarm:
-                    fa_events += 1
-            prev_alarm = a
+    prev: set = set()   # the alarms of the frame before
+    for f in range(first, last):
+        now = run.alarms_at(f)
+        bad = [fid for fid, x, y in now if not explained(f, x, y)]
+        fa_frames += bool(bad)
+        fa_events += sum(fid not in prev for fid in bad)
+        prev = {fid for fid, _, _ in now}
     if not truth.object_level:  # a clip-level label only: no object-level false alarms
         fa_events = fa_frames = None
     video = {"model": run.label, "video": truth.key, "source": run.source, "frames": run.n_frames,
@@ -470,11 +450,8 @@ def _warning_truth(truth: VideoTruth) -> bool:
 
 
 def _median(values) -> float | None:
-    v = sorted(x for x in values if x is not None)
-    if not v:
-        return None
-    m = len(v) // 2
-    return float(v[m]) if len(v) % 2 else (v[m - 1] + v[m]) / 2.0
+    v = [x for x in values if x is not None]
+    return float(statistics.median(v)) if v else None
 
 
 def _quantile(values, q: float) -> float | None:
@@ -501,10 +478,8 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were
     processed (an interrupted or partial run) is not scored, only counted (``collision_objects_outside``).
     """
+    run = run.in_pixels_of(truth)
     first, last = run.start, run.start + run.n_frames
-    sx = sy = 1.0
-    if truth.size and run.size and tuple(run.size) != tuple(truth.size):
-        sx, sy = truth.size[0] / run.size[0], truth.size[1] / run.size[1]
     fps = run.fps
     clip = truth.label is not None
     collider = truth.collider
@@ -519,26 +494,13 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     early_before = None
     if clip and truth.danger_onset_frame is not None:
         early_before = truth.danger_onset_frame - EARLY_S * fps
-    localises = _model_says(run.model, "localises")
-
-    def targets(f):
-        rows = run.frame_targets.get(f, ())
-        if sx == 1.0 and sy == 1.0:
-            return rows
-        return [TargetRow(t.id, t.x * sx, t.y * sy, None if t.width is None else t.width * sx,
-                          None if t.height is None else t.height * sy, t.ttc_s, t.miss, t.warning, t.fields)
-                for t in rows]
-
-    def fields(f):
-        return [(fid, x * sx, y * sy, c) for fid, x, y, c in run.frame_fields.get(f, ())]
+    localises = run.localises
 
     def warnings_at(f):
         """(key, x, y) of every warning in frame f (key: target or field id; x None: a global alarm)."""
         if run.has_targets:
-            return [(t.id, t.x, t.y) for t in targets(f) if t.warning]
-        if localises:
-            return [(fid, x, y) for fid, x, y, c in fields(f) if c]
-        return [(None, None, None)] if run.frame_alarm.get(f) else []
+            return [(t.id, t.x, t.y) for t in run.frame_targets.get(f, ()) if t.warning]
+        return run.alarms_at(f)
 
     objects = []
     outside = 0
@@ -574,7 +536,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
             # contact it covers the view, and every target anywhere lies on it
             fits = width is None or truth.size is None or width <= max(truth.size)
             if run.has_targets:
-                on = [t for t in targets(f) if on_object(t.x, t.y, o, f, radius)]
+                on = [t for t in run.frame_targets.get(f, ()) if on_object(t.x, t.y, o, f, radius)]
                 if fits:
                     ids.update(t.id for t in on)
                 true = o.ttc_at(f, fps)
@@ -588,7 +550,7 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
                         rec["ttc_estimated"] += 1
                         rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
             elif localises and fits:
-                ids.update(fid for fid, x, y, _ in fields(f) if on_object(x, y, o, f, radius))
+                ids.update(fid for fid, x, y, _ in run.frame_fields.get(f, ()) if on_object(x, y, o, f, radius))
         rec["targets"] = len(ids) if (run.has_targets or localises) else None
         objects.append(rec)
 
@@ -648,7 +610,6 @@ def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -
     warned = [o for o in sobjs if o["warned"]]
     frames = sum(v["frames_scored"] for v in synth)
     per_k = (lambda n: round(1000.0 * n / frames, 3)) if frames else (lambda n: None)
-    causes = ("pass", "distractor", "background")
     s: dict[str, Any] = {
         "collision_objects": len(sobjs), "warned": len(warned),
         "collision_objects_outside": sum(v["collision_objects_outside"] for v in synth),
@@ -661,9 +622,9 @@ def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -
         "false_frames_per_1000": per_k(sum(v["false_frames"] for v in synth)),
         "false_episodes_per_1000": per_k(sum(v["false_episodes"] for v in synth)),
         "false_frames_per_1000_by_cause": {c: per_k(sum(v["false_frames_by_cause"].get(c, 0) for v in synth))
-                                           for c in causes},
+                                           for c in CAUSES},
         "false_episodes_per_1000_by_cause": {c: per_k(sum(v["false_episodes_by_cause"].get(c, 0) for v in synth))
-                                             for c in causes},
+                                             for c in CAUSES},
         "false_frames_pct": round(100.0 * sum(v["false_frames"] for v in synth) / frames, 3) if frames else None,
         "fragmentation": _mean(o["targets"] for o in sobjs if o["targets"] is not None),
     }
@@ -716,10 +677,7 @@ def _summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
              false_alarm_frames=sum(v["false_alarm_frames"] for v in obj_vids) if obj_vids else None,
              false_alarms_per_min=fa / obj_minutes if obj_vids and obj_minutes > 0 else None)
     clips = [v for v in vids if v["outcome"] is not None]
-    tp = sum(v["outcome"] == "TP" for v in clips)
-    fp = sum(v["outcome"] == "FP" for v in clips)
-    tn = sum(v["outcome"] == "TN" for v in clips)
-    fn = sum(v["outcome"] == "FN" for v in clips)
+    tp, fp, tn, fn = (sum(v["outcome"] == o for v in clips) for o in ("TP", "FP", "TN", "FN"))
     s.update(clips=len(clips), tp=tp, fp=fp, tn=tn, fn=fn,
              accuracy=(tp + tn) / len(clips) if clips else None,
              precision=tp / (tp + fp) if tp + fp else None,
@@ -954,24 +912,11 @@ class Evaluation:
 
     def to_markdown(self, details: bool = False) -> str:
         """The per-model comparison table(s); ``details`` adds the per-video table."""
-        parts = []
-        if any(s["objects"] or not s["clips"] for s in self.models.values()):
-            parts.append(self.object_table())
-        notes = self.notes()
-        if notes:
-            parts.append(notes)
-        clip = self.clip_table()
-        if clip:
-            parts.append(clip)
-        warn = self.warning_table()
-        if warn:
-            parts.append("Warnings (collision objects of 3-D truth):\n\n" + warn)
-        cw = self.clip_warning_table()
-        if cw:
-            parts.append("Warnings on labelled clips:\n\n" + cw)
-        if details:
-            parts.append(self.video_table())
-        return "\n\n".join(parts)
+        parts = [self.object_table()] if any(s["objects"] or not s["clips"] for s in self.models.values()) else []
+        warn, cw = self.warning_table(), self.clip_warning_table()
+        parts += [self.notes(), self.clip_table(), warn and "Warnings (collision objects of 3-D truth):\n\n" + warn,
+                  cw and "Warnings on labelled clips:\n\n" + cw, self.video_table() if details else ""]
+        return "\n\n".join(p for p in parts if p)
 
     def write(self, out) -> dict[str, Path]:
         """Write ``evaluation.md`` and ``evaluation.json`` into folder ``out``."""

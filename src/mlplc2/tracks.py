@@ -27,8 +27,7 @@ false warnings (the warning metrics, another question)
     before its contact; otherwise its cause is ``"pass"`` (on a pass-by object),
     ``"distractor"`` (on a receding, translating or static object) or ``"background"``.
 
-Coordinates are those of the ground truth (the video's own pixels); a Record made at another
-size is mapped with :meth:`Record.scaled`.
+Coordinates are those of the ground truth (the video's own pixels).
 """
 
 from __future__ import annotations
@@ -37,7 +36,7 @@ import json
 import math
 import tempfile
 from collections.abc import Iterable, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
@@ -132,7 +131,7 @@ class FieldTrack:
 
 @dataclass(frozen=True)
 class TargetRow:
-    """One target in one frame (video pixels; ground-truth pixels after :meth:`Record.scaled`)."""
+    """One target in one frame (video pixels)."""
 
     id: int
     x: float
@@ -229,35 +228,6 @@ class Record:
     def alarmed(self) -> list[FieldTrack]:
         """The fields that raised an alarm, in order of birth."""
         return [f for f in self.fields.values() if f.first_alarm_frame is not None]
-
-    def warnings_at(self, frame: int) -> list[TargetRow]:
-        """The warning targets of ``frame``."""
-        return [t for t in self.targets_at.get(frame, ()) if t.warning]
-
-    def warned(self, frame: int) -> bool:
-        """The model's warning this frame: any target warning (models with targets), else the alarm."""
-        if self.has_targets:
-            return any(t.warning for t in self.targets_at.get(frame, ()))
-        return bool(self.alarm.get(frame))
-
-    def scaled(self, sx: float, sy: float) -> "Record":
-        """A copy with every position and size multiplied by (sx, sy) (model -> truth pixels)."""
-        if sx == 1.0 and sy == 1.0:
-            return self
-        s = math.sqrt(sx * sy)
-
-        def row(t):
-            return None if t is None else replace(t, x=t.x * sx, y=t.y * sy,
-                                                  width=None if t.width is None else t.width * sx,
-                                                  height=None if t.height is None else t.height * sy)
-
-        fields_at = {f: [(i, x * sx, y * sy, r, c) for i, x, y, r, c in rows] for f, rows in self.fields_at.items()}
-        targets_at = {f: [row(t) for t in rows] for f, rows in self.targets_at.items()}
-        fields = {i: replace(ft, x=ft.x * sx, y=ft.y * sy, radius=ft.radius * s) for i, ft in self.fields.items()}
-        targets = {i: replace(tt, at_first_warning=row(tt.at_first_warning), last=row(tt.last))
-                   for i, tt in self.targets.items()}
-        size = None if self.size is None else (int(round(self.size[0] * sx)), int(round(self.size[1] * sy)))
-        return replace(self, fields_at=fields_at, targets_at=targets_at, fields=fields, targets=targets, size=size)
 
 
 class Recorder:
@@ -520,25 +490,18 @@ def warning_cause(x: float | None, y: float | None, frame: int, truth: VideoTrut
     def live(o):
         return o.collides and (o.contact_frame is None or frame <= o.contact_frame + tail)
 
-    for _, o in sorted(cands, key=lambda c: (not live(c[1]), c[0])):
-        if live(o):
-            return "true", o
-    for _, o in sorted(cands, key=lambda c: c[0]):
-        if o.kind == "pass":
-            return "pass", o
-    if cands:
-        return "distractor", min(cands, key=lambda c: c[0])[1]
+    # the nearest candidate of the first class that has one (min keeps the first of equals)
+    for verdict, of in (("true", live), ("pass", lambda o: o.kind == "pass"), ("distractor", lambda o: True)):
+        hits = [c for c in cands if of(c[1])]
+        if hits:
+            return verdict, min(hits, key=lambda c: c[0])[1]
     return "background", None
 
 
 def episodes(frames: Iterable[int]) -> int:
     """Number of runs of consecutive frames in ``frames``."""
-    n, prev = 0, None
-    for f in sorted(set(frames)):
-        if prev is None or f != prev + 1:
-            n += 1
-        prev = f
-    return n
+    frames = set(frames)
+    return sum(f - 1 not in frames for f in frames)
 
 
 def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RADIUS) -> list[dict]:

@@ -24,6 +24,8 @@ Every malformed field raises :class:`~mlplc2.InputValueError` naming it.
 
 from __future__ import annotations
 
+import bisect
+import functools
 import json
 import math
 from collections.abc import Mapping
@@ -173,19 +175,12 @@ class ObjectTruth:
             return t[0]
         if frame >= t[-1].frame:
             return t[-1]
-        lo, hi = 0, len(t) - 1
-        while hi - lo > 1:
-            mid = (lo + hi) // 2
-            if t[mid].frame <= frame:
-                lo = mid
-            else:
-                hi = mid
-        a, b = t[lo], t[hi]
+        hi = bisect.bisect_right(t, frame, key=lambda p: p.frame)
+        a, b = t[hi - 1], t[hi]
         if a.frame == frame:
             return a
         w = (frame - a.frame) / (b.frame - a.frame)
-        return TrackPoint(int(frame), a.x + w * (b.x - a.x), a.y + w * (b.y - a.y), _lerp(a.width, b.width, w),
-                          _lerp(a.height, b.height, w), _lerp(a.ttc_s, b.ttc_s, w), _lerp(a.miss, b.miss, w))
+        return TrackPoint(int(frame), *(_lerp(u, v, w) for u, v in zip(a[1:], b[1:])))
 
     def center_at(self, frame: float) -> tuple[float, float] | None:
         """Centre ``(x, y)`` at ``frame``: the track (interpolated) if there is one, else
@@ -267,9 +262,8 @@ class ObjectTruth:
 
 
 def _used_columns(p: TrackPoint) -> int:
-    vals = [getattr(p, c) for c in TRACK_COLUMNS]
-    n = len(vals)
-    while n > 3 and vals[n - 1] is None:
+    n = len(p)
+    while n > 3 and p[n - 1] is None:
         n -= 1
     return n
 
@@ -315,26 +309,17 @@ class VideoTruth:
     def to_dict(self) -> dict[str, Any]:
         """The JSON entry of this video (the keys that are set)."""
         out: dict[str, Any] = {}
-        if self.size is not None:
-            out["size"] = list(self.size)
-        if self.frames is not None:
-            out["frames"] = int(self.frames)
-        if self.fps is not None:
-            out["fps"] = float(self.fps)
-        if self.camera is not None:
-            out["camera"] = dict(self.camera)
-        if self.background is not None:
-            out["background"] = self.background
-        if self.label is not None:
-            out["label"] = self.label
+        for name, as_json in (("size", list), ("frames", int), ("fps", float), ("camera", dict), ("background", str),
+                              ("label", str)):
+            if getattr(self, name) is not None:
+                out[name] = as_json(getattr(self, name))
         for name in ("contact_frame", "danger_onset_frame", "first_visible_frame"):
             v = getattr(self, name)
             if v is not None or (self.label is not None and name == "contact_frame"):
                 out[name] = None if v is None else _num(v)
             r = self.ranges.get(name)
             if r is not None:
-                out[f"{name.removesuffix('_frame')}_range" if name != "contact_frame" else "contact_frame_range"] = \
-                    [_num(r[0]), _num(r[1])]
+                out[_RANGE_NAMES[name]] = [_num(r[0]), _num(r[1])]
         if self.collider is not None:
             out["track"] = [[p.frame, _num(p.x), _num(p.y)] + ([] if p.width is None else [_num(p.width)])
                             for p in self.collider.track]
@@ -344,7 +329,7 @@ class VideoTruth:
             out["events"] = [dict(e) for e in self.events]
         for k, v in self.extra.items():
             out.setdefault(k, v)
-        if self.objects or self.label is None:
+        if self.object_level:
             out["objects"] = [o.to_dict() for o in self.objects]
         return out
 
@@ -352,6 +337,7 @@ class VideoTruth:
 #: Range keys of the clip-level format and the frame each bounds.
 _RANGE_KEYS = {"contact_frame_range": "contact_frame", "danger_onset_range": "danger_onset_frame",
                "first_visible_range": "first_visible_frame"}
+_RANGE_NAMES = {v: k for k, v in _RANGE_KEYS.items()}
 
 
 class GroundTruth(Mapping):
@@ -402,12 +388,10 @@ class GroundTruth(Mapping):
     def to_dict(self) -> dict[str, Any]:
         """``{"videos": {key: entry}}`` (object level) and ``{"clips": {...}}`` (clip level)."""
         out: dict[str, Any] = {}
-        videos = {k: v.to_dict() for k, v in self._videos.items() if v.label is None or v.objects}
-        clips = {k: v.to_dict() for k, v in self._videos.items() if not (v.label is None or v.objects)}
-        if videos:
-            out["videos"] = videos
-        if clips:
-            out["clips"] = clips
+        for top, object_level in (("videos", True), ("clips", False)):
+            entries = {k: v.to_dict() for k, v in self._videos.items() if v.object_level == object_level}
+            if entries:
+                out[top] = entries
         return out
 
 
@@ -582,10 +566,8 @@ def parse_entry(key: str, entry, where: str) -> VideoTruth:
         if label != "collision":
             raise _bad(f"{where}.{given}", f"only a clip labelled 'collision' has a {given.replace('_', ' ')}")
         contact = _int(contact, f"{where}.{given}", 0)
-    onset = entry.get("danger_onset_frame")
-    onset = None if onset is None else _int(onset, f"{where}.danger_onset_frame", 0)
-    visible = entry.get("first_visible_frame")
-    visible = None if visible is None else _int(visible, f"{where}.first_visible_frame", 0)
+    marks = {k: None if entry.get(k) is None else float(_int(entry[k], f"{where}.{k}", 0))
+             for k in ("danger_onset_frame", "first_visible_frame")}
     ranges = {}
     for rk, fk in _RANGE_KEYS.items():
         if entry.get(rk) is not None:
@@ -615,14 +597,13 @@ def parse_entry(key: str, entry, where: str) -> VideoTruth:
     extra = {k: v for k, v in entry.items() if k not in _ENTRY_KEYS and not (collider is not None and k == "object")}
     return VideoTruth(key=key, size=size, frames=frames, fps=fps, objects=objs, label=label,
                       contact_frame=None if contact is None else float(contact),
-                      danger_onset_frame=None if onset is None else float(onset),
-                      first_visible_frame=None if visible is None else float(visible), ranges=ranges,
+                      ranges=ranges, **marks,
                       collider=collider, events=tuple(dict(e) for e in events),
                       camera=None if camera is None else dict(camera), background=background, extra=extra)
 
 
 def read_json(path):
-    """The parsed content of the ground-truth file ``path`` (one-line errors)."""
+    """The parsed content of the ground-truth (or other JSON) file ``path`` (one-line errors)."""
     path = Path(path)
     if path.is_dir():
         hint = " (did you mean its ground_truth.json?)" if (path / "ground_truth.json").is_file() else ""
@@ -640,11 +621,8 @@ def parse(data, source: str = "<dict>") -> GroundTruth:
     if not isinstance(data, Mapping):
         raise InputValueError(f"{source}: ground truth must be a JSON object, got {type(data).__name__}")
     parsed: dict[str, VideoTruth] = {}
-    found = False
-    for top in ("videos", "clips"):
-        if top not in data:
-            continue
-        found = True
+    tops = [top for top in ("videos", "clips") if top in data]
+    for top in tops:
         videos = data[top]
         if not isinstance(videos, Mapping) or not videos:
             raise InputValueError(f"{source}: '{top}' must be a non-empty object {{name: entry}}")
@@ -652,7 +630,7 @@ def parse(data, source: str = "<dict>") -> GroundTruth:
             if str(k) in parsed:
                 raise InputValueError(f"{source}: {k!r} is both in 'videos' and in 'clips'")
             parsed[str(k)] = parse_entry(str(k), v, f"{source}: {top}[{k!r}]")
-    if not found:
+    if not tops:
         key = str(data.get("video") or "*")
         parsed = {key: parse_entry(key, data, source)}
     return GroundTruth(parsed, source)
@@ -672,11 +650,7 @@ def load(gt) -> GroundTruth:
     if isinstance(gt, (list, tuple)):
         if not gt:
             raise InputValueError("no ground truth given")
-        parts = [load(g) for g in gt]
-        out = parts[0]
-        for p in parts[1:]:
-            out = out.merged(p)
-        return out
+        return functools.reduce(GroundTruth.merged, [load(g) for g in gt])
     if isinstance(gt, (str, Path)):
         return parse(read_json(gt), str(gt))
     return parse(gt)
