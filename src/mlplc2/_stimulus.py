@@ -15,8 +15,8 @@ import numpy as np
 from ._validation import InputValueError
 from .truth import ObjectTruth, VideoTruth
 
-__all__ = ["Stimulus", "ApproachStimulus", "MAX_STIMULUS_BYTES", "OPTICS_BLUR_PX", "check_count", "check_number",
-           "check_size", "focal_length_px", "plain_level", "procedural_background", "blur"]
+__all__ = ["Stimulus", "ApproachStimulus", "MAX_STIMULUS_BYTES", "OPTICS_BLUR_PX", "check_choice", "check_count",
+           "check_number", "check_size", "focal_length_px", "plain_level", "procedural_background", "blur"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -102,6 +102,10 @@ class ApproachStimulus(Stimulus):
         return dataclasses.replace(super().truth(), camera=dict(self.camera or {}), background=self.background)
 
 
+def check_choice(value, name: str, options: Sequence[str]) -> str:
+    if not isinstance(value, str) or value not in options:
+        raise InputValueError(f"{name} must be one of {', '.join(options)}, got {value!r}")
+    return value
 
 
 def check_count(value, name: str, minimum: int = 0) -> int:

@@ -78,8 +78,8 @@ from typing import Any, Sequence
 import numpy as np
 
 from ._validation import (InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals)
-from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, check_size, focal_length_px, plain_level,
-                        procedural_background)
+from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, check_choice, check_size, focal_length_px,
+                        plain_level, procedural_background)
 from .truth import ObjectTruth, TrackPoint
 
 __all__ = [
@@ -143,12 +143,6 @@ _PANORAMA_MARGIN = 4
 # Objects
 # ---------------------------------------------------------------------------
 
-def _choice(value, name: str, options: Sequence[str]) -> str:
-    if not isinstance(value, str) or value not in options:
-        raise InputValueError(f"{name} must be one of {', '.join(options)}, got {value!r}")
-    return value
-
-
 @dataclass(frozen=True)
 class ApproachObject:
     """One flat object of an :func:`approach` scene.
@@ -187,9 +181,9 @@ class ApproachObject:
     seed: int | None = None
 
     def __post_init__(self):
-        _choice(self.kind, "kind", APPROACH_KINDS)
-        _choice(self.shape, "shape", APPROACH_SHAPES)
-        _choice(self.appearance, "appearance", APPROACH_APPEARANCES)
+        check_choice(self.kind, "kind", APPROACH_KINDS)
+        check_choice(self.shape, "shape", APPROACH_SHAPES)
+        check_choice(self.appearance, "appearance", APPROACH_APPEARANCES)
         object.__setattr__(self, "width_m", check_real(self.width_m, "width_m", positive=True))
         start = check_reals(self.start, "start", 3, "X, Y, Z in m")
         if not start[2] > 0:
@@ -418,11 +412,10 @@ class _Geometry:
     """Per-frame camera-frame pose, homography and image extent of one object."""
 
     def __init__(self, obj: ApproachObject, cam: _Camera):
-        n = cam.n
         self.obj = obj
         self.r = obj.width_m / 2.0
         k0 = obj.onset
-        self.frames = np.arange(k0, n)
+        self.frames = np.arange(k0, cam.n)
         tau = (self.frames - k0) / cam.fps
         ego = cam.speed if cam.motion == "forward" else 0.0
         self.v_rel = np.array(obj.velocity) - np.array([0.0, 0.0, ego])
@@ -509,9 +502,7 @@ class _Geometry:
             ttc = float((self.contact - k) / fps) if approaching else None
             rows.append(TrackPoint(k, float(self.x[j]), float(self.y[j]), _opt(self.width[j]), _opt(self.height[j]),
                                    ttc, self.miss))
-        span = None
-        if approaching and rows:
-            span = (rows[0].frame, rows[-1].frame + 1)
+        span = (rows[0].frame, rows[-1].frame + 1) if approaching and rows else None
         return ObjectTruth(id=oid, kind=obj.kind, polarity=obj.appearance, approach=span, track=tuple(rows),
                            contact_frame=self.contact, miss=self.miss,
                            extra={"shape": obj.shape, "width_m": obj.width_m, "onset": int(obj.onset),
@@ -837,8 +828,8 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     fps = check_fps(fps)
     focal_length_px(w, hfov_deg)                  # checks hfov_deg
     hfov = float(hfov_deg)
-    background = _choice(background, "background", APPROACH_BACKGROUNDS)
-    camera = _choice(camera, "camera", CAMERA_MOTIONS)
+    background = check_choice(background, "background", APPROACH_BACKGROUNDS)
+    camera = check_choice(camera, "camera", CAMERA_MOTIONS)
     speed = check_real(camera_speed, "camera_speed")
     if camera == "static" and speed != 0:
         raise InputValueError(f"camera_speed must be 0 for a static camera, got {camera_speed!r}")
@@ -976,10 +967,10 @@ def approach_scene(*, kind: str = "collision", n_objects: int | None = None, app
     -------
     ApproachStimulus
     """
-    kind = _choice(kind, "kind", APPROACH_KINDS + ("mixed",))
+    kind = check_choice(kind, "kind", APPROACH_KINDS + ("mixed",))
     fps = check_fps(fps)
     count = (3 if kind == "mixed" else 1) if n_objects is None else check_int(n_objects, "n_objects", minimum=1)
-    camera = _choice(camera, "camera", CAMERA_MOTIONS)
+    camera = check_choice(camera, "camera", CAMERA_MOTIONS)
     cam_speed = DEFAULT_CAMERA_SPEED[camera] if camera_speed is None else check_real(camera_speed, "camera_speed")
     ego = cam_speed if camera == "forward" else 0.0
     w, h = check_size(size)
@@ -1061,7 +1052,7 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     ApproachStimulus
     """
     seed = check_int(seed, "seed")
-    camera = _choice(camera, "camera", CAMERA_MOTIONS)
+    camera = check_choice(camera, "camera", CAMERA_MOTIONS)
     cam_speed = DEFAULT_CAMERA_SPEED[camera] if camera_speed is None else check_real(camera_speed, "camera_speed")
     ego = cam_speed if camera == "forward" else 0.0
     w, h = check_size(size)
@@ -1071,7 +1062,7 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     rng = np.random.default_rng(_seed(seed, 6))
     count = int(rng.integers(1, 4)) if n_objects is None else check_int(n_objects, "n_objects", minimum=1)
     if kinds is not None:
-        kinds = [_choice(k, "kinds", APPROACH_KINDS) for k in kinds]
+        kinds = [check_choice(k, "kinds", APPROACH_KINDS) for k in kinds]
         if not kinds or (n_objects is not None and len(kinds) != count):
             raise InputValueError(f"kinds must name one kind per object (n_objects={count}), got {kinds!r}")
         count = len(kinds)

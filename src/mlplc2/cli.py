@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 from ._signals import interrupts
 from ._validation import InputError, InputValueError
+from .io import parse_resize
 from .models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
@@ -152,9 +153,17 @@ def _target_options(args) -> dict:
     return options
 
 
-def _add_run(p: argparse.ArgumentParser) -> None:
-    from .models.base import available_models
+def _video_run_options(args) -> dict:
+    """The ``run_options`` of ``mlplc2 evaluate`` and ``batch``: ``--resize``, the repeat and the warning options."""
+    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
+        options["repeat_threshold"] = _repeat_threshold(args)
+    if _target_options(args):  # --horizon / --max-miss: part of each task's options
+        options["target_params"] = _target_options(args)
+    return options
 
+
+def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", help="video file (AVI, MP4, ...), folder of images, glob pattern "
                                   "('frames/*.png', quoted) or camera index (0, 1, ...)")
     p.add_argument("--model", "-m", action="append", metavar="NAME",
@@ -192,7 +201,6 @@ def _add_run(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_run(args) -> int:
-    from .io import parse_resize
     from .runner import RunInterrupted, TruncatedInputWarning, run
 
     models = resolve_names(args.model or ["mlplc2"], what="--model")
@@ -258,14 +266,9 @@ def _print_run_summary(args, result) -> None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     _say(args, *lines)
     held = max(result.repeated.values(), default=0)
-    if held and not getattr(args, "skip_repeats", False) and getattr(args, "repeat_level", None) is None:
-        _note(args, f"the video repeats its frames (duplicated frames): the models held their output on "
-                    f"{held} of {result.n_frames} frames (--every-frame processes every frame)")
-
-
-def _note(args, message: str) -> None:
-    if not getattr(args, "quiet", False):
-        print(f"{PROG}: note: {message}", file=sys.stderr)
+    if held and not (args.quiet or args.skip_repeats or args.repeat_level is not None):
+        print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
+              f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------
@@ -494,7 +497,6 @@ def _cmd_stimulus(args) -> int:
     import re
 
     from . import stimuli
-    from .stimuli import write as write_stimulus
 
     if args.name not in stimuli.NAMES:
         raise InputValueError(f"unknown stimulus {args.name!r}; choose from {', '.join(stimuli.NAMES)} "
@@ -504,7 +506,7 @@ def _cmd_stimulus(args) -> int:
     try:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
-            video, gt = write_stimulus(args.name, args.out, gt=args.gt, **options)
+            video, gt = stimuli.write(args.name, args.out, gt=args.gt, **options)
     except InputValueError as exc:
         # the generator names its parameters in Python: name the options given as written here
         msg = new = str(exc)
@@ -587,15 +589,9 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
 
 def _cmd_evaluate(args) -> int:
     from .evaluate import EvaluationWarning, evaluate
-    from .io import parse_resize
 
     models = resolve_names(args.model, what="--model") if args.model else None
-    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
-        options["repeat_threshold"] = _repeat_threshold(args)
-    target = _target_options(args)  # --horizon / --max-miss
-    if target:
-        options["target_params"] = target
+    options = _video_run_options(args)
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)  # reported below, one line each
         ev = evaluate(args.inputs, args.gt, models=models, match_radius=args.match_radius, tail=args.tail,
@@ -638,15 +634,9 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
 
 def _cmd_batch(args) -> int:
     from .batch import BatchInterrupted, batch
-    from .io import parse_resize
 
     models = resolve_names(args.model or ["mlplc2"], what="--model")
-    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
-    if _repeat_threshold(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
-        options["repeat_threshold"] = _repeat_threshold(args)
-    target = _target_options(args)  # --horizon / --max-miss: part of each task's options
-    if target:
-        options["target_params"] = target
+    options = _video_run_options(args)
     try:
         res = batch(args.inputs, args.out, models=models, params=args.params, sweep=args.sweep,
                     scheduler=args.scheduler, workers=args.workers, run_options=options, plot=args.plot,
@@ -853,12 +843,6 @@ def build_parser() -> argparse.ArgumentParser:
     return parser
 
 
-def _oserror_line(exc: OSError) -> str:
-    if exc.strerror and exc.filename:
-        return f"{exc.filename}: {exc.strerror}"
-    return str(exc) or type(exc).__name__
-
-
 def _one_line(text: str) -> str:
     return " ".join(text.split()) or "unknown error"
 
@@ -912,7 +896,8 @@ def _main(argv: list[str] | None) -> int:
         print(f"{PROG}: error: {_one_line(str(exc))}", file=sys.stderr)
         return EXIT_INPUT
     except OSError as exc:
-        print(f"{PROG}: error: {_one_line(_oserror_line(exc))}", file=sys.stderr)
+        line = f"{exc.filename}: {exc.strerror}" if exc.strerror and exc.filename else str(exc) or type(exc).__name__
+        print(f"{PROG}: error: {_one_line(line)}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)

@@ -19,6 +19,7 @@ missing or its FFmpeg has no H.264 encoder, MP4 files are written by OpenCV
 from __future__ import annotations
 
 import glob as _glob
+import itertools
 import logging
 import math
 import os
@@ -27,6 +28,7 @@ import re
 import threading
 import warnings
 from collections.abc import Iterable, Iterator
+from fractions import Fraction
 from pathlib import Path
 
 import numpy as np
@@ -123,7 +125,7 @@ def _to_rgb(frame: np.ndarray) -> np.ndarray:
     if frame.dtype != np.uint8:
         frame = np.clip(frame, 0, 255).astype(np.uint8)
     if frame.ndim == 2:
-        return np.repeat(frame[:, :, None], 3, axis=2)
+        frame = frame[:, :, None]
     if frame.ndim == 3 and frame.shape[2] == 1:
         return np.repeat(frame, 3, axis=2)
     if frame.ndim == 3 and frame.shape[2] == 4:
@@ -134,10 +136,8 @@ def _to_rgb(frame: np.ndarray) -> np.ndarray:
 
 
 def is_camera(source) -> bool:
-    if isinstance(source, bool):
-        return False
     if isinstance(source, (int, np.integer)):
-        return True
+        return not isinstance(source, bool)
     return isinstance(source, str) and source.strip().isdigit() and not os.path.exists(source)
 
 
@@ -155,11 +155,13 @@ class _Decoder:
     def skip(self, n: int) -> int:
         """Skip ``n`` frames; return how many were really skipped."""
         done = 0
-        for _ in range(n):
-            if self.read() is None:
-                break
+        while done < n and self.grab():
             done += 1
         return done
+
+    def grab(self) -> bool:
+        """Skip one frame; False at the end."""
+        return self.read() is not None
 
     def read(self) -> np.ndarray | None:  # pragma: no cover - abstract
         raise NotImplementedError
@@ -174,7 +176,6 @@ class _OpenCVDecoder(_Decoder):
 
         self._cv2 = cv2
         self.name = name
-        self.camera = camera
         self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
@@ -187,13 +188,8 @@ class _OpenCVDecoder(_Decoder):
         self.frame_count = int(count) if not camera and count and count > 0 else None
         self.size = (int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
 
-    def skip(self, n: int) -> int:
-        done = 0
-        for _ in range(n):
-            if not self.cap.grab():
-                break
-            done += 1
-        return done
+    def grab(self) -> bool:
+        return self.cap.grab()
 
     def read(self):
         ok, frame = self.cap.read()
@@ -252,7 +248,6 @@ class _ImageDecoder(_Decoder):
         self.name = name
         self.files = files
         self.frame_count = len(files)
-        self.fps = None
         self._i = 0
         self.failed: str | None = None
         first = cv2.imread(files[0], cv2.IMREAD_COLOR)
@@ -309,12 +304,10 @@ def expand_inputs(inputs) -> list[str]:
             out.extend(matches)
         else:
             raise InputValueError(f"{s}: no such file or folder")
-    seen, unique = set(), []
+    first: dict[str, str] = {}  # each file once, where it first appears
     for s in out:
-        key = os.path.abspath(s)
-        if key not in seen:
-            seen.add(key)
-            unique.append(s)
+        first.setdefault(os.path.abspath(s), s)
+    unique = list(first.values())
     if not unique:
         raise InputValueError("no input videos")
     return unique
@@ -713,8 +706,7 @@ class VideoWriter:
             self.enc_size = (w + w % 2, h + h % 2)
             self._container = av.open(str(self.tmp), "w", format="mp4",
                                       options={"movflags": "+faststart"})
-            rate = _rate(self.fps)
-            self._stream = self._container.add_stream("libx264", rate=rate)
+            self._stream = self._container.add_stream("libx264", rate=Fraction(self.fps).limit_denominator(1001))
             self._stream.width, self._stream.height = self.enc_size
             self._stream.pix_fmt = "yuv420p"
             self._stream.options = {"crf": str(quality), "preset": "veryfast"}
@@ -804,12 +796,6 @@ class VideoWriter:
             self.abort()
 
 
-def _rate(fps: float):
-    from fractions import Fraction
-
-    return Fraction(fps).limit_denominator(1001)
-
-
 def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int, int] | None = None, *,
                 backend: str | None = None, quality: int = 23) -> Path:
     """Write ``frames`` (grey or RGB uint8) to ``path`` atomically; see :class:`VideoWriter`
@@ -825,16 +811,11 @@ def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int,
         except StopIteration:
             raise InputValueError(f"{path}: no frames to write") from None
         size = (first.shape[1], first.shape[0])
-        it = _chain_first(first, it)
+        it = itertools.chain([first], it)
     with VideoWriter(path, fps, size, backend=backend, quality=quality) as writer:
         for frame in it:
             writer.write(frame)
     return writer.path
-
-
-def _chain_first(first, rest):
-    yield first
-    yield from rest
 
 
 def check_video_output(path) -> Path:

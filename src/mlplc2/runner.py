@@ -42,12 +42,13 @@ from pathlib import Path
 from typing import Any
 
 from ._signals import interrupts
-from ._validation import InputTypeError, InputValueError
+from ._validation import InputTypeError, InputValueError, as_gray
 from ._files import write_json
-from .io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
-from .models.base import Model, check_repeat_threshold, get_model, resolve_names
+from .io import FrameSource, TruncatedInputWarning, VideoWriter, is_camera, open_source
+from .models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
+                          looks_duplicated, resolve_names)
 from .plots import DRAW_FIELDS
-from .targets import TargetParams
+from .targets import TargetParams, check_hfov
 from .tracks import Recorder, match_fields, response_rows
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
@@ -145,11 +146,7 @@ class RunResult:
             df = pd.read_csv(path)
         else:
             df = pd.DataFrame(self.rows, columns=list(COLUMNS))
-        df["field_id"] = df["field_id"].astype("Int64")
-        df["x"] = df["x"].astype("float64")
-        df["y"] = df["y"].astype("float64")
-        df["collision"] = df["collision"].astype(bool)
-        return df
+        return df.astype({"field_id": "Int64", "x": "float64", "y": "float64", "collision": bool})
 
     def summary(self) -> dict[str, Any]:
         """The content of ``fields.json``."""
@@ -174,8 +171,6 @@ class RunResult:
 
 def default_out_dir(source) -> Path:
     """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``)."""
-    from .io import is_camera
-
     if is_camera(source):
         return Path.cwd() / f"camera{int(source)}_mlplc2"
     p = Path(source)
@@ -218,8 +213,6 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold="m
             model = m
             model.reset()
             if hfov_deg is not None and hasattr(model, "hfov_deg"):
-                from .targets import check_hfov
-
                 model.hfov_deg = check_hfov(hfov_deg)
             if repeat_threshold != "model default":
                 model.repeat_threshold = check_repeat_threshold(repeat_threshold)
@@ -249,16 +242,9 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
     need = max(m.min_size for m in models)
     w, h = src.out_size
     if w < need or h < need:
-        from ._validation import InputValueError
-
         resized = " after resizing" if src.out_size != src.size else ""
         raise InputValueError(f"{src.name}: frames are {w}x{h} pixels{resized}; "
                               f"the models need at least {need}x{need}")
-
-
-def _primary(models: Sequence[Model]) -> int | None:
-    """Index of the first model with fields (the one drawn on the video)."""
-    return next((i for i, m in enumerate(models) if m.has_fields), None)
 
 
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, fps=None, resize=None,
@@ -367,11 +353,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         raise
     names = [m.name for m in built]
     result = RunResult(source=str(source), models=names, fps=src.fps, size=src.size,
-                       model_size=src.out_size, start=src.start,
+                       model_size=src.out_size, start=src.start, duplicated=duplicated,
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
-    result.alarms = {name: {"count": 0, "first": None} for name in names}
-    result.duplicated = duplicated
     out_dir = None
     if out is not False:
         out_dir = Path(out) if out is not None else default_out_dir(source)
@@ -383,7 +367,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
             if out_dir.exists() and not out_dir.is_dir():
                 raise InputValueError(f"{out_dir}: is a file, expected a folder for the outputs")
             out_dir.mkdir(parents=True, exist_ok=True)
-            _remove_stale_outputs(out_dir)
+            for p in (out_dir / name for name in RUN_OUTPUTS):  # an earlier run's: never mix two runs
+                if p.is_file() or p.is_symlink():
+                    p.unlink()
         except BaseException:
             src.close()
             raise
@@ -402,9 +388,6 @@ def _prescan_repeats(source, models, src: FrameSource, **options) -> bool:
     measured at the models' working size). If so those models hold duplicates from the first frame
     on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera is not scanned."""
     import cv2
-
-    from ._validation import as_gray
-    from .models.base import REPEAT_THRESHOLD, looks_duplicated
 
     auto = [m for m in models if m.repeat_threshold == "auto"]
     if not auto or src.kind == "camera":
@@ -432,17 +415,30 @@ def _prescan_repeats(source, models, src: FrameSource, **options) -> bool:
     return True
 
 
-#: The files a run writes into its output folder (all of them, whatever the options).
+#: The files a run writes into its output folder (all of them, whatever the options). :func:`run`
+#: deletes those of an earlier run first, so that the folder never mixes two runs (e.g. an old
+#: ``annotated.mp4`` beside new results).
 RUN_OUTPUTS = ("responses.csv", "targets.csv", "fields.json", "responses.png", "annotated.mp4")
 
 
-def _remove_stale_outputs(out_dir: Path) -> None:
-    """Delete the outputs of an earlier run in ``out_dir`` (:data:`RUN_OUTPUTS` only), so that
-    the folder never mixes two runs (e.g. an old ``annotated.mp4`` beside new results)."""
-    for name in RUN_OUTPUTS:
-        p = out_dir / name
-        if p.is_file() or p.is_symlink():
-            p.unlink()
+class _CsvFile:
+    """A CSV file of dict rows, header first; :meth:`write` makes one ``write()`` per frame, then
+    flushes: the file holds whole frames only."""
+
+    def __init__(self, path: Path, columns: Sequence[str]):
+        self.path = path
+        self.file = open(path, "w", newline="", buffering=1, encoding="utf-8")
+        self._buf = io.StringIO()
+        self._writer = csv.DictWriter(self._buf, fieldnames=columns, lineterminator="\n")
+        self._writer.writeheader()
+        self.write([])
+
+    def write(self, rows: list[dict]) -> None:
+        self._writer.writerows(rows)
+        self.file.write(self._buf.getvalue())
+        self.file.flush()
+        self._buf.seek(0)
+        self._buf.truncate()
 
 
 def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
@@ -451,10 +447,9 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
 
     recorder = Recorder(built, fps=src.fps, source=str(src.name), size=src.size, offset=src.start,
                         to_input=src.to_input, series=False, spill=not keep_rows)
-    primary = _primary(built)
+    primary = next((i for i, m in enumerate(built) if m.has_fields), None)  # the model drawn on the video
     field_shape = getattr(built[primary].params, "field_shape", "square") if primary is not None else "square"
-    csv_file = writer = vw = None
-    tcsv_file = twriter = None
+    responses = targets = vw = None
     interrupted = False
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
@@ -463,23 +458,11 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
         t0 = time.perf_counter()
         try:
             if out_dir is not None:
-                csv_path = out_dir / "responses.csv"
-                csv_file = open(csv_path, "w", newline="", buffering=1, encoding="utf-8")
-                buf = io.StringIO()
-                writer = csv.DictWriter(buf, fieldnames=COLUMNS, lineterminator="\n")
-                writer.writeheader()
-                csv_file.write(buf.getvalue())
-                csv_file.flush()
-                result.files["responses.csv"] = csv_path
+                responses = _CsvFile(out_dir / "responses.csv", COLUMNS)
+                result.files["responses.csv"] = responses.path
                 if any(m.has_targets for m in built):
-                    tpath = out_dir / "targets.csv"
-                    tcsv_file = open(tpath, "w", newline="", buffering=1, encoding="utf-8")
-                    tbuf = io.StringIO()
-                    twriter = csv.DictWriter(tbuf, fieldnames=TARGET_COLUMNS, lineterminator="\n")
-                    twriter.writeheader()
-                    tcsv_file.write(tbuf.getvalue())
-                    tcsv_file.flush()
-                    result.files["targets.csv"] = tpath
+                    targets = _CsvFile(out_dir / "targets.csv", TARGET_COLUMNS)
+                    result.files["targets.csv"] = targets.path
                 if video:
                     vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
             bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
@@ -491,9 +474,8 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                 index, frame = item[0], item[1]
                 outputs = [m.step(frame) for m in built]
                 time_s = round(index / fps, 6)
-                frame_rows = []
-                for name, out in zip(names, outputs):
-                    frame_rows.extend(response_rows(index, time_s, name, out, to_input))
+                frame_rows = [row for name, out in zip(names, outputs)
+                              for row in response_rows(index, time_s, name, out, to_input)]
                 if vw is not None:
                     from .plots import annotate_frame
 
@@ -506,19 +488,10 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                         result.repeated[name] = result.repeated.get(name, 0) + 1
                     target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                        for t in recorder.update(index, name, out))
-                if twriter is not None and target_rows:
-                    tbuf.seek(0)
-                    tbuf.truncate()
-                    twriter.writerows(target_rows)
-                    tcsv_file.write(tbuf.getvalue())
-                    tcsv_file.flush()
-                if writer is not None:
-                    # One write() per frame, then flush: the file holds whole frames only.
-                    buf.seek(0)
-                    buf.truncate()
-                    writer.writerows(frame_rows)
-                    csv_file.write(buf.getvalue())
-                    csv_file.flush()
+                if targets is not None and target_rows:
+                    targets.write(target_rows)
+                if responses is not None:
+                    responses.write(frame_rows)
                 if keep_rows:
                     result.targets.extend(target_rows)
                     result.rows.extend(frame_rows)
@@ -534,10 +507,9 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
             result.seconds = time.perf_counter() - t0
             if bar is not None:
                 bar.close()
-            if csv_file is not None:
-                csv_file.close()
-            if tcsv_file is not None:
-                tcsv_file.close()
+            for f in (responses, targets):
+                if f is not None:
+                    f.file.close()
             src.close()
 
         result.interrupted = interrupted
@@ -616,13 +588,11 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     the mLPLC2 field that stands for it and the distance in pixels.
     """
     from . import stimuli
-    from .models.base import available_models
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)
     video_path, gt_path = stimuli.write(scene, out / "demo.mp4")
-    with open(gt_path, encoding="utf-8") as f:
-        truth = json.load(f)
+    truth = json.loads(gt_path.read_text(encoding="utf-8"))
     names = [m for m in DEMO_MODELS if m in available_models()]
     res = run(video_path, names, out=out / "demo_mlplc2", video=video, quiet=quiet, progress=progress)
     return DemoResult(res, truth, video_path, match_fields(res.fields.get("mlplc2", []), truth))

@@ -76,8 +76,8 @@ from typing import Any, Callable, Sequence
 import numpy as np
 
 from ._validation import InputValueError, as_gray, check_fps
-from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, Stimulus, check_count, check_number, check_size,
-                        focal_length_px, plain_level, procedural_background)
+from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, Stimulus, check_choice, check_count, check_number,
+                        check_size, focal_length_px, plain_level, procedural_background)
 from .approach import ApproachObject, ObjectTrack, approach, approach_scene, random_scene
 from .truth import ObjectTruth
 
@@ -129,11 +129,6 @@ FOUR_PHASE_CENTERS: tuple[tuple[tuple[float, float], ...], ...] = (
 SIX_OBJECT_CENTERS: tuple[tuple[float, float], ...] = (
     (240.0, 60.0), (80.0, 120.0), (192.0, 180.0), (80.0, 60.0), (240.0, 120.0), (128.0, 180.0))
 SIX_OBJECT_ONSETS: tuple[int, ...] = (5, 15, 25, 45, 55, 65)
-
-
-# ---------------------------------------------------------------------------
-# Result types
-# ---------------------------------------------------------------------------
 
 
 @dataclass(frozen=True)
@@ -204,27 +199,13 @@ class SceneObject:
 # ---------------------------------------------------------------------------
 
 
-def _check_polarity(polarity) -> str:
-    if polarity not in _POLARITIES:
-        raise InputValueError(f"polarity must be one of {', '.join(_POLARITIES)}, got {polarity!r}")
-    return polarity
-
-
-def _edges(center: float, side: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
-    """First and one-past-last pixel index of squares of ``side`` centred at ``center``."""
-    side = np.asarray(side, dtype=np.float64)
-    lo = np.floor(center - side / 2.0 + 0.5)
-    hi = np.floor(center + side / 2.0 + 0.5)
-    return lo, hi
-
-
 def _draw_square(frame: np.ndarray, center: tuple[float, float], side: float, level: int) -> None:
-    """Fill a square (in place) on one ``(H, W)`` frame, clipped to the frame."""
+    """Fill a square (in place) on one ``(H, W)`` frame, clipped to the frame (edges as in the
+    module docstring, "Square geometry")."""
     if side <= 0:
         return
     h, w = frame.shape
-    x0, x1 = _edges(center[0], side)
-    y0, y1 = _edges(center[1], side)
+    x0, x1, y0, y1 = (np.floor(c + d * side / 2.0 + 0.5) for c in center for d in (-1, 1))
     x0, x1 = int(max(x0, 0)), int(min(x1, w))
     y0, y1 = int(max(y0, 0)), int(min(y1, h))
     if x1 > x0 and y1 > y0:
@@ -340,10 +321,7 @@ def basic(name: str, *, size: int = 100, frames: int = 50, fps: float = 30.0) ->
 
     Notes
     -----
-    See the module docstring for the exact geometry (which follows the paper's
-    video files: approach sides ``1 + 2t``, recede sides ``1 + 2(T - t)``,
-    translating bar 21x41 px whose left edge is at ``2t``, grating of period
-    40 px moving right 1 px/frame).
+    The exact geometry, that of the paper's video files, is in the module docstring.
     """
     if name not in BASIC_NAMES:
         raise InputValueError(f"unknown basic stimulus {name!r}; valid names: {', '.join(BASIC_NAMES)}")
@@ -419,34 +397,31 @@ def _object_sides(obj: SceneObject, n: int, fps: float, focal: float) -> tuple[n
                               recede=min(obj.recede, max(0, n - h1)))
     if obj.looming == "linear":
         approach_sides = obj.start_side + obj.growth * np.arange(obj.approach)
-        if obj.peak_side is not None:
-            peak = float(obj.peak_side)
-        elif obj.approach > 0:
-            peak = float(approach_sides[-1])
-        else:
-            peak = obj.start_side
-        recede_sides = peak - obj.growth * np.arange(obj.recede)
     else:
         approach_sides = _physical_sides(np.arange(a0, a0 + obj.approach, dtype=np.float64), contact, fps,
                                          obj.half_size, obj.speed, focal)
-        if obj.peak_side is not None:
-            peak = float(obj.peak_side)
-        elif obj.approach > 0:
-            peak = float(approach_sides[-1])
-        else:
-            raise InputValueError("a physical object with no approach needs peak_side")
-        if obj.approach == 0:
-            # No approach to reverse: recede at ``speed`` from the distance at which the square
-            # spans ``peak_side`` (side = 2 f l / distance, as in _physical_sides).
-            if not peak > 0:
-                raise InputValueError("a physical object with no approach needs peak_side > 0")
-            start = obj.half_size * 2.0 * focal / peak
-            recede_sides = 2.0 * focal * obj.half_size / (start + obj.speed * np.arange(obj.recede) / fps)
-        else:
-            recede_sides = approach_sides[::-1][:obj.recede] if obj.recede <= obj.approach else np.concatenate(
-                [approach_sides[::-1], np.full(obj.recede - obj.approach, approach_sides[0])])
-            if obj.peak_side is not None and obj.recede:
-                recede_sides = recede_sides * (peak / max(float(recede_sides[0]), 1e-12))
+    if obj.peak_side is not None:
+        peak = float(obj.peak_side)
+    elif obj.approach > 0:
+        peak = float(approach_sides[-1])
+    elif obj.looming == "linear":
+        peak = obj.start_side
+    else:
+        raise InputValueError("a physical object with no approach needs peak_side")
+    if obj.looming == "linear":
+        recede_sides = peak - obj.growth * np.arange(obj.recede)
+    elif obj.approach == 0:
+        # No approach to reverse: recede at ``speed`` from the distance at which the square
+        # spans ``peak_side`` (side = 2 f l / distance, as in _physical_sides).
+        if not peak > 0:
+            raise InputValueError("a physical object with no approach needs peak_side > 0")
+        start = obj.half_size * 2.0 * focal / peak
+        recede_sides = 2.0 * focal * obj.half_size / (start + obj.speed * np.arange(obj.recede) / fps)
+    else:
+        recede_sides = approach_sides[::-1][:obj.recede] if obj.recede <= obj.approach else np.concatenate(
+            [approach_sides[::-1], np.full(obj.recede - obj.approach, approach_sides[0])])
+        if obj.peak_side is not None and obj.recede:
+            recede_sides = recede_sides * (peak / max(float(recede_sides[0]), 1e-12))
     full = np.concatenate([approach_sides, np.full(obj.hold, peak), recede_sides])
     full = np.maximum(full, 0.0)
     if obj.max_side is not None:
@@ -474,9 +449,8 @@ def _check_object(obj, n: int, i: int) -> SceneObject:
     recede = check_count(obj.recede, f"objects[{i}].recede", 0)
     if approach + hold + recede == 0:
         raise InputValueError(f"objects[{i}] has no frames: approach, hold and recede are all 0")
-    _check_polarity(obj.polarity)
-    if obj.looming not in ("linear", "physical"):
-        raise InputValueError(f"objects[{i}].looming must be one of linear, physical, got {obj.looming!r}")
+    check_choice(obj.polarity, "polarity", _POLARITIES)
+    check_choice(obj.looming, f"objects[{i}].looming", ("linear", "physical"))
     check_number(obj.growth, f"objects[{i}].growth", nonneg=True)
     check_number(obj.start_side, f"objects[{i}].start_side", nonneg=True)
     if obj.peak_side is not None:
@@ -498,9 +472,7 @@ def _check_object(obj, n: int, i: int) -> SceneObject:
 
 
 def _interval(start: int, length: int, n: int) -> tuple[int, int] | None:
-    if length <= 0 or start >= n:
-        return None
-    return (start, min(start + length, n))
+    return None if length <= 0 or start >= n else (start, min(start + length, n))
 
 
 MAX_SCROLL_PX = 100_000
@@ -570,8 +542,7 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     strip = _background_strip(background, w, h, need, seed)
     video = np.clip(np.rint(_scrolled(strip, offsets, w)), 0, 255).astype(np.uint8)
 
-    truths = []
-    all_sides = []
+    truths, all_sides = [], []
     for i, obj in enumerate(checked):
         sides, contact = _object_sides(obj, n, fps, focal)
         all_sides.append(sides)
@@ -627,7 +598,7 @@ def four_phase(*, background: Any = "procedural", seed: int = 0, fps: float = 30
     if approach + hold + recede > 100:
         raise InputValueError(f"approach + hold + recede must be at most 100 frames (one phase), "
                               f"got {approach + hold + recede}")
-    _check_polarity(polarity)
+    check_choice(polarity, "polarity", _POLARITIES)
     objs = [SceneObject(center=c, onset=100 * k, approach=approach, hold=hold, recede=recede,
                         polarity=polarity)
             for k, centers in enumerate(FOUR_PHASE_CENTERS) for c in centers]
@@ -655,7 +626,7 @@ def six_objects(*, background: Any = "procedural", seed: int = 0, fps: float = 3
     -------
     Stimulus
     """
-    _check_polarity(polarity)
+    check_choice(polarity, "polarity", _POLARITIES)
     objs = [SceneObject(center=c, onset=o, approach=40, hold=10, recede=0, polarity=polarity,
                         peak_side=81.0)
             for c, o in zip(SIX_OBJECT_CENTERS, SIX_OBJECT_ONSETS)]
@@ -711,7 +682,7 @@ def looming(*, size: tuple[int, int] = (320, 240), center: tuple[float, float] |
     half_size = check_number(half_size, "half_size", positive=True)
     speed = check_number(speed, "speed", positive=True)
     contact_time = check_number(contact_time, "contact_time", positive=True)
-    _check_polarity(polarity)
+    check_choice(polarity, "polarity", _POLARITIES)
     focal = focal_length_px(w, hfov_deg)
     if center is None:
         center = (w / 2.0, h / 2.0)
@@ -821,7 +792,5 @@ def write(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     stim = generate(name, **options)
     gt_path.parent.mkdir(parents=True, exist_ok=True)
     write_video(out, stim.frames, stim.fps, stim.size)
-    truth = dict(stim.to_ground_truth())
-    truth = {"name": name, "video": out.name, **truth}
-    write_json(gt_path, truth)
+    write_json(gt_path, {"name": name, "video": out.name, **stim.to_ground_truth()})
     return out, gt_path
