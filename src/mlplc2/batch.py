@@ -534,14 +534,22 @@ def _bad_address(address, why) -> InputValueError:
                            f"expected tcp://HOST:PORT")
 
 
+#: Address schemes of a Dask scheduler (distributed's comm backends).
+_SCHEMES = ("tcp", "tls", "ws", "wss", "ucx", "inproc")
+
+
 def _check_scheduler(address) -> None:
-    """A one-line error for a scheduler address without a host or a port 1-65535 (before anything
-    runs; ``Client(address)`` would wait for it until it times out)."""
+    """A one-line error for a scheduler address that is not ``SCHEME://HOST:PORT`` (port 1-65535),
+    before anything runs or any Client is made: a Client on a malformed address may wait until it
+    times out."""
     if not isinstance(address, str):
         raise InputTypeError(f"scheduler must be an address such as tcp://HOST:8786, got {address!r}")
     try:
-        url = urlsplit(address)
-        if url.scheme in ("tcp", "tls", "ws", "wss") and not (url.hostname and url.port):
+        url = urlsplit(address if "://" in address else f"tcp://{address}")
+        if url.scheme not in _SCHEMES:
+            raise ValueError(f"unknown address scheme {url.scheme!r}; known: {', '.join(_SCHEMES)}")
+        port = url.port      # ValueError unless an integer in 0-65535
+        if url.scheme != "inproc" and not (url.hostname and port):
             raise ValueError("no host or port 1-65535")
     except ValueError as exc:
         raise _bad_address(address, exc) from None
