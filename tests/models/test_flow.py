@@ -21,7 +21,7 @@ from mlplc2.params import parameter_table
 from mlplc2.stimuli import ApproachObject, approach
 from mlplc2.targets import pyramid
 
-DOCS = Path(__file__).resolve().parents[1] / "docs"
+DOCS = Path(__file__).resolve().parents[2] / "docs"
 
 
 def _run(stim, model=None):
