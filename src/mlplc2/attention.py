@@ -92,20 +92,22 @@ def field_mask(r: int) -> np.ndarray:
     return _DISC_CACHE[r]
 
 
+def _disc_part(cx: int, cy: int, r: int, rows: slice, cols: slice) -> np.ndarray:
+    """The part of the disc of radius r centred on (cx, cy) that the frame slices ``rows, cols`` cover."""
+    return field_mask(r)[rows.start - cy + r:rows.stop - cy + r, cols.start - cx + r:cols.stop - cx + r]
+
+
 def quadrant_sums(lm: LocalMotion, cx: int, cy: int, r: int, shape: str = "square"
                   ) -> tuple[float, float, float, float]:
     """Eq. 14: the four quadrant integrals Q1..Q4 of a field centred at (cx, cy)."""
     pairs = ((lm.r, lm.u), (lm.l, lm.u), (lm.l, lm.d), (lm.r, lm.d))
     out = []
     for (rows, cols), (a, b) in zip(_window(cx, cy, r, lm.magnitude.shape), pairs):
+        a, b = a[rows, cols], b[rows, cols]
         if shape == "disc":
-            m = field_mask(r)[rows.start - cy + r:rows.stop - cy + r,
-                              cols.start - cx + r:cols.stop - cx + r]
-            out.append(float(np.sum(a[rows, cols][m], dtype=np.float64)
-                             + np.sum(b[rows, cols][m], dtype=np.float64)))
-        else:
-            out.append(float(np.sum(a[rows, cols], dtype=np.float64)
-                             + np.sum(b[rows, cols], dtype=np.float64)))
+            m = _disc_part(cx, cy, r, rows, cols)
+            a, b = a[m], b[m]
+        out.append(float(np.sum(a, dtype=np.float64) + np.sum(b, dtype=np.float64)))
     return tuple(out)
 
 
@@ -113,8 +115,7 @@ def quadrant_areas(cx: int, cy: int, r: int, frame_shape: tuple[int, int], shape
                    ) -> tuple[int, ...]:
     """Number of pixels of each quadrant Q1..Q4 inside the frame (of the disc with ``shape='disc'``)."""
     if shape == "disc":
-        return tuple(int(np.count_nonzero(field_mask(r)[rows.start - cy + r:rows.stop - cy + r,
-                                                        cols.start - cx + r:cols.stop - cx + r]))
+        return tuple(int(np.count_nonzero(_disc_part(cx, cy, r, rows, cols)))
                      for rows, cols in _window(cx, cy, r, frame_shape))
     return tuple((rows.stop - rows.start) * (cols.stop - cols.start)
                  for rows, cols in _window(cx, cy, r, frame_shape))
@@ -161,9 +162,7 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
         if rows.start >= rows.stop or cols.start >= cols.stop:
             continue  # the zone lies outside the frame
         if shape == "disc":
-            m = field_mask(r)[rows.start - fy + r:rows.stop - fy + r,
-                              cols.start - fx + r:cols.stop - fx + r]
-            masked[rows, cols][m] = -np.inf
+            masked[rows, cols][_disc_part(fx, fy, r, rows, cols)] = -np.inf
         else:
             masked[rows, cols] = -np.inf
     idx = int(np.argmax(masked))
@@ -172,21 +171,4 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
     if value == -np.inf:
         return None
     return x, y, value
-
-
-class IdCounter:
-    """Stable, increasing integer ids for fields (1, 2, 3, ...).
-
-    A plain int, not ``itertools.count``: pickling/deep-copying ``itertools``
-    objects is deprecated in Python 3.12 and removed in 3.14, and models must
-    stay picklable.
-    """
-
-    def __init__(self) -> None:
-        self._next = 1
-
-    def __call__(self) -> int:
-        value = self._next
-        self._next += 1
-        return value
 

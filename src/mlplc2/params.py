@@ -86,7 +86,13 @@ def _fields(cls) -> tuple[dataclasses.Field, ...]:
     return fields
 
 
-def _rows(cls, markdown: bool) -> tuple[list[str], list[list[str]]]:
+def parameter_table(cls, *, markdown: bool = False) -> str:
+    """The parameter table of the dataclass ``cls`` (:class:`Params`, ``TargetParams``), built
+    from its fields' metadata (:func:`param`): name, symbol, unit, default, Table I value or
+    "extra", valid values and description. ``markdown=True``: the table of docs/model.md (one
+    row per field, description in the last column); otherwise plain text for the docstring
+    (aligned columns, then the descriptions in numpydoc ``Attributes`` form). Symbol and
+    Table I columns are left out when no field has a Table I value."""
     fields = _fields(cls)
     paper = any(f.metadata["table"] is not None for f in fields)
     head = ["field", "symbol", "unit", "default", "Table I", "valid values"] if paper else \
@@ -98,18 +104,6 @@ def _rows(cls, markdown: bool) -> tuple[list[str], list[list[str]]]:
         cells = [name, m["symbol"] or "-", m["unit"] or "-", _show_default(f.default, markdown),
                  "extra" if m["table"] is None else m["table"], str(m["valid"])]
         rows.append(cells if paper else [cells[0], cells[2], cells[3], cells[5]])
-    return head, rows
-
-
-def parameter_table(cls, *, markdown: bool = False) -> str:
-    """The parameter table of the dataclass ``cls`` (:class:`Params`, ``TargetParams``), built
-    from its fields' metadata (:func:`param`): name, symbol, unit, default, Table I value or
-    "extra", valid values and description. ``markdown=True``: the table of docs/model.md (one
-    row per field, description in the last column); otherwise plain text for the docstring
-    (aligned columns, then the descriptions in numpydoc ``Attributes`` form). Symbol and
-    Table I columns are left out when no field has a Table I value."""
-    head, rows = _rows(cls, markdown)
-    fields = _fields(cls)
     if markdown:
         def cell(text):
             return text.replace("|", "\\|")

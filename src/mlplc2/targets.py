@@ -4,43 +4,17 @@ The attention fields of the LPLC2 family (:mod:`mlplc2.attention`, Eq. 13-16) sa
 local motion looms. A :class:`TargetLayer` turns them into what a robot acts on: one
 :class:`Target` per object, with a stable id, its apparent size, the time to contact
 ``ttc_s``, the predicted ``miss`` distance at contact and a ``warning``. Nothing here changes
-the fields: the paper's model is untouched (``docs/targets.md`` has the measurements behind
-every choice, ``docs/benchmark.md`` the figures).
+the fields: the paper's model is untouched. ``docs/targets.md`` gives the method step by step
+and the measurements behind every choice, ``docs/benchmark.md`` the figures.
 
-Method, per frame (``docs/targets.md``)
----------------------------------------
-1. *Candidates.* Every attention field whose centre lies in no target, and (``seed_lm``) the
-   strongest local motion outside all targets and fields, is a candidate: the edges of the
-   outward motion around it (:func:`measure_extent`, the LM maps of Eq. 11-12) give the
-   object's box. A candidate whose box does not contain its seed point within ``max_shift``
-   px is dropped (two things taken for one).
-2. *Size change, measured in the image* (:func:`align`). The object's patch (its box and a
-   margin, resampled to ``patch`` x ``patch`` px from an image pyramid, so the cost does not
-   grow with the object) is aligned between the previous frame and this one by Gauss-Newton
-   on a similarity (scale ``k`` and shift), with the weights on the box: a sub-pixel measure of
-   the growth d(log size)/dt long before the edges move a pixel per frame. The box moves and
-   grows with the alignment.
-3. *Time to contact* (:func:`fit_contact`). For an object approaching at constant speed its
-   image size ``s = f W / Z`` with ``Z`` linear in time, so ``1 / s`` is linear in time and
-   vanishes at contact. A least-squares line through ``1 / S`` (S the accumulated scale) over
-   the last ``window`` frames gives the contact frame, its standard error, and the t-statistic
-   of the slope; ``ttc_s`` is reported when the growth is significant (``min_tstat``) and the
-   contact within ``max_ttc_s``. Holding and receding objects have no significant growth:
-   no estimate.
-4. *Course* (:func:`fit_course`). For constant velocity, the offset of the object's centre
-   from the heading point divided by its width, ``(x - x_h) / w`` (and the same for ``y``),
-   is ``X / W``: linear in time. Its value at the contact frame is the lateral miss in object
-   widths, ``miss`` (0 = dead centre). The heading is the optical axis (the principal point)
-   unless ``TargetParams.heading`` gives it.
-5. *Warning.* ``warning`` is set when the target shows looming evidence (one of its attention
-   fields answered within ``evidence_frames`` frames, or its growth has been significant for
-   ``confirm_frames`` frames in a row), ``miss <= max_miss``, ``ttc_s <= horizon_s`` and the
-   contact time is known to ``max_ttc_sigma`` (relative). The paper's field alarm
-   (``Field.collision``, the "fatal" field) is a separate signal and stays as it is.
-6. *Bookkeeping.* Fields inside a target's box belong to it (``Target.fields``); two targets
-   that cover one another merge (the older id stays); a target is dropped when it leaves the
-   frame, when the alignment fails ``max_fails`` frames in a row, or after ``idle_frames``
-   frames without an estimate or an answering field.
+Per frame (:meth:`TargetLayer.step`): candidates from the attention fields and from the
+strongest local motion or grey-level change outside every target; their box (:func:`change_box`,
+else the edges of the outward local motion, :func:`measure_extent`); their growth d(log size)/dt,
+measured in the image by aligning the object's patch between frames (:func:`align`); the time to
+contact from the line through ``1 / S`` (:func:`fit_contact`); the lateral ``miss`` at contact
+from the course (:func:`fit_course`); and the warning rule (:func:`estimate`,
+:class:`TargetParams`). The paper's field alarm (``Field.collision``, the "fatal" field) is a
+separate signal and stays as it is.
 
 Bearing convention: azimuth positive to the right, elevation positive up,
 ``azimuth = atan((x - cx) / f)``, ``elevation = atan((cy - y) / f)`` with
@@ -263,8 +237,6 @@ class Extent:
         return float(sum(vals) / len(vals)) if vals else None
 
 
-
-
 def focal_length(width: int, hfov_deg: float | None) -> float | None:
     """Pinhole focal length in px, ``(W / 2) / tan(hfov / 2)``; None without a field of view."""
     if hfov_deg is None:
@@ -445,8 +417,6 @@ def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = Targe
     edges = (None if dr is None else x + dr + off, None if dl is None else x - dl - off,
              None if du is None else y - du - off, None if dd is None else y + dd + off)
     return Extent(width, height, cx, cy, edges)
-
-
 
 
 # ---------------------------------------------------------------------------
@@ -745,7 +715,6 @@ class Track:
     fails: int = 0
     last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
     last_estimate: int = -(10 ** 9)    # frame of its last time to contact
-    last_seen: int = -(10 ** 9)        # frame its object was last found (models without fields)
     streak: int = 0
     fields: set = field(default_factory=set)
     rate: float | None = None
@@ -770,7 +739,7 @@ class Track:
 
     def follow(self, move: tuple | None, index: int, fps: float, shape: tuple[int, int], max_fails: int, *,
                box: tuple | None = None, refit: float = 0.0, camera=None) -> bool:
-        """Move and grow the box by this frame's measurement (step 2); False when it is lost: its
+        """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
         centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
         the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
         (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
@@ -862,12 +831,10 @@ class TargetLayer:
             zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + p.claim)) for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             cand = argmax_outside(lm.magnitude, zones)
-            if cand is not None and cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-                seeds.append((cand[0], cand[1], None))
-            else:
+            if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                 cand = self._change_seed(levels, zones)
-                if cand is not None:
-                    seeds.append((cand[0], cand[1], None))
+            if cand is not None:
+                seeds.append((cand[0], cand[1], None))
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
@@ -899,7 +866,7 @@ class TargetLayer:
         out = []
         for t in self._tracks:
             t.fields &= alive
-            out.append(self._estimate(t, index, w, h))
+            out.append(estimate(t, p, self.fps, index, (h, w), self.focal))
         self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
@@ -991,9 +958,6 @@ class TargetLayer:
                 host.last_answer = max(host.last_answer, t.last_answer)
         self._tracks = out
 
-    def _estimate(self, t: Track, index: int, w: int, h: int) -> Target:
-        return estimate(t, self.params, self.fps, index, (h, w), self.focal)
-
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:
     """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down; an estimate
@@ -1011,7 +975,7 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
-    course (:func:`fit_course`) and the warning rule (step 5 of the module docstring). Shared
+    course (:func:`fit_course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline)."""
     h, w = shape
     frames = [q[0] for q in t.history]

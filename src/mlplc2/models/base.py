@@ -19,6 +19,7 @@ import numpy as np
 
 from .._validation import InputTypeError, InputValueError, as_gray, check_fps, check_int, check_unit_scale
 from ..attention import Field
+from ..targets import count_down
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
            "get_model", "available_models", "resolve_names", "looks_duplicated"]
@@ -126,14 +127,11 @@ def check_repeat_threshold(value) -> float | str | None:
 
 def _to_frame(out: Output, sx: float, sy: float) -> Output:
     """``out`` of a working frame mapped to the frame given (pixel centres: ``x = (x' + 0.5) s - 0.5``)."""
-    def fx(v):
-        return (v + 0.5) * sx - 0.5
+    def px(v, s):
+        return (v + 0.5) * s - 0.5
 
-    def fy(v):
-        return (v + 0.5) * sy - 0.5
-
-    fields = tuple(dataclasses.replace(f, x=fx(f.x), y=fy(f.y), radius=f.radius * sx) for f in out.fields)
-    targets = tuple(dataclasses.replace(t, x=fx(t.x), y=fy(t.y), width=t.width * sx, height=t.height * sy)
+    fields = tuple(dataclasses.replace(f, x=px(f.x, sx), y=px(f.y, sy), radius=f.radius * sx) for f in out.fields)
+    targets = tuple(dataclasses.replace(t, x=px(t.x, sx), y=px(t.y, sy), width=t.width * sx, height=t.height * sy)
                     for t in out.targets)
     return dataclasses.replace(out, fields=fields, targets=targets)
 
@@ -233,14 +231,19 @@ class Model(abc.ABC):
         before the model's stages; fields and targets come back in the frame's own pixels
         (``model.maps`` stays at the working size). None: every frame at its own size.
         Default :data:`WORK_WIDTH` = 320 (the paper's videos)."""
+        self._scale_warned = False
+        self._diffs: deque = deque(maxlen=REPEAT_WINDOW)
+        self._forget()
+
+    def _forget(self) -> None:
+        """The base's state back to that of a new model (the unit-scale warning aside)."""
         self._shape: tuple[int, int] | None = None
         self._frame = 0
         self._last_gray: np.ndarray | None = None
         self._last_out: Output | None = None
         self._repeats = 0
-        self._scale_warned = False
         self._prev_in: np.ndarray | None = None      # the previous input frame ("auto" repeats)
-        self._diffs: deque = deque(maxlen=REPEAT_WINDOW)
+        self._diffs.clear()
         self._work: tuple[int, int] | None = None     # (W, H) of the working frames, None: as given
 
     @property
@@ -321,19 +324,21 @@ class Model(abc.ABC):
         return dataclasses.replace(held, frame=self._frame, repeated=True)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
-        """The output held ``elapsed`` seconds after ``last`` (models with clocks override it)."""
-        return last
+        """The output held ``elapsed`` seconds after ``last``: each target's ``ttc_s`` counts down
+        (:func:`~mlplc2.targets.count_down`; models with other clocks override it)."""
+        return dataclasses.replace(last, targets=count_down(last.targets, elapsed))
+
+    @staticmethod
+    def _check_params(value, cls, what: str, label: str):
+        """``value`` (None: ``cls()``), which must be a ``cls``: else "``what`` must be ``label``"."""
+        value = cls() if value is None else value
+        if not isinstance(value, cls):
+            raise InputTypeError(f"{what} must be {label}, got {type(value).__name__}")
+        return value
 
     def reset(self) -> None:
         """Forget all state: the next frame is frame 0 and may have a new size."""
-        self._shape = None
-        self._frame = 0
-        self._last_gray = None
-        self._last_out = None
-        self._repeats = 0
-        self._prev_in = None
-        self._diffs.clear()
-        self._work = None
+        self._forget()
         self._reset()
 
     def run(self, frames: Iterable[np.ndarray]) -> Iterator[Output]:

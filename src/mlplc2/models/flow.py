@@ -6,36 +6,20 @@ choices and the figures). Per frame:
 
 1. **Frame flow.** Dense optical flow ``F`` (OpenCV's DIS, Kroeger et al. 2016;
    ``FlowParams.preset``) from the frame ``baseline`` frames back to this one.
-2. **Camera motion** (:func:`camera_motion`). A homography fitted by RANSAC to a grid of the
-   flow vectors, and a second one to its outliers when they are a large share (the ground
-   and the sky of a camera driving forward): the background's flow ``C``. The focus of
-   expansion (:func:`focus_of_expansion`, :attr:`FlowTTC.foe`) is the point the flow lines
-   meet, None when they do not radiate from one point (a still camera, a pan).
-3. **Candidates** (:func:`divergence`). The divergence ``du/dx + dv/dy`` of ``F - C`` where
-   the image has structure, averaged over cells of ``cell`` px; cells above
-   ``min_divergence`` (and the frame's noise) are joined into regions. A region that no
-   growing target claims becomes a target when its box (:func:`mlplc2.targets.change_box`,
-   the camera's motion undone) grew, alike in both directions, over the last
-   ``TargetParams.change_frames`` frames in the object's own flow (step 4), as the LPLC2
+2. **Camera motion** (:func:`camera_motion`): one or two homographies fitted by RANSAC to the
+   flow (the ground and the sky of a camera driving forward), the background's flow ``C``; the
+   focus of expansion (:func:`focus_of_expansion`, :attr:`FlowTTC.foe`).
+3. **Candidates** (:func:`divergence`): regions where the divergence of ``F - C`` exceeds
+   ``min_divergence`` and the frame's noise. A region that no growing target claims becomes a
+   target when its box (:func:`mlplc2.targets.change_box`) grew, alike in both directions, over
+   the last ``TargetParams.change_frames`` frames in the object's own flow, as the LPLC2
    family's candidates must.
-4. **The object's own flow** (:func:`object_flow`). Each target's box and a margin are
-   resampled to ``patch`` x ``patch`` samples in both frames (from an image pyramid, so the
-   cost does not grow with the object) and Farneback's flow (2003) is computed there, at the
-   object's own scale: a 10-px object spans 30 samples instead of one DIS patch smoothed over
-   its boundary. The model ``u = tx + kx (x - cx)``, ``v = ty + ky (y - cy)`` (per-axis
-   expansion rates per frame) is fitted by weighted least squares to the normal flow (the
-   flow's component along the grey-level gradient, the one an edge determines), weighted by
-   the gradient's magnitude (a uniform area has no flow of its own), in two layers: a sample
-   belongs to the object when the object's model explains it better than the background's
-   ``C`` does (``layer_iterations`` rounds); the still background it leaves out would pull
-   the expansion towards zero.
-5. **Time to contact.** The box moves by (tx, ty), grows by ``exp(kx)``, ``exp(ky)`` and
-   settles on the object's layer (``refit``); its log-scale accumulates ``(kx + ky) / 2`` per
-   frame and its anisotropy ``ky - kx``; its positions are stabilised against the camera's
-   turn. The estimator of the LPLC2 family's targets (:func:`mlplc2.targets.estimate`: the
-   ``1 / S`` line, the course, the horizon, the miss) gives ``ttc_s``, ``miss`` and the
-   warning, with looming evidence = sustained significant growth
-   (``TargetParams.confirm_frames``).
+4. **The object's own flow** (:func:`object_flow`): Farneback's flow (2003) on the target's box
+   resampled to ``patch`` x ``patch`` samples, and the per-axis expansion and shift fitted to
+   its normal flow in two layers (object and background).
+5. **Time to contact.** The box follows that fit; the estimator of the LPLC2 family's targets
+   (:func:`mlplc2.targets.estimate`) gives ``ttc_s``, ``miss`` and the warning, with looming
+   evidence = sustained significant growth (``TargetParams.confirm_frames``).
 
 It has no attention fields; its alarm (``Output.collision``) is "any target warns" and its
 response the largest expansion rate (1/s).
@@ -45,15 +29,14 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass, replace
+from dataclasses import dataclass
 
 import cv2
 import numpy as np
 
-from .._validation import InputTypeError, Valid, check_fields
+from .._validation import Valid, check_fields
 from ..params import ParameterSet, document_parameters, param
-from ..targets import (Target, TargetParams, Track, change_box, check_hfov, count_down, estimate,
-                       focal_length, pyramid)
+from ..targets import Target, TargetParams, Track, change_box, check_hfov, estimate, focal_length, pyramid
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["FlowTTC", "FlowParams", "ObjectFlow", "object_flow", "camera_motion", "CameraMotion",
@@ -168,8 +151,7 @@ class CameraMotion:
 
     def flows(self, xs, ys, frames: float = 1.0) -> list[tuple[np.ndarray, np.ndarray]]:
         """The flow of every layer (:meth:`flow`), the dominant one first."""
-        hs = [self.H] + ([self.H2] if self.H2 is not None else [])
-        return [_homography_flow(h, xs, ys, frames / self.frames) for h in hs]
+        return [_homography_flow(h, xs, ys, frames / self.frames) for h in (self.H, self.H2) if h is not None]
 
     def turning(self, cx: float, cy: float, width: float, ratio: float = 0.25) -> bool:
         """Whether the dominant motion is a turn (pan, tilt) rather than the camera's
@@ -462,12 +444,8 @@ class FlowTTC(Model):
 
     def __init__(self, fps: float = 30.0, params: FlowParams | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
-        params = FlowParams() if params is None else params
-        if not isinstance(params, FlowParams):
-            raise InputTypeError(f"params must be mlplc2.models.flow.FlowParams, got {type(params).__name__}")
-        target_params = TargetParams() if target_params is None else target_params
-        if not isinstance(target_params, TargetParams):
-            raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
+        params = self._check_params(params, FlowParams, "params", "mlplc2.models.flow.FlowParams")
+        target_params = self._check_params(target_params, TargetParams, "target_params", "mlplc2.targets.TargetParams")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         self.hfov_deg = check_hfov(hfov_deg)
         self.target_params = target_params
@@ -640,6 +618,3 @@ class FlowTTC(Model):
             return False
         g = 0.5 * (of.kx + of.ky)
         return g >= tp.min_growth and abs(of.ky - of.kx) <= tp.max_anisotropy * g
-
-    def _hold(self, last: Output, elapsed: float) -> Output:
-        return replace(last, targets=count_down(last.targets, elapsed))

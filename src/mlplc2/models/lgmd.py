@@ -27,8 +27,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._validation import (FLOAT32_MAX, InputTypeError, InputValueError, check_bool, check_int, check_real,
-                           check_reals)
+from .._validation import FLOAT32_MAX, InputValueError, check_bool, check_int, check_real, check_reals
 from ..lamina import on_off
 from ..medulla import delayed, lowpass_alpha
 from ..params import ParameterSet
@@ -66,13 +65,9 @@ def stable_sigmoid(x: float) -> float:
 
 def _ring_kernels(centre: float, nearest: float, diagonal: float) -> tuple[np.ndarray, ...]:
     """Split a 3x3 kernel into its centre, 4-nearest and diagonal parts."""
-    kc = np.zeros((3, 3), np.float32)
-    kc[1, 1] = centre
-    kn = np.zeros((3, 3), np.float32)
-    kn[0, 1] = kn[1, 0] = kn[1, 2] = kn[2, 1] = nearest
-    kd = np.zeros((3, 3), np.float32)
-    kd[0, 0] = kd[0, 2] = kd[2, 0] = kd[2, 2] = diagonal
-    return kc, kn, kd
+    c, n, d = centre, nearest, diagonal
+    return tuple(np.array(k, np.float32) for k in ([[0, 0, 0], [0, c, 0], [0, 0, 0]], [[0, n, 0], [n, 0, n], [0, n, 0]],
+                                                   [[d, 0, d], [0, 0, 0], [d, 0, d]]))
 
 
 def _check(cls_name: str, obj, positive=(), non_negative=(), ints=(), bools=()) -> None:
@@ -208,9 +203,7 @@ class LGMD2(Model):
 
     def __init__(self, fps: float = 30.0, params: LGMD2Params | None = None, *,
                  repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
-        params = LGMD2Params() if params is None else params
-        if not isinstance(params, LGMD2Params):
-            raise InputTypeError(f"params must be LGMD2Params, got {type(params).__name__}")
+        params = self._check_params(params, LGMD2Params, "params", "LGMD2Params")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         p = params
         self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
@@ -357,9 +350,7 @@ class LGMD1(Model):
 
     def __init__(self, fps: float = 30.0, params: LGMD1Params | None = None, *,
                  repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
-        params = LGMD1Params() if params is None else params
-        if not isinstance(params, LGMD1Params):
-            raise InputTypeError(f"params must be LGMD1Params, got {type(params).__name__}")
+        params = self._check_params(params, LGMD1Params, "params", "LGMD1Params")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         kn, kd = params.w_i_kernel
         self._kernel = np.array([[kd, kn, kd], [kn, 0.0, kn], [kd, kn, kd]], np.float32)

@@ -3,17 +3,15 @@ field) and LPLC2 (one fixed cell spanning the frame), sharing one front end."""
 
 from __future__ import annotations
 
-import dataclasses
 from collections import deque
 
 import numpy as np
 
-from .._validation import InputTypeError
-from ..attention import AttentionField, IdCounter, argmax_outside, gate_area, lplc2_response, quadrant_areas
+from ..attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..lobula_plate import LocalMotion
 from ..params import Params
-from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
+from ..targets import TargetLayer, TargetParams, check_hfov, focal_length
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
@@ -33,12 +31,8 @@ class _LPLC2Family(Model):
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, backend: str = "auto",
                  repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
-        params = Params() if params is None else params
-        if not isinstance(params, Params):
-            raise InputTypeError(f"params must be mlplc2.Params, got {type(params).__name__}")
-        target_params = TargetParams() if target_params is None else target_params
-        if not isinstance(target_params, TargetParams):
-            raise InputTypeError(f"target_params must be mlplc2.targets.TargetParams, got {type(target_params).__name__}")
+        params = self._check_params(params, Params, "params", "mlplc2.Params")
+        target_params = self._check_params(target_params, TargetParams, "target_params", "mlplc2.targets.TargetParams")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         self.hfov_deg = check_hfov(hfov_deg)
         """Horizontal field of view (degrees) of the camera, or None. Given: targets carry their
@@ -52,7 +46,7 @@ class _LPLC2Family(Model):
         self._edge_kernel = impl.edge_kernel
         self._align_kernel = impl.align_kernel
         self._fields: list[AttentionField] = []
-        self._ids = IdCounter()
+        self._next_id = 1                                  # id of the next field (1, 2, ...)
         self.maps: LocalMotion | None = None
         """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
         self._layer: TargetLayer | None = None
@@ -60,15 +54,16 @@ class _LPLC2Family(Model):
     def _reset(self) -> None:
         self.frontend.reset()
         self._fields = []
-        self._ids = IdCounter()
+        self._next_id = 1
         self.maps = None
         self._layer = None
 
     # -- field bookkeeping ---------------------------------------------------
     def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
         p = self.params
-        f = AttentionField(id=self._ids(), x=int(x), y=int(y), born=index, radius=radius,
+        f = AttentionField(id=self._next_id, x=int(x), y=int(y), born=index, radius=radius,
                            history=deque(maxlen=max(p.d, p.alarm_window)))
+        self._next_id += 1
         self._fields.append(f)
         return f
 
@@ -97,10 +92,6 @@ class _LPLC2Family(Model):
         collision = any(f.collision for f in fields)
         return Output(frame=index, response=response, fields=fields, collision=collision,
                       spike=collision, targets=targets)
-
-    def _hold(self, last: Output, elapsed: float) -> Output:
-        """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
-        return dataclasses.replace(last, targets=count_down(last.targets, elapsed))
 
 
 @register("mlplc2")
@@ -147,13 +138,7 @@ class MLPLC2(_LPLC2Family):
         # Eq. 14-15 for every field, then Eq. 16 removal (never the last field).
         for f in self._fields:
             self._integrate(f, lm)
-        keep = []
-        for f in self._fields:
-            old_enough = index - f.born >= p.grace
-            window = list(f.history)[-p.d:]
-            if old_enough and sum(window) < p.t_d:
-                continue
-            keep.append(f)
+        keep = [f for f in self._fields if not (index - f.born >= p.grace and sum(list(f.history)[-p.d:]) < p.t_d)]
         if not keep and self._fields:
             keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
         self._fields = keep
