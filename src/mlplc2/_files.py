@@ -52,15 +52,8 @@ def replace(tmp: Path, path: Path) -> None:
     try:
         os.replace(tmp, path)
     except OSError as exc:
-        _unlink(tmp)
+        Path(tmp).unlink(missing_ok=True)
         raise OSError(exc.errno, exc.strerror, str(path)) from None
-
-
-def _unlink(tmp: Path) -> None:
-    try:
-        Path(tmp).unlink()
-    except FileNotFoundError:
-        pass
 
 
 @contextmanager
@@ -71,7 +64,7 @@ def atomic_path(path):
     try:
         yield tmp
     except BaseException:
-        _unlink(tmp)
+        tmp.unlink(missing_ok=True)
         raise
     replace(tmp, Path(path))
 

@@ -36,10 +36,6 @@ T = TypeVar("T")
 _MARK = "_mlplc2_interrupts"  # attribute set on the handlers installed here that interrupt
 
 
-def _signals() -> tuple[int, ...]:
-    return tuple(s for s in (getattr(signal, "SIGINT", None), getattr(signal, "SIGTERM", None)) if s is not None)
-
-
 def _interrupting(handler) -> bool:
     return handler is signal.default_int_handler or bool(getattr(handler, _MARK, False))
 
@@ -99,13 +95,13 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
         if threading.current_thread() is not threading.main_thread():
             return self
         try:
-            for sig in _signals():
+            for sig in (signal.SIGINT, signal.SIGTERM):
                 previous = signal.getsignal(sig)
                 if self.ignore:
                     if sig != signal.SIGINT:
                         continue
                     new = signal.SIG_IGN
-                elif self.sigterm and sig == getattr(signal, "SIGTERM", None) and not _interrupting(previous):
+                elif self.sigterm and sig == signal.SIGTERM and not _interrupting(previous):
                     new = self._wrap(signal.default_int_handler)
                 elif _interrupting(previous) and self.defer:
                     new = self._wrap(previous)

@@ -35,6 +35,7 @@ import os
 import sys
 import time
 import warnings
+from collections import Counter
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -240,6 +241,9 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
     building the parameters of every model in ``models``. Overrides equal to
     the default value are dropped (a set of defaults is ``{}``, id ``default``).
     """
+    from .models.base import available_models
+    from .params import Params
+
     base: dict = {}
     if params is not None:
         if isinstance(params, (str, Path)):
@@ -251,8 +255,6 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
             except json.JSONDecodeError as exc:
                 raise InputValueError(f"{path}: not valid JSON ({exc})") from None
         elif hasattr(params, "to_dict"):
-            from .params import Params
-
             default = Params().to_dict()
             base = {k: v for k, v in params.to_dict().items() if default.get(k) != v}
         else:
@@ -272,10 +274,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
             else:
                 pset[name] = value
         sets.append(pset)
-    from .models.base import available_models
-    from .params import Params
-
-    pnames = {f for f in Params().to_dict()}
+    pnames = set(Params().to_dict())
     for pset in sets:
         for k, v in pset.items():
             if isinstance(v, Mapping):
@@ -327,9 +326,7 @@ def run_task(task: dict) -> dict:
         from .runner import run
 
         params = model_params(task["pset"], task["model"])
-        marker = out / DONE_MARKER
-        if marker.exists():
-            marker.unlink()  # the outputs are about to change
+        (out / DONE_MARKER).unlink(missing_ok=True)  # the outputs are about to change
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", TruncatedInputWarning)
             res = run(task["video"], [task["model"]], out=out, quiet=True, progress=False, params=params,
@@ -345,10 +342,9 @@ def run_task(task: dict) -> dict:
         if isinstance(exc, OSError) and getattr(exc, "filename", None) and exc.strerror:
             msg = f"{exc.filename}: {exc.strerror}"
         row["error"] = _one_line(msg if isinstance(exc, InputError) else f"{type(exc).__name__}: {msg}")
-        row["seconds"] = round(time.perf_counter() - t0, 3)
-        return row
     row["seconds"] = round(time.perf_counter() - t0, 3)
-    write_json(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
+    if row["status"] != "error":
+        write_json(out / DONE_MARKER, {**row, "pset": task["pset"], "run_options": task.get("run_options", {})})
     return row
 
 
@@ -394,11 +390,10 @@ def _plot(task: dict, note: str = "") -> None:
 def _done_row(task: dict) -> dict | None:
     """The saved row of a finished task, if its outputs are complete."""
     out = Path(task["out"])
-    marker = out / DONE_MARKER
-    if not marker.is_file() or not (out / "responses.csv").is_file() or not (out / "fields.json").is_file():
+    if not all((out / name).is_file() for name in (DONE_MARKER, "responses.csv", "fields.json")):
         return None
     try:
-        saved = json.loads(marker.read_text(encoding="utf-8"))
+        saved = json.loads((out / DONE_MARKER).read_text(encoding="utf-8"))
     except (OSError, json.JSONDecodeError):
         return None
     if saved.get("pset") != task["pset"] or saved.get("video") != task["video"] \
@@ -467,22 +462,16 @@ class BatchInterrupted(KeyboardInterrupt):
 
 
 def _video_keys(videos: list[str]) -> dict[str, str]:
-    stems: dict[str, list[str]] = {}
-    for v in videos:
-        p = Path(v)
-        stems.setdefault(p.stem if p.suffix else p.name, []).append(v)
-    keys = {}
-    for stem, vs in stems.items():
-        for v in vs:
-            keys[v] = stem if len(vs) == 1 else \
-                f"{stem}-{hashlib.sha1(os.path.abspath(v).encode()).hexdigest()[:6]}"
-    return keys
+    """Folder name of each video: its stem, with 6 hex digits of a hash of its path where stems repeat."""
+    stems = {v: Path(v).stem if Path(v).suffix else Path(v).name for v in videos}
+    count = Counter(stems.values())
+    return {v: s if count[s] == 1 else f"{s}-{hashlib.sha1(os.path.abspath(v).encode()).hexdigest()[:6]}"
+            for v, s in stems.items()}
 
 
-def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
+def _write_table(rows: list[dict], out: Path, parquet: bool) -> None:
     """``results.csv`` (and ``results.parquet``), atomically."""
-    table = out / "results.csv"
-    write_csv(table, ({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS} for r in rows),
+    write_csv(out / "results.csv", ({k: ("" if r.get(k) is None else r.get(k)) for k in RESULT_COLUMNS} for r in rows),
               RESULT_COLUMNS)
     if parquet:
         import pandas as pd
@@ -493,7 +482,6 @@ def _write_table(rows: list[dict], out: Path, parquet: bool) -> Path:
         df["seconds"] = df["seconds"].astype("float64")
         with atomic_path(out / "results.parquet") as tmp:
             df.to_parquet(tmp, index=False)
-    return table
 
 
 def start_local_cluster(workers: int, **kwargs):

@@ -33,6 +33,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from ._validation import InputValueError
 from .params import Params
 
 __all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
@@ -75,8 +76,6 @@ class BenchRow:
 
 def parse_sizes(text: str) -> list[tuple[int, int]]:
     """'320x240,640x480' -> [(320, 240), (640, 480)] (width x height)."""
-    from ._validation import InputValueError
-
     sizes = []
     for part in str(text).split(","):
         part = part.strip().lower()
@@ -158,7 +157,6 @@ def time_model(name: str, frames: np.ndarray, backend: str, warmup: int, fps: fl
 def time_frontend(frames: np.ndarray, backend: str, warmup: int, fps: float = 30.0) -> float:
     """Median ms of the front end alone (Eq. 1-12) on float32 frames."""
     from .backend import make_frontend
-    from .params import Params
 
     fe = make_frontend(Params(), fps, backend)
     gray = [np.asarray(f, np.float32) for f in frames]
@@ -185,7 +183,6 @@ def peak_memory_mb(name: str, frames: np.ndarray, backend: str = "auto", n: int 
         _, peak = tracemalloc.get_traced_memory()
     finally:
         tracemalloc.stop()
-    del model
     return peak / 2**20
 
 
@@ -208,8 +205,7 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
     planes = _fast.plane_count(Params().n_floor > 0)
     rows = []
     for w, h in sizes:
-        total = warmup + max(frames, ref_frames)
-        video = synthetic_frames(w, h, total)
+        video = synthetic_frames(w, h, warmup + max(frames, ref_frames))
         fast_video = video[:warmup + frames]
         ref_video = video[:warmup + ref_frames]
         best: dict = {}

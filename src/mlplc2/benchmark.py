@@ -143,22 +143,15 @@ def _real_inputs(real) -> tuple[list[Path], Path | None]:
     from .truth import load
 
     truth = load(gt)
-    found = []
-    for base in (real, real.parent / "paper"):
-        for p in sorted(base.rglob("*")):
-            if p.is_file() and "fullres" not in p.name and p.suffix.lower() in (".mp4", ".avi") \
-                    and truth.match(p) is not None:
-                found.append(p)
-    return found, gt
+    return [p for base in (real, real.parent / "paper") for p in sorted(base.rglob("*"))
+            if p.is_file() and "fullres" not in p.name and p.suffix.lower() in (".mp4", ".avi")
+            and truth.match(p) is not None], gt
 
 
 def default_real_dir() -> Path | None:
     """``../shared/data/real`` from the current folder, else beside the package's checkout."""
     here = Path(__file__).resolve().parents[3] / "shared" / "data" / "real"
-    for cand in (REAL_DIR, here):
-        if (cand / "ground_truth.json").is_file():
-            return cand
-    return None
+    return next((cand for cand in (REAL_DIR, here) if (cand / "ground_truth.json").is_file()), None)
 
 
 #: Columns of ``benchmark.csv`` (one row per model).
@@ -203,26 +196,18 @@ def _row(model: str, summary: dict, ms: float | None) -> dict:
         return None if v is None else round(100.0 * v, 1)
 
     c = w.get("false_episodes_per_1000_by_cause") or {}
-    return {"model": model, "collision_objects": w.get("collision_objects"), "warned": w.get("warned"),
-            "warned_pct": pct(w.get("warned_rate")), "lead_median_s": w.get("lead_median_s"),
-            "lead_p10_s": w.get("lead_p10_s"), "ttc_at_warning_median_s": w.get("ttc_at_warning_median_s"),
-            "false_frames_per_1000": w.get("false_frames_per_1000"), "false_frames_pct": w.get("false_frames_pct"),
-            "false_episodes_per_1000": w.get("false_episodes_per_1000"), "false_episodes_pass": c.get("pass"),
-            "false_episodes_distractor": c.get("distractor"), "false_episodes_background": c.get("background"),
-            **{f"ttc_rte_pct_{b}": w.get(f"ttc_rte_pct_{b}") for b in ("0-1s", "1-3s", "3-6s")},
-            **{f"ttc_mid_{b}": w.get(f"ttc_mid_{b}") for b in ("0-1s", "1-3s", "3-6s")},
-            "ttc_coverage_pct": pct(w.get("ttc_coverage")), "targets_per_object": w.get("fragmentation"),
-            "clips": w.get("clips"), "clips_warned": w.get("clips_warned"), "clips_missed": w.get("clips_missed"),
-            "clips_false": w.get("clips_false"), "clip_lead_median_s": w.get("clip_lead_median_s"),
-            "ms_per_frame": None if ms is None else round(ms, 2)}
+    row = {k: w.get(k) for k in COLUMNS}  # most columns are the warning metric of that name
+    row.update(model=model, warned_pct=pct(w.get("warned_rate")), false_episodes_pass=c.get("pass"),
+               false_episodes_distractor=c.get("distractor"), false_episodes_background=c.get("background"),
+               ttc_coverage_pct=pct(w.get("ttc_coverage")), targets_per_object=w.get("fragmentation"),
+               ms_per_frame=None if ms is None else round(ms, 2))
+    return row
 
 
 def _fmt(v, digits: int = 2) -> str:
     if v is None:
         return "-"
-    if isinstance(v, float):
-        return f"{v:.{digits}f}"
-    return str(v)
+    return f"{v:.{digits}f}" if isinstance(v, float) else str(v)
 
 
 def _markdown(res: BenchmarkResult) -> str:
@@ -271,6 +256,12 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     ev = res.evaluation
     models = [r["model"] for r in res.rows]
     files = {}
+
+    def save(fig, name: str) -> None:
+        fig.tight_layout()
+        files[name] = out / name
+        fig.savefig(files[name])
+
     # lead time per model
     fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.6), dpi=110)
     ax = fig.subplots()
@@ -287,9 +278,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     ax.set_ylabel("lead time before contact (s)")
     ax.set_ylim(bottom=-0.5)
     ax.set_title("Collision objects of the generated suite: warning lead time")
-    fig.tight_layout()
-    files["lead_time.png"] = out / "lead_time.png"
-    fig.savefig(files["lead_time.png"])
+    save(fig, "lead_time.png")
     # TTC estimate against truth
     with_ttc = [m for m in models if any(o["ttc_errors"] for o in ev.warning_objects if o["model"] == m)]
     if with_ttc:
@@ -304,9 +293,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
             ax.set_title(m, fontsize=9)
             ax.set_xlabel("true TTC (s)")
         axes[0].set_ylabel("estimated TTC (s)")
-        fig.tight_layout()
-        files["ttc.png"] = out / "ttc.png"
-        fig.savefig(files["ttc.png"])
+        save(fig, "ttc.png")
     # false warnings by cause
     fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.4), dpi=110)
     ax = fig.subplots()
@@ -321,9 +308,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     ax.set_ylabel("false-warning episodes per 1000 frames")
     ax.legend(fontsize=7)
     ax.set_title("False warnings on the generated suite, by cause")
-    fig.tight_layout()
-    files["false_warnings.png"] = out / "false_warnings.png"
-    fig.savefig(files["false_warnings.png"])
+    save(fig, "false_warnings.png")
     return files
 
 
@@ -354,7 +339,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         Rerun tasks already done.
     """
     from .batch import batch
-    from .evaluate import evaluate
+    from .evaluate import EvaluationWarning, evaluate
     from .models.base import available_models, resolve_names
     from .targets import TargetParams
 
@@ -372,8 +357,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     clips, real_gt = _real_inputs(real_dir)
     run_options = {}
     if tp is not None:
-        changed = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
-        run_options["target_params"] = changed
+        run_options["target_params"] = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
     failed, seen = [], set()
@@ -385,9 +369,6 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     for f in failed:
         warnings.warn(_failure(f), BenchmarkWarning, stacklevel=2)
     gts = [suite_gt] + ([real_gt] if real_gt is not None else [])
-
-    from .evaluate import EvaluationWarning
-
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", EvaluationWarning)
         ev = evaluate(out / "runs", gts, models=models)
@@ -416,17 +397,12 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
 def _write(res: BenchmarkResult, out: Path) -> None:
     from ._files import write_csv, write_text
 
-    files = {}
-    text = "# mlplc2 benchmark\n\n" + res.to_markdown()
-    for name, content in (("benchmark.md", text),
-                          ("benchmark.json", json.dumps({"settings": res.settings, "models": res.rows,
-                                                         "scenes": res.scenes, "clips": res.clips,
-                                                         "failed": res.failed,
-                                                         "seconds": round(res.seconds, 1)}, indent=1) + "\n")):
-        write_text(out / name, content)
-        files[name] = out / name
+    write_text(out / "benchmark.md", "# mlplc2 benchmark\n\n" + res.to_markdown())
+    write_text(out / "benchmark.json", json.dumps({"settings": res.settings, "models": res.rows, "scenes": res.scenes,
+                                                   "clips": res.clips, "failed": res.failed,
+                                                   "seconds": round(res.seconds, 1)}, indent=1) + "\n")
     write_csv(out / "benchmark.csv", res.rows, COLUMNS)
-    files["benchmark.csv"] = out / "benchmark.csv"
+    files = {name: out / name for name in ("benchmark.md", "benchmark.json", "benchmark.csv")}
     files.update(res.evaluation.write(out))
     files.update(_plots(res, out))
     res.files = files

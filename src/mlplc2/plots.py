@@ -13,6 +13,9 @@ from pathlib import Path
 
 import numpy as np
 
+from ._files import atomic_path
+from ._validation import InputValueError
+
 __all__ = ["plot_responses", "annotate_frame", "read_responses", "DRAW_FIELDS"]
 
 #: RGB colours of the annotated video.
@@ -40,18 +43,14 @@ def _series(rows: Sequence[dict]):
     models: dict[str, dict] = {}
     for r in rows:
         m = models.setdefault(r["model"], {"fields": {}, "plain": ([], [])})
-        if r["field_id"] is None:
-            m["plain"][0].append(r["frame"])
-            m["plain"][1].append(r["response"])
-        else:
-            fr, resp = m["fields"].setdefault(r["field_id"], ([], []))
-            fr.append(r["frame"])
-            resp.append(r["response"])
+        fr, resp = m["plain"] if r["field_id"] is None else m["fields"].setdefault(r["field_id"], ([], []))
+        fr.append(r["frame"])
+        resp.append(r["response"])
     return models
 
 
-def _segments(frames: list[int], values: list[float]):
-    """Split a field's series where frames are not consecutive (NaN gaps)."""
+def gap_segments(frames: Sequence[int], values: Sequence[float]) -> tuple[np.ndarray, np.ndarray]:
+    """A field's series as float arrays, split by NaN where frames are not consecutive (gaps in the line)."""
     fr = np.asarray(frames, dtype=float)
     val = np.asarray(values, dtype=float)
     if len(fr) > 1:
@@ -90,18 +89,13 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
     the end), like the paper's Fig. 5. A field's first alarm is marked with a
     triangle. Models without fields (LGMD) are one black line.
     """
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
     from matplotlib.lines import Line2D
-
-    from ._files import atomic_path
 
     if isinstance(rows, (str, Path)):
         rows = read_responses(rows)
     data = _series(rows)
     n = max(len(data), 1)
-    fig = Figure(figsize=(9.5, 1.0 + 2.6 * n), layout="constrained")
-    FigureCanvasAgg(fig)
+    fig = figure(9.5, 1.0 + 2.6 * n)
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     all_frames = [r["frame"] for r in rows] or [0]
     x0, x1 = min(all_frames), max(all_frames)
@@ -112,18 +106,14 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
             shown = sorted(ranked[:top])  # legend in id (= birth) order
             cmap = colours(len(shown))
             for fid in ranked[top:]:
-                fr, val = _segments(*d["fields"][fid])
-                ax.plot(fr, val, color="0.7", lw=0.7, zorder=1)
+                ax.plot(*gap_segments(*d["fields"][fid]), color="0.7", lw=0.7, zorder=1)
             for c, fid in zip(cmap, shown):
-                fr, val = _segments(*d["fields"][fid])
-                ax.plot(fr, val, color=c, lw=1.5, label=_label(fid, summaries.get(fid), d["fields"][fid]),
-                        zorder=2)
+                frs, vals = d["fields"][fid]
                 s = summaries.get(fid)
-                if s and s.get("first_alarm_frame") is not None:
-                    k = s["first_alarm_frame"]
-                    frs = d["fields"][fid][0]
-                    if k in frs:
-                        ax.plot([k], [d["fields"][fid][1][frs.index(k)]], marker="v", color=c, ms=6, zorder=3)
+                ax.plot(*gap_segments(frs, vals), color=c, lw=1.5, label=_label(fid, s, (frs, vals)), zorder=2)
+                k = s.get("first_alarm_frame") if s else None
+                if k is not None and k in frs:
+                    ax.plot([k], [vals[frs.index(k)]], marker="v", color=c, ms=6, zorder=3)
             handles, labels = ax.get_legend_handles_labels()
             if len(ranked) > top:
                 handles.append(Line2D([], [], color="0.7", lw=0.7))
@@ -144,6 +134,21 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
         sec.tick_params(labelsize=7)
     if title:
         fig.suptitle(title, fontsize=11)
+    return save_png(fig, path, dpi)
+
+
+def figure(width: float, height: float):
+    """A matplotlib Figure of ``width`` x ``height`` inches, constrained layout, on its own Agg canvas."""
+    from matplotlib.backends.backend_agg import FigureCanvasAgg
+    from matplotlib.figure import Figure
+
+    fig = Figure(figsize=(width, height), layout="constrained")
+    FigureCanvasAgg(fig)
+    return fig
+
+
+def save_png(fig, path, dpi: int) -> Path:
+    """Write ``fig`` to ``path`` as PNG at ``dpi``, atomically (folders created); returns ``path``."""
     path = Path(path)
     with atomic_path(path) as tmp:
         fig.savefig(tmp, dpi=dpi, format="png")
@@ -161,18 +166,10 @@ def colours(k: int) -> list:
 
 
 def _label(fid: int, summary: dict | None, series) -> str:
-    if summary is not None:
-        x, y = summary["x"], summary["y"]
-        born = summary["born"]
-        died = summary["died"]
-    else:
-        x = y = math.nan
-        born, died = series[0][0], None
-    span = f"{born}-{'' if died is None else died}"
-    return f"#{fid} ({x:.0f}, {y:.0f}) {span}"
+    s = summary if summary is not None else {"x": math.nan, "y": math.nan, "born": series[0][0], "died": None}
+    return f"#{fid} ({s['x']:.0f}, {s['y']:.0f}) {s['born']}-{'' if s['died'] is None else s['died']}"
 
 
-#: Which fields :func:`annotate_frame` draws: ``"responding"`` (response > 0 or in alarm) or ``"all"``.
 #: Which attention fields ``annotate_frame`` draws: "auto" (none when the model has targets, else
 #: those that respond or alarm), "none", "responding", "all".
 DRAW_FIELDS = ("auto", "none", "responding", "all")
@@ -206,12 +203,9 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
 
     Text size, line widths and margins scale with the frame size (``_Style``), and every
     label sits on a filled box, placed where it hides no other label, so it reads on any
-    background. Each drawn thing is one small function (``_draw_field``,
-    ``_header_labels``) that puts its labels through :class:`_Labels`.
+    background.
     """
     if draw_fields not in DRAW_FIELDS:
-        from ._validation import InputValueError
-
         raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, "
                               f"got {draw_fields!r}")
     img = np.ascontiguousarray(frame[:, :, :3], dtype=np.uint8).copy()

@@ -12,30 +12,11 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import LUMA_RGB
-from ..plots import colours as _colours
+from ..plots import colours as _colours, figure, gap_segments, save_png
 from ..tracks import DEFAULT_MATCH_RADIUS, fields_near
 from .claims import LABELS, MODELS, STIMULUS_LABELS
 
 __all__ = ["fig3_selectivity", "fig4_four_phases", "fig5_six_objects", "fig6_real_clips", "size_profile"]
-
-
-def _figure(w: float, h: float):
-    from matplotlib.backends.backend_agg import FigureCanvasAgg
-    from matplotlib.figure import Figure
-
-    fig = Figure(figsize=(w, h), layout="constrained")
-    FigureCanvasAgg(fig)
-    return fig
-
-
-def _save(fig, path, dpi: int) -> Path:
-    from .._files import atomic_path
-
-    path = Path(path)
-    path.parent.mkdir(parents=True, exist_ok=True)
-    with atomic_path(path) as tmp:
-        fig.savefig(tmp, dpi=dpi, format="png")
-    return path
 
 
 def _gray(frame) -> np.ndarray:
@@ -49,12 +30,11 @@ def size_profile(obj, n: int) -> np.ndarray:
     """Side length (px) of a square object (:class:`mlplc2.truth.ObjectTruth`) at every frame:
     its ``sizes`` if given, else from its phases (the paper's squares grow and shrink by 2 px
     per frame)."""
+    s = np.zeros(n)
     if obj.sizes:
-        s = np.zeros(n)
         v = np.asarray(obj.sizes, float)[:n]
         s[:v.size] = v
         return s
-    s = np.zeros(n)
     side = 0.0
     if obj.approach:
         a0, a1 = obj.approach
@@ -98,13 +78,9 @@ def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, to
     ranked = sorted(fields, key=lambda f: -f.peak)
     shown = {f.id for f in ranked[:top]}
     for f in sorted(fields, key=lambda f: f.id):
-        fr = np.asarray(f.frames, float)
-        val = np.asarray(f.responses, float)
+        fr, val = gap_segments(f.frames, f.responses)
         if normalise:
             val = val / normalise
-        if fr.size > 1:
-            br = np.nonzero(np.diff(fr) > 1)[0] + 1
-            fr, val = np.insert(fr, br, np.nan), np.insert(val, br, np.nan)
         if f.id in shown:
             c = colours_by_id[f.id]
             ls = "--" if any(colours_by_id.get(g) == c for g in trace.fields if g < f.id) else "-"
@@ -140,16 +116,12 @@ def _field_colours(trace, objects=None, object_colours=None, radius: float = DEF
     ids = sorted(trace.fields)
     if not objects:
         return dict(zip(ids, _colours(len(ids))))
+    present = [np.nonzero(size_profile(o, trace.n_frames) > 0)[0] for o in objects]
     out, spare = {}, 0
     other = colormaps["Dark2"]
     for fid in ids:
-        f = trace.fields[fid]
-        match = None
-        for o, c in zip(objects, object_colours):
-            present = np.nonzero(size_profile(o, trace.n_frames) > 0)[0]
-            if present.size and fields_near([f], o, present[0], present[-1] + 1, radius):
-                match = c
-                break
+        match = next((c for o, c, p in zip(objects, object_colours, present)
+                      if p.size and fields_near([trace.fields[fid]], o, p[0], p[-1] + 1, radius)), None)
         if match is None:
             match = other(spare % 8)
             spare += 1
@@ -180,9 +152,8 @@ def _key_frames(subfig, scene, trace, indices, colours_by_id, object_colours) ->
         if trace is not None:
             _draw_fields(ax, trace, t, colours_by_id)
         for o, c in zip(scene.objects, object_colours):
-            if size_profile(o, scene.n)[t] <= 0:
-                continue
-            ax.plot([o.center[0]], [o.center[1]], marker="x", color=c, ms=6, mew=1.5)
+            if size_profile(o, scene.n)[t] > 0:
+                ax.plot([o.center[0]], [o.center[1]], marker="x", color=c, ms=6, mew=1.5)
         ax.set_title(f"frame {t}", fontsize=8)
         ax.set_xticks([])
         ax.set_yticks([])
@@ -198,7 +169,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
     response against frame, stimulus snapshots (frames 5, 25, 45) on top."""
     names = list(basic)
     models = [m for m in MODELS if m in traces]
-    fig = _figure(2.5 * len(names) + 0.6, 1.4 + 1.9 * len(models) + 0.9)
+    fig = figure(2.5 * len(names) + 0.6, 1.4 + 1.9 * len(models) + 0.9)
     gs = fig.add_gridspec(len(models) + 1, len(names), height_ratios=[0.9] + [1.0] * len(models))
     from matplotlib.lines import Line2D
 
@@ -251,7 +222,7 @@ def fig3_selectivity(basic: dict, traces: dict, path, *, source: str = "", dpi: 
     fig.legend(handles, labels, loc="outside lower center", ncol=3, fontsize=8, frameon=False)
     fig.suptitle("Fig. 3 - responses to the six basic motion patterns (100x100 px, 50 frames)"
                  + (f"\ninput: {source}" if source else ""), fontsize=11)
-    return _save(fig, path, dpi)
+    return save_png(fig, path, dpi)
 
 
 # ---------------------------------------------------------------------------
@@ -268,7 +239,7 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
     keys = [t for t in (30, 130, 230, 330) if t < n]
     if len(keys) < 4:
         keys = [min(30 + 100 * k, n - 1) for k in range(max(1, n // 100))]
-    fig = _figure(13.5, 3.0 + 1.1 + 2.0 * len(models))
+    fig = figure(13.5, 3.0 + 1.1 + 2.0 * len(models))
     sub = fig.subfigures(2, 1, height_ratios=[2.4, 1.1 + 2.0 * len(models)])
     _key_frames(sub[0], scene, tr, keys, cols, ocol)
     axes = sub[1].subplots(len(models) + 1, 1, sharex=True, height_ratios=[0.8] + [1.0] * len(models))
@@ -301,7 +272,7 @@ def fig4_four_phases(scene, traces: dict, path, *, source: str = "", dpi: int = 
     fig.suptitle("Fig. 4 - four phases: dark objects approach (40 frames), hold (20), recede (40) "
                  "on a background scrolling left" + (f" [{note}]" if note else "")
                  + (f"\ninput: {source}" if source else ""), fontsize=11)
-    return _save(fig, path, dpi)
+    return save_png(fig, path, dpi)
 
 
 # ---------------------------------------------------------------------------
@@ -313,7 +284,7 @@ def fig5_six_objects(scene, trace, path, *, source: str = "", dpi: int = 110) ->
     ocol = _colours(len(scene.objects))
     cols = _field_colours(trace, scene.objects, ocol)
     keys = [t for t in (20, 50, 80, 110) if t < n] or [n - 1]
-    fig = _figure(13.5, 8.2)
+    fig = figure(13.5, 8.2)
     sub = fig.subfigures(2, 1, height_ratios=[2.4, 4.4])
     _key_frames(sub[0], scene, trace, keys, cols, ocol)
     ax0, ax1 = sub[1].subplots(2, 1, sharex=True, height_ratios=[0.8, 1.4])
@@ -328,7 +299,7 @@ def fig5_six_objects(scene, trace, path, *, source: str = "", dpi: int = 110) ->
     ax1.set_xlim(0, max(n - 1, 1))
     fig.suptitle("Fig. 5 - six dark objects appear at frames 5, 15, 25, 45, 55, 65 and expand"
                  + (f"\ninput: {source}" if source else ""), fontsize=11)
-    return _save(fig, path, dpi)
+    return save_png(fig, path, dpi)
 
 
 # ---------------------------------------------------------------------------
@@ -338,9 +309,8 @@ def fig6_real_clips(clips: list, traces: dict, path, *, dpi: int = 110) -> Path:
     """Fig. 6: mLPLC2 on real clips; per clip a key frame (the frame of the largest
     response) with the fields drawn, and the normalised response of every field."""
     k = max(1, len(clips))
-    fig = _figure(14.0, 2.9 * k + 0.8)
-    rows = fig.subfigures(k, 1)
-    rows = np.atleast_1d(rows)
+    fig = figure(14.0, 2.9 * k + 0.8)
+    rows = np.atleast_1d(fig.subfigures(k, 1))
     for row, sc in zip(rows, clips):
         tr = traces[sc.name]
         cols = _field_colours(tr)
@@ -366,4 +336,4 @@ def fig6_real_clips(clips: list, traces: dict, path, *, dpi: int = 110) -> Path:
                       fontsize=9, loc="left")
     fig.suptitle("Fig. 6 - mLPLC2 on real UAV clips (fields: dashed square, solid = in alarm; "
                  "responses normalised by the clip's largest field response)\n", fontsize=11)
-    return _save(fig, path, dpi)
+    return save_png(fig, path, dpi)

@@ -87,11 +87,9 @@ def load_inputs(data: Path | None, *, quick: bool = False, seed: int = 0) -> dic
         for name in stimuli.BASIC_NAMES:
             st = stimuli.basic(name)
             out["basic"][name] = Scene(name, st.frames, st.fps, list(st.objects), f"stimuli.basic({name!r})")
-        st = stimuli.four_phase(seed=seed)
-        out["four_phase"] = Scene("four_phase", st.frames, st.fps, list(st.objects), f"stimuli.four_phase(seed={seed})")
-        st = stimuli.six_objects(seed=seed)
-        out["six_objects"] = Scene("six_objects", st.frames, st.fps, list(st.objects),
-                                   f"stimuli.six_objects(seed={seed})")
+        for key, make in (("four_phase", stimuli.four_phase), ("six_objects", stimuli.six_objects)):
+            st = make(seed=seed)
+            out[key] = Scene(key, st.frames, st.fps, list(st.objects), f"stimuli.{key}(seed={seed})")
         return out
     data = Path(data)
     gt_path = data / "ground_truth.json"

@@ -77,9 +77,8 @@ def write_json(result: ReproduceResult, path: Path) -> Path:
         "figures": sorted(k for k in result.files if k.endswith(".png")),
         "claims": [c.to_dict() for c in result.claims],
     }
-    path = Path(path)
     _files.write_json(path, doc, indent=2)
-    return path
+    return Path(path)
 
 
 def _cell(text) -> str:
@@ -110,7 +109,6 @@ def write_markdown(result: ReproduceResult, path: Path) -> Path:
         lines.append("")
     lines += ["Claim ids, values and flags are in `report.json`. Thresholds and the meaning of each line: "
               "docs/reproduce.md.", ""]
-    path = Path(path)
     _files.write_text(path, "\n".join(lines))
-    return path
+    return Path(path)
 
