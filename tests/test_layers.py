@@ -94,3 +94,11 @@ def test_cli_is_imported_by_no_module_of_the_package():
                                                      or any(a.name == "cli" for a in node.names)):
                 importers.append(f"{_module_name(path)}:{node.lineno}")
     assert not importers, importers
+
+
+def test_the_model_base_class_knows_no_family():
+    """models/base.py (the generic contract) imports no family's stages: the attention fields'
+    type aside (``Output.fields``), nothing of the front end, the targets or a baseline."""
+    tree = ast.parse((PACKAGE / "models" / "base.py").read_text(encoding="utf-8"))
+    imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level}
+    assert imported <= {"_validation", "attention"}, imported

@@ -19,7 +19,6 @@ import numpy as np
 
 from .._validation import InputTypeError, InputValueError, as_gray, check_fps, check_int, check_unit_scale
 from ..attention import Field
-from ..targets import count_down
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
            "get_model", "available_models", "resolve_names", "looks_duplicated"]
@@ -46,7 +45,7 @@ class Output:
     repeated : bool
         The frame repeated the last processed one (see ``Model.repeat_threshold``): the
         model did not step, and this output is the previous one with this frame's index, as
-        the model's ``_hold`` ages it (models with targets count each ``ttc_s`` down).
+        the model's ``_hold`` ages it (the models with targets count each ``ttc_s`` down).
     targets : tuple of Target
         The approaching objects (:class:`mlplc2.targets.Target`: size, time to contact,
         miss, warning), most urgent first; empty for models without targets (LGMD).
@@ -324,9 +323,8 @@ class Model(abc.ABC):
         return dataclasses.replace(held, frame=self._frame, repeated=True)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
-        """The output held ``elapsed`` seconds after ``last``: each target's ``ttc_s`` counts down
-        (:func:`~mlplc2.targets.count_down`; models with other clocks override it)."""
-        return dataclasses.replace(last, targets=count_down(last.targets, elapsed))
+        """The output held ``elapsed`` seconds after ``last`` (models with clocks override it)."""
+        return last
 
     @staticmethod
     def _check_params(value, cls, what: str, label: str):

@@ -29,14 +29,15 @@ from __future__ import annotations
 
 import math
 from collections import deque
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 
 import cv2
 import numpy as np
 
 from .._validation import Valid, check_fields
 from ..params import ParameterSet, document_parameters, param
-from ..targets import Target, TargetParams, Track, change_box, check_hfov, estimate, focal_length, pyramid
+from ..targets import (Target, TargetParams, Track, change_box, check_hfov, count_down, estimate, focal_length,
+                       pyramid)
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["FlowTTC", "FlowParams", "ObjectFlow", "object_flow", "camera_motion", "CameraMotion",
@@ -450,6 +451,10 @@ class FlowTTC(Model):
         self.hfov_deg = check_hfov(hfov_deg)
         self.target_params = target_params
         self._reset()
+
+    def _hold(self, last: Output, elapsed: float) -> Output:
+        """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
+        return replace(last, targets=count_down(last.targets, elapsed))
 
     def _reset(self) -> None:
         self._frames: deque = deque(maxlen=max(self.params.baseline, self.target_params.change_frames))

@@ -4,6 +4,7 @@ field) and LPLC2 (one fixed cell spanning the frame), sharing one front end."""
 from __future__ import annotations
 
 from collections import deque
+from dataclasses import replace
 
 import numpy as np
 
@@ -11,7 +12,7 @@ from ..attention import AttentionField, argmax_outside, gate_area, lplc2_respons
 from ..backend import resolve
 from ..lobula_plate import LocalMotion
 from ..params import Params
-from ..targets import TargetLayer, TargetParams, check_hfov, focal_length
+from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
@@ -50,6 +51,10 @@ class _LPLC2Family(Model):
         self.maps: LocalMotion | None = None
         """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
         self._layer: TargetLayer | None = None
+
+    def _hold(self, last: Output, elapsed: float) -> Output:
+        """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
+        return replace(last, targets=count_down(last.targets, elapsed))
 
     def _reset(self) -> None:
         self.frontend.reset()
