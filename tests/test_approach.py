@@ -1,4 +1,4 @@
-"""Tests of mlplc2.approach (3-D approaches and their truth): geometry measured from the pixels."""
+"""Tests of mlplc2.stimuli.world (3-D approaches and their truth): geometry measured from the pixels."""
 
 from __future__ import annotations
 
@@ -14,7 +14,7 @@ import pytest
 
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
-from mlplc2.approach import COLLISION_MISS
+from mlplc2.stimuli.world import COLLISION_MISS
 
 A = S.ApproachObject
 SIZE = (81, 61)                 # odd: the principal point (40, 30) is a pixel centre
@@ -318,10 +318,10 @@ def test_preset_signature_is_cli_friendly_and_documented():
 
 
 def test_either_module_may_be_imported_first():
-    for first in ("mlplc2.approach", "mlplc2.stimuli"):
+    for first in ("mlplc2.stimuli.world", "mlplc2.stimuli"):
         code = f"import {first}; from mlplc2.stimuli import approach; print(approach.__module__)"
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-        assert out.stdout.strip() == "mlplc2.approach"
+        assert out.stdout.strip() == "mlplc2.stimuli.world"
 
 
 # --------------------------------------------------------------------------- bad input

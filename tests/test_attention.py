@@ -6,8 +6,8 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2.attention import argmax_outside, lplc2_response, quadrant_sums
-from mlplc2.lobula_plate import LocalMotion
+from mlplc2.neuropils.attention import argmax_outside, lplc2_response, quadrant_sums
+from mlplc2.neuropils.lobula_plate import LocalMotion
 
 
 def radial_maps(h=100, w=100, cx=50, cy=50, inward=False):
@@ -134,7 +134,7 @@ def test_argmax_outside_matches_masking_the_map(shape):
 def test_disc_quadrant_areas_count_the_disc():
     """The arbour gate scales with the pixels a quadrant integrates: for a disc field, the disc's
     pixels (it used the square's, a 32 % stricter gate per pixel at R_AF = 40)."""
-    from mlplc2.attention import field_mask, quadrant_areas
+    from mlplc2.neuropils.attention import field_mask, quadrant_areas
 
     m = field_mask(40)
     want = int(m[:40, 41:].sum())

@@ -25,7 +25,7 @@ from mlplc2.cli import main
 from mlplc2.evaluate import EARLY_S, LATE_S, Evaluation, EvaluationWarning, evaluate, load_ground_truth
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, TARGET_COLUMNS, RunResult
-from mlplc2.truth import TRACK_COLUMNS
+from mlplc2.evaluation.truth import TRACK_COLUMNS
 
 FPS = 30.0
 

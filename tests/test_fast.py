@@ -1,4 +1,4 @@
-"""The fast front end (mlplc2._fast) against the reference (mlplc2.frontend.FrontEnd), the oracle.
+"""The fast front end (mlplc2.neuropils._fast) against the reference (mlplc2.neuropils.frontend.FrontEnd), the oracle.
 
 LM maps agree to 1e-4 of their largest value (in practice ~1e-6: only x ** 0.9 is computed
 differently); mLPLC2 with either backend makes the same fields. No timings here: see
@@ -17,10 +17,11 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2 import _fast, attention, stimuli
+from mlplc2 import stimuli
+from mlplc2.neuropils import _fast, attention
 from mlplc2.backend import make_frontend
-from mlplc2.frontend import FrontEnd
-from mlplc2.lobula_plate import LocalMotion
+from mlplc2.neuropils.frontend import FrontEnd
+from mlplc2.neuropils.lobula_plate import LocalMotion
 
 from .conftest import read_gray
 
@@ -354,7 +355,7 @@ def test_bench_cli(capsys):
 _TWO_STREAMS = r"""
 import os, sys, threading, time
 import numpy as np, mlplc2
-from mlplc2 import _fast
+from mlplc2.neuropils import _fast
 frames = [np.random.default_rng(k).integers(0, 256, (480, 640)).astype(np.uint8) for k in range(3)]
 real_pool = _fast._pool
 class SlowSubmit:  # a thread switch after every submit: the band tasks of two frames interleave

@@ -1,4 +1,4 @@
-"""The compiled image alignment (mlplc2._fast_targets.align_patch) against mlplc2.targets.align.
+"""The compiled image alignment (mlplc2.targets._fast.align_patch) against mlplc2.targets.align.
 
 The NumPy ``align`` is the oracle. The kernel samples, blurs and differentiates the patch in
 OpenCV's float32 order (bit for bit here; asserted to a few float32 ulps, the order of
@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2 import _fast_targets, stimuli
+from mlplc2 import stimuli
+from mlplc2.targets import _fast as _fast_targets
 from mlplc2 import targets as T
 from mlplc2.backend import resolve
 

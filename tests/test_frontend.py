@@ -7,10 +7,10 @@ import pytest
 
 import mlplc2
 from mlplc2 import stimuli
-from mlplc2.frontend import FrontEnd
-from mlplc2.lamina import gaussian_kernel_1d, on_off, vdog
-from mlplc2.medulla import contrast_normalise, shift
-from mlplc2.retina import photoreceptors
+from mlplc2.neuropils.frontend import FrontEnd
+from mlplc2.neuropils.lamina import gaussian_kernel_1d, on_off, vdog
+from mlplc2.neuropils.medulla import contrast_normalise, shift
+from mlplc2.neuropils.retina import photoreceptors
 
 SIZE = 80
 
@@ -88,7 +88,7 @@ def test_vdog_keeps_sign_of_excitation_and_never_amplifies():
     rng = np.random.default_rng(0)
     l = rng.normal(0, 30, (40, 40)).astype(np.float32)
     fe = FrontEnd(mlplc2.Params(), fps=30.0)
-    from mlplc2.lamina import gaussian_filter
+    from mlplc2.neuropils.lamina import gaussian_filter
 
     e = gaussian_filter(l, fe.k_e)
     out = vdog(l, fe.k_e, fe.k_i, 1.2)

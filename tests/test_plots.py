@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 
 from mlplc2._validation import InputValueError
-from mlplc2.attention import Field
+from mlplc2.neuropils.attention import Field
 from mlplc2.models.base import Output
 from mlplc2.plots import ALARM_RGB, CALM_RGB, PANEL_RGB, annotate_frame
 

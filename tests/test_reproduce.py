@@ -222,7 +222,7 @@ def test_good_ground_truth_reaches_the_videos(tmp_path, capsys):
 @pytest.mark.paper
 def test_paper_ground_truth_objects_unchanged(paper_dir, paper_truth):
     """Checking the paper's file leaves its objects as they are (so the claims do not change):
-    read as mlplc2.truth objects, they give back the file's objects key by key."""
+    read as mlplc2.evaluation.truth objects, they give back the file's objects key by key."""
     objects = reproduce.load_paper_objects(paper_dir / "ground_truth.json")
     assert {k: [o.to_dict() for o in v] for k, v in objects.items()} == \
         {k: v.get("objects", []) for k, v in paper_truth.items()}

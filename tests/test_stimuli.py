@@ -11,7 +11,7 @@ import pytest
 
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
-from mlplc2.truth import PHASES
+from mlplc2.evaluation.truth import PHASES
 
 from .conftest import PAPER, read_gray
 

@@ -22,7 +22,7 @@ from mlplc2._validation import InputTypeError, InputValueError
 from mlplc2.stimuli import ApproachObject, approach
 from mlplc2.targets import (Target, TargetParams, Track, align, bearing, change_box, edge_distance, fit_contact,
                             fit_course, focal_length, pyramid)
-from mlplc2.truth import parse
+from mlplc2.evaluation.truth import parse
 
 FPS = 30.0
 
@@ -144,7 +144,7 @@ def test_edge_distance_outer_boundary_and_nearest_edge():
 def test_compiled_edge_scan_matches_numpy():
     """The backend's compiled edge scan (``measure_extent(kernel=...)``) is the NumPy code's."""
     from mlplc2.backend import resolve
-    from mlplc2.lobula_plate import LocalMotion
+    from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import measure_extent
 
     kernel = resolve("numba").edge_kernel

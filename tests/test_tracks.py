@@ -1,4 +1,4 @@
-"""mlplc2.tracks as the one recorder, matcher and false-alarm rule of the edge code."""
+"""mlplc2.evaluation.tracks as the one recorder, matcher and false-alarm rule of the edge code."""
 
 from __future__ import annotations
 
@@ -6,11 +6,12 @@ import numpy as np
 import pytest
 
 import mlplc2
-from mlplc2 import stimuli, tracks, truth
-from mlplc2.attention import Field
+from mlplc2 import stimuli
+from mlplc2.evaluation import tracks, truth
+from mlplc2.neuropils.attention import Field
 from mlplc2.evaluate import evaluate
 from mlplc2.runner import RunResult
-from mlplc2.tracks import match_fields
+from mlplc2.evaluation.tracks import match_fields
 
 OBJ = truth.ObjectTruth(id=1, center=(50.0, 50.0), polarity="dark", approach=(10, 50), hold=(50, 60))
 RECEDING = truth.ObjectTruth(id=2, center=(150.0, 50.0), polarity="dark", recede=(0, 40))
@@ -135,8 +136,8 @@ def test_flat_recorder_keeps_no_series_and_counts_alarms():
 # -- the recorder of a run: dead fields spilled to disk, the peak of a plateau ------------
 def test_field_summaries_keep_only_live_fields_in_memory():
     """keep_rows=False: a field that died leaves memory (it is spilled to a temporary file)."""
-    from mlplc2.attention import Field
-    from mlplc2.tracks import Recorder
+    from mlplc2.neuropils.attention import Field
+    from mlplc2.evaluation.tracks import Recorder
 
     tracker = Recorder(["m"], series=False, spill=True)
     for k in range(200):   # a new field every frame, each living 3 frames
@@ -152,8 +153,8 @@ def test_field_summaries_keep_only_live_fields_in_memory():
 def test_peak_frame_is_the_first_frame_of_a_plateau():
     """A response held on later frames (duplicates) leaves the peak at its first frame, also when
     the stored value is rounded (it used to move to the last frame of the plateau)."""
-    from mlplc2.attention import Field
-    from mlplc2.tracks import Recorder
+    from mlplc2.neuropils.attention import Field
+    from mlplc2.evaluation.tracks import Recorder
 
     tracker = Recorder(["m"])
     for k, r in enumerate((5.0, 12058.344999, 12058.344999, 12058.344999, 100.0)):

@@ -1,4 +1,4 @@
-"""mlplc2.truth as the one ground-truth type: what the stimulus generators emit, what they write
+"""mlplc2.evaluation.truth as the one ground-truth type: what the stimulus generators emit, what they write
 and what the loader reads back."""
 
 from __future__ import annotations
@@ -9,10 +9,12 @@ from pathlib import Path
 
 import pytest
 
-from mlplc2 import approach, stimuli as S, truth
+from mlplc2 import stimuli as S
+from mlplc2.evaluation import truth
+from mlplc2.stimuli import world as approach
 
 #: ``to_ground_truth()`` of every case below, recorded with the code before the generators
-#: emitted :class:`mlplc2.truth.ObjectTruth` (commit 278bca0, when they had their own truth
+#: emitted :class:`mlplc2.evaluation.truth.ObjectTruth` (commit 278bca0, when they had their own truth
 #: types): the JSON they write must not change.
 FIXTURE = Path(__file__).parent / "fixtures" / "generator_truth.json"
 

@@ -5,7 +5,7 @@
 """
 
 from ._validation import InputError, InputWarning
-from .attention import Field
+from .neuropils.attention import Field
 from .models import LGMD1, LGMD2, LPLC2, MLPLC2, SLPLC2, Output, available_models, get_model
 from .params import Params
 from .runner import RunResult, run

@@ -2,9 +2,9 @@
 
 A model picks its :class:`Backend` once, at construction (``backend="auto" | "numba" |
 "reference"``), and every per-frame stage that has a compiled version takes it from there:
-the front end (Eq. 1-12, :class:`mlplc2._fast.FastFrontEnd`), the quadrant sums of Eq. 14
-(:func:`mlplc2._fast.quadrant_sums`), the edge scans and the image alignment of the target
-layer (:func:`mlplc2._fast_targets.edges4`, :func:`mlplc2._fast_targets.align_patch`).
+the front end (Eq. 1-12, :class:`mlplc2.neuropils._fast.FastFrontEnd`), the quadrant sums of Eq. 14
+(:func:`mlplc2.neuropils._fast.quadrant_sums`), the edge scans and the image alignment of the target
+layer (:func:`mlplc2.targets._fast.edges4`, :func:`mlplc2.targets._fast.align_patch`).
 ``"reference"`` never imports Numba. Both give the same fields and targets; the LM maps agree
 to ~1e-6, the edge scans bit for bit, the alignments to ~1e-12.
 """
@@ -32,7 +32,8 @@ def fast_available() -> bool:
     """True when the compiled kernels (Numba) can be imported."""
     global _FAST_ERROR
     try:
-        from . import _fast, _fast_targets  # noqa: F401
+        from .neuropils import _fast  # noqa: F401
+        from .targets import _fast as _fast_targets  # noqa: F401
     except Exception as exc:  # noqa: BLE001 - ImportError, or numba failing to initialise
         _FAST_ERROR = f"{type(exc).__name__}: {exc}"
         return False
@@ -61,7 +62,8 @@ def resolve(backend: str = "auto") -> Backend:
         raise InputValueError(f"backend must be one of {', '.join(BACKENDS)}, got {backend!r}")
     if backend != "reference":
         if fast_available():
-            from . import _fast, _fast_targets
+            from .neuropils import _fast
+            from .targets import _fast as _fast_targets
 
             return Backend("numba", _fast.FastFrontEnd, _fast.quadrant_sums, _fast_targets.edges4,
                            _fast_targets.align_patch)
@@ -70,8 +72,8 @@ def resolve(backend: str = "auto") -> Backend:
         if not _WARNED:
             _log.warning("mlplc2: Numba is unavailable (%s); using the slower reference front end", _FAST_ERROR)
             _WARNED = True
-    from .attention import quadrant_sums
-    from .frontend import FrontEnd
+    from .neuropils.attention import quadrant_sums
+    from .neuropils.frontend import FrontEnd
 
     return Backend("reference", FrontEnd, quadrant_sums, None, None)
 

@@ -11,9 +11,9 @@ For every model and frame size it reports, measured in the same run:
 * the same for the reference front end (``backend="reference"``, fewer frames) and the
   speed-up;
 * a memory-bandwidth probe: the time to copy the float32 planes the fast pipeline touches
-  (:func:`mlplc2._fast.plane_count`: N = 26 planes with the default parameters, 28 with the
+  (:func:`mlplc2.neuropils._fast.plane_count`: N = 26 planes with the default parameters, 28 with the
   relative floor ``Params.n_floor``; the kernels do 54 or 64 plane reads + writes,
-  :func:`mlplc2._fast.plane_traffic`) with the same thread count, and the
+  :func:`mlplc2.neuropils._fast.plane_traffic`) with the same thread count, and the
   ratio of the model's time to it;
 * the peak memory one stream allocates (``tracemalloc``: model state, scratch and one
   frame's output maps; Numba's row buffers and OpenCV's strip buffers are not traced and
@@ -124,7 +124,7 @@ def bandwidth_probe(width: int, height: int, planes: int, repeats: int = 15) -> 
     bandwidth figure is what the machine can do, the strictest yardstick for the ratio."""
     import numba
 
-    from ._fast import copy_chain
+    from .neuropils._fast import copy_chain
 
     stack = np.ones((planes + 1, height * width), np.float32)
     best = float("inf")
@@ -197,7 +197,7 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
     """
     import numba
 
-    from . import _fast
+    from .neuropils import _fast
 
     _fast.set_threads(numba.get_num_threads() if threads is None else threads)
     n_threads = numba.get_num_threads()
@@ -256,7 +256,7 @@ def describe(frames: int, rounds: int) -> str:
     """What the columns of :func:`format_table` measure (printed under the table)."""
     import os
 
-    from . import _fast
+    from .neuropils import _fast
 
     traffic = sum(_fast.plane_traffic(Params().n_floor > 0).values())
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"

@@ -140,7 +140,7 @@ def _real_inputs(real) -> tuple[list[Path], Path | None]:
     gt = real / "ground_truth.json"
     if not gt.is_file():
         return [], None
-    from .truth import load
+    from .evaluation.truth import load
 
     truth = load(gt)
     return [p for base in (real, real.parent / "paper") for p in sorted(base.rglob("*"))

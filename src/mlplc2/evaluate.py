@@ -1,6 +1,6 @@
 """Score model outputs against ground truth (the ``mlplc2 evaluate`` command).
 
-Two kinds of truth (:mod:`mlplc2.truth`; schema in ``docs/evaluation.md``):
+Two kinds of truth (:mod:`mlplc2.evaluation.truth`; schema in ``docs/evaluation.md``):
 
 object level
     the objects and their phases (the paper's ``ground_truth.json``), scored per approaching
@@ -62,10 +62,10 @@ def mid_error(true_ttc: float, est_ttc: float, interval: float = MID_INTERVAL_S)
     ``|ln s(est) - ln s(true)| x 10^4`` (positive TTCs)."""
     return abs(math.log(est_ttc / (est_ttc + interval)) - math.log(true_ttc / (true_ttc + interval))) * 1e4
 
-from .tracks import (CAUSES, DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance,
+from .evaluation.tracks import (CAUSES, DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance,
                      episodes, on_object, warning_cause)
-from .truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
-from .truth import load as load_ground_truth
+from .evaluation.truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
+from .evaluation.truth import load as load_ground_truth
 
 #: Row order of the comparison table (other registered models follow, alphabetically).
 MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
@@ -400,7 +400,7 @@ def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tup
         objects.append(rec)
 
     # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
-    # no approaching object explains (mlplc2.tracks.alarm_explained)
+    # no approaching object explains (mlplc2.evaluation.tracks.alarm_explained)
     def explained(f, x=None, y=None):
         return alarm_explained(f, approaching, x, y, radius=radius, tail=tail)
 
@@ -471,8 +471,8 @@ def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dic
     A model's warning is its targets' warnings (models with targets), else its alarm: the fields
     in alarm of a model that localises, the frame's alarm of one that does not. Collision objects
     (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
-    (:func:`mlplc2.tracks.on_object`) before contact; every other warning is false, with its
-    cause (:func:`mlplc2.tracks.warning_cause`), except within ``LATE_S`` after a contact, on
+    (:func:`mlplc2.evaluation.tracks.on_object`) before contact; every other warning is false, with its
+    cause (:func:`mlplc2.evaluation.tracks.warning_cause`), except within ``LATE_S`` after a contact, on
     the object that hit. On a labelled clip, frames from the contact on are not scored, and a
     warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
     collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were

@@ -49,7 +49,7 @@ from .models.base import (REPEAT_THRESHOLD, Model, available_models, check_repea
                           looks_duplicated, resolve_names)
 from .plots import DRAW_FIELDS
 from .targets import TargetParams, check_hfov
-from .tracks import Recorder, match_fields, response_rows
+from .evaluation.tracks import Recorder, match_fields, response_rows
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir", "demo", "DemoResult"]

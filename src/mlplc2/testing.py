@@ -32,7 +32,7 @@ import cv2
 import numpy as np
 
 from ._validation import InputError, InputTypeError, InputWarning
-from .attention import Field
+from .neuropils.attention import Field
 from .models.base import Model, Output
 
 __all__ = ["check_model", "run_checks", "looming_frames", "CHECKS", "BAD_FRAMES"]

@@ -8,7 +8,7 @@ import os
 import numpy as np
 import pytest
 
-from mlplc2.medulla import lowpass_alpha
+from mlplc2.neuropils.medulla import lowpass_alpha
 from mlplc2.models.base import REGISTRY
 from mlplc2.models.lgmd import (
     LGMD1,

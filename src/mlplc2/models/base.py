@@ -18,7 +18,7 @@ import cv2
 import numpy as np
 
 from .._validation import InputTypeError, InputValueError, as_gray, check_fps, check_int, check_unit_scale
-from ..attention import Field
+from ..neuropils.attention import Field
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
            "get_model", "available_models", "resolve_names", "looks_duplicated"]

@@ -28,10 +28,10 @@ import cv2
 import numpy as np
 
 from .._validation import FLOAT32_MAX, InputValueError, check_bool, check_int, check_real, check_reals
-from ..lamina import on_off
-from ..medulla import delayed, lowpass_alpha
+from ..neuropils.lamina import on_off
+from ..neuropils.medulla import delayed, lowpass_alpha
 from ..params import ParameterSet
-from ..retina import photoreceptors
+from ..neuropils.retina import photoreceptors
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["LGMD2Params", "LGMD1Params", "LGMD2", "LGMD1", "highpass_coeff",

@@ -8,9 +8,9 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
+from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
-from ..lobula_plate import LocalMotion
+from ..neuropils.lobula_plate import LocalMotion
 from ..params import Params
 from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
 from .base import WORK_WIDTH, Model, Output, register

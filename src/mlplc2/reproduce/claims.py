@@ -11,7 +11,7 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, Record, centre_distance, false_alarms, fields_near,
+from ..evaluation.tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, Record, centre_distance, false_alarms, fields_near,
                       first_field)
 from .inputs import Scene
 
@@ -270,7 +270,7 @@ def _approaching(scene: Scene) -> list:
 def _localisation_claims(claims: _Claims, sec: str, prefix: str, tr: Record, o, verb: str,
                          paper_latency: str | None, paper_error: str) -> None:
     """``PREFIX.latency.objI`` and ``PREFIX.error.objI``: the first field on object ``o``
-    (:func:`mlplc2.tracks.first_field`), how soon after the onset and how close to its centre."""
+    (:func:`mlplc2.evaluation.tracks.first_field`), how soon after the onset and how close to its centre."""
     hit = first_field(tr, o, MATCH_RADIUS)
     lat = None if hit is None else hit[1]
     err = None if hit is None else hit[2]

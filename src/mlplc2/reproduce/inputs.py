@@ -11,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from .._validation import InputValueError
-from ..truth import ObjectTruth, parse, read_json
+from ..evaluation.truth import ObjectTruth, parse, read_json
 
 __all__ = ["Scene", "load_inputs", "load_paper_objects", "PAPER_BASIC_FILES", "FOUR_PHASE_FILE",
            "SIX_OBJECTS_FILE"]
@@ -26,7 +26,7 @@ SIX_OBJECTS_FILE = "scenes/outdoor_3_black_expand_multi_6.avi"
 
 @dataclass
 class Scene:
-    """Frames of one input and the ground truth of its objects (:class:`mlplc2.truth.ObjectTruth`)."""
+    """Frames of one input and the ground truth of its objects (:class:`mlplc2.evaluation.truth.ObjectTruth`)."""
 
     name: str
     frames: Any
@@ -56,7 +56,7 @@ def _read(path: Path):
 
 def load_paper_objects(gt_path: Path) -> dict[str, list[ObjectTruth]]:
     """The objects of every video of the paper's ``ground_truth.json`` (``{key: [ObjectTruth]}``),
-    read by the loader of ``mlplc2 evaluate`` (:func:`mlplc2.truth.load`): a malformed file
+    read by the loader of ``mlplc2 evaluate`` (:func:`mlplc2.evaluation.truth.load`): a malformed file
     raises :class:`~mlplc2.InputValueError` naming the field. The two scenes must have
     object-level entries whose objects have a ``center`` (the reproduction does not follow
     tracks)."""

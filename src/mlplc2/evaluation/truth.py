@@ -33,7 +33,7 @@ from dataclasses import dataclass, field
 from pathlib import Path, PurePosixPath
 from typing import Any, NamedTuple
 
-from ._validation import InputValueError
+from .._validation import InputValueError
 
 __all__ = ["TrackPoint", "ObjectTruth", "VideoTruth", "GroundTruth", "load", "parse", "read_json", "save",
            "PHASES", "KINDS", "LEGACY_KINDS", "LABELS", "TRACK_COLUMNS", "APPEARANCES", "OBJECT_LAYOUTS"]
@@ -658,7 +658,7 @@ def load(gt) -> GroundTruth:
 
 def save(truth: GroundTruth | VideoTruth, path) -> Path:
     """Write ``truth`` as JSON to ``path`` (atomically: a file with its final name is complete)."""
-    from ._files import write_json
+    from .._files import write_json
 
     path = Path(path)
     write_json(path, truth.to_dict())

@@ -3,7 +3,7 @@
 Every generator returns a :class:`Stimulus`: grey ``uint8`` frames of shape
 ``(T, H, W)`` plus one :class:`ObjectTruth` per object (centre, polarity,
 phase intervals, side length per frame, contact frame; the one ground-truth type,
-:class:`mlplc2.truth.ObjectTruth`). Coordinates are pixels,
+:class:`mlplc2.evaluation.truth.ObjectTruth`). Coordinates are pixels,
 ``x`` = column, ``y`` = row, origin at the top-left corner; frame indices are
 0-based and intervals are half-open ``[start, end)``, exactly as in the
 paper's ``ground_truth.json``. Everything is vectorised with NumPy (no loop
@@ -48,7 +48,7 @@ Map to the paper (Sec. IV, "Experimental Evaluation")
     Not in the paper: flat objects moving in 3-D in front of a pinhole camera
     that may pan, tilt or move forward over a ground plane (collisions,
     passes, distractors), with exact per-frame truth. Built by
-    :func:`approach_scene` over :func:`approach` (module :mod:`mlplc2.approach`,
+    :func:`approach_scene` over :func:`approach` (module :mod:`mlplc2.stimuli.world`,
     re-exported here; docs/stimuli.md).
 
 Arbitrary multi-object scenes are made with :func:`scene` and
@@ -75,11 +75,12 @@ from typing import Any, Callable, Sequence
 
 import numpy as np
 
-from ._validation import InputValueError, as_gray, check_fps
-from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, Stimulus, check_choice, check_count, check_number,
-                        check_size, focal_length_px, plain_level, procedural_background)
-from .approach import ApproachObject, ObjectTrack, approach, approach_scene, random_scene
-from .truth import ObjectTruth
+from .._validation import InputValueError, as_gray, check_fps
+from ..camera import check_hfov, focal_length
+from ._common import (MAX_STIMULUS_BYTES, ApproachStimulus, Stimulus, check_choice, check_count, check_number,
+                        check_size, plain_level, procedural_background)
+from .world import ApproachObject, ObjectTrack, approach, approach_scene, random_scene
+from ..evaluation.truth import ObjectTruth
 
 __all__ = [
     "ObjectTruth",
@@ -96,9 +97,8 @@ __all__ = [
     "generate",
     "write",
     "parameters",
-    "focal_length_px",
     "plain_level",
-    # 3-D approaches (mlplc2.approach)
+    # 3-D approaches (mlplc2.stimuli.world)
     "ApproachObject",
     "ObjectTrack",
     "ApproachStimulus",
@@ -166,7 +166,7 @@ class SceneObject:
         "physical": a square of half-size ``half_size`` m approaching at
         ``speed`` m/s; its side is ``2 f tan(theta)`` with
         ``theta = atan(l / (v (t_c - t)))`` and ``f`` from ``hfov_deg`` (see
-        :func:`focal_length_px`). The recede is the time reverse.
+        :func:`mlplc2.camera.focal_length`). The recede is the time reverse.
     half_size : float
         Physical half-size ``l`` in metres ("physical" only).
     speed : float
@@ -523,7 +523,7 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     fps = check_fps(fps)
     scroll = check_number(scroll, "scroll")
     seed = check_count(seed, "seed", 0)
-    focal = focal_length_px(w, hfov_deg)
+    focal = focal_length(w, check_hfov(hfov_deg, required=True))
     if isinstance(objects, SceneObject):
         objects = [objects]
     checked = [_check_object(o, n, i) for i, o in enumerate(objects)]
@@ -683,7 +683,7 @@ def looming(*, size: tuple[int, int] = (320, 240), center: tuple[float, float] |
     speed = check_number(speed, "speed", positive=True)
     contact_time = check_number(contact_time, "contact_time", positive=True)
     check_choice(polarity, "polarity", _POLARITIES)
-    focal = focal_length_px(w, hfov_deg)
+    focal = focal_length(w, check_hfov(hfov_deg, required=True))
     if center is None:
         center = (w / 2.0, h / 2.0)
     contact = contact_time * fps
@@ -781,8 +781,8 @@ def write(name: str, out, *, gt=None, **options) -> tuple[Path, Path]:
     ``options`` go to the generator (e.g. ``seed``, ``background``).
     Returns ``(video_path, gt_path)``.
     """
-    from ._files import check_output_file, write_json
-    from .io import check_video_output, write_video
+    from .._files import check_output_file, write_json
+    from ..io import check_video_output, write_video
 
     out = check_video_output(out)
     gt_path = check_output_file(gt if gt is not None else out.with_name(f"{out.stem}_gt.json"),

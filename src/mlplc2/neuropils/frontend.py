@@ -5,7 +5,7 @@ one grey frame (float32, 0-255) and returns the :class:`LocalMotion` maps.
 All state between frames is held explicitly in :class:`FrontEndState`.
 
 :class:`FrontEnd` is the plain reference implementation (the tests' oracle);
-:func:`mlplc2.backend.make_frontend` picks the fast one (:class:`mlplc2._fast.FastFrontEnd`:
+:func:`mlplc2.backend.make_frontend` picks the fast one (:class:`mlplc2.neuropils._fast.FastFrontEnd`:
 OpenCV + fused Numba kernels, same results to ~1e-6) by default. This module imports
 neither: the fast one imports :func:`set_coefficients` from here.
 """
@@ -19,7 +19,7 @@ import numpy as np
 from .lamina import gaussian_kernel_1d, on_off, vdog
 from .lobula_plate import LocalMotion, local_motion
 from .medulla import DIRECTIONS, contrast_normalise, lowpass_alpha, motion_detectors
-from .params import Params
+from ..params import Params
 from .retina import photoreceptors
 
 __all__ = ["FrontEnd", "FrontEndState", "set_coefficients"]
@@ -42,7 +42,7 @@ class FrontEndState:
 def set_coefficients(front_end, params: Params, fps: float) -> None:
     """Give a front end its ``params``, ``fps`` and the filter coefficients both
     implementations share: the delay coefficients ``alphas`` (Eq. 8, one per sampling
-    distance) and ``alpha_out`` (Eq. 10) (:func:`mlplc2.medulla.lowpass_alpha`), and the 1-D
+    distance) and ``alpha_out`` (Eq. 10) (:func:`mlplc2.neuropils.medulla.lowpass_alpha`), and the 1-D
     Gaussian factors ``k_e``, ``k_i``, ``k_c`` (Eq. 3)."""
     front_end.params = params
     front_end.fps = float(fps)

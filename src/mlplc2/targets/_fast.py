@@ -26,7 +26,7 @@ import numpy as np
 from llvmlite import ir as llvm_ir
 from numba.extending import intrinsic
 
-from ._fast import jit  # the same njit options and on-disk cache fallback as the front end
+from ..neuropils._fast import jit  # the same njit options and on-disk cache fallback as the front end
 
 __all__ = ["edges4", "align_patch"]
 

@@ -1,6 +1,6 @@
 """Targets: one per approaching object, with its time to contact, course and a collision warning.
 
-The attention fields of the LPLC2 family (:mod:`mlplc2.attention`, Eq. 13-16) say *where* the
+The attention fields of the LPLC2 family (:mod:`mlplc2.neuropils.attention`, Eq. 13-16) say *where* the
 local motion looms. A :class:`TargetLayer` turns them into what a robot acts on: one
 :class:`Target` per object, with a stable id, its apparent size, the time to contact
 ``ttc_s``, the predicted ``miss`` distance at contact and a ``warning``. Nothing here changes
@@ -16,10 +16,7 @@ from the course (:func:`fit_course`); and the warning rule (:func:`estimate`,
 :class:`TargetParams`). The paper's field alarm (``Field.collision``, the "fatal" field) is a
 separate signal and stays as it is.
 
-Bearing convention: azimuth positive to the right, elevation positive up,
-``azimuth = atan((x - cx) / f)``, ``elevation = atan((cy - y) / f)`` with
-``(cx, cy) = ((W - 1) / 2, (H - 1) / 2)`` in pixel-index coordinates (the centre
-of pixel column ``i`` is at ``x = i``) and ``f = (W / 2) / tan(hfov / 2)``.
+Bearings follow the convention of :mod:`mlplc2.camera`.
 """
 
 from __future__ import annotations
@@ -32,9 +29,10 @@ from dataclasses import dataclass, field, replace
 import cv2
 import numpy as np
 
-from ._validation import InputValueError, Valid, check_fields, check_real
-from .lobula_plate import LocalMotion
-from .params import ParameterSet, document_parameters, param
+from .._validation import InputValueError, Valid, check_fields, check_real
+from ..camera import bearing, check_hfov, focal_length
+from ..neuropils.lobula_plate import LocalMotion
+from ..params import ParameterSet, document_parameters, param
 
 __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignment", "measure_extent", "edge_distance",
            "align", "change_box", "pyramid", "fit_contact", "fit_course", "estimate", "count_down", "bearing", "focal_length",
@@ -237,34 +235,6 @@ class Extent:
         return float(sum(vals) / len(vals)) if vals else None
 
 
-def focal_length(width: int, hfov_deg: float | None) -> float | None:
-    """Pinhole focal length in px, ``(W / 2) / tan(hfov / 2)``; None without a field of view."""
-    if hfov_deg is None:
-        return None
-    return (width / 2.0) / math.tan(math.radians(float(hfov_deg)) / 2.0)
-
-
-def check_hfov(hfov_deg) -> float | None:
-    """Validate a horizontal field of view in degrees (None allowed)."""
-    if hfov_deg is None:
-        return None
-    return check_real(hfov_deg, "hfov_deg", positive=True, below=180)
-
-
-def bearing(x: float, y: float, shape: tuple[int, int], focal: float | None) -> tuple[float, float]:
-    """(azimuth, elevation) of pixel (x, y): degrees given ``focal`` (px), else px offsets.
-
-    Azimuth positive right, elevation positive up; the optical axis passes
-    through ((W - 1) / 2, (H - 1) / 2).
-    """
-    h, w = shape
-    dx = x - (w - 1) / 2.0
-    dy = (h - 1) / 2.0 - y
-    if focal is None:
-        return float(dx), float(dy)
-    return math.degrees(math.atan2(dx, focal)), math.degrees(math.atan2(dy, focal))
-
-
 def _edge_distances(prof: np.ndarray, lens, scale, params: TargetParams) -> list:
     """:func:`edge_distance` of several profiles at once (rows of ``prof``).
 
@@ -390,7 +360,7 @@ def measure_extent(lm: LocalMotion, x: int, y: int, params: TargetParams = Targe
     (lobes closer than ``gap`` px merged, above a noise floor) is the object's edge; its outer
     boundary, plus ``edge_offset`` (the lobes trail the true edge), is the edge position.
 
-    ``kernel``: the compiled version of the four scans (:func:`mlplc2._fast_targets.edges4`,
+    ``kernel``: the compiled version of the four scans (:func:`mlplc2.targets._fast.edges4`,
     bit-identical; :mod:`mlplc2.backend` chooses it), or None for the NumPy code.
     """
     h, w = lm.magnitude.shape
@@ -500,7 +470,7 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     samples outside the frame get no weight. None when the patch has too little texture or the
     iteration does not settle.
 
-    ``kernel``: the compiled version (:func:`mlplc2._fast_targets.align_patch`, the same
+    ``kernel``: the compiled version (:func:`mlplc2.targets._fast.align_patch`, the same
     alignment to ~1e-12; :mod:`mlplc2.backend` chooses it) for float32 pyramids, or None.
     """
     step = 2.0 * half / n
@@ -824,7 +794,7 @@ class TargetLayer:
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
-            from .attention import argmax_outside
+            from ..neuropils.attention import argmax_outside
 
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own

@@ -509,10 +509,10 @@ def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RAD
 
     Among the fields born while the object is on screen, the one with the largest peak
     response whose centre lies within ``radius`` px of the object's
-    (:func:`mlplc2.tracks.centre_distance`, the matcher of the paper's metrics), else the
+    (:func:`mlplc2.evaluation.tracks.centre_distance`, the matcher of the paper's metrics), else the
     nearest one (``None`` when no field was born meanwhile). ``fields``: field summaries
     (``fields.json``); ``truth``: the demo's ground truth (a JSON entry) or a
-    :class:`~mlplc2.truth.VideoTruth`.
+    :class:`~mlplc2.evaluation.truth.VideoTruth`.
     """
     video = truth if isinstance(truth, VideoTruth) else next(iter(load(truth).values()))
     matches = []

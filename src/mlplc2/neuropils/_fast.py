@@ -1,6 +1,6 @@
 """Fast front end of the LPLC2 family (Eq. 1-12): OpenCV Gaussians + fused Numba kernels.
 
-:class:`FastFrontEnd` computes exactly what the reference :class:`mlplc2.frontend.FrontEnd`
+:class:`FastFrontEnd` computes exactly what the reference :class:`mlplc2.neuropils.frontend.FrontEnd`
 computes, with the same float32 arithmetic in the same order, so that everything up to the
 T4/T5 outputs is bit-identical to it:
 
@@ -50,11 +50,11 @@ import cv2
 import numba
 import numpy as np
 
-from ._validation import check_int
+from .._validation import check_int
 from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
 from .medulla import local_max
-from .params import Params
+from ..params import Params
 
 __all__ = ["FastFrontEnd", "quadrant_sums", "quadrant_sums_all", "set_threads", "jit", "PLANES",
            "plane_traffic"]
@@ -108,7 +108,7 @@ def _vdog_rows(e_band, e_off, i_band, i_off, on, off, y0, y1, w_i, after, use_pr
 
     ``e_band[y - e_off]`` and ``i_band[y - i_off]`` are E and I of frame row y. With
     ``use_prev`` the after-image ``after`` times the previous ON/OFF (held in ``on``/``off``)
-    is added, as in :func:`mlplc2.lamina.on_off`.
+    is added, as in :func:`mlplc2.neuropils.lamina.on_off`.
     """
     zero = _F32(0.0)
     w = on.shape[1]
@@ -412,7 +412,7 @@ def _motion_rows(n_cur, n_prev, pad, m, lm, y0, y1, a, b, ao, bo, beta, nc_div, 
 
 
 # ---------------------------------------------------------------------------
-# Attention-field helper (Eq. 14). Eq. 13 stays mlplc2.attention.argmax_outside: its copy and
+# Attention-field helper (Eq. 14). Eq. 13 stays mlplc2.neuropils.attention.argmax_outside: its copy and
 # NumPy's SIMD argmax measured 2-3x faster than a masked argmax kernel here.
 # ---------------------------------------------------------------------------
 @jit()
@@ -464,7 +464,7 @@ def _quadrant_sums_kernel(a_r, a_l, a_d, a_u, fields, disc, out):
 
 def quadrant_sums(lm: LocalMotion, cx: int, cy: int, r: int, shape: str = "square"
                   ) -> tuple[float, float, float, float]:
-    """Same as :func:`mlplc2.attention.quadrant_sums` (to float64 rounding), in one pass."""
+    """Same as :func:`mlplc2.neuropils.attention.quadrant_sums` (to float64 rounding), in one pass."""
     out = np.zeros((1, 4), np.float64)
     _quadrant_sums_kernel(lm.r, lm.l, lm.d, lm.u, np.array([[cx, cy, r]], np.int64), shape == "disc", out)
     return (float(out[0, 0]), float(out[0, 1]), float(out[0, 2]), float(out[0, 3]))
@@ -637,7 +637,7 @@ def _pow_mode(g: float) -> int:
 
 
 class FastFrontEnd:
-    """Eq. 1-12 like :class:`mlplc2.frontend.FrontEnd`, fast (see the module docstring).
+    """Eq. 1-12 like :class:`mlplc2.neuropils.frontend.FrontEnd`, fast (see the module docstring).
 
     Same constructor, attributes (``params``, ``fps``, ``alphas``, ``alpha_out``, ``k_e``,
     ``k_i``, ``k_c``), :meth:`step` and :meth:`reset`. The returned maps are new arrays

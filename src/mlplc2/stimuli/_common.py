@@ -1,4 +1,4 @@
-"""What every stimulus generator shares (:mod:`mlplc2.stimuli`, :mod:`mlplc2.approach`): the
+"""What every stimulus generator shares (:mod:`mlplc2.stimuli`, :mod:`mlplc2.stimuli.world`): the
 result types, the argument checks, the pinhole focal length, the plain and procedural
 backgrounds and the size limit. Both generator modules import it; neither imports the other's
 internals (the 2-D module re-exports the 3-D one's public names)."""
@@ -12,11 +12,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._validation import InputValueError
-from .truth import ObjectTruth, VideoTruth
+from .._validation import InputValueError
+from ..evaluation.truth import ObjectTruth, VideoTruth
 
 __all__ = ["Stimulus", "ApproachStimulus", "MAX_STIMULUS_BYTES", "OPTICS_BLUR_PX", "check_choice", "check_count",
-           "check_number", "check_size", "focal_length_px", "plain_level", "procedural_background", "blur"]
+           "check_number", "check_size", "plain_level", "procedural_background", "blur"]
 
 
 @dataclass(frozen=True, eq=False)
@@ -49,12 +49,12 @@ class Stimulus:
         return int(self.frames.shape[0])
 
     def truth(self) -> VideoTruth:
-        """The ground truth of this stimulus (:class:`mlplc2.truth.VideoTruth`, key ``name``)."""
+        """The ground truth of this stimulus (:class:`mlplc2.evaluation.truth.VideoTruth`, key ``name``)."""
         return VideoTruth(key=self.name, size=self.size, frames=len(self), fps=float(self.fps), objects=self.objects)
 
     def to_ground_truth(self) -> dict[str, Any]:
         """Return a JSON-ready dict in the schema of one ``ground_truth.json`` "videos" entry
-        (:meth:`truth` as JSON, :meth:`mlplc2.truth.VideoTruth.to_dict`).
+        (:meth:`truth` as JSON, :meth:`mlplc2.evaluation.truth.VideoTruth.to_dict`).
 
         Keys: ``"size"`` ``[W, H]``, ``"frames"`` ``T``, ``"fps"``, ``"objects"``
         (list of :meth:`ObjectTruth.to_dict`, with only the phases that exist,
@@ -80,10 +80,10 @@ class Stimulus:
 
 @dataclass(frozen=True, eq=False)
 class ApproachStimulus(Stimulus):
-    """A :class:`Stimulus` of :func:`mlplc2.approach.approach`, with its camera and background.
+    """A :class:`Stimulus` of :func:`mlplc2.stimuli.world.approach`, with its camera and background.
 
     Its ``objects`` are 3-D :class:`ObjectTruth` (a ``kind``, a per-frame ``track`` of
-    :class:`mlplc2.truth.TrackPoint` with the time to contact and the miss).
+    :class:`mlplc2.evaluation.truth.TrackPoint` with the time to contact and the miss).
 
     Attributes
     ----------
@@ -141,14 +141,6 @@ def check_size(size) -> tuple[int, int]:
     return check_count(w, "width", 1), check_count(h, "height", 1)
 
 
-def focal_length_px(width: int, hfov_deg: float) -> float:
-    """Focal length in pixels of a pinhole camera: ``(width / 2) / tan(hfov / 2)``."""
-    hfov = check_number(hfov_deg, "hfov_deg", positive=True)
-    if hfov >= 180:
-        raise InputValueError(f"hfov_deg must be in (0, 180), got {hfov_deg!r}")
-    return (width / 2.0) / math.tan(math.radians(hfov) / 2.0)
-
-
 def plain_level(appearances: Sequence[str]) -> float:
     """Grey level of a plain background for objects of these appearances: 250 (the paper's
     "white") if every one is dark, 0 if every one is bright, else mid-grey 128."""
@@ -182,7 +174,7 @@ def procedural_background(width: int, height: int, seed: int = 0, *, periodic: b
     periodic : bool
         Make the texture tile seamlessly (blobs wrap around the borders and the
         blurs are circular; the noise is periodic anyway): for the ground plane
-        of :func:`mlplc2.approach.approach`. ``False`` gives the texture as
+        of :func:`mlplc2.stimuli.world.approach`. ``False`` gives the texture as
         before (the same for a seed).
 
     Returns

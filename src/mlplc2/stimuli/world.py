@@ -14,7 +14,7 @@ Conventions
   Y down. Image origin top-left, pixel centres at integer coordinates
   (column ``x``, row ``y``), principal point ``((W - 1) / 2, (H - 1) / 2)``,
   focal length ``f = (W / 2) / tan(hfov / 2)`` px (as
-  :func:`mlplc2.targets.focal_length` and :func:`mlplc2.targets.bearing`).
+  :func:`mlplc2.camera.focal_length` and :func:`mlplc2.camera.bearing`).
   A point ``(X, Y, Z)`` with ``Z > 0`` is seen at
   ``x = cx + f X / Z``, ``y = cy + f Y / Z``.
 * World frame: the camera frame at frame 0. ``camera="pan"`` turns the camera
@@ -77,10 +77,11 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from ._validation import (InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals)
-from ._stimulus import (MAX_STIMULUS_BYTES, ApproachStimulus, check_choice, check_size, focal_length_px,
+from .._validation import (InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals)
+from ..camera import check_hfov, focal_length
+from ._common import (MAX_STIMULUS_BYTES, ApproachStimulus, check_choice, check_size,
                         plain_level, procedural_background)
-from .truth import ObjectTruth, TrackPoint
+from ..evaluation.truth import ObjectTruth, TrackPoint
 
 __all__ = [
     "ApproachObject",
@@ -334,7 +335,7 @@ def _side_angle(side) -> float:
 def _place(at, distance, width_m, width_px, size, hfov_deg):
     """Ray ``(X/Z, Y/Z, 1)`` through image point ``at``, depth and physical width."""
     w, h = check_size(size)
-    f = focal_length_px(w, hfov_deg)
+    f = focal_length(w, check_hfov(hfov_deg, required=True))
     z = check_real(distance, "distance_m", positive=True)
     if at is None:
         x, y = (w - 1) / 2.0, (h - 1) / 2.0
@@ -353,9 +354,9 @@ def _place(at, distance, width_m, width_px, size, hfov_deg):
 # Ground truth
 # ---------------------------------------------------------------------------
 
-#: The older name of the 3-D truth: one :class:`mlplc2.truth.ObjectTruth` per object, with its
+#: The older name of the 3-D truth: one :class:`mlplc2.evaluation.truth.ObjectTruth` per object, with its
 #: ``kind``, ``approach`` (the frames in view while approaching), ``contact_frame``, ``miss``,
-#: a ``track`` of :class:`mlplc2.truth.TrackPoint` (one row per frame in which the object is at
+#: a ``track`` of :class:`mlplc2.evaluation.truth.TrackPoint` (one row per frame in which the object is at
 #: least partly in view: the projection of its centre, the extent of its outline, None while
 #: part of it is behind the camera, the true time to contact and the predicted miss) and the
 #: object as given in ``extra`` (``shape``, ``width_m``, ``onset``, ``start_m``,
@@ -373,7 +374,7 @@ class _Camera:
     def __init__(self, w: int, h: int, hfov: float, fps: float, motion: str, speed: float, height: float, n: int):
         self.w, self.h, self.hfov, self.fps = w, h, hfov, fps
         self.motion, self.speed, self.height, self.n = motion, speed, height, n
-        self.f = focal_length_px(w, hfov)
+        self.f = focal_length(w, check_hfov(hfov, required=True))
         self.cx, self.cy = (w - 1) / 2.0, (h - 1) / 2.0
         self.K = np.array([[self.f, 0.0, self.cx], [0.0, self.f, self.cy], [0.0, 0.0, 1.0]])
         t = np.arange(n, dtype=np.float64) / fps
@@ -804,7 +805,7 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     Returns
     -------
     ApproachStimulus
-        ``frames`` ``uint8 (T, H, W)``; ``objects`` one 3-D :class:`~mlplc2.truth.ObjectTruth`
+        ``frames`` ``uint8 (T, H, W)``; ``objects`` one 3-D :class:`~mlplc2.evaluation.truth.ObjectTruth`
         per object; :meth:`ApproachStimulus.to_ground_truth` gives the JSON
         entry of docs/stimuli.md.
 
@@ -826,7 +827,7 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
             raise InputTypeError(f"objects[{i}] must be an ApproachObject, got {type(o).__name__}")
     w, h = check_size(size)
     fps = check_fps(fps)
-    focal_length_px(w, hfov_deg)                  # checks hfov_deg
+    focal_length(w, check_hfov(hfov_deg, required=True))                  # checks hfov_deg
     hfov = float(hfov_deg)
     background = check_choice(background, "background", APPROACH_BACKGROUNDS)
     camera = check_choice(camera, "camera", CAMERA_MOTIONS)
@@ -1066,7 +1067,7 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
         if not kinds or (n_objects is not None and len(kinds) != count):
             raise InputValueError(f"kinds must name one kind per object (n_objects={count}), got {kinds!r}")
         count = len(kinds)
-    f = focal_length_px(w, hfov_deg)
+    f = focal_length(w, check_hfov(hfov_deg, required=True))
     objs = []
     for i in range(count):
         if i == 0:
