@@ -9,10 +9,14 @@ of pixel column ``i`` is at ``x = i``) and ``f = (W / 2) / tan(hfov / 2)``.
 from __future__ import annotations
 
 import math
+from dataclasses import dataclass
+
+import cv2
+import numpy as np
 
 from ._validation import check_real
 
-__all__ = ["check_hfov", "focal_length", "bearing"]
+__all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix"]
 
 
 def check_hfov(hfov_deg, *, required: bool = False) -> float | None:
@@ -42,3 +46,198 @@ def bearing(x: float, y: float, shape: tuple[int, int], focal: float | None) -> 
     if focal is None:
         return float(dx), float(dy)
     return math.degrees(math.atan2(dx, focal)), math.degrees(math.atan2(dy, focal))
+
+
+# ---------------------------------------------------------------------------
+# Camera motion: the rotation (the homography of the far scene) and the heading (FOE), per frame
+# ---------------------------------------------------------------------------
+
+@dataclass(frozen=True)
+class CameraMotion:
+    """The camera's motion between the previous frame and this one, in this frame's pixels.
+
+    ``omega``: the camera's rotation since the previous frame (rad per frame, right-handed, about its
+    x (right), y (down) and z (forward) axes: a pan to the right is ``+y``, a tilt up ``+x``), so that a
+    point of the far scene seen at ``p`` in the previous frame is seen at ``homography(...) @ p`` now
+    (the homography ``K R^T K^-1`` of a pure rotation ``R``).
+    ``heading``: the focus of expansion (x, y) in pixels (where the camera is going), None when no
+    translation is measured. ``rotation_confidence`` and ``heading_confidence`` are in [0, 1]:
+    the share of the tracked points that agree with the fit (0: nothing measured).
+    ``given``: True when the rotation came from the user (a gyro), not from the images.
+    """
+
+    omega: tuple[float, float, float] = (0.0, 0.0, 0.0)
+    heading: tuple[float, float] | None = None
+    rotation_confidence: float = 0.0
+    heading_confidence: float = 0.0
+    expansion: float = 0.0
+    points: int = 0
+    given: bool = False
+
+    def homography(self, shape: tuple[int, int], focal: float) -> np.ndarray:
+        """The 3x3 homography that maps the previous frame's far scene onto this frame."""
+        h, w = shape
+        k = np.array([[focal, 0.0, (w - 1) / 2.0], [0.0, focal, (h - 1) / 2.0], [0.0, 0.0, 1.0]])
+        return k @ rotation_matrix(self.omega).T @ np.linalg.inv(k)
+
+    @property
+    def still(self) -> bool:
+        """No rotation to compensate (exactly zero)."""
+        return self.omega == (0.0, 0.0, 0.0)
+
+
+def rotation_matrix(omega) -> np.ndarray:
+    """The camera's rotation ``R`` for the rotation vector ``omega`` (rad; Rodrigues' formula)."""
+    r, _ = cv2.Rodrigues(np.asarray(omega, dtype=np.float64).reshape(3, 1))
+    return r
+
+
+def _rotational_flow(x: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """Per point, the 2x3 matrix A with flow = A @ omega for a small rotation (normalised coordinates).
+
+    The image motion of the far scene under a small camera rotation ``omega`` (Longuet-Higgins &
+    Prazdny 1980, with x right, y down, z forward): a pan to the right moves the scene left.
+    """
+    a = np.empty((x.size, 2, 3))
+    a[:, 0, 0] = x * y
+    a[:, 0, 1] = -(1.0 + x * x)
+    a[:, 0, 2] = y
+    a[:, 1, 0] = 1.0 + y * y
+    a[:, 1, 1] = -x * y
+    a[:, 1, 2] = -x
+    return a
+
+
+class MotionEstimator:
+    """Estimates :class:`CameraMotion` once per frame from the grey images (``apply(gray)``).
+
+    Sparse pyramidal Lucas-Kanade (OpenCV) on a regular grid of a reduced frame, a forward-backward
+    check, then a robust fit (iteratively reweighted least squares) of the flow field of a moving
+    camera: a small rotation ``omega`` plus an expansion about the focus of expansion (the heading),
+    whose magnitude varies from point to point with the depth. Objects that move on their own and
+    frames without texture fall out as outliers (low confidence, no motion assumed).
+
+    ``hfov_deg``: the horizontal field of view (needed to turn pixels into angles; 60 deg when
+    unknown, documented). ``gyro``: when given, :meth:`apply` takes ``omega`` from the caller
+    (rad per frame in the camera's axes) and only the heading is estimated. ``heading``: a fixed
+    heading (x, y) in pixels, when the robot knows it.
+    """
+
+    def __init__(self, *, hfov_deg: float | None = None, grid: tuple[int, int] = (16, 12), work_width: int = 160,
+                 heading: tuple[float, float] | None = None, min_expansion: float = 0.002):
+        self.hfov_deg = 60.0 if hfov_deg is None else check_hfov(hfov_deg)
+        self.grid = grid
+        self.work_width = work_width
+        self.fixed_heading = heading
+        self.min_expansion = min_expansion
+        self.reset()
+
+    def reset(self) -> None:
+        self._prev: np.ndarray | None = None
+
+    def _reduce(self, gray: np.ndarray) -> tuple[np.ndarray, float]:
+        h, w = gray.shape
+        img = gray if gray.dtype == np.uint8 else np.clip(gray, 0, 255).astype(np.uint8)
+        scale = 1.0
+        while img.shape[1] >= 2 * self.work_width:
+            img = cv2.pyrDown(img)
+            scale *= 2.0
+        return img, scale
+
+    def _track(self, prev: np.ndarray, cur: np.ndarray):
+        h, w = prev.shape
+        nx, ny = self.grid
+        xs = (np.arange(nx) + 0.5) * w / nx
+        ys = (np.arange(ny) + 0.5) * h / ny
+        p0 = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 1, 2).astype(np.float32)
+        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(prev, cur, p0, None, winSize=(15, 15), maxLevel=2, criteria=crit)
+        pb, st2, _ = cv2.calcOpticalFlowPyrLK(cur, prev, p1, None, winSize=(15, 15), maxLevel=2, criteria=crit)
+        ok = (st.ravel() == 1) & (st2.ravel() == 1) & (np.linalg.norm((pb - p0).reshape(-1, 2), axis=1) < 0.5)
+        # textureless cells track "perfectly" onto themselves: require image structure
+        gx = cv2.Sobel(prev, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(prev, cv2.CV_32F, 0, 1, ksize=3)
+        mag = cv2.blur(gx * gx + gy * gy, (7, 7))
+        ix = np.clip(p0[:, 0, 0].astype(int), 0, w - 1)
+        iy = np.clip(p0[:, 0, 1].astype(int), 0, h - 1)
+        ok &= mag[iy, ix] > 100.0
+        return p0.reshape(-1, 2)[ok].astype(np.float64), p1.reshape(-1, 2)[ok].astype(np.float64)
+
+    def apply(self, gray: np.ndarray, *, omega=None) -> CameraMotion:
+        """The camera's motion from the previous frame to ``gray`` (the first frame: none)."""
+        cur, scale = self._reduce(gray)
+        prev, self._prev = self._prev, cur
+        given = omega is not None
+        if prev is None or prev.shape != cur.shape:
+            return CameraMotion(omega=tuple(float(v) for v in omega) if given else (0.0, 0.0, 0.0), given=given)
+        h, w = cur.shape
+        f = focal_length(w, self.hfov_deg)
+        cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
+        p0, p1 = self._track(prev, cur)
+        if len(p0) < 8:
+            return CameraMotion(omega=tuple(float(v) for v in omega) if given else (0.0, 0.0, 0.0), points=len(p0),
+                                given=given)
+        x0, y0 = (p0[:, 0] - cx) / f, (p0[:, 1] - cy) / f
+        d = np.stack([(p1[:, 0] - p0[:, 0]) / f, (p1[:, 1] - p0[:, 1]) / f], -1)
+        heading = None if self.fixed_heading is None else (
+            (self.fixed_heading[0] / scale - cx) / f, (self.fixed_heading[1] / scale - cy) / f)
+        fit = _fit_motion(x0, y0, d, None if omega is None else np.asarray(omega, float), heading, 1.0 / f)
+        w_est, e, rot_ok, exp, exp_ok = fit
+        head_px = None
+        if e is not None and exp > self.min_expansion:
+            head_px = (float((e[0] * f + cx) * scale), float((e[1] * f + cy) * scale))
+        return CameraMotion(omega=tuple(float(v) for v in w_est), heading=head_px,
+                            rotation_confidence=float(rot_ok), heading_confidence=float(exp_ok if head_px else 0.0),
+                            expansion=float(exp), points=len(p0), given=given)
+
+
+def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: float = 0.3):
+    """Robust fit of ``d = A(x, y) omega + s_i (p_i - e)`` (rotation + expansion about the FOE e).
+
+    Alternates: omega and the expansion rates given e (linear), e given the rotation (linear in e:
+    the residual flow is parallel to p - e). Tukey weights on the residual, scale from its median.
+    Returns omega, e (normalised; None when no expansion), the share of inliers of the rotation,
+    the median expansion rate (1 / frames) and the share of points that expand about e.
+    """
+    a = _rotational_flow(x, y)
+    p = np.stack([x, y], -1)
+    n = len(x)
+    wts = np.ones(n)
+    w_est = np.zeros(3) if omega is None else omega
+    e = np.zeros(2) if heading is None else np.asarray(heading, float)
+    s = np.zeros(n)
+    sigma = 0.3 * px
+    for _ in range(iterations):
+        r = p - e                                           # radial direction of the expansion
+        if omega is None:
+            # the flow perpendicular to the radial direction is rotation only (the expansion is radial)
+            nrm = np.stack([-r[:, 1], r[:, 0]], -1)
+            nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-9)
+            rows = np.einsum("ni,nij->nj", nrm, a)
+            rhs = np.einsum("ni,ni->n", nrm, d)
+            ww = np.sqrt(wts)
+            w_est, *_ = np.linalg.lstsq(rows * ww[:, None], rhs * ww, rcond=None)
+        res = d - np.einsum("nij,j->ni", a, w_est)           # what the rotation leaves: the expansion
+        rr = np.einsum("ni,ni->n", r, r)
+        s = np.einsum("ni,ni->n", res, r) / np.maximum(rr, 1e-9)
+        if heading is None:
+            # residual parallel to p - e: res_y (x - ex) - res_x (y - ey) = 0, linear in e
+            rows = np.stack([-res[:, 1], res[:, 0]], -1)
+            rhs = -res[:, 1] * x + res[:, 0] * y
+            ww = np.sqrt(wts) * (s > 0)
+            if ww.sum() >= 3:
+                e_new, *_ = np.linalg.lstsq(rows * ww[:, None], rhs * ww, rcond=None)
+                if np.all(np.isfinite(e_new)) and np.hypot(*e_new) < 3.0:
+                    e = e_new
+        err = np.linalg.norm(res - s[:, None] * (p - e), axis=1)
+        scale = max(1.4826 * float(np.median(err)), sigma)
+        u = err / (4.685 * scale)
+        wts = np.where(u < 1.0, (1.0 - u * u) ** 2, 0.0)
+    inliers = err < 3.0 * max(1.4826 * float(np.median(err)), sigma)
+    radial = s * np.sqrt(rr)                                # the expansion's own flow at each point
+    moving = inliers & (np.abs(radial) > 2.0 * sigma)       # points whose expansion is measured
+    if moving.sum() < max(3, min_share * n):                # too little expands to tell a heading
+        return w_est, None, float(np.mean(inliers)), 0.0, 0.0
+    exp = float(np.median(s[moving]))
+    exp_ok = float(np.mean(s[moving] > 0))
+    return w_est, e, float(np.mean(inliers)), exp, exp_ok

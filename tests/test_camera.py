@@ -1,0 +1,98 @@
+"""Camera geometry and camera motion (mlplc2.camera): known answers on rendered 3-D scenes.
+
+The scenes come from :func:`mlplc2.stimuli.approach`, whose camera turns or drives with an exact,
+known motion (a pan about the camera's y axis, a tilt about its x axis, a forward drive whose
+focus of expansion is the principal point), so every expected value here is physics, not output
+of the code under test.
+"""
+
+import math
+
+import numpy as np
+import pytest
+
+from mlplc2 import stimuli
+from mlplc2.camera import CameraMotion, MotionEstimator, bearing, focal_length
+
+FPS = 30.0
+
+
+def _frames(camera, speed, background="texture", size=(320, 240), frames=12, objects=()):
+    st = stimuli.approach(list(objects), size=size, fps=FPS, frames=frames, background=background, camera=camera,
+                          camera_speed=speed, noise_std=2.0, seed=5)
+    return st.frames
+
+
+def _estimates(frames, **kw):
+    est = MotionEstimator(hfov_deg=60.0, **kw)
+    return [est.apply(f) for f in frames][1:]
+
+
+def test_focal_length_and_bearing_of_a_pinhole_camera():
+    f = focal_length(320, 60.0)
+    assert f == pytest.approx(160.0 / math.tan(math.radians(30.0)))
+    assert focal_length(320, None) is None
+    assert bearing(159.5, 119.5, (240, 320), f) == pytest.approx((0.0, 0.0))
+    az, el = bearing(319.5, 0.0, (240, 320), f)
+    assert az == pytest.approx(30.0) and el > 0
+
+
+@pytest.mark.parametrize("camera, speed, axis", [("pan", 10.0, 1), ("pan", -25.0, 1), ("tilt", 6.0, 0)])
+def test_rotation_of_a_panning_or_tilting_camera_is_measured(camera, speed, axis):
+    """The camera's own turn per frame (deg/s / fps), within 5 %, about the right axis and sign."""
+    true = math.radians(speed) / FPS
+    for m in _estimates(_frames(camera, speed)):
+        assert m.omega[axis] == pytest.approx(true, rel=0.05)
+        others = [abs(v) for i, v in enumerate(m.omega) if i != axis]
+        assert max(others) < 0.1 * abs(true)
+        assert m.rotation_confidence > 0.7
+        assert m.heading is None                      # a pure rotation has no heading
+
+
+def test_a_still_camera_measures_no_motion():
+    for m in _estimates(_frames("static", 0.0)):
+        assert max(abs(v) for v in m.omega) < 2e-4   # < 0.04 px at 320 px, 60 deg
+        assert m.heading is None
+
+
+def test_heading_of_a_camera_driving_forward_is_the_principal_point():
+    ms = _estimates(_frames("forward", 8.0, background="ground", frames=16))
+    heads = np.array([m.heading for m in ms if m.heading is not None])
+    assert len(heads) >= 0.8 * len(ms)
+    assert np.median(heads[:, 0]) == pytest.approx(159.5, abs=8)
+    assert np.median(heads[:, 1]) == pytest.approx(119.5, abs=8)
+    assert all(max(abs(v) for v in m.omega) < 1e-3 for m in ms)  # no turn
+
+
+def test_a_given_gyro_rate_agrees_with_the_estimate_of_a_pan():
+    frames = _frames("pan", 12.0)
+    est = _estimates(frames)
+    true = (0.0, math.radians(12.0) / FPS, 0.0)
+    given = MotionEstimator(hfov_deg=60.0)
+    outs = [given.apply(f, omega=true) for f in frames][1:]
+    for m, g in zip(est, outs):
+        assert g.given and g.omega == true
+        assert np.allclose(m.omega, g.omega, atol=0.05 * true[1])
+
+
+def test_objects_that_move_on_their_own_do_not_bend_the_estimate():
+    """A large object crossing the view of a panning camera: the rotation stays the camera's."""
+    obj = stimuli.ApproachObject.translating(at=(90.0, 120.0), width_px=90.0, speed_mps=3.0, appearance="textured")
+    true = math.radians(10.0) / FPS
+    for m in _estimates(_frames("pan", 10.0, objects=[obj])):
+        assert m.omega[1] == pytest.approx(true, rel=0.08)
+
+
+def test_textureless_frames_give_no_confident_motion():
+    frames = [np.full((120, 160), 128, np.uint8)] * 4
+    for m in _estimates(frames):
+        assert m.omega == (0.0, 0.0, 0.0) and m.rotation_confidence == 0.0
+
+
+def test_the_homography_of_a_rotation_moves_the_far_scene_like_the_camera():
+    """A pan to the right by one degree moves the principal point's scene f tan(1 deg) px to the left."""
+    f = focal_length(320, 60.0)
+    m = CameraMotion(omega=(0.0, math.radians(1.0), 0.0))
+    p = m.homography((240, 320), f) @ np.array([159.5, 119.5, 1.0])
+    assert p[0] / p[2] == pytest.approx(159.5 - f * math.tan(math.radians(1.0)), abs=1e-6)
+    assert p[1] / p[2] == pytest.approx(119.5, abs=1e-6)
