@@ -96,3 +96,27 @@ def test_the_homography_of_a_rotation_moves_the_far_scene_like_the_camera():
     p = m.homography((240, 320), f) @ np.array([159.5, 119.5, 1.0])
     assert p[0] / p[2] == pytest.approx(159.5 - f * math.tan(math.radians(1.0)), abs=1e-6)
     assert p[1] / p[2] == pytest.approx(119.5, abs=1e-6)
+
+
+@pytest.mark.parametrize("camera, speed", [("pan", 12.0), ("tilt", -6.0)])
+def test_gaze_stabilisation_silences_the_static_world_of_a_turning_camera(camera, speed):
+    """The front end (Eq. 1-12) with its state carried into each new frame's pixels answers a
+    textured static world seen by a turning camera as it answers the same world seen still."""
+    from mlplc2.neuropils.frontend import FrontEnd
+    from mlplc2.params import Params
+
+    def p99(frames, compensate):
+        fe, est, f = FrontEnd(Params(), FPS), MotionEstimator(hfov_deg=60.0), focal_length(320, 60.0)
+        levels = []
+        for fr in frames:
+            g = fr.astype(np.float32)
+            m = est.apply(fr)
+            if compensate and not m.still:
+                fe.compensate(m.homography(g.shape, f), g)
+            levels.append(float(np.percentile(fe.step(g).magnitude, 99)))
+        return float(np.median(levels[3:]))
+
+    still = p99(_frames("static", 0.0), False)
+    turning = _frames(camera, speed)
+    assert p99(turning, False) > 20 * still           # the turn drowns everything ...
+    assert p99(turning, True) < 2 * still             # ... unless the gaze is stabilised

@@ -16,7 +16,7 @@ import numpy as np
 
 from ._validation import check_real
 
-__all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix"]
+__all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp"]
 
 
 def check_hfov(hfov_deg, *, required: bool = False) -> float | None:
@@ -241,3 +241,20 @@ def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: flo
     exp = float(np.median(s[moving]))
     exp_ok = float(np.mean(s[moving] > 0))
     return w_est, e, float(np.mean(inliers)), exp, exp_ok
+
+
+def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0) -> np.ndarray:
+    """``image`` of the previous frame seen in this frame's pixels (``homography``: previous -> this).
+
+    Bilinear (``cv2.warpPerspective``); where this frame sees what the previous one did not (the
+    border the rotation uncovers), ``fill``: a number, or an image of this frame whose values are
+    taken there (the current grey frame for the previous frame: no change where nothing was seen).
+    """
+    h, w = image.shape
+    if np.isscalar(fill):
+        return cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR,
+                                   borderMode=cv2.BORDER_CONSTANT, borderValue=float(fill))
+    out = cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
+                              borderValue=np.nan)
+    seen = np.isfinite(out)
+    return np.where(seen, out, fill).astype(image.dtype, copy=False)

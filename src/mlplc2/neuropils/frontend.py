@@ -19,6 +19,7 @@ import numpy as np
 from .lamina import gaussian_kernel_1d, on_off, vdog
 from .lobula_plate import LocalMotion, local_motion
 from .medulla import DIRECTIONS, contrast_normalise, lowpass_alpha, motion_detectors
+from ..camera import warp
 from ..params import Params
 from .retina import photoreceptors
 
@@ -73,6 +74,24 @@ class FrontEnd:
 
     def reset(self) -> None:
         self.state = FrontEndState()
+
+    def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
+        """Gaze stabilisation: carry the state of the previous frame into this frame's pixels.
+
+        ``homography`` maps the previous frame onto this one (the camera's rotation,
+        :meth:`mlplc2.camera.CameraMotion.homography`); ``gray`` is this frame, which fills the
+        uncovered border of P(t-1) (no change where nothing was seen before). The delayed signals
+        N(t-1) and M-hat(t-1) of Eq. 8-10 (and the after-image of Eq. 5) follow, zero where uncovered.
+        Call it before :meth:`step` of the frame; a still camera never calls it (nothing resampled).
+        """
+        st = self.state
+        if st.p_prev is None:
+            return
+        st.p_prev = warp(st.p_prev, homography, fill=gray)
+        if st.onoff_prev is not None:
+            st.onoff_prev = tuple(warp(a, homography) for a in st.onoff_prev)
+        st.n_prev = {c: warp(a, homography) for c, a in st.n_prev.items()}
+        st.m_prev = {c: {d: warp(a, homography) for d, a in ms.items()} for c, ms in st.m_prev.items()}
 
     def step(self, gray: np.ndarray) -> LocalMotion:
         p, st = self.params, self.state
