@@ -101,4 +101,4 @@ def test_the_model_base_class_knows_no_family():
     type aside (``Output.fields``), nothing of the front end, the targets or a baseline."""
     tree = ast.parse((PACKAGE / "models" / "base.py").read_text(encoding="utf-8"))
     imported = {node.module for node in ast.walk(tree) if isinstance(node, ast.ImportFrom) and node.level}
-    assert imported <= {"_validation", "attention"}, imported
+    assert imported <= {"_validation", "neuropils.attention"}, imported
