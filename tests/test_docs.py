@@ -14,6 +14,7 @@ import pytest
 
 import mlplc2
 from mlplc2 import cli
+from mlplc2.models.lgmd import LGMD1Params, LGMD2Params
 from mlplc2.params import Params, parameter_table
 from mlplc2.targets import TargetParams
 
@@ -40,7 +41,9 @@ def _generated(text: str, command: str) -> str:
     return text.split(begin)[1].split(end)[0]
 
 
-@pytest.mark.parametrize("doc, args, cls", [("model.md", [], Params), ("targets.md", ["--targets"], TargetParams)])
+@pytest.mark.parametrize("doc, args, cls", [("model.md", [], Params), ("targets.md", ["--targets"], TargetParams),
+                                             ("model.md", ["--lgmd2"], LGMD2Params),
+                                             ("model.md", ["--lgmd1"], LGMD1Params)])
 def test_parameter_table_in_docs_is_the_generated_one(doc, args, cls, capsys):
     """Regenerate with the command named in the markers (``mlplc2 params --markdown``)."""
     command = " ".join(["mlplc2 params", *args, "--markdown"])

@@ -1,4 +1,4 @@
-"""The fast front end (mlplc2.neuropils._fast) against the reference (mlplc2.neuropils.frontend.FrontEnd), the oracle.
+"""The fast front end (mlplc2.neuropils._fast_frontend) against the reference (mlplc2.neuropils.frontend.FrontEnd), the oracle.
 
 LM maps agree to 1e-4 of their largest value (in practice ~1e-6: only x ** 0.9 is computed
 differently); mLPLC2 with either backend makes the same fields. No timings here: see
@@ -18,7 +18,7 @@ import pytest
 
 import mlplc2
 from mlplc2 import stimuli
-from mlplc2.neuropils import _fast, attention
+from mlplc2.neuropils import _fast, _fast_attention, _fast_frontend, attention
 from mlplc2.backend import make_frontend
 from mlplc2.neuropils.frontend import FrontEnd
 from mlplc2.neuropils.lobula_plate import LocalMotion
@@ -44,7 +44,7 @@ def assert_maps_close(ref: LocalMotion, fast: LocalMotion, where: str = "") -> N
 def run_both(frames, params=None, fps=30.0, fast=None):
     params = mlplc2.Params() if params is None else params
     ref = FrontEnd(params, fps)
-    fast = _fast.FastFrontEnd(params, fps) if fast is None else fast
+    fast = _fast_frontend.FastFrontEnd(params, fps) if fast is None else fast
     for i, frame in enumerate(frames):
         gray = np.asarray(frame, np.float32)
         assert_maps_close(ref.step(gray), fast.step(gray), where=f"frame {i}")
@@ -141,7 +141,7 @@ def test_n_floor_paths_bit_identical_in_bands(monkeypatch, floor, radius):
     params = mlplc2.Params(n_floor=floor, n_floor_radius=radius)
     frames = list(four_phase()[30:36, 10:130, 30:190])
     for bands in (1, 4):
-        fast = _fast.FastFrontEnd(params, 30.0)
+        fast = _fast_frontend.FastFrontEnd(params, 30.0)
         monkeypatch.setattr(fast, "_nbands", lambda h, w, bands=bands: bands)
         ref, fast = run_both(frames, params, fast=fast)
         pad = fast._pad
@@ -155,9 +155,9 @@ def test_n_floor_paths_bit_identical_in_bands(monkeypatch, floor, radius):
 def test_bands_give_identical_results(monkeypatch):
     """Splitting the rows into bands (threads) changes nothing, bit for bit."""
     frames = four_phase()[30:38]
-    one = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    one = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     monkeypatch.setattr(one, "_nbands", lambda h, w: 1)
-    many = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    many = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     monkeypatch.setattr(many, "_nbands", lambda h, w: 5)
     for i, f in enumerate(frames):
         a, b = one.step(f.astype(np.float32)), many.step(f.astype(np.float32))
@@ -170,7 +170,7 @@ def test_bands_give_identical_results(monkeypatch):
 def test_a_failing_band_raises_without_hanging(monkeypatch):
     """A phase that raises on any band (the calling thread's or a pool thread's) releases the
     spin barriers of the others and the exception reaches the caller; the front end keeps working."""
-    fe = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    fe = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     monkeypatch.setattr(fe, "_nbands", lambda h, w: 3)
     frame = noise((90, 120), n=1)[0].astype(np.float32)
     fe.step(frame)
@@ -190,7 +190,7 @@ def test_a_failing_band_raises_without_hanging(monkeypatch):
 
 
 def test_thread_count_sets_bands():
-    fe = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    fe = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     before = numba.get_num_threads()
     try:
         numba.set_num_threads(1)
@@ -203,7 +203,7 @@ def test_thread_count_sets_bands():
 
 
 def test_reset_and_new_size_match_a_fresh_front_end():
-    fast = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    fast = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     for f in noise((40, 50), n=4):
         fast.step(f.astype(np.float32))
     fast.reset()
@@ -211,7 +211,7 @@ def test_reset_and_new_size_match_a_fresh_front_end():
 
 
 def test_maps_are_new_arrays_each_frame():
-    fast = _fast.FastFrontEnd(mlplc2.Params(), 30.0)
+    fast = _fast_frontend.FastFrontEnd(mlplc2.Params(), 30.0)
     frames = noise((30, 40), n=3)
     first = fast.step(frames[0].astype(np.float32))
     kept = first.magnitude.copy()
@@ -230,9 +230,9 @@ def test_quadrant_sums_match_attention(shape):
         fields = [(int(rng.integers(0, w)), int(rng.integers(0, h)), int(rng.integers(0, 40)))
                   for _ in range(3)] + [(w // 2, h // 2, max(h, w))]
         for x, y, r in fields:
-            np.testing.assert_allclose(_fast.quadrant_sums(lm, x, y, r, shape),
+            np.testing.assert_allclose(_fast_attention.quadrant_sums(lm, x, y, r, shape),
                                        attention.quadrant_sums(lm, x, y, r, shape), rtol=1e-12, atol=1e-9)
-        np.testing.assert_allclose(_fast.quadrant_sums_all(lm, fields, shape),
+        np.testing.assert_allclose(_fast_attention.quadrant_sums_all(lm, fields, shape),
                                    [attention.quadrant_sums(lm, *f, shape) for f in fields], rtol=1e-12, atol=1e-9)
 
 
@@ -290,8 +290,8 @@ def test_default_backend_is_fast_and_model_pickles():
 def test_make_frontend_backends():
     p = mlplc2.Params()
     assert isinstance(make_frontend(p, 30.0, "reference"), FrontEnd)
-    assert isinstance(make_frontend(p, 30.0, "numba"), _fast.FastFrontEnd)
-    assert isinstance(make_frontend(p, 30.0), _fast.FastFrontEnd)
+    assert isinstance(make_frontend(p, 30.0, "numba"), _fast_frontend.FastFrontEnd)
+    assert isinstance(make_frontend(p, 30.0), _fast_frontend.FastFrontEnd)
     with pytest.raises(ValueError, match="backend"):
         make_frontend(p, 30.0, "cuda")
     with pytest.raises(ValueError, match="backend"):
@@ -336,7 +336,7 @@ def test_bench_runs_and_formats():
     rows = bench.run_bench([(48, 40)], ["mlplc2"], frames=3, ref_frames=2, warmup=2)
     (row,) = rows
     assert row.ms > 0 and row.ref_ms > 0 and row.probe_ms > 0 and row.peak_mb > 0
-    assert row.planes == _fast.plane_count(mlplc2.Params().n_floor > 0) == 26
+    assert row.planes == _fast_frontend.plane_count(mlplc2.Params().n_floor > 0) == 26
     table = bench.format_table(rows)
     assert "| mlplc2 | 48x40 |" in table
     assert bench.parse_sizes("320x240, 64x48") == [(320, 240), (64, 48)]
@@ -357,12 +357,12 @@ import os, sys, threading, time
 import numpy as np, mlplc2
 from mlplc2.neuropils import _fast
 frames = [np.random.default_rng(k).integers(0, 256, (480, 640)).astype(np.uint8) for k in range(3)]
-real_pool = _fast._pool
+real_pool = _fast.pool
 class SlowSubmit:  # a thread switch after every submit: the band tasks of two frames interleave
     def __init__(self, pool): self.pool = pool
     def submit(self, *a, **k):
         f = self.pool.submit(*a, **k); time.sleep(0.002); return f
-_fast._pool = lambda n: SlowSubmit(real_pool(n))
+_fast.pool = lambda n: SlowSubmit(real_pool(n))
 done = [0, 0]
 maps = [[], []]
 def work(i):

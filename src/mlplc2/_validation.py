@@ -257,8 +257,10 @@ class Valid:
 
     ``kind`` is ``"real"`` (:func:`check_real` with ``minimum``, ``below``, ``maximum``,
     ``positive``), ``"int"`` (:func:`check_int` with ``minimum``, ``maximum``), ``"bool"``
-    (:func:`check_bool`) or ``"choice"`` (one of the strings ``choices``). ``also`` states a
-    constraint between fields, checked by the class itself, for the tables.
+    (:func:`check_bool`), ``"choice"`` (one of the strings ``choices``) or ``"reals"`` (a
+    sequence of ``count`` numbers, :func:`check_reals`, the entries named by ``what``, each with
+    ``minimum`` or ``positive``). ``also`` states a constraint between fields, checked by the
+    class itself, for the tables.
     """
 
     kind: str
@@ -268,6 +270,8 @@ class Valid:
     positive: bool = False
     choices: tuple[str, ...] = ()
     also: str = ""
+    count: int = 0
+    what: str = ""
 
     @classmethod
     def real(cls, *, minimum=None, below=None, maximum=None, positive=False, also="") -> "Valid":
@@ -286,6 +290,11 @@ class Valid:
         return cls("choice", choices=tuple(choices))
 
     @classmethod
+    def reals(cls, count: int, what: str, *, minimum=None, positive=False) -> "Valid":
+        """A sequence of ``count`` numbers (``what`` names them), each checked like :meth:`real`."""
+        return cls("reals", minimum, None, None, positive, count=count, what=what)
+
+    @classmethod
     def point(cls) -> "Valid":
         """None or a pair of numbers (x, y)."""
         return cls("point")
@@ -301,6 +310,9 @@ class Valid:
             return check_bool(value, name)
         if self.kind == "point":
             return None if value is None else check_reals(value, name, 2, "x, y")
+        if self.kind == "reals":
+            return check_reals(value, name, self.count, self.what, minimum=self.minimum,
+                               positive=self.positive)
         if not isinstance(value, str) or value not in self.choices:
             raise InputValueError(f"{name} must be {' or '.join(map(repr, self.choices))}, got {_show(value)}")
         return str(value)
@@ -326,6 +338,8 @@ class Valid:
                 text = "any number"
             if self.kind == "int":
                 text = f"integer {text}"
+            elif self.kind == "reals":
+                text = f"{self.count} numbers {text} ({self.what})"
             elif text.startswith("in "):
                 text = text[3:]
         return f"{text}; {self.also}" if self.also else text

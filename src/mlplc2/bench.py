@@ -11,9 +11,9 @@ For every model and frame size it reports, measured in the same run:
 * the same for the reference front end (``backend="reference"``, fewer frames) and the
   speed-up;
 * a memory-bandwidth probe: the time to copy the float32 planes the fast pipeline touches
-  (:func:`mlplc2.neuropils._fast.plane_count`: N = 26 planes with the default parameters, 28 with the
+  (:func:`mlplc2.neuropils._fast_frontend.plane_count`: N = 26 planes with the default parameters, 28 with the
   relative floor ``Params.n_floor``; the kernels do 54 or 64 plane reads + writes,
-  :func:`mlplc2.neuropils._fast.plane_traffic`) with the same thread count, and the
+  :func:`mlplc2.neuropils._fast_frontend.plane_traffic`) with the same thread count, and the
   ratio of the model's time to it;
 * the peak memory one stream allocates (``tracemalloc``: model state, scratch and one
   frame's output maps; Numba's row buffers and OpenCV's strip buffers are not traced and
@@ -197,12 +197,12 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
     """
     import numba
 
-    from .neuropils import _fast
+    from .neuropils import _fast, _fast_frontend
 
     _fast.set_threads(numba.get_num_threads() if threads is None else threads)
     n_threads = numba.get_num_threads()
     sizes = parse_sizes(DEFAULT_SIZES) if sizes is None else sizes
-    planes = _fast.plane_count(Params().n_floor > 0)
+    planes = _fast_frontend.plane_count(Params().n_floor > 0)
     rows = []
     for w, h in sizes:
         video = synthetic_frames(w, h, warmup + max(frames, ref_frames))
@@ -256,9 +256,9 @@ def describe(frames: int, rounds: int) -> str:
     """What the columns of :func:`format_table` measure (printed under the table)."""
     import os
 
-    from .neuropils import _fast
+    from .neuropils import _fast_frontend
 
-    traffic = sum(_fast.plane_traffic(Params().n_floor > 0).values())
+    traffic = sum(_fast_frontend.plane_traffic(Params().n_floor > 0).values())
     load = ", ".join(f"{v:.1f}" for v in os.getloadavg()) if hasattr(os, "getloadavg") else "?"
     return (f"ms/frame: median of model.step over {frames} in-memory uint8 frames (no decoding; "
             f"smallest of {rounds} round(s)): front end, attention fields and target estimates. "

@@ -745,17 +745,22 @@ def _cmd_reproduce(args) -> int:
 # params: the parameter tables (one source: the fields' metadata, mlplc2.params)
 # ---------------------------------------------------------------------------
 def _add_params(p: argparse.ArgumentParser) -> None:
-    p.add_argument("--targets", action="store_true",
-                   help="the target estimators' TargetParams instead of the model's Params")
+    which = p.add_mutually_exclusive_group()
+    which.add_argument("--targets", action="store_true",
+                       help="the target estimators' TargetParams instead of the model's Params")
+    which.add_argument("--lgmd2", action="store_true", help="the LGMD2 baseline's LGMD2Params")
+    which.add_argument("--lgmd1", action="store_true", help="the LGMD1 baseline's LGMD1Params")
     p.add_argument("--markdown", action="store_true",
                    help="as the Markdown table of docs/model.md (docs/targets.md with --targets)")
 
 
 def _cmd_params(args) -> int:
+    from .models.lgmd import LGMD1Params, LGMD2Params
     from .params import Params, parameter_table
     from .targets import TargetParams
 
-    print(parameter_table(TargetParams if args.targets else Params, markdown=args.markdown), end="")
+    cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else Params
+    print(parameter_table(cls, markdown=args.markdown), end="")
     return EXIT_OK
 
 

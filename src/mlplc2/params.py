@@ -91,19 +91,21 @@ def parameter_table(cls, *, markdown: bool = False) -> str:
     from its fields' metadata (:func:`param`): name, symbol, unit, default, Table I value or
     "extra", valid values and description. ``markdown=True``: the table of docs/model.md (one
     row per field, description in the last column); otherwise plain text for the docstring
-    (aligned columns, then the descriptions in numpydoc ``Attributes`` form). Symbol and
-    Table I columns are left out when no field has a Table I value."""
+    (aligned columns, then the descriptions in numpydoc ``Attributes`` form). The Table I
+    column is left out when no field has a Table I value, the symbol column when no field has a
+    Table I value or a symbol."""
     fields = _fields(cls)
     paper = any(f.metadata["table"] is not None for f in fields)
-    head = ["field", "symbol", "unit", "default", "Table I", "valid values"] if paper else \
-        ["field", "unit", "default", "valid values"]
+    symbols = paper or any(f.metadata["symbol"] for f in fields)
+    keep = [0, *([1] if symbols else []), 2, 3, *([4] if paper else []), 5]
+    head = [["field", "symbol", "unit", "default", "Table I", "valid values"][i] for i in keep]
     rows = []
     for f in fields:
         m = f.metadata
         name = f"`{f.name}`" if markdown else f.name
         cells = [name, m["symbol"] or "-", m["unit"] or "-", _show_default(f.default, markdown),
                  "extra" if m["table"] is None else m["table"], str(m["valid"])]
-        rows.append(cells if paper else [cells[0], cells[2], cells[3], cells[5]])
+        rows.append([cells[i] for i in keep])
     if markdown:
         def cell(text):
             return text.replace("|", "\\|")

@@ -27,10 +27,10 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-from .._validation import FLOAT32_MAX, InputValueError, check_bool, check_int, check_real, check_reals
+from .._validation import FLOAT32_MAX, Valid, check_fields
 from ..neuropils.lamina import on_off
 from ..neuropils.medulla import delayed, lowpass_alpha
-from ..params import ParameterSet
+from ..params import ParameterSet, document_parameters, param
 from ..neuropils.retina import photoreceptors
 from .base import WORK_WIDTH, Model, Output, register
 
@@ -70,19 +70,6 @@ def _ring_kernels(centre: float, nearest: float, diagonal: float) -> tuple[np.nd
                                                    [[d, 0, d], [0, 0, 0], [d, 0, d]]))
 
 
-def _check(cls_name: str, obj, positive=(), non_negative=(), ints=(), bools=()) -> None:
-    """Validate (and store as Python floats / ints / bools) the named fields of a frozen
-    parameter dataclass (``_validation.check_real`` / ``check_int`` / ``check_bool``)."""
-    for name in positive:
-        object.__setattr__(obj, name, check_real(getattr(obj, name), f"{cls_name}.{name}", positive=True))
-    for name in non_negative:
-        object.__setattr__(obj, name, check_real(getattr(obj, name), f"{cls_name}.{name}", minimum=0))
-    for name in ints:
-        object.__setattr__(obj, name, check_int(getattr(obj, name), f"{cls_name}.{name}", minimum=1))
-    for name in bools:
-        object.__setattr__(obj, name, check_bool(getattr(obj, name), f"{cls_name}.{name}"))
-
-
 # ---------------------------------------------------------------------------
 # Grouping layer, shared (Yue & Rind 2006 feature enhancement; Fu et al.)
 # ---------------------------------------------------------------------------
@@ -100,6 +87,7 @@ def _grouping(s: np.ndarray, c_w: float, delta_c: float, c_de: float, t_de: floa
 # ---------------------------------------------------------------------------
 # LGMD2
 # ---------------------------------------------------------------------------
+@document_parameters("Parameters")
 @dataclass(frozen=True)
 class LGMD2Params(ParameterSet):
     """Parameters of the LGMD2 network (Fu et al., IEEE TCYB 2020; Fu & Yue 2015).
@@ -109,80 +97,67 @@ class LGMD2Params(ParameterSet):
     biased-ON weight from the mLPLC2 authors' Python LGMD2). Time constants are
     in ms and become filter coefficients from the frame rate.
 
-    Valid values (one-line :class:`mlplc2.InputError` otherwise): numbers are finite
-    Python or NumPy scalars (not bools, strings or arrays) within float32's range,
+    Valid values (the table below; one-line :class:`mlplc2.InputError` otherwise): numbers
+    are finite Python or NumPy scalars (not bools, strings or arrays) within float32's range,
     stored as Python floats; those that must be > 0 are at least 1.18e-38 (float32's
-    smallest normal number), ``t_pm`` at least 7.5e-37 (``T_PM_MIN``); ``dc`` < 1;
-    ``a_on``, ``a_off``, ``a_onoff`` <= 1e6 (``SUM_WEIGHT_MAX``); the kernels and
-    delays are sequences of 3 such numbers; ``n_ts`` an integer >= 1;
-    ``recursive_delay`` True or False.
+    smallest normal number); ``t_pm`` at least 7.5e-37 (``T_PM_MIN``); ``a_on``, ``a_off``,
+    ``a_onoff`` at most 1e6 (``SUM_WEIGHT_MAX``).
     """
 
-    dc: float = 0.1
-    """d_c: fraction of the previous ON/OFF value added to the current one (after-image)."""
-    on_kernel: tuple[float, float, float] = (2.0, 0.5, 0.25)
-    """W_on (centre, 4-nearest, diagonal): 3x3 lateral-inhibition weights, ON pathway."""
-    off_kernel: tuple[float, float, float] = (1.0, 0.25, 0.125)
-    """W_off (centre, 4-nearest, diagonal): 3x3 lateral-inhibition weights, OFF pathway."""
-    tau_on: tuple[float, float, float] = (15.0, 30.0, 45.0)
-    """tau_on (ms; centre, nearest, diagonal): delays of the ON inhibition."""
-    tau_off: tuple[float, float, float] = (60.0, 120.0, 180.0)
-    """tau_off (ms; centre, nearest, diagonal): delays of the OFF inhibition."""
-    recursive_delay: bool = False
-    """If False (published code) the delayed signal is alpha X(t) + (1 - alpha) X(t-1), a
-    fractional one-frame delay; if True a recursive low-pass alpha X(t) + (1 - alpha) Y(t-1)."""
-    tau_pm: float = 90.0
-    """tau_PM (ms): low-pass time constant of the mean luminance change PM (adaptive inhibition)."""
-    t_pm: float = 8.0
-    """T_PM (grey levels): w_on = max(w_on_base, PM / T_PM), likewise w_off."""
-    w_on_base: float = 1.0
-    """Baseline (floor) of the adaptive ON inhibition weight w_on."""
-    w_off_base: float = 0.5
-    """Baseline (floor) of the adaptive OFF inhibition weight w_off."""
-    a_on: float = 0.5
-    """theta_1: weight of S_on in the summation S = theta_1 S_on + theta_2 S_off + theta_3 S_on S_off."""
-    a_off: float = 1.0
-    """theta_2: weight of S_off in the summation."""
-    a_onoff: float = 1.0
-    """theta_3: weight of the supra-linear S_on S_off term."""
-    c_w: float = 4.0
-    """C_w: grouping scale w = max|Ce| / C_w + Delta_C."""
-    delta_c: float = 0.01
-    """Delta_C: small constant of the grouping scale."""
-    c_de: float = 0.5
-    """C_de: decay coefficient of the grouping threshold (G kept where G C_de >= T_de)."""
-    t_de: float = 15.0
-    """T_de: grouping (decay) threshold."""
-    c_sig: float = 1.0
-    """C_sig: sigmoid coefficient, K = 1 / (1 + exp(-sum(G) / (N_cells C_sig)))."""
-    tau_sfa: float = 800.0
-    """tau_SFA (ms): time constant of the spike-frequency-adaptation high-pass."""
-    t_sfa: float = 0.003
-    """T_SFA: K increases larger than this reset the SFA to the high-passed K."""
-    c_spi: float = 4.0
-    """C_spi: spike scale, spikes = floor(exp(C_spi (K_sfa - T_sp)))."""
-    t_sp: float = 0.78
-    """T_sp: spiking threshold on the adapted membrane potential."""
-    n_ts: int = 8
-    """N_ts (spikes): collision when the spikes counted over consecutive spiking frames reach this."""
+    dc: float = param(0.1, "Fraction of the previous ON/OFF value added to the current one (after-image).",
+                      symbol="d_c", valid=Valid.real(minimum=0, below=1))
+    on_kernel: tuple[float, float, float] = param(
+        (2.0, 0.5, 0.25), "3x3 lateral-inhibition weights of the ON pathway (centre, 4-nearest, diagonal).",
+        symbol="W_on", valid=Valid.reals(3, "centre, nearest, diagonal", minimum=0))
+    off_kernel: tuple[float, float, float] = param(
+        (1.0, 0.25, 0.125), "3x3 lateral-inhibition weights of the OFF pathway (centre, 4-nearest, diagonal).",
+        symbol="W_off", valid=Valid.reals(3, "centre, nearest, diagonal", minimum=0))
+    tau_on: tuple[float, float, float] = param(
+        (15.0, 30.0, 45.0), "Delays of the ON inhibition (centre, nearest, diagonal).",
+        symbol="tau_on", unit="ms", valid=Valid.reals(3, "centre, nearest, diagonal", positive=True))
+    tau_off: tuple[float, float, float] = param(
+        (60.0, 120.0, 180.0), "Delays of the OFF inhibition (centre, nearest, diagonal).",
+        symbol="tau_off", unit="ms", valid=Valid.reals(3, "centre, nearest, diagonal", positive=True))
+    recursive_delay: bool = param(False, """If False (published code) the delayed signal is
+                                  alpha X(t) + (1 - alpha) X(t-1), a fractional one-frame delay; if True a
+                                  recursive low-pass alpha X(t) + (1 - alpha) Y(t-1).""", valid=Valid.boolean())
+    tau_pm: float = param(90.0, "Low-pass time constant of the mean luminance change PM (adaptive inhibition).",
+                          symbol="tau_PM", unit="ms", valid=Valid.real(positive=True))
+    t_pm: float = param(8.0, """w_on = max(w_on_base, PM / T_PM), likewise w_off. At least ``T_PM_MIN``: PM / T_PM
+                        (PM, a mean |frame difference|, is at most 255) must stay within float32's range.""",
+                        symbol="T_PM", unit="grey level", valid=Valid.real(minimum=T_PM_MIN))
+    w_on_base: float = param(1.0, "Baseline (floor) of the adaptive ON inhibition weight w_on.",
+                             symbol="w_on^0", valid=Valid.real(minimum=0))
+    w_off_base: float = param(0.5, "Baseline (floor) of the adaptive OFF inhibition weight w_off.",
+                              symbol="w_off^0", valid=Valid.real(minimum=0))
+    a_on: float = param(0.5, "Weight of S_on in the summation S = theta_1 S_on + theta_2 S_off + theta_3 S_on S_off.",
+                        symbol="theta_1", valid=Valid.real(minimum=0, maximum=SUM_WEIGHT_MAX))
+    a_off: float = param(1.0, "Weight of S_off in the summation.",
+                         symbol="theta_2", valid=Valid.real(minimum=0, maximum=SUM_WEIGHT_MAX))
+    a_onoff: float = param(1.0, "Weight of the supra-linear S_on S_off term.",
+                           symbol="theta_3", valid=Valid.real(minimum=0, maximum=SUM_WEIGHT_MAX))
+    c_w: float = param(4.0, "Grouping scale w = max|Ce| / C_w + Delta_C.", symbol="C_w",
+                       valid=Valid.real(positive=True))
+    delta_c: float = param(0.01, "Small constant of the grouping scale.", symbol="Delta_C",
+                           valid=Valid.real(positive=True))
+    c_de: float = param(0.5, "Decay coefficient of the grouping threshold (G kept where G C_de >= T_de).",
+                        symbol="C_de", valid=Valid.real(minimum=0))
+    t_de: float = param(15.0, "Grouping (decay) threshold.", symbol="T_de", valid=Valid.real(minimum=0))
+    c_sig: float = param(1.0, "Sigmoid coefficient, K = 1 / (1 + exp(-sum(G) / (N_cells C_sig))).",
+                         symbol="C_sig", valid=Valid.real(positive=True))
+    tau_sfa: float = param(800.0, "Time constant of the spike-frequency-adaptation high-pass.",
+                           symbol="tau_SFA", unit="ms", valid=Valid.real(positive=True))
+    t_sfa: float = param(0.003, "K increases larger than this reset the SFA to the high-passed K.",
+                         symbol="T_SFA", valid=Valid.real(minimum=0))
+    c_spi: float = param(4.0, "Spike scale, spikes = floor(exp(C_spi (K_sfa - T_sp))).",
+                         symbol="C_spi", valid=Valid.real(positive=True))
+    t_sp: float = param(0.78, "Spiking threshold on the adapted membrane potential.",
+                        symbol="T_sp", valid=Valid.real(minimum=0))
+    n_ts: int = param(8, "Collision when the spikes counted over consecutive spiking frames reach this.",
+                      symbol="N_ts", unit="spikes", valid=Valid.integer(1))
 
     def __post_init__(self) -> None:
-        for name in ("on_kernel", "off_kernel", "tau_on", "tau_off"):
-            bound = {"positive": True} if name.startswith("tau") else {"minimum": 0}
-            object.__setattr__(self, name, check_reals(getattr(self, name), f"LGMD2Params.{name}", 3,
-                                                       "centre, nearest, diagonal", **bound))
-        _check("LGMD2Params", self,
-               positive=("tau_pm", "t_pm", "c_w", "delta_c", "c_sig", "tau_sfa", "c_spi"),
-               non_negative=("dc", "w_on_base", "w_off_base", "c_de", "t_de", "t_sfa", "t_sp"),
-               ints=("n_ts",), bools=("recursive_delay",))
-        for name in ("a_on", "a_off", "a_onoff"):
-            object.__setattr__(self, name, check_real(getattr(self, name), f"LGMD2Params.{name}", minimum=0,
-                                                      maximum=SUM_WEIGHT_MAX))
-        if self.dc >= 1:
-            raise InputValueError(f"LGMD2Params.dc must be < 1, got {self.dc!r}")
-        if self.t_pm < T_PM_MIN:
-            raise InputValueError(f"LGMD2Params.t_pm must be >= {T_PM_MIN:.2g} (PM / t_pm, PM <= 255, must stay "
-                                  f"within float32's range), got {self.t_pm!r}")
+        check_fields(self, "LGMD2Params")
 
 
 @register("lgmd2")
@@ -285,6 +260,7 @@ class LGMD2(Model):
 # ---------------------------------------------------------------------------
 # LGMD1
 # ---------------------------------------------------------------------------
+@document_parameters("Parameters")
 @dataclass(frozen=True)
 class LGMD1Params(ParameterSet):
     """Parameters of the LGMD1 network (Yue & Rind, IEEE TNN 2006).
@@ -294,42 +270,36 @@ class LGMD1Params(ParameterSet):
     the shared grouping layer; ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
     value and rule with the published model.
 
-    Valid values: as for :class:`LGMD2Params` (``w_i_kernel`` 2 numbers >= 0, ``signed``
-    True or False).
+    Valid values: the table below, numbers as for :class:`LGMD2Params`.
     """
 
-    w_i_kernel: tuple[float, float] = (0.25, 0.125)
-    """w_I (4-nearest, diagonal): 3x3 lateral-inhibition kernel (centre 0), one-frame delay."""
-    w_i: float = 0.6
-    """W_I: weight of the inhibition in S = E - W_I I."""
-    c_w: float = 4.0
-    """C_w: grouping scale w = max|Ce| / C_w + Delta_C."""
-    delta_c: float = 0.01
-    """Delta_C: small constant of the grouping scale."""
-    c_de: float = 0.5
-    """C_de: decay coefficient of the grouping threshold."""
-    t_de: float = 15.0
-    """T_de: grouping (decay) threshold (G kept where G C_de >= T_de)."""
-    c_sig: float = 1.0
-    """C_sig: sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig)))."""
-    t_sp: float = 0.78
-    """T_sp: spiking threshold on kappa."""
-    n_ts: int = 5
-    """n_ts (frames): collision after this many consecutive spiking frames."""
-    t_ffi: float = 10.0
-    """T_FFI (grey levels): LGMD output suppressed when the FFI, the mean |P| of the previous
-    frame, reaches this."""
-    signed: bool = False
-    """If True, Yue & Rind's signed layers: E = P, I from the signed P(t-1), S = E - W_I I
-    (not rectified), membrane sum over |G|, so inhibition from a neighbour of the opposite
-    polarity adds to the excitation. If False (default, a documented deviation): magnitudes,
-    E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition always inhibits."""
+    w_i_kernel: tuple[float, float] = param(
+        (0.25, 0.125), "3x3 lateral-inhibition kernel (4-nearest, diagonal; centre 0), one-frame delay.",
+        symbol="w_I", valid=Valid.reals(2, "nearest, diagonal", minimum=0))
+    w_i: float = param(0.6, "Weight of the inhibition in S = E - W_I I.", symbol="W_I", valid=Valid.real(minimum=0))
+    c_w: float = param(4.0, "Grouping scale w = max|Ce| / C_w + Delta_C.", symbol="C_w",
+                       valid=Valid.real(positive=True))
+    delta_c: float = param(0.01, "Small constant of the grouping scale.", symbol="Delta_C",
+                           valid=Valid.real(positive=True))
+    c_de: float = param(0.5, "Decay coefficient of the grouping threshold.", symbol="C_de",
+                        valid=Valid.real(minimum=0))
+    t_de: float = param(15.0, "Grouping (decay) threshold (G kept where G C_de >= T_de).", symbol="T_de",
+                        valid=Valid.real(minimum=0))
+    c_sig: float = param(1.0, "Sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig))).",
+                         symbol="C_sig", valid=Valid.real(positive=True))
+    t_sp: float = param(0.78, "Spiking threshold on kappa.", symbol="T_sp", valid=Valid.real(minimum=0))
+    n_ts: int = param(5, "Collision after this many consecutive spiking frames.", symbol="n_ts", unit="frames",
+                      valid=Valid.integer(1))
+    t_ffi: float = param(10.0, """LGMD output suppressed when the FFI, the mean |P| of the previous frame,
+                         reaches this.""", symbol="T_FFI", unit="grey level", valid=Valid.real(positive=True))
+    signed: bool = param(False, """If True, Yue & Rind's signed layers: E = P, I from the signed P(t-1),
+                         S = E - W_I I (not rectified), membrane sum over |G|, so inhibition from a neighbour
+                         of the opposite polarity adds to the excitation. If False (default, a documented
+                         deviation): magnitudes, E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition
+                         always inhibits.""", valid=Valid.boolean())
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "w_i_kernel", check_reals(self.w_i_kernel, "LGMD1Params.w_i_kernel", 2,
-                                                           "nearest, diagonal", minimum=0))
-        _check("LGMD1Params", self, positive=("c_w", "delta_c", "c_sig", "t_ffi"),
-               non_negative=("w_i", "c_de", "t_de", "t_sp"), ints=("n_ts",), bools=("signed",))
+        check_fields(self, "LGMD1Params")
 
 
 @register("lgmd1")
