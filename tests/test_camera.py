@@ -120,3 +120,24 @@ def test_gaze_stabilisation_silences_the_static_world_of_a_turning_camera(camera
     turning = _frames(camera, speed)
     assert p99(turning, False) > 20 * still           # the turn drowns everything ...
     assert p99(turning, True) < 2 * still             # ... unless the gaze is stabilised
+
+
+def test_both_front_ends_stabilise_alike():
+    """The compiled front end carries its state as the reference does (the LM maps agree)."""
+    pytest.importorskip("numba")
+    from mlplc2.neuropils._fast_frontend import FastFrontEnd
+    from mlplc2.neuropils.frontend import FrontEnd
+    from mlplc2.params import Params
+
+    frames = _frames("pan", -15.0, size=(160, 120), frames=8)
+    ends = [FrontEnd(Params(), FPS), FastFrontEnd(Params(), FPS)]
+    est, f = MotionEstimator(hfov_deg=60.0), focal_length(160, 60.0)
+    for fr in frames:
+        g = fr.astype(np.float32)
+        m = est.apply(fr)
+        maps = []
+        for fe in ends:
+            if not m.still:
+                fe.compensate(m.homography(g.shape, f), g)
+            maps.append(fe.step(g).magnitude)
+        assert np.allclose(maps[0], maps[1], atol=1e-4 * max(1.0, float(maps[0].max())))

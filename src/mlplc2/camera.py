@@ -16,6 +16,12 @@ import numpy as np
 
 from ._validation import check_real
 
+#: A rotation that moves no point of the frame by more than this (px, at the model's working size)
+#: is not compensated: a still camera's frames are never resampled (its estimate is ~0.01 px).
+STILL_PX = 0.1
+#: Least share of the tracked points that must agree with the rotation for it to be compensated.
+MIN_ROTATION_CONFIDENCE = 0.5
+
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp"]
 
 
@@ -82,8 +88,16 @@ class CameraMotion:
 
     @property
     def still(self) -> bool:
-        """No rotation to compensate (exactly zero)."""
+        """No rotation to compensate: exactly zero (the first frame, no texture, or given so)."""
         return self.omega == (0.0, 0.0, 0.0)
+
+    def shift_px(self, shape: tuple[int, int], focal: float) -> float:
+        """The largest image motion (px) the rotation gives at the frame's centre and corners."""
+        h, w = shape
+        pts = np.array([[0.0, 0.0, 1.0], [w - 1.0, 0.0, 1.0], [0.0, h - 1.0, 1.0], [w - 1.0, h - 1.0, 1.0],
+                        [(w - 1) / 2.0, (h - 1) / 2.0, 1.0]]).T
+        q = self.homography(shape, focal) @ pts
+        return float(np.max(np.hypot(q[0] / q[2] - pts[0], q[1] / q[2] - pts[1])))
 
 
 def rotation_matrix(omega) -> np.ndarray:

@@ -8,6 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
+from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -31,7 +32,8 @@ class _LPLC2Family(Model):
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, backend: str = "auto",
-                 repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH):
+                 repeat_threshold: float | str | None = "auto", work_width: int | None = WORK_WIDTH,
+                 stabilise: bool = False):
         params = self._check_params(params, Params, "params", "mlplc2.Params")
         target_params = self._check_params(target_params, TargetParams, "target_params", "mlplc2.targets.TargetParams")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
@@ -51,6 +53,38 @@ class _LPLC2Family(Model):
         self.maps: LocalMotion | None = None
         """The lobula-plate maps (LM_r, LM_l, LM_d, LM_u, LM) of the last frame, for inspection."""
         self._layer: TargetLayer | None = None
+        self.stabilise = bool(stabilise)
+        """Gaze stabilisation (docs/model.md, "Camera motion"): the camera's rotation is estimated
+        every frame (:class:`mlplc2.camera.MotionEstimator`) and the front end's state, the fields
+        and the targets are carried into the new frame's pixels before it is processed, so that
+        the model sees what a camera that does not turn would see. False: the paper's model."""
+        self._camera = MotionEstimator(hfov_deg=hfov_deg) if self.stabilise else None
+        self.camera_motion: CameraMotion | None = None
+        """The camera's motion measured at the last frame (with ``stabilise``), else None."""
+
+    def _front(self, gray: np.ndarray) -> LocalMotion:
+        """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
+        if self._camera is not None:
+            self._stabilise(gray)
+        lm = self.frontend.step(gray)
+        self.maps = lm
+        return lm
+
+    def _stabilise(self, gray: np.ndarray) -> None:
+        """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
+        m = self.camera_motion = self._camera.apply(gray)
+        focal = focal_length(gray.shape[1], self._camera.hfov_deg)
+        if m.still or m.rotation_confidence < MIN_ROTATION_CONFIDENCE or m.shift_px(gray.shape, focal) < STILL_PX:
+            return
+        hom = m.homography(gray.shape, focal)
+        self.frontend.compensate(hom, gray)
+        h, w = gray.shape
+        for f in self._fields:
+            x, y, z = hom @ np.array([f.x, f.y, 1.0])
+            f.x = int(min(max(round(x / z), 0), w - 1))
+            f.y = int(min(max(round(y / z), 0), h - 1))
+        if self._layer is not None:
+            self._layer.compensate(hom, gray)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
         """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
@@ -62,6 +96,9 @@ class _LPLC2Family(Model):
         self._next_id = 1
         self.maps = None
         self._layer = None
+        if self._camera is not None:
+            self._camera.reset()
+        self.camera_motion = None
 
     # -- field bookkeeping ---------------------------------------------------
     def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
@@ -130,8 +167,7 @@ class MLPLC2(_LPLC2Family):
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
-        lm = self.frontend.step(gray)
-        self.maps = lm
+        lm = self._front(gray)
         # Eq. 13: at most one new field per frame, at the largest LM outside all fields.
         if len(self._fields) < p.max_fields:
             # A responding field also claims the blurred edges just beyond it (``exclusion``).
@@ -157,8 +193,7 @@ class SLPLC2(_LPLC2Family):
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
-        lm = self.frontend.step(gray)
-        self.maps = lm
+        lm = self._front(gray)
         mag = lm.magnitude
         if not self._fields and float(mag.max()) > p.t_a:
             self._new_field(0, 0, index, p.r_af)
@@ -189,8 +224,7 @@ class LPLC2(_LPLC2Family):
     localises = False
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
-        lm = self.frontend.step(gray)
-        self.maps = lm
+        lm = self._front(gray)
         if not self._fields:
             h, w = gray.shape
             self._new_field(w // 2, h // 2, 0, max(h, w))

@@ -57,6 +57,7 @@ from ._fast_motion import motion_rows, pow_mode
 from .frontend import set_coefficients
 from .lobula_plate import LocalMotion
 from .medulla import local_max
+from ..camera import warp
 from ..params import Params
 
 __all__ = ["FastFrontEnd", "PLANES", "MIN_BAND_PIXELS", "plane_count", "plane_traffic"]
@@ -245,6 +246,24 @@ class FastFrontEnd:
         self._shape = None
         self._first = True
         self._bands = None
+
+    def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
+        """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
+        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels, in place."""
+        if self._shape is None or self._first or np.shape(gray) != self._shape:
+            return
+        gray = np.asarray(gray, dtype=np.float32)
+        prev = self._p[0]
+        prev[...] = warp(prev, homography, fill=gray)
+        pad = self._pad
+        for c in range(2):
+            inner = self._n_prev[c, pad:-pad, pad:-pad] if pad else self._n_prev[c]
+            inner[...] = warp(np.ascontiguousarray(inner), homography)
+            for d in range(4):
+                self._m[c, d][...] = warp(np.ascontiguousarray(self._m[c, d]), homography)
+        if self.params.after_image:
+            self._on[...] = warp(self._on, homography)
+            self._off[...] = warp(self._off, homography)
 
     # -- buffers ----------------------------------------------------------------
     def _allocate(self, h: int, w: int, nbands: int) -> None:
