@@ -17,7 +17,7 @@ from mlplc2 import cli
 from mlplc2.params import Params, parameter_table
 from mlplc2.targets import TargetParams
 
-MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd", "mlplc2.stimuli.world", "mlplc2._signals"]
+MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd", "mlplc2.stimuli.world.scenes", "mlplc2._signals"]
 
 
 @pytest.mark.parametrize("name", MODULES)
