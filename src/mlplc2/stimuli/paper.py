@@ -491,21 +491,7 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
     if isinstance(objects, SceneObject):
         objects = [objects]
     checked = [_check_object(o, n, i) for i, o in enumerate(objects)]
-
-    if isinstance(background, str) and background == "plain":
-        background = plain_level([o.polarity for o in checked])
-    if n * w * h > MAX_STIMULUS_BYTES:
-        raise InputValueError(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
-                              f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
-    offsets = np.arange(n, dtype=np.float64) * scroll
-    offsets -= offsets.min()
-    if offsets.max() > MAX_SCROLL_PX:
-        raise InputValueError(f"scroll {scroll!r} px per frame over {n} frames moves the background "
-                              f"{offsets.max():.0f} px; at most {MAX_SCROLL_PX}")
-    need = w + int(math.ceil(offsets.max())) + 1
-    strip = _background_strip(background, w, h, need, seed)
-    video = np.clip(np.rint(_scrolled(strip, offsets, w)), 0, 255).astype(np.uint8)
-
+    video = _scrolling_background(background, checked, n, (w, h), scroll, seed)
     truths, all_sides = [], []
     for i, obj in enumerate(checked):
         sides, contact = _object_sides(obj, n, fps, focal)
@@ -516,20 +502,44 @@ def scene(objects: Sequence[SceneObject], *, size: tuple[int, int] = (320, 240),
             warnings.warn(f"objects[{i}] at ({cx:g}, {cy:g}) is never visible in the {w}x{h} frames "
                           f"{'(its side is 0)' if half < 0.5 else '(outside the frame)'}",
                           stacklevel=2)
-        a0, a1 = obj.onset, obj.onset + obj.approach
-        h1 = a1 + obj.hold
-        truths.append(ObjectTruth(
-            id=i + 1, center=obj.center, polarity=obj.polarity,
-            approach=_interval(a0, obj.approach, n), hold=_interval(a1, obj.hold, n),
-            recede=_interval(h1, obj.recede, n), sizes=tuple(float(s) for s in sides),
-            contact_frame=contact,
-            extra={"half_size": float(obj.half_size), "speed": float(obj.speed)} if obj.looming == "physical" else {}))
+        truths.append(_square_truth(i + 1, obj, sides, contact, n))
     for t in range(n):
         for obj, sides in zip(checked, all_sides):
             if sides[t] > 0:
                 _draw_square(video[t], obj.center, float(sides[t]),
                              DARK_LEVEL if obj.polarity == "dark" else BRIGHT_LEVEL)
     return Stimulus(video, fps, tuple(truths), name)
+
+
+def _scrolling_background(background, objects: list[SceneObject], n: int, size: tuple[int, int], scroll: float,
+                          seed: int) -> np.ndarray:
+    """The ``uint8 (T, H, W)`` background of :func:`scene`, scrolled by ``scroll`` px per frame."""
+    w, h = size
+    if isinstance(background, str) and background == "plain":
+        background = plain_level([o.polarity for o in objects])
+    if n * w * h > MAX_STIMULUS_BYTES:
+        raise InputValueError(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
+                              f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB (generate it in parts)")
+    offsets = np.arange(n, dtype=np.float64) * scroll
+    offsets -= offsets.min()
+    if offsets.max() > MAX_SCROLL_PX:
+        raise InputValueError(f"scroll {scroll!r} px per frame over {n} frames moves the background "
+                              f"{offsets.max():.0f} px; at most {MAX_SCROLL_PX}")
+    need = w + int(math.ceil(offsets.max())) + 1
+    strip = _background_strip(background, w, h, need, seed)
+    return np.clip(np.rint(_scrolled(strip, offsets, w)), 0, 255).astype(np.uint8)
+
+
+def _square_truth(oid: int, obj: SceneObject, sides: np.ndarray, contact: float | None, n: int) -> ObjectTruth:
+    """The truth of one square of :func:`scene`: its phases, its side per frame, its contact."""
+    a0, a1 = obj.onset, obj.onset + obj.approach
+    h1 = a1 + obj.hold
+    return ObjectTruth(
+        id=oid, center=obj.center, polarity=obj.polarity,
+        approach=_interval(a0, obj.approach, n), hold=_interval(a1, obj.hold, n),
+        recede=_interval(h1, obj.recede, n), sizes=tuple(float(s) for s in sides),
+        contact_frame=contact,
+        extra={"half_size": float(obj.half_size), "speed": float(obj.speed)} if obj.looming == "physical" else {})
 
 
 def four_phase(*, background: Any = "procedural", seed: int = 0, fps: float = 30.0, scroll: float = 1.0,
