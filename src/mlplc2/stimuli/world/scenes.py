@@ -274,7 +274,7 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
         ``"texture"``: a procedural texture at infinity; ``"ground"``: a
         textured ground plane below the horizon, the far texture above.
     camera : {"static", "pan", "tilt", "forward"}
-        Camera motion (module docstring).
+        Camera motion (:mod:`mlplc2.stimuli.world.camera`).
     camera_speed : float
         Pan or tilt rate (deg/s, positive right / up) or forward speed (m/s);
         must be 0 for a static camera.
