@@ -306,7 +306,7 @@ def test_registered_generator_and_reexports():
 
 
 def test_preset_signature_is_cli_friendly_and_documented():
-    func = S._GENERATORS["approach"]
+    func = S.GENERATORS["approach"]
     hints = typing.get_type_hints(func)
     allowed = {int, float, str, bool, typing.Optional[int], typing.Optional[float], typing.Optional[str],
                tuple[int, int], tuple[float, float]}
@@ -321,7 +321,7 @@ def test_either_module_may_be_imported_first():
     for first in ("mlplc2.stimuli.world", "mlplc2.stimuli"):
         code = f"import {first}; from mlplc2.stimuli import approach; print(approach.__module__)"
         out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, check=True)
-        assert out.stdout.strip() == "mlplc2.stimuli.world"
+        assert out.stdout.strip() == "mlplc2.stimuli.world.scenes"
 
 
 # --------------------------------------------------------------------------- bad input

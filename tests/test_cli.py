@@ -378,7 +378,7 @@ def test_stimulus_options_of_a_new_generator(monkeypatch, tmp_path, capsys):
         seen.update(size=size, start=start, mode=mode, invert=invert, speed=speed, frames=frames, scale=scale)
         return stimuli.scene([], size=size, frames=frames, background="plain", scroll=0.0, name="approach3d")
 
-    monkeypatch.setitem(stimuli._GENERATORS, "approach3d", approach3d)
+    monkeypatch.setitem(stimuli.GENERATORS, "approach3d", approach3d)
     monkeypatch.setattr(stimuli, "NAMES", stimuli.NAMES + ("approach3d",))
     out = str(tmp_path / "a.avi")
     assert main(["stimulus", "approach3d", "--start", "1,-2,7.5", "--mode", "ballistic", "--invert",

@@ -18,7 +18,7 @@ from mlplc2.models.lgmd import LGMD1Params, LGMD2Params
 from mlplc2.params import Params, parameter_table
 from mlplc2.targets import TargetParams
 
-MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd", "mlplc2.stimuli.world", "mlplc2._signals"]
+MODULES = ["mlplc2", "mlplc2.params", "mlplc2.models.lplc2", "mlplc2.models.lgmd", "mlplc2.stimuli.world.scenes", "mlplc2._signals"]
 
 
 @pytest.mark.parametrize("name", MODULES)

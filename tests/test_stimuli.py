@@ -11,6 +11,7 @@ import pytest
 
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
+from mlplc2.camera import focal_length
 from mlplc2.evaluation.truth import PHASES
 
 from .conftest import PAPER, read_gray
@@ -395,7 +396,7 @@ def test_physical_recede_without_approach_moves_away_at_its_speed():
     st = S.scene([obj], size=(100, 80), frames=14, fps=fps, background="plain", hfov_deg=60.0)
     truth = st.to_ground_truth()["objects"][0]
     assert truth["recede"] == [2, 12]
-    f = S.focal_length_px(100, 60.0)
+    f = focal_length(100, 60.0)
     d0 = 2 * f * l / peak
     expect = [peak, peak] + [2 * f * l / (d0 + v * k / fps) for k in range(10)] + [0, 0]
     assert np.allclose(truth["sizes"], expect, atol=1e-6)

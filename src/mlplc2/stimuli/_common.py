@@ -1,7 +1,12 @@
-"""What every stimulus generator shares (:mod:`mlplc2.stimuli`, :mod:`mlplc2.stimuli.world`): the
-result types, the argument checks, the pinhole focal length, the plain and procedural
-backgrounds and the size limit. Both generator modules import it; neither imports the other's
-internals (the 2-D module re-exports the 3-D one's public names)."""
+"""What every stimulus generator shares (:mod:`mlplc2.stimuli.paper`, :mod:`mlplc2.stimuli.world`): the
+result types (:class:`Stimulus`, :class:`ApproachStimulus`), the argument checks, the plain and
+procedural backgrounds (1/f noise, blobs, optics blur) and the size limit. Both families import
+it; neither imports the other (import-linter: ``paper | world``).
+
+The checks here are the stimuli's own on purpose: :func:`check_count` takes an integral float
+(``frames=50.0``) and :func:`check_number` anything ``float()`` reads, where
+:func:`mlplc2._validation.check_int` and :func:`~mlplc2._validation.check_real` refuse them (the
+3-D world uses those). :func:`check_choice` names the options in its message."""
 
 from __future__ import annotations
 
