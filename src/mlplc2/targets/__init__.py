@@ -37,4 +37,4 @@ from .params import TargetParams
 
 __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignment", "measure_extent", "edge_distance",
            "align", "change_box", "pyramid", "fit_contact", "fit_course", "estimate", "count_down", "bearing", "focal_length",
-           "check_hfov", "Observation"]
+           "check_hfov", "Observation", "ContactFit"]
