@@ -1,4 +1,4 @@
-"""The compiled image alignment (mlplc2.targets._fast.align_patch) against mlplc2.targets.align.
+"""The compiled image alignment (mlplc2.targets._fast_align.align_patch) against mlplc2.targets.alignment.
 
 The NumPy ``align`` is the oracle. The kernel samples, blurs and differentiates the patch in
 OpenCV's float32 order (bit for bit here; asserted to a few float32 ulps, the order of
@@ -14,8 +14,9 @@ import pytest
 
 import mlplc2
 from mlplc2 import stimuli
-from mlplc2.targets import _fast as _fast_targets
 from mlplc2 import targets as T
+from mlplc2.targets import _fast_align
+from mlplc2.targets.alignment import _sample
 from mlplc2.backend import resolve
 
 W, H = 200, 150
@@ -39,7 +40,7 @@ def zoomed(img: np.ndarray, cx: float, cy: float, kx: float, ky: float, dx: floa
 def both(prev, cur, cx, cy, half, box, n=32, iterations=10):
     pa, pc = T.pyramid(prev), T.pyramid(cur)
     ref = T.align(pa, pc, cx, cy, half, box, n=n, iterations=iterations)
-    fast = T.align(pa, pc, cx, cy, half, box, n=n, iterations=iterations, kernel=_fast_targets.align_patch)
+    fast = T.align(pa, pc, cx, cy, half, box, n=n, iterations=iterations, kernel=_fast_align.align_patch)
     return ref, fast
 
 
@@ -64,8 +65,8 @@ def test_sampling_and_inside_mask_match_opencv(n):
         level = int(rng.integers(0, len(levels)))
         cx, cy = rng.uniform(-40, W + 40), rng.uniform(-40, H + 40)     # some patches cross the border
         sx, sy = rng.uniform(0.3, 4.0, 2)
-        ref, inside = T._sample(levels, level, cx, cy, sx, sy, n)
-        everywhere = _fast_targets._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y)
+        ref, inside = _sample(levels, level, cx, cy, sx, sy, n)
+        everywhere = _fast_align._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y)
         np.testing.assert_array_equal(in_y[:, None] & in_x[None, :], inside)
         assert everywhere == inside.all()
         partial += 0 < inside.sum() < inside.size
@@ -76,12 +77,12 @@ def test_sampling_and_inside_mask_match_opencv(n):
 @pytest.mark.parametrize("n", [8, 32])
 def test_blur_matches_opencv(n):
     rng = np.random.default_rng(n)
-    taps = _fast_targets._TAPS
+    taps = _fast_align._TAPS
     np.testing.assert_array_equal(taps, cv2.getGaussianKernel(7, 0.8, cv2.CV_32F).ravel())
     pad, tmp, out = np.empty(n + taps.size - 1, np.float32), np.empty((n, n), np.float32), np.empty((n, n), np.float32)
     for _ in range(10):
         a = (rng.random((n, n)) * 255).astype(np.float32)
-        _fast_targets._blur(a, pad, tmp, out, taps)
+        _fast_align._blur(a, pad, tmp, out, taps)
         np.testing.assert_allclose(out, cv2.GaussianBlur(a, (0, 0), 0.8), rtol=1e-6, atol=1e-4)
 
 
@@ -113,7 +114,7 @@ def test_kernel_matches_reference_at_the_frame_border(cx, cy):
     prev = texture(3)
     cur = zoomed(prev, cx, cy, 1.04, 1.04, 0.4, -0.3)
     levels = T.pyramid(prev)
-    _, inside = T._sample(levels, 0, cx, cy, 30.0 / 16, 30.0 / 16, 32)
+    _, inside = _sample(levels, 0, cx, cy, 30.0 / 16, 30.0 / 16, 32)
     assert 0 < inside.sum() < inside.size
     ref, fast = both(prev, cur, cx, cy, 30.0, (20.0, 20.0))
     assert ref is not None and fast is not None
@@ -154,9 +155,9 @@ def test_kernel_matches_reference_when_the_iteration_fails():
 
 
 def test_dispatch_and_backend():
-    assert resolve("numba").align_kernel is _fast_targets.align_patch
+    assert resolve("numba").align_kernel is _fast_align.align_patch
     assert resolve("reference").align_kernel is None
-    for backend, kernel in (("numba", _fast_targets.align_patch), ("reference", None)):
+    for backend, kernel in (("numba", _fast_align.align_patch), ("reference", None)):
         model = mlplc2.MLPLC2(fps=30.0, backend=backend)
         model.step(np.zeros((48, 64), np.uint8))
         assert model._layer.align_kernel is kernel

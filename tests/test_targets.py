@@ -20,8 +20,8 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2._validation import InputTypeError, InputValueError
 from mlplc2.stimuli import ApproachObject, approach
-from mlplc2.targets import (Target, TargetParams, Track, align, bearing, change_box, edge_distance, fit_contact,
-                            fit_course, focal_length, pyramid)
+from mlplc2.targets import (Observation, Target, TargetParams, Track, align, bearing, change_box, edge_distance,
+                            fit_contact, fit_course, focal_length, pyramid)
 from mlplc2.evaluation.truth import parse
 
 FPS = 30.0
@@ -315,7 +315,8 @@ def test_track_follow_counts_fails_moves_refits_and_loses():
     assert t.fails == 2 and not t.history
     assert t.follow((2.0, -1.0, 1.1, 1.2, 0.1, 0.05), 3, 30.0, (100, 100), 3)
     assert t.fails == 0 and (t.cx, t.cy) == (52.0, 39.0) and t.w == 10.0 * 1.1 and t.h == 10.0 * 1.2
-    assert t.rate == 0.1 * 30.0 and t.history[-1] == (3, 0.1, 52.0, 39.0, t.w, 0.05)
+    assert t.rate == 0.1 * 30.0 and t.history[-1] == Observation(3, 0.1, 52.0, 39.0, t.w, 0.05)
+    assert (t.history[-1].frame, t.history[-1].log_scale, t.history[-1].anisotropy) == (3, 0.1, 0.05)
 
     class Pan:                                       # the camera's image motion: 1 px right
         def flow(self, x, y):
@@ -325,7 +326,7 @@ def test_track_follow_counts_fails_moves_refits_and_loses():
     t.follow((0.0, 0.0, 1.0, 1.0, 0.0, 0.0), 4, 30.0, (100, 100), 3, box=(60.0, 39.0, 2.75, 100.0), refit=0.5,
              camera=Pan())
     assert t.cx == 56.0 and t.w == 11.0 * 0.5 and t.h == 12.0 and t.ox == 1.0
-    assert t.history[-1][2:4] == (55.0, 39.0)
+    assert (t.history[-1].x, t.history[-1].y) == (55.0, 39.0)
     assert not t.follow((60.0, 0.0, 1.0, 1.0, 0.0, 0.0), 5, 30.0, (100, 100), 3)   # the centre left the frame
     assert t.overlap(Track(2, 0, t.cx, t.cy, t.w, t.h)) == 1.0 and t.overlap(Track(3, 0, 0.0, 0.0, 1.0, 1.0)) == 0.0
 

@@ -4,7 +4,7 @@ A model picks its :class:`Backend` once, at construction (``backend="auto" | "nu
 "reference"``), and every per-frame stage that has a compiled version takes it from there:
 the front end (Eq. 1-12, :class:`mlplc2.neuropils._fast_frontend.FastFrontEnd`), the quadrant sums of
 Eq. 14 (:func:`mlplc2.neuropils._fast_attention.quadrant_sums`), the edge scans and the image alignment of the target
-layer (:func:`mlplc2.targets._fast.edges4`, :func:`mlplc2.targets._fast.align_patch`).
+layer (:func:`mlplc2.targets._fast_extent.edges4`, :func:`mlplc2.targets._fast_align.align_patch`).
 ``"reference"`` never imports Numba. Both give the same fields and targets; the LM maps agree
 to ~1e-6, the edge scans bit for bit, the alignments to ~1e-12.
 """
@@ -33,7 +33,7 @@ def fast_available() -> bool:
     global _FAST_ERROR
     try:
         from .neuropils import _fast_attention, _fast_frontend  # noqa: F401
-        from .targets import _fast as _fast_targets  # noqa: F401
+        from .targets import _fast_align, _fast_extent  # noqa: F401
     except Exception as exc:  # noqa: BLE001 - ImportError, or numba failing to initialise
         _FAST_ERROR = f"{type(exc).__name__}: {exc}"
         return False
@@ -63,10 +63,10 @@ def resolve(backend: str = "auto") -> Backend:
     if backend != "reference":
         if fast_available():
             from .neuropils import _fast_attention, _fast_frontend
-            from .targets import _fast as _fast_targets
+            from .targets import _fast_align, _fast_extent
 
-            return Backend("numba", _fast_frontend.FastFrontEnd, _fast_attention.quadrant_sums, _fast_targets.edges4,
-                           _fast_targets.align_patch)
+            return Backend("numba", _fast_frontend.FastFrontEnd, _fast_attention.quadrant_sums, _fast_extent.edges4,
+                           _fast_align.align_patch)
         if backend == "numba":
             raise ImportError(f"the numba backend is unavailable ({_FAST_ERROR})")
         if not _WARNED:

@@ -20,7 +20,8 @@ from typing import Literal
 
 from ._validation import InputValueError, Valid, check_fields
 
-__all__ = ["Params", "ParameterSet", "GAMMA_MIN", "LM_SCALE_MAX", "param", "parameter_table", "document_parameters"]
+__all__ = ["Params", "ParameterSet", "GAMMA_MIN", "LM_SCALE_MAX", "param", "param_of", "parameter_table",
+           "document_parameters"]
 
 #: Smallest exponent gamma_on / gamma_off (Eq. 11). With tiny exponents T ** gamma lies within a
 #: few float32 steps of 1 for every T > 0, the opponent difference r - l is rounding noise and the
@@ -67,6 +68,13 @@ def param(default, doc: str, *, valid: Valid, symbol: str = "", unit: str = "", 
     ``doc`` (one paragraph)."""
     return dataclasses.field(default=default, metadata={"symbol": symbol, "unit": unit, "table": table,
                                                         "valid": valid, "doc": " ".join(doc.split())})
+
+
+def param_of(cls, name: str):
+    """A new field with the default and the :func:`param` metadata of field ``name`` of the
+    parameter set ``cls``: one definition for a parameter that two parameter sets share."""
+    f = next(f for f in dataclasses.fields(cls) if f.name == name)
+    return dataclasses.field(default=f.default, metadata=f.metadata)
 
 
 def _show_default(value, markdown: bool) -> str:

@@ -35,9 +35,12 @@ import cv2
 import numpy as np
 
 from .._validation import Valid, check_fields
-from ..params import ParameterSet, document_parameters, param
-from ..targets import (Target, TargetParams, Track, change_box, check_hfov, count_down, estimate, focal_length,
-                       pyramid)
+from ..camera import check_hfov, focal_length
+from ..params import ParameterSet, document_parameters, param, param_of
+from ..targets.alignment import pyramid
+from ..targets.change import change_box
+from ..targets.layer import Observation, Target, Track, count_down, estimate
+from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
 
 __all__ = ["FlowTTC", "FlowParams", "ObjectFlow", "object_flow", "camera_motion", "CameraMotion",
@@ -96,8 +99,7 @@ class FlowParams(ParameterSet):
                                 out of the focus of expansion.""", unit="px/frame", valid=Valid.real(minimum=0))
     patch: int = param(48, "Side of the resampled patch a target's own flow is computed on (step 4).",
                        unit="samples", valid=Valid.integer(16, 256))
-    margin: float = param(1.5, "Patch half-side = ``margin`` x half the box's larger side + 3 px.",
-                          valid=Valid.real(minimum=1))
+    margin: float = param_of(TargetParams, "margin")     # the same definition as the targets'
     window: int = param(5, """Averaging window of Farneback's flow on the patch (odd): smaller follows the
                         object's boundary more closely (less of the still background blended into its
                         flow), larger is smoother.""", unit="samples", valid=Valid.integer(3, 31))
@@ -416,8 +418,8 @@ def _grew(t: Track, tp: TargetParams) -> bool:
     (``max_anisotropy``); True while it is younger than ``change_frames``."""
     if len(t.history) < tp.change_frames:
         return True
-    g = t.history[-1][1] - t.history[0][1]
-    return g >= tp.min_growth and abs(t.history[-1][5] - t.history[0][5]) <= tp.max_anisotropy * g
+    g = t.history[-1].log_scale - t.history[0].log_scale
+    return g >= tp.min_growth and abs(t.history[-1].anisotropy - t.history[0].anisotropy) <= tp.max_anisotropy * g
 
 
 @register("flow")
@@ -586,7 +588,7 @@ class FlowTTC(Model):
             t = _FlowTrack(self._next, index, *box)
             if any(o.overlap(t) >= 0.5 for o in self._tracks) or not self._grows(t, levels, cam):
                 continue
-            t.history = deque([(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
+            t.history = deque([Observation(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
             t.seen = self._steps
             self._next += 1
             self._tracks.append(t)

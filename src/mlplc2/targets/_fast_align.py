@@ -1,18 +1,13 @@
-"""Numba kernel of the target layer (:mod:`mlplc2.targets`), chosen by :mod:`mlplc2.backend`.
+"""Numba kernel of the image alignment of :mod:`mlplc2.targets.alignment`, chosen by :mod:`mlplc2.backend`.
 
-* :func:`edges4` is :func:`mlplc2.targets._strip_profiles` followed by
-  :func:`mlplc2.targets._edge_distances` in one compiled pass: the same strip sums (float64,
-  rows / columns added in the same order as ``np.add.reduce``), the same order statistic for
-  the noise floor (the 75th percentile as ``np.partition``), the same threshold and the same
-  scan over the samples above it, so the four distances are bit-identical to the NumPy path.
-* :func:`align_patch` is :func:`mlplc2.targets.align` on one pyramid level: the patch sampled,
-  blurred and differentiated as OpenCV (>= 4.11, whose ``cv2.warpAffine`` computes float
-  coordinates) does it in float32: the warp's coordinates and ``fma`` interpolations,
-  ``cv2.GaussianBlur``'s and ``cv2.Sobel``'s tap order. That is bit for bit on x86-64 with
-  AVX2 for a patch side that is a multiple of 16 (the default 32), and within a float32 ulp or
-  so otherwise (OpenCV's scalar tail rounds differently). Then the same float32 weights and
-  Jacobian, the same float64 normal equations, iteration and stopping rules: the alignments
-  agree to ~1e-12 (``tests/test_fast_targets.py``).
+:func:`align_patch` is :func:`mlplc2.targets.alignment.align` on one pyramid level: the patch sampled,
+blurred and differentiated as OpenCV (>= 4.11, whose ``cv2.warpAffine`` computes float
+coordinates) does it in float32: the warp's coordinates and ``fma`` interpolations,
+``cv2.GaussianBlur``'s and ``cv2.Sobel``'s tap order. That is bit for bit on x86-64 with
+AVX2 for a patch side that is a multiple of 16 (the default 32), and within a float32 ulp or
+so otherwise (OpenCV's scalar tail rounds differently). Then the same float32 weights and
+Jacobian, the same float64 normal equations (the Gauss-Newton Hessian of the template),
+iteration and stopping rules: the alignments agree to ~1e-12 (``tests/test_fast_targets.py``).
 Every kernel is ``nogil`` and cached on disk where possible; nothing here is public API.
 """
 
@@ -28,141 +23,10 @@ from numba.extending import intrinsic
 
 from ..neuropils._fast import jit  # the same njit options and on-disk cache fallback as the front end
 
-__all__ = ["edges4", "align_patch"]
+__all__ = ["align_patch"]
 
 
-@jit()
-def _edge_of(prof, n, scale, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals):
-    """:func:`mlplc2.targets._edge_distances` of one profile ``prof[:n]``; -1.0 for None.
-
-    ``cols`` / ``vals``: scratch buffers of at least ``n`` entries. The comparisons and
-    ``max`` / ``min`` follow Python's semantics (``max(a, b)`` is ``a`` unless ``b > a``).
-    """
-    floor = min_peak * scale
-    if n > 0:
-        # floor = max(floor, noise_k * max(q, 0)) with q the 75th percentile (order statistic
-        # kq). q only matters when noise_k * q > floor; then the n - kq samples at or above q
-        # in sorted order (NaN sorts last) all fail noise_k * v <= floor. Count those first
-        # (one pass) and select q only when there are enough of them (a noisy profile).
-        kq = int(0.75 * (n - 1))
-        above = 0
-        for c in range(n):
-            if not noise_k * prof[c] <= floor:
-                above += 1
-        if above >= n - kq:
-            q = np.partition(prof[:n], kq)[kq]
-            if 0.0 > q:
-                q = 0.0
-            f2 = noise_k * q
-            if f2 > floor:
-                floor = f2
-    sel = 0.5 * floor
-    ns = 0
-    for c in range(n):
-        v = prof[c]
-        if v >= sel:
-            cols[ns] = c
-            vals[ns] = v
-            ns += 1
-    i = 0
-    while i < ns:
-        j = i
-        peak = vals[i]
-        while j + 1 < ns and cols[j + 1] - cols[j] <= gap:
-            j += 1
-            if vals[j] > peak:
-                peak = vals[j]
-        if peak >= floor:
-            near = peak
-            k = j + 1
-            lim = cols[i] + local
-            while k < ns and cols[k] < lim:
-                if vals[k] > near:
-                    near = vals[k]
-                k += 1
-            if peak >= rel_start * near:
-                level = rel_edge * peak
-                k = j
-                while vals[k] < level:      # stops at the peak (rel_edge <= 1, checked by the caller)
-                    k -= 1
-                ck = cols[k]
-                if ck + 1 < n:
-                    a = vals[k]
-                    b = prof[ck + 1]
-                    if 0.0 > b:
-                        b = 0.0
-                    den = a - b
-                    tiny = 1e-12 * scale
-                    if tiny > den:
-                        den = tiny
-                    frac = (a - level) / den
-                    if 0.0 > frac:
-                        frac = 0.0
-                    if 1.0 < frac:
-                        frac = 1.0
-                    return (ck + 1) + frac
-                return -1.0
-        i = j + 1
-    return -1.0
-
-
-@jit()
-def edges4(r, l, u, d, x, y, band, min_peak, noise_k, rel_start, rel_edge, gap, local):  # noqa: E741
-    """The four edge distances (right, left, up, down; -1.0 for None) around (x, y).
-
-    ``r, l, u, d``: the LM maps (H, W); ``x``, ``y`` inside the frame; ``rel_edge <= 1``.
-    """
-    h, w = r.shape
-    r0 = max(y - band, 0)
-    r1 = min(y + band + 1, h)
-    c0 = max(x - band, 0)
-    c1 = min(x + band + 1, w)
-    nr = float(r1 - r0)
-    nc = float(c1 - c0)
-    m = max(w, h)
-    prof = np.empty(m)
-    cols = np.empty(m, np.int64)
-    vals = np.empty(m)
-    out = np.empty(4)
-    # right: LM_r along the row, summed over the strip's rows (in order, like np.add.reduce)
-    n = w - 1 - x
-    for k in range(n):
-        prof[k] = np.float64(r[r0, x + 1 + k])
-    for row in range(r0 + 1, r1):
-        for k in range(n):
-            prof[k] += np.float64(r[row, x + 1 + k])
-    out[0] = _edge_of(prof, n, nr, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
-    # left: LM_l, outwards from x - 1
-    n = x
-    for k in range(n):
-        prof[k] = np.float64(l[r0, x - 1 - k])
-    for row in range(r0 + 1, r1):
-        for k in range(n):
-            prof[k] += np.float64(l[row, x - 1 - k])
-    out[1] = _edge_of(prof, n, nr, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
-    # up: LM_u along the column, upwards from y - 1, summed over the strip's columns
-    n = y
-    for k in range(n):
-        s = np.float64(u[y - 1 - k, c0])
-        for c in range(c0 + 1, c1):
-            s += np.float64(u[y - 1 - k, c])
-        prof[k] = s
-    out[2] = _edge_of(prof, n, nc, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
-    # down: LM_d, downwards from y + 1
-    n = h - 1 - y
-    for k in range(n):
-        s = np.float64(d[y + 1 + k, c0])
-        for c in range(c0 + 1, c1):
-            s += np.float64(d[y + 1 + k, c])
-        prof[k] = s
-    out[3] = _edge_of(prof, n, nc, min_peak, noise_k, rel_start, rel_edge, gap, local, cols, vals)
-    return out[0], out[1], out[2], out[3]
-
-
-# ---------------------------------------------------------------------------
-# the image alignment (:func:`mlplc2.targets.align`)
-# ---------------------------------------------------------------------------
-#: The blur of :func:`mlplc2.targets.align`, ``cv2.GaussianBlur(patch, (0, 0), 0.8)`` on float32:
+#: The blur of :func:`mlplc2.targets.alignment.align`, ``cv2.GaussianBlur(patch, (0, 0), 0.8)`` on float32:
 #: OpenCV's kernel size for a float image, ``round(8 sigma + 1) | 1`` = 7, and its float32 taps.
 _BLUR_SIGMA = 0.8
 _TAPS = cv2.getGaussianKernel(int(round(8 * _BLUR_SIGMA + 1)) | 1, _BLUR_SIGMA, cv2.CV_32F).ravel().copy()
@@ -198,7 +62,7 @@ def _reflect101(i, n):
 
 @jit()
 def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
-    """:func:`mlplc2.targets._sample` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
+    """:func:`mlplc2.targets.alignment._sample` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
     inside mask per column / row (the mask is their outer product). True when all inside.
 
     ``cv2.warpAffine(INTER_LINEAR | WARP_INVERSE_MAP, BORDER_REPLICATE)`` with the float32
@@ -299,27 +163,9 @@ def _support(wts):
 
 
 @jit()
-def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
-    """:func:`mlplc2.targets.align` on pyramid level ``level`` (``prev`` and ``cur``: that level
-    of the two pyramids, float32), patch ``n`` x ``n`` every ``step`` level-0 px.
-
-    Returns ``(ok, kx, ky, dx, dy, residual, sigma)``; ``ok`` False for None. The samples, the
-    blur, the Sobel gradients (``ksize=3`` x 1/8, ``BORDER_REFLECT_101``), the weights and the
-    Jacobian are the reference's float32 values; the Hessian, its inverse and the sums of the
-    updates are float64 like the reference's (summed in sample order here, by BLAS there), with
-    the same iteration and stopping rules. The rms residual is summed in float64 (float32
-    there: ~1e-7 relative).
-    """
-    taps = _TAPS
-    a0 = np.empty((n, n), np.float32)
-    a = np.empty((n, n), np.float32)
-    tmp = np.empty((n, n), np.float32)
-    pad = np.empty(n + taps.shape[0] - 1, np.float32)
-    in_x = np.empty(n, np.bool_)
-    in_y = np.empty(n, np.bool_)
-    _sample(prev, level, cx, cy, step, step, n, a0, in_x, in_y)
-    _blur(a0, pad, tmp, a, taps)
-    # weights: 1 on the box, falling to 0 over a fifth of its half-size beyond it (float32)
+def _weights(n, step, box_w, box_h):
+    """The patch coordinate ``u`` of each column (row) and the float32 weights per column ``wx``
+    and per row ``wy``: 1 on the box, falling to 0 over a fifth of its half-size beyond it."""
     hw = max(box_w, 1.0) / step
     hh = max(box_h, 1.0) / step
     cw1, cw2 = _F32(1.2 * hw), _F32(0.2 * hw)
@@ -335,16 +181,19 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
         au = abs(u[j])
         wx[j] = min(max((cw1 - au) / cw2, zero), one)
         wy[j] = min(max((ch1 - au) / ch2, zero), one)
-    # the samples of zero weight add exact zeros to every sum below: only the rows i0:i1 and
-    # columns j0:j1 of nonzero weight are visited
-    j0, j1 = _support(wx)
-    i0, i1 = _support(wy)
-    m = n * n
-    jw = np.empty((m, 4), np.float32)
-    wgt = np.empty(m, np.float32)
+    return u, wx, wy
+
+
+@jit()
+def _normal_equations(a, in_x, in_y, u, wx, wy, i0, i1, j0, j1, jw, wgt):
+    """The template's Sobel gradients (``ksize=3`` x 1/8, ``BORDER_REFLECT_101``), weights and
+    Jacobian (float32) on rows ``i0:i1``, columns ``j0:j1`` of the blurred patch ``a`` (n, n):
+    the weighted Jacobian into ``jw`` (n n, 4) and the weights into ``wgt`` (n n); returns the
+    Hessian ``jw.T @ jac`` (4, 4) float64, each of the 16 entries summed over the samples in order."""
+    n = a.shape[0]
+    zero = _F32(0.0)
     eighth = _F32(0.125)
     two = _F32(2.0)
-    # jw.T @ jac, each of the 16 entries summed over the samples in order
     h00 = h01 = h02 = h03 = h10 = h11 = h12 = h13 = 0.0
     h20 = h21 = h22 = h23 = h30 = h31 = h32 = h33 = 0.0
     for i in range(i0, i1):
@@ -392,15 +241,20 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     hess[1, 0], hess[1, 1], hess[1, 2], hess[1, 3] = h10, h11, h12, h13
     hess[2, 0], hess[2, 1], hess[2, 2], hess[2, 3] = h20, h21, h22, h23
     hess[3, 0], hess[3, 1], hess[3, 2], hess[3, 3] = h30, h31, h32, h33
-    fail = (False, 1.0, 1.0, 0.0, 0.0, math.inf, math.inf)
-    if not np.all(np.isfinite(hess)) or np.linalg.cond(hess) > 1e7:
-        return fail
-    hinv = np.linalg.inv(hess)
+    return hess
+
+
+@jit()
+def _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j1, pad, tmp, taps, r):
+    """The Gauss-Newton iteration (forward-additive, fixed Hessian ``hinv``) of the patch of
+    ``cur`` against the template ``a``: the residuals of the last round into ``r`` (n n).
+    Returns ``(ok, px, py, tx, ty)`` (log kx, log ky, shift in samples); ``ok`` False when
+    the iteration ran away."""
     b0 = np.empty((n, n), np.float32)
     b = np.empty((n, n), np.float32)
-    r = np.empty(m, np.float32)
     bx = np.empty(n, np.bool_)
     by = np.empty(n, np.bool_)
+    zero = _F32(0.0)
     px = py = tx = ty = 0.0
     for _ in range(max(iterations, 1)):
         kx, ky = math.exp(px), math.exp(py)
@@ -428,15 +282,63 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
         tx -= d2 * kx
         ty -= d3 * ky
         if not (abs(px) < 1.0 and abs(py) < 1.0 and abs(tx) < n and abs(ty) < n):
-            return fail
+            return False, px, py, tx, ty
         if abs(d0) < 1e-5 and abs(d1) < 1e-5 and abs(d2) < 1e-3 and abs(d3) < 1e-3:
             break
+    return True, px, py, tx, ty
+
+
+@jit()
+def _rms(wgt, r, n, i0, i1, j0, j1):
+    """The weighted rms residual (summed in float64); inf without weight."""
     wsum = 0.0
     rr = 0.0
     for i in range(i0, i1):
         for k in range(i * n + j0, i * n + j1):
             wsum += np.float64(wgt[k])
             rr += np.float64(wgt[k]) * (np.float64(r[k]) * np.float64(r[k]))
-    res = math.sqrt(rr / wsum) if wsum > 0 else math.inf
+    return math.sqrt(rr / wsum) if wsum > 0 else math.inf
+
+
+@jit()
+def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
+    """:func:`mlplc2.targets.alignment.align` on pyramid level ``level`` (``prev`` and ``cur``: that level
+    of the two pyramids, float32), patch ``n`` x ``n`` every ``step`` level-0 px.
+
+    Returns ``(ok, kx, ky, dx, dy, residual, sigma)``; ``ok`` False for None. The samples, the
+    blur, the Sobel gradients (``ksize=3`` x 1/8, ``BORDER_REFLECT_101``), the weights and the
+    Jacobian are the reference's float32 values; the Hessian, its inverse and the sums of the
+    updates are float64 like the reference's (summed in sample order here, by BLAS there), with
+    the same iteration and stopping rules. The rms residual is summed in float64 (float32
+    there: ~1e-7 relative).
+    """
+    taps = _TAPS
+    a0 = np.empty((n, n), np.float32)
+    a = np.empty((n, n), np.float32)
+    tmp = np.empty((n, n), np.float32)
+    pad = np.empty(n + taps.shape[0] - 1, np.float32)
+    in_x = np.empty(n, np.bool_)
+    in_y = np.empty(n, np.bool_)
+    _sample(prev, level, cx, cy, step, step, n, a0, in_x, in_y)
+    _blur(a0, pad, tmp, a, taps)
+    u, wx, wy = _weights(n, step, box_w, box_h)
+    # the samples of zero weight add exact zeros to every sum below: only the rows i0:i1 and
+    # columns j0:j1 of nonzero weight are visited
+    j0, j1 = _support(wx)
+    i0, i1 = _support(wy)
+    m = n * n
+    jw = np.empty((m, 4), np.float32)
+    wgt = np.empty(m, np.float32)
+    hess = _normal_equations(a, in_x, in_y, u, wx, wy, i0, i1, j0, j1, jw, wgt)
+    fail = (False, 1.0, 1.0, 0.0, 0.0, math.inf, math.inf)
+    if not np.all(np.isfinite(hess)) or np.linalg.cond(hess) > 1e7:
+        return fail
+    hinv = np.linalg.inv(hess)
+    r = np.empty(m, np.float32)
+    ok, px, py, tx, ty = _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j1, pad, tmp,
+                                  taps, r)
+    if not ok:
+        return fail
+    res = _rms(wgt, r, n, i0, i1, j0, j1)
     var = 0.25 * (hinv[0, 0] + hinv[1, 1] + 2 * hinv[0, 1])     # of (log kx + log ky) / 2
     return (True, math.exp(px), math.exp(py), tx * step, ty * step, res, res * math.sqrt(max(var, 0.0)))

@@ -1,0 +1,81 @@
+"""The box of the region that changed between two frames around a point (:func:`change_box`):
+the window's own image motion undone by phase correlation, then the connected region of large
+grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2).
+"""
+
+from __future__ import annotations
+
+import math
+
+import cv2
+import numpy as np
+
+__all__ = ["change_box"]
+
+
+def _even_dft_size(n: int) -> int:
+    """The largest m <= n that is even and its own optimal DFT size (``cv2.getOptimalDFTSize``)."""
+    m = n
+    while m > 2 and (m % 2 or cv2.getOptimalDFTSize(m) != m):
+        m -= 1
+    return m
+
+
+def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
+               rel: float = 0.2) -> tuple[float, float, float, float] | None:
+    """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y).
+
+    Within ``radius`` px of (x, y), the window's own image motion (a turning camera moves the
+    background as a whole) is found by phase correlation and undone; then the pixels whose
+    grey level still changed by at least ``max(min_change, rel x`` the largest change``)`` are
+    joined (3 x 3 dilation) and the connected region nearest to (x, y) is taken: for a small
+    object growing against its background, the ring of its edge, hence its size to a pixel,
+    long before its edges move a pixel per frame. None when nothing changed or the region
+    reaches the window's border (a background that does not move as a whole: no compact
+    object to box).
+    """
+    h, w = cur.shape
+    x0, x1 = max(x - radius, 0), min(x + radius + 1, w)
+    y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
+    if x1 - x0 < 8 or y1 - y0 < 8:
+        return None
+    # OpenCV's phase correlation reports a spurious half-pixel shift of identical windows whose
+    # DFT size is odd (81 px: (0.5, 0.5)); an even DFT size has none
+    x1, y1 = x0 + _even_dft_size(x1 - x0), y0 + _even_dft_size(y1 - y0)
+    a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
+    b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
+    (sx, sy), _ = cv2.phaseCorrelate(a, b, cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F))
+    if abs(sx) > 0.5 or abs(sy) > 0.5:      # the background moved: compare it with itself
+        m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
+        b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+        border = int(math.ceil(max(abs(sx), abs(sy)))) + 1
+    else:
+        border = 0
+    d = cv2.absdiff(b, a)
+    if border:                               # the replicated margin is not a change
+        d[:border] = 0
+        d[-border:] = 0
+        d[:, :border] = 0
+        d[:, -border:] = 0
+    top = float(d.max())
+    if top < min_change:
+        return None
+    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), np.ones((3, 3), np.uint8))
+    n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
+    best, best_d = None, math.inf
+    for k in range(1, n):
+        bx, by, bw, bh = (int(v) for v in stats[k, :4])
+        dx = max(bx - (x - x0), 0, (x - x0) - (bx + bw - 1))
+        dy = max(by - (y - y0), 0, (y - y0) - (by + bh - 1))
+        dist = math.hypot(dx, dy)
+        if dist < best_d:
+            best, best_d = (bx, by, bw, bh), dist
+    if best is None or best_d > radius / 4.0:
+        return None
+    bx, by, bw, bh = best
+    inner_x = (x0 > 0 and bx == 0) or (x1 < w and bx + bw == x1 - x0)
+    inner_y = (y0 > 0 and by == 0) or (y1 < h and by + bh == y1 - y0)
+    if inner_x or inner_y:
+        return None
+    # the dilation added a pixel on each side
+    return x0 + bx + bw / 2.0 - 0.5, y0 + by + bh / 2.0 - 0.5, max(bw - 2.0, 1.0), max(bh - 2.0, 1.0)

@@ -1,0 +1,423 @@
+"""The target layer proper: the tracker (:class:`Track`, :class:`TargetLayer`) and the warning
+rule (:func:`estimate`, :func:`count_down`), giving one :class:`Target` per approaching object.
+
+Per frame (:meth:`TargetLayer.step`; ``docs/targets.md``, steps 1-8): candidates from the
+attention fields (Eq. 13-16) and from the strongest local motion (Eq. 12) or grey-level change
+outside every target; their box (:mod:`.change`, else :mod:`.extent`); that it grows and how
+fast (:mod:`.align`); time to contact and course (:mod:`.contact`); the warning rule.
+A track's history is a deque of :class:`Observation` records, the points the fits use.
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field, replace
+from typing import NamedTuple
+
+import cv2
+import numpy as np
+
+from ..camera import bearing
+from ..neuropils.lobula_plate import LocalMotion
+from .alignment import align, pyramid
+from .change import change_box
+from .contact import fit_contact, fit_course
+from .extent import measure_extent
+from .params import TargetParams
+
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "count_down"]
+
+
+@dataclass(frozen=True)
+class Target:
+    """One approaching object in one frame (what models return in ``Output.targets``).
+
+    Attributes
+    ----------
+    id : int
+        Stable id (1, 2, ...), kept while the object is tracked.
+    x, y : float
+        Centre of the object's box (its expansion centre), in the pixels of the model's frames.
+    width, height : float
+        Apparent size (px).
+    ttc_s : float or None
+        Time to contact in seconds; None while the growth is not significant.
+    miss : float or None
+        Predicted lateral miss distance at contact, in object widths (0 = dead centre); None
+        without ``ttc_s``.
+    warning : bool
+        On a collision course (``miss <= max_miss``) with ``ttc_s <= horizon_s``, contact time
+        known, and looming evidence (see :class:`TargetParams`).
+    fields : tuple of int
+        Ids of the attention fields inside the target.
+    born : int
+        Frame of the target's creation.
+    looming : bool
+        Looming evidence this frame (an answering field recently, or sustained growth).
+    expansion : float or None
+        Measured growth rate d(log size)/dt in 1/s (None before two frames).
+    ttc_sigma_s : float or None
+        Standard error of ``ttc_s`` (s).
+    azimuth_deg, elevation_deg : float or None
+        Bearing of the centre in degrees (azimuth positive right, elevation positive up)
+        when the model was given the camera's field of view; None otherwise.
+    miss_xy : (float, float) or None
+        Where the object's centre passes the camera plane, from the heading point, in object
+        widths (right, down): ``miss`` is its length.
+    """
+
+    id: int
+    x: float
+    y: float
+    width: float
+    height: float
+    ttc_s: float | None = None
+    miss: float | None = None
+    warning: bool = False
+    fields: tuple[int, ...] = ()
+    born: int = 0
+    looming: bool = False
+    expansion: float | None = None
+    ttc_sigma_s: float | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+    miss_xy: tuple[float, float] | None = None
+
+    def urgency(self) -> tuple:
+        """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""
+        return (not self.warning, math.inf if self.ttc_s is None else self.ttc_s,
+                -(self.width * self.height), self.id)
+
+class Observation(NamedTuple):
+    """One frame of a track's history (what the fits use): the frame, the accumulated
+    log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width
+    and the accumulated log-anisotropy."""
+
+    frame: int
+    log_scale: float
+    x: float
+    y: float
+    width: float
+    anisotropy: float
+
+
+@dataclass
+class Track:
+    """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
+    history the fits use (:class:`Observation` records), and the evidence
+    counters. ``ox``, ``oy``: the camera's turn accumulated at the box since its birth (px; 0
+    unless the model measures the camera's motion): the history's positions are the box's less
+    it, so that the course (:func:`fit_course`) is the object's own, not the pan's."""
+
+    id: int
+    born: int
+    cx: float
+    cy: float
+    w: float
+    h: float
+    log_s: float = 0.0
+    aniso: float = 0.0                               # accumulated log(ky / kx)
+    history: deque = field(default_factory=deque)   # of Observation
+    fails: int = 0
+    last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
+    last_estimate: int = -(10 ** 9)    # frame of its last time to contact
+    streak: int = 0
+    fields: set = field(default_factory=set)
+    rate: float | None = None
+    ox: float = 0.0
+    oy: float = 0.0
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
+
+    @property
+    def size(self) -> float:
+        return max(self.w, self.h)
+
+    def overlap(self, other: Track) -> float:
+        """Area of the intersection of the two boxes over the area of the smaller."""
+        a, b = self, other
+        ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
+        iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
+        if ix <= 0 or iy <= 0:
+            return 0.0
+        return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+
+    def follow(self, move: tuple | None, index: int, fps: float, shape: tuple[int, int], max_fails: int, *,
+               box: tuple | None = None, refit: float = 0.0, camera=None) -> bool:
+        """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
+        centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
+        the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
+        (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
+        the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
+        the box (the camera's image motion) adds to ``ox``, ``oy``."""
+        if move is None:
+            self.fails += 1
+            return self.fails < max_fails
+        dx, dy, fx, fy, growth, skew = move
+        self.fails = 0
+        self.cx += dx
+        self.cy += dy
+        self.w *= fx
+        self.h *= fy
+        if box is not None and refit > 0:
+            self.cx += refit * (box[0] - self.cx)
+            self.cy += refit * (box[1] - self.cy)
+            self.w *= min(max(box[2], 1.0) / self.w, 1.0) ** refit
+            self.h *= min(max(box[3], 1.0) / self.h, 1.0) ** refit
+        self.log_s += growth
+        self.aniso += skew
+        self.rate = growth * fps
+        if camera is not None:
+            du, dv = camera.flow(self.cx - dx, self.cy - dy)
+            self.ox += float(du)
+            self.oy += float(dv)
+        self.history.append(Observation(index, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
+                                        self.aniso))
+        h, w = shape
+        return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
+                    or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
+
+
+class TargetLayer:
+    """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
+
+    Parameters
+    ----------
+    params : TargetParams
+    fps : float
+        Frame rate (frames -> seconds).
+    kernel : callable, optional
+        Compiled edge scan for :func:`measure_extent` (:mod:`mlplc2.backend`); None = NumPy.
+    align_kernel : callable, optional
+        Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
+    focal : float, optional
+        Focal length in px (from the camera's field of view): targets then carry bearings.
+    """
+
+    def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
+                 align_kernel=None, focal: float | None = None):
+        self.params = TargetParams() if params is None else params
+        self.fps = float(fps)
+        self.kernel = kernel
+        self.align_kernel = align_kernel
+        self.focal = focal
+        self.reset()
+
+    def reset(self) -> None:
+        self._tracks: list[Track] = []
+        self._next = 1
+        self._prev: list[np.ndarray] | None = None
+        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
+
+    # -- one frame -----------------------------------------------------------------------
+    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
+        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps;
+        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``)."""
+        p = self.params
+        levels = pyramid(gray)
+        h, w = gray.shape
+        if self._prev is not None:
+            self._follow(levels, index, w, h)
+        self._merge()
+        seeds = []
+        for f in fields:
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, 0.25 * t.size + 4.0)]
+            if owners:
+                t = min(owners, key=lambda t: t.size)
+                t.fields.add(f.id)
+                if f.response > 0:
+                    t.last_answer = index
+            else:
+                seeds.append((int(f.x), int(f.y), f))
+        if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+            from ..neuropils.attention import argmax_outside
+
+            # a track claims its box and the blur of the front end around it (the lamina's
+            # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
+            zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + p.claim)) for t in self._tracks]
+            zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
+            cand = argmax_outside(lm.magnitude, zones)
+            if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
+                cand = self._change_seed(levels, zones)
+            if cand is not None:
+                seeds.append((cand[0], cand[1], None))
+        for x, y, f in seeds:
+            if len(self._tracks) >= p.max_targets:
+                break
+            if any(t.contains(x, y) for t in self._tracks):
+                continue
+            box = self._box(lm, gray, x, y, field_seed=f is not None)
+            if box is None:
+                continue
+            t = Track(self._next, index, *box)
+            host = next((o for o in self._tracks if o.overlap(t) >= 0.5), None)
+            if host is not None:          # a part of an object already tracked
+                if f is not None:
+                    host.fields.add(f.id)
+                    if f.response > 0:
+                        host.last_answer = index
+                continue
+            if not self._grows(levels, t):
+                continue
+            t.history = deque([Observation(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
+            self._next += 1
+            if f is not None:
+                t.fields.add(f.id)
+                if f.response > 0:
+                    t.last_answer = index
+            self._tracks.append(t)
+        self._prev = levels
+        self._past.append(levels)
+        alive = {f.id for f in fields}
+        out = []
+        for t in self._tracks:
+            t.fields &= alive
+            out.append(estimate(t, p, self.fps, index, (h, w), self.focal))
+        self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
+        keep = {t.id for t in self._tracks}
+        return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    def _change_seed(self, levels, zones):
+        """A candidate where the image changed most over the last ``change_frames`` frames (at
+        half resolution, outside the zones of targets and fields), when that change stands out:
+        at least ``seed_change`` grey levels and ``seed_contrast`` times the frame's mean change.
+        An object that grows straight at the camera moves its edges a fraction of a pixel per
+        frame, too little for the local motion, while the grey levels along its edge change
+        steadily; a moving background changes everywhere and seeds nothing here."""
+        p = self.params
+        if p.seed_change <= 0 or len(self._past) < p.change_frames or len(levels) < 2:
+            return None
+        d = cv2.blur(cv2.absdiff(levels[1], self._past[0][1]), (3, 3))
+        for zx, zy, zr in zones:                 # at half resolution
+            x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
+            y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
+            d[y0:y1, x0:x1] = 0
+        _, top, _, (x, y) = cv2.minMaxLoc(d)
+        if top < max(p.seed_change, p.seed_contrast * float(d.mean())):
+            return None
+        return 2 * x + 1, 2 * y + 1
+
+    def _grows(self, levels, t: Track) -> bool:
+        """Whether the candidate grew, alike in both directions, over the last ``change_frames``
+        frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
+        background that slides with a turning camera, a receding or a static object does not
+        become a target. Without that frame yet (the first frames), True."""
+        p = self.params
+        if p.min_growth <= 0 or len(self._past) < p.change_frames:
+            return True
+        half = p.margin * t.size / 2.0 + 3.0
+        al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                   iterations=p.iterations, kernel=self.align_kernel)
+        if al is None or al.residual > p.max_residual:
+            return False
+        g = math.log(al.scale)
+        return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
+
+    def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
+        """The box of a candidate at (x, y): the region that changed over the last frames
+        (:func:`change_box`, tight for a small object), else the edges of the local motion
+        (:func:`measure_extent`). None when neither finds a box holding the seed within
+        ``max_shift``."""
+        p = self.params
+
+        def edges():
+            ext = measure_extent(lm, x, y, p, kernel=self.kernel)
+            if ext.width is None or ext.height is None:
+                return None
+            return ext.cx, ext.cy, ext.width, ext.height
+
+        def change():
+            if not self._past:
+                return None
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
+
+        for find in ((edges, change) if field_seed else (change, edges)):
+            box = find()
+            if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
+                return box
+        return None
+
+    def _follow(self, levels, index: int, w: int, h: int) -> None:
+        """Move and grow every track with the image alignment; drop the lost ones."""
+        p = self.params
+        kept = []
+        for t in self._tracks:
+            half = p.margin * t.size / 2.0 + 3.0
+            al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                       iterations=p.iterations, kernel=self.align_kernel)
+            move = None if al is None or al.residual > p.max_residual else \
+                (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+            if t.follow(move, index, self.fps, (h, w), p.max_fails):
+                kept.append(t)
+        self._tracks = kept
+
+    def _merge(self) -> None:
+        """Two tracks are one object when most of the smaller box lies in the larger: keep the older."""
+        tracks = sorted(self._tracks, key=lambda t: t.id)
+        out: list[Track] = []
+        for t in tracks:
+            host = next((o for o in out if o.overlap(t) >= 0.5), None)
+            if host is None:
+                out.append(t)
+            else:
+                host.fields |= t.fields
+                host.last_answer = max(host.last_answer, t.last_answer)
+        self._tracks = out
+
+
+def count_down(targets, elapsed: float) -> tuple[Target, ...]:
+    """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down; an estimate
+    whose contact has passed becomes None and loses its warning; re-sorted by urgency."""
+    out = []
+    for t in targets:
+        if t.ttc_s is not None:
+            left = t.ttc_s - elapsed
+            t = replace(t, ttc_s=left) if left > 0 else replace(t, ttc_s=None, miss=None, warning=False,
+                                                                 ttc_sigma_s=None, miss_xy=None)
+        out.append(t)
+    return tuple(sorted(out, key=Target.urgency))
+
+
+def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
+             focal: float | None = None) -> Target:
+    """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
+    course (:func:`fit_course`) and the warning rule (``docs/targets.md``, step 7). Shared
+    by every model with targets (the LPLC2 family and the optical-flow baseline)."""
+    h, w = shape
+    frames = [q.frame for q in t.history]
+    ttc = sigma = miss = miss_xy = None
+    fit = fit_contact(frames, [q.log_scale for q in t.history]) if len(frames) >= p.min_frames else None
+    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
+    # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
+    # along the motion: none of them is an object approaching, none gets a time to contact
+    isotropic = True
+    if fit is not None and fit.ttc is not None:
+        growth = t.history[-1].log_scale - t.history[0].log_scale
+        skew = t.history[-1].anisotropy - t.history[0].anisotropy
+        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
+    if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
+            and fit.ttc / fps <= p.max_ttc_s:
+        ttc, sigma = fit.ttc / fps, fit.sigma / fps
+        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+        miss_xy = fit_course(frames, [q.x for q in t.history], [q.y for q in t.history],
+                             [q.width for q in t.history], heading, fit.ttc)
+        miss = None if miss_xy is None else math.hypot(*miss_xy)
+        t.streak += 1
+        t.last_estimate = index
+    else:
+        t.streak = 0
+    looming = ttc is not None and (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames)
+    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
+                   and sigma <= p.max_ttc_sigma * ttc)
+    az = el = None
+    if focal is not None:
+        az, el = bearing(t.cx, t.cy, (h, w), focal)
+    def num(v):
+        return None if v is None else float(v)
+
+    return Target(t.id, float(t.cx), float(t.cy), float(t.w), float(t.h), ttc_s=num(ttc), miss=num(miss),
+                  warning=warning, fields=tuple(sorted(t.fields)), born=t.born, looming=looming,
+                  expansion=num(t.rate), ttc_sigma_s=num(sigma), azimuth_deg=num(az), elevation_deg=num(el),
+                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])))

@@ -1,0 +1,122 @@
+"""The target layer's parameters (:class:`TargetParams`): candidates and their box, the image
+measurement, the time to contact and course fits, and the warning rule (``docs/targets.md``,
+whose parameter table ``mlplc2 params --targets --markdown`` regenerates from the fields here).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+from .._validation import InputValueError, Valid, check_fields
+from ..params import ParameterSet, document_parameters, param
+
+__all__ = ["TargetParams"]
+
+
+@document_parameters("Parameters")
+@dataclass(frozen=True)
+class TargetParams(ParameterSet):
+    """Parameters of the target layer: candidates, the image measurement, time to contact,
+    course and the warning (one set for every input; ``docs/targets.md``).
+
+    Valid values (the table below; checked at construction; one-line
+    :class:`mlplc2.InputError` otherwise, a ``ValueError`` or ``TypeError``):
+    integers are Python or NumPy integers (not bools), stored as Python ints;
+    numbers are finite Python or NumPy scalars (not bools, strings or arrays) within
+    float32's range, stored as Python floats; ``heading`` is None or two numbers.
+    """
+
+    # --- candidates and their box ---------------------------------------------------------
+    band: int = param(2, "Half-width of the strips along a seed's row and column (:func:`measure_extent`).",
+                      unit="px", valid=Valid.integer(0))
+    min_peak: float = param(0.08, "Smallest outward LM (profile mean, after the gain) that counts as an edge.",
+                            valid=Valid.real(minimum=0))
+    noise_k: float = param(3.0, """An edge complex must exceed ``noise_k`` x the 75th percentile of its
+                           profile (noise floor).""", valid=Valid.real(minimum=0))
+    rel_start: float = param(0.3, """An edge complex must reach ``rel_start`` x the largest value within
+                             ``local`` px of its start.""", valid=Valid.real(minimum=0, maximum=1))
+    local: int = param(20, "How far beyond the start of a complex a stronger edge is searched for (see ``rel_start``).",
+                       unit="px", valid=Valid.integer(0))
+    rel_edge: float = param(0.25, "Outer boundary of the edge complex: where it falls below ``rel_edge`` x its peak.",
+                            valid=Valid.real(minimum=0, maximum=1))
+    gap: int = param(6, "Lobes closer than this belong to one edge complex (fast edges make 2-3 lobes).",
+                     unit="px", valid=Valid.integer(0))
+    edge_offset: float = param(6.5, "How far the outer boundary of the LM lobes trails the true edge (added back).",
+                               unit="px", valid=Valid.real(minimum=0))
+    max_shift: float = param(40.0, """A candidate box whose centre lies further than this (in x or y) from
+                             its seed point is dropped: it encloses two things, or background (40 = R_AF).""",
+                             unit="px", valid=Valid.real(minimum=0))
+    claim: float = param(12.0, """Margin around a target's box that belongs to it: no new candidate is
+                         sought there (the front end's local motion spreads about r_Di = 11 px beyond a
+                         moving edge).""", unit="px", valid=Valid.real(minimum=0))
+    seed_lm: float = param(0.5, """Local motion (LM, Eq. 12) above which the strongest point outside every
+                           target and attention field also seeds a candidate (one per frame), far below
+                           the field threshold T_a = 10: a far object grows by a fraction of a pixel per
+                           frame. 0 = attention fields only.""", valid=Valid.real(minimum=0))
+    seed_contrast: float = param(20.0, """... and above this many times the frame's mean LM (a salient
+                                 point, not a moving background).""", valid=Valid.real(minimum=0))
+    seed_change: float = param(6.0, """When no local motion stands out, the largest grey-level change over
+                               the last ``change_frames`` frames outside every target and field seeds a
+                               candidate (:meth:`TargetLayer._change_seed`) when it is at least this
+                               much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
+                               unit="grey levels", valid=Valid.real(minimum=0))
+    change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
+                               frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
+                               frame.""", unit="frames", valid=Valid.integer(1))
+    min_growth: float = param(0.005, """A candidate becomes a target only when its box grew by at least this
+                              much (log of the scale) over the last ``change_frames`` frames, alike in
+                              both directions (``max_anisotropy``): a patch of background that slides
+                              with a turning camera, a receding or a static object does not grow. 0.005
+                              over 4 frames is a time to contact of 27 s at 30 fps. 0 = no test.""",
+                              valid=Valid.real(minimum=0))
+    max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
+                             unit="targets", valid=Valid.integer(0))
+    # --- the image measurement ------------------------------------------------------------
+    patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",
+                       unit="samples", valid=Valid.integer(8, 256))
+    margin: float = param(1.5, "Patch half-side = ``margin`` x half the box's larger side + 3 px.",
+                          valid=Valid.real(minimum=1))
+    iterations: int = param(10, "Most Gauss-Newton iterations per alignment.", valid=Valid.integer(1))
+    max_residual: float = param(25.0, "Largest rms residual of an accepted alignment (0-255 scale).",
+                                unit="grey levels", valid=Valid.real(minimum=0))
+    max_fails: int = param(3, "Consecutive failed alignments after which a target is dropped.",
+                           unit="frames", valid=Valid.integer(1))
+    # --- time to contact and course -------------------------------------------------------
+    window: int = param(12, "Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course.",
+                        unit="frames", valid=Valid.integer(3, 1000, also=">= min_frames"))
+    min_frames: int = param(5, "Fewest frames a fit needs.", unit="frames",
+                            valid=Valid.integer(3, 1000, also="<= window"))
+    min_tstat: float = param(3.0, "The growth (the fit's slope) must be this many standard errors from 0.",
+                             valid=Valid.real(minimum=0))
+    max_ttc_s: float = param(10.0, "Longer times to contact are reported as None (no measurable approach).",
+                             unit="s", valid=Valid.real(minimum=0))
+    heading: tuple[float, float] | None = param(None, """Heading point (x, y) in the model's frames; None =
+                                                the principal point ((W - 1) / 2, (H - 1) / 2): the camera
+                                                moves along its optical axis, or stands still.""",
+                                                unit="px", valid=Valid.point())
+    max_anisotropy: float = param(0.35, """Largest difference of the vertical and horizontal growth
+                                  (log ky - log kx over the fit's frames) relative to the growth of a
+                                  looming target: a fronto-parallel object grows alike in both directions
+                                  (0), the ground ahead of a moving camera twice as fast vertically
+                                  (0.67), a wall beside its path the other way round (-0.67).""",
+                                  valid=Valid.real(minimum=0))
+    # --- the warning ------------------------------------------------------------------------
+    horizon_s: float = param(1.0, "A target warns only when its ``ttc_s`` is at most this ...", unit="s",
+                             valid=Valid.real(minimum=0))
+    max_miss: float = param(1.0, "... its predicted miss at contact at most this ...", unit="object widths",
+                            valid=Valid.real(minimum=0))
+    max_ttc_sigma: float = param(0.3, "... its contact time known to this fraction (standard error / ttc) ...",
+                                 valid=Valid.real(minimum=0))
+    evidence_frames: int = param(15, """... and it shows looming evidence: one of its attention fields
+                                 answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
+    confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
+                                unit="frames", valid=Valid.integer(0))
+    idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
+                             unit="frames", valid=Valid.integer(0))
+
+    def __post_init__(self) -> None:
+        check_fields(self, "TargetParams")
+        if self.min_frames > self.window:
+            raise InputValueError(f"TargetParams.min_frames must be <= window ({self.window}), "
+                                  f"got {self.min_frames!r}")
+
