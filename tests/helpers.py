@@ -1,6 +1,6 @@
 """Helpers shared by the tests (not part of the package API): the check that the outputs of an
 interrupted run agree, small noise clips, and clips with duplicated frames. (Recording and
-scoring model outputs: :mod:`mlplc2.evaluation.tracks`.)"""
+scoring model outputs: :mod:`mlplc2.evaluation.record`, :mod:`mlplc2.evaluation.match`.)"""
 
 from __future__ import annotations
 

@@ -21,7 +21,7 @@ from mlplc2.io import expand_inputs
 from mlplc2.batch import (DONE_MARKER, RESULT_COLUMNS, BatchInterrupted, batch, param_label,
                           param_set_id, param_sets, parse_sweep, start_local_cluster)
 from mlplc2.cli import main
-from mlplc2.evaluate import evaluate
+from mlplc2.evaluator import evaluate
 from mlplc2.io import write_video
 
 MODELS = ["mlplc2", "lgmd2"]

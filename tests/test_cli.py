@@ -750,7 +750,7 @@ def test_repeat_options_reach_the_run(command, argv, level, monkeypatch):
         seen.append(opts.get("repeat_threshold"))
         raise Stop
 
-    module, name = {"run": ("mlplc2.runner", "run"), "evaluate": ("mlplc2.evaluate", "evaluate"),
+    module, name = {"run": ("mlplc2.runner", "run"), "evaluate": ("mlplc2.evaluator", "evaluate"),
                     "batch": ("mlplc2.batch", "batch")}[command]
     monkeypatch.setattr(importlib.import_module(module), name, fake)
     extra = {"run": [], "evaluate": ["--gt", "gt.json"], "batch": ["--out", "b"]}[command]

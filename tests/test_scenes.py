@@ -3,7 +3,7 @@ generated here and, when present, the paper's own videos. One parameter set thro
 
 A cross-cutting suite of the paper's results (the sibling of ``test_selectivity.py``): the
 LPLC2 family (mlplc2.models.lplc2) on scenes of mlplc2.stimuli, localisation scored by
-mlplc2.evaluation.tracks against mlplc2.evaluation.truth."""
+mlplc2.evaluation.match against mlplc2.evaluation.truth."""
 
 from __future__ import annotations
 
@@ -12,7 +12,8 @@ import pytest
 import mlplc2
 from mlplc2 import stimuli
 from mlplc2.evaluation import truth
-from mlplc2.evaluation.tracks import false_alarms, fields_near, first_field, record
+from mlplc2.evaluation.match import false_alarms, fields_near, first_field
+from mlplc2.evaluation.record import record
 
 from .conftest import read_gray
 
@@ -22,7 +23,7 @@ MAX_ERROR = 10.0  # px between field centre and true centre
 
 def check_localisation(frames, objects, fps=30.0):
     """mLPLC2 on ``frames``; every approaching object of ``objects`` (ObjectTruth) gets a field
-    in time and in place, and no alarm is false (the paper's rules, mlplc2.evaluation.tracks)."""
+    in time and in place, and no alarm is false (the paper's rules, mlplc2.evaluation.match)."""
     rec = record(mlplc2.MLPLC2(fps=fps), frames)
     for o in objects:
         if not o.approach:

@@ -27,7 +27,7 @@ from mlplc2._signals import interrupts
 from mlplc2.cli import main
 from mlplc2.io import VideoWriter, write_video
 from mlplc2.runner import COLUMNS, RunInterrupted, run
-from mlplc2.evaluation.tracks import Recorder
+from mlplc2.evaluation.record import Recorder
 
 from .helpers import check_outputs_agree, noise_frames
 

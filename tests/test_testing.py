@@ -60,7 +60,7 @@ def test_pickle_and_deepcopy_keep_a_non_default_fps(name, how):
 
 def test_fields_and_localisation_are_class_attributes():
     """One truth for "has fields" and "localises": the model classes say it, evaluate asks them."""
-    ev = importlib.import_module("mlplc2.evaluate")   # mlplc2.evaluate is also the function
+    ev = importlib.import_module("mlplc2.evaluator")
 
     flags = {name: (cls.has_fields, cls.localises, cls.has_targets) for name, cls in REGISTRY.items()}
     assert flags["mlplc2"] == flags["slplc2"] == (True, True, True)

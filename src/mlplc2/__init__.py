@@ -9,7 +9,7 @@ from .neuropils.attention import Field
 from .models import LGMD1, LGMD2, LPLC2, MLPLC2, SLPLC2, Output, available_models, get_model
 from .params import Params
 from .runner import RunResult, run
-from .evaluate import evaluate  # light: stdlib only at import time
+from .evaluator import evaluate  # light: stdlib only at import time
 
 __all__ = ["Params", "MLPLC2", "SLPLC2", "LPLC2", "LGMD2", "LGMD1", "Output", "Field", "InputError", "InputWarning",
            "available_models", "get_model", "run", "RunResult", "evaluate"]

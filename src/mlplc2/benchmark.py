@@ -11,7 +11,7 @@ One command measures how early and how reliably each model warns (``docs/benchma
    copies) and the paper's four UAV clips, with the hand labels of its ``ground_truth.json``.
 3. Every model (:data:`MODELS`) runs on every video through :func:`mlplc2.batch.batch`
    (a local Dask cluster by default, ``scheduler=`` for a real one; finished tasks are kept).
-4. :func:`mlplc2.evaluate.evaluate` scores the runs: the warning metrics (collision objects
+4. :func:`mlplc2.evaluate` scores the runs: the warning metrics (collision objects
    warned before contact, lead time, false warnings by cause, time-to-contact errors,
    fragmentation, real clips warned / missed / false).
 5. ``benchmark.md`` / ``.csv`` / ``.json`` and three plots: lead time per model, TTC estimate
@@ -339,7 +339,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         Rerun tasks already done.
     """
     from .batch import batch
-    from .evaluate import EvaluationWarning, evaluate
+    from .evaluator import EvaluationWarning, evaluate
     from .models.base import available_models, resolve_names
     from .targets import TargetParams
 

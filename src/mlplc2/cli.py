@@ -588,7 +588,7 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_evaluate(args) -> int:
-    from .evaluate import EvaluationWarning, evaluate
+    from .evaluator import EvaluationWarning, evaluate
 
     models = resolve_names(args.model, what="--model") if args.model else None
     options = _video_run_options(args)

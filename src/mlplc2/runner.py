@@ -49,7 +49,8 @@ from .models.base import (REPEAT_THRESHOLD, Model, available_models, check_repea
                           looks_duplicated, resolve_names)
 from .plots import DRAW_FIELDS
 from .targets import TargetParams, check_hfov
-from .evaluation.tracks import Recorder, match_fields, response_rows
+from .evaluation.match import match_fields
+from .evaluation.record import Recorder, response_rows
 
 __all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir", "demo", "DemoResult"]

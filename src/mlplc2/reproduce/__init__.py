@@ -37,7 +37,7 @@ import time
 from pathlib import Path
 
 from ..models.base import REPEAT_THRESHOLD
-from ..evaluation.tracks import Record, record
+from ..evaluation.record import Record, record
 from .claims import FAMILY, KNOWN_DEVIATIONS, MODELS, STATUS_KNOWN, Claim, KnownDeviation, check_claims
 from .inputs import FOUR_PHASE_FILE, PAPER_BASIC_FILES, SIX_OBJECTS_FILE, Scene, load_inputs, load_paper_objects
 from .report import ReproduceResult, write_json, write_markdown
@@ -54,7 +54,7 @@ OUTPUTS = ("fig3_selectivity.png", "fig4_four_phases.png", "fig5_six_objects.png
 def run_model(name: str, frames, fps: float, progress=None, params=None) -> Record:
     """Run model ``name`` (registry name; its default parameters, or ``params``; duplicated
     frames held: :data:`REPEAT_THRESHOLD`) over ``frames``; its outputs as a
-    :class:`mlplc2.evaluation.tracks.Record` with every series (``response``, ``collision``, ``fields``).
+    :class:`mlplc2.evaluation.record.Record` with every series (``response``, ``collision``, ``fields``).
 
     Every model of the reproduction holds duplicated frames (``Model.repeat_threshold``): the
     paper's real clips repeat many frames (the raptor clip most of them); the synthetic

@@ -11,8 +11,9 @@ from dataclasses import asdict, dataclass
 
 import numpy as np
 
-from ..evaluation.tracks import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, Record, centre_distance, false_alarms, fields_near,
-                      first_field)
+from ..evaluation.match import (DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, centre_distance, false_alarms, fields_near,
+                                first_field)
+from ..evaluation.record import Record
 from .inputs import Scene
 
 __all__ = ["Claim", "check_claims", "KNOWN_DEVIATIONS", "KnownDeviation", "STATUS_KNOWN", "MODELS", "FAMILY",
@@ -270,7 +271,7 @@ def _approaching(scene: Scene) -> list:
 def _localisation_claims(claims: _Claims, sec: str, prefix: str, tr: Record, o, verb: str,
                          paper_latency: str | None, paper_error: str) -> None:
     """``PREFIX.latency.objI`` and ``PREFIX.error.objI``: the first field on object ``o``
-    (:func:`mlplc2.evaluation.tracks.first_field`), how soon after the onset and how close to its centre."""
+    (:func:`mlplc2.evaluation.match.first_field`), how soon after the onset and how close to its centre."""
     hit = first_field(tr, o, MATCH_RADIUS)
     lat = None if hit is None else hit[1]
     err = None if hit is None else hit[2]

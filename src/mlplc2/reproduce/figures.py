@@ -13,7 +13,7 @@ import numpy as np
 
 from .._validation import LUMA_RGB
 from ..plots import colours as _colours, figure, gap_segments, save_png
-from ..evaluation.tracks import DEFAULT_MATCH_RADIUS, fields_near
+from ..evaluation.match import DEFAULT_MATCH_RADIUS, fields_near
 from .claims import LABELS, MODELS, STIMULUS_LABELS
 
 __all__ = ["fig3_selectivity", "fig4_four_phases", "fig5_six_objects", "fig6_real_clips", "size_profile"]
@@ -109,7 +109,7 @@ def _field_lines(ax, trace, colours_by_id, *, normalise: float | None = None, to
 
 def _field_colours(trace, objects=None, object_colours=None, radius: float = DEFAULT_MATCH_RADIUS) -> dict:
     """Colour per field id: the colour of the object it sits on (born while the object is
-    present, within ``radius`` px: :func:`mlplc2.evaluation.tracks.fields_near`) when ``objects`` are
+    present, within ``radius`` px: :func:`mlplc2.evaluation.match.fields_near`) when ``objects`` are
     given, else a palette; fields on no object get shades of a second palette."""
     from matplotlib import colormaps
 

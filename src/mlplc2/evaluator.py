@@ -1,4 +1,6 @@
-"""Score model outputs against ground truth (the ``mlplc2 evaluate`` command).
+"""The application of ``mlplc2 evaluate``: read run results (or run the models), score them
+against ground truth, write the report. (``mlplc2.evaluator``, as ``mlplc2.runner`` is the
+application of ``mlplc2 run``; the function :func:`evaluate` is ``mlplc2.evaluate``.)
 
 Two kinds of truth (:mod:`mlplc2.evaluation.truth`; schema in ``docs/evaluation.md``):
 
@@ -13,16 +15,17 @@ clip level
 
 Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
 collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
-:func:`_score_warnings`): collision objects warned before contact, lead time, false warnings
-per 1000 frames by cause, time-to-contact errors (RTE, MiD) and coverage, fragmentation, and
-per clip warned / missed / false.
+:func:`mlplc2.evaluation.score.score_warnings`): collision objects warned before contact, lead
+time, false warnings per 1000 frames by cause, time-to-contact errors (RTE, MiD) and coverage,
+fragmentation, and per clip warned / missed / false. The scores themselves are
+:mod:`mlplc2.evaluation.score`; this module reads the inputs (:class:`~mlplc2.runner.RunResult`,
+results folders, videos), orders the models and writes the tables.
 
 :func:`evaluate` takes run results (a :class:`~mlplc2.runner.RunResult`, an
 output folder with ``responses.csv`` and ``fields.json``, a ``mlplc2 batch``
 folder) or videos (the models are run first) and returns an
 :class:`Evaluation` with per-object, per-video and per-model tables, as
-Markdown (:meth:`Evaluation.to_markdown`) and JSON (:meth:`Evaluation.to_dict`).
-"""
+Markdown (:meth:`Evaluation.to_markdown`) and JSON (:meth:`Evaluation.to_dict`)."""
 
 from __future__ import annotations
 
@@ -30,42 +33,24 @@ import csv
 import json
 import math
 import os
-import statistics
 import warnings
 from collections.abc import Mapping, Sequence
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
 from ._validation import InputTypeError, InputValueError, check_int, check_real
 
+from .evaluation.match import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL
+from .evaluation.record import TargetRow
+from .evaluation.score import (EARLY_S, LATE_S, MID_INTERVAL_S, MIN_TTC_WIDTH, TTC_BINS, ModelRun, mid_error,
+                               score_run, score_warnings, summarise, summarise_warnings, warning_truth)
+from .evaluation.truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
+from .evaluation.truth import load as load_ground_truth
+
 __all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
            "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS", "TTC_BINS", "MIN_TTC_WIDTH",
            "EARLY_S", "LATE_S", "MID_INTERVAL_S", "mid_error"]
-
-#: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
-TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
-#: TTC coverage counts the frames in which a collision object is at least this wide (px).
-MIN_TTC_WIDTH = 16.0
-#: Real clips: a warning earlier than the danger onset minus this (s) is false.
-EARLY_S = 0.5
-#: A warning on a collision object up to this long (s) after its contact is neither true nor false.
-LATE_S = 0.5
-#: MiD (the TSTTC benchmark's motion-in-depth error) compares the depth ratio over this interval (s):
-#: TSTTC's frame interval (10 fps).
-MID_INTERVAL_S = 0.1
-
-
-def mid_error(true_ttc: float, est_ttc: float, interval: float = MID_INTERVAL_S) -> float:
-    """MiD of one time-to-contact estimate, as the TSTTC benchmark computes it: the depth ratio
-    over ``interval`` implied by a TTC, ``s = ttc / (ttc + interval)``, compared in log space,
-    ``|ln s(est) - ln s(true)| x 10^4`` (positive TTCs)."""
-    return abs(math.log(est_ttc / (est_ttc + interval)) - math.log(true_ttc / (true_ttc + interval))) * 1e4
-
-from .evaluation.tracks import (CAUSES, DEFAULT_MATCH_RADIUS, DEFAULT_TAIL, TargetRow, alarm_explained, centre_distance,
-                     episodes, on_object, warning_cause)
-from .evaluation.truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
-from .evaluation.truth import load as load_ground_truth
 
 #: Row order of the comparison table (other registered models follow, alphabetically).
 MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
@@ -80,55 +65,6 @@ class EvaluationWarning(UserWarning):
 # ---------------------------------------------------------------------------
 # results
 # ---------------------------------------------------------------------------
-@dataclass
-class _Run:
-    """One model's output on one video, reduced to what scoring needs."""
-
-    source: str
-    model: str
-    label: str
-    fps: float
-    size: tuple[int, int] | None
-    start: int
-    n_frames: int
-    fields: list[dict]
-    # frame -> [(field_id, x, y, collision)] for rows with a field; frame -> alarm for all rows
-    frame_fields: dict[int, list[tuple[int, float, float, bool]]]
-    frame_alarm: dict[int, bool]
-    param_set: str | None = None
-    params: dict = field(default_factory=dict)  # the parameter overrides it ran with (batch: done.json)
-    # where the run came from (results folder or input, for messages) and its identity (two runs of one
-    # label and video from different identities are an error); why it is incomplete (None: complete)
-    origin: str = ""
-    ident: Any = None
-    incomplete: str | None = None
-    # False when the folder does not say which video it is (no fields.json nor done.json)
-    video_known: bool = True
-    # frame -> the targets of that frame (models with targets: their warning is the targets' warning)
-    frame_targets: dict[int, list[TargetRow]] = field(default_factory=dict)
-    has_targets: bool = False
-    localises: bool = False  # its fields have meaningful positions (Model.localises)
-
-    def alarms_at(self, f: int) -> list[tuple]:
-        """``(field id, x, y)`` of every field in alarm in frame ``f``; for a model that does not localise,
-        ``(None, None, None)`` for the frame's alarm."""
-        if self.localises:
-            return [(fid, x, y) for fid, x, y, c in self.frame_fields.get(f, ()) if c]
-        return [(None, None, None)] if self.frame_alarm.get(f) else []
-
-    def in_pixels_of(self, truth: VideoTruth) -> "_Run":
-        """The run with its field and target positions in ``truth``'s pixels (when its size differs)."""
-        if not (truth.size and self.size and tuple(self.size) != tuple(truth.size)):
-            return self
-        sx, sy = truth.size[0] / self.size[0], truth.size[1] / self.size[1]
-        return replace(self, frame_fields={f: [(fid, x * sx, y * sy, c) for fid, x, y, c in rows]
-                                           for f, rows in self.frame_fields.items()},
-                       frame_targets={f: [replace(t, x=t.x * sx, y=t.y * sy,
-                                                  width=None if t.width is None else t.width * sx,
-                                                  height=None if t.height is None else t.height * sy) for t in rows]
-                                      for f, rows in self.frame_targets.items()})
-
-
 def _model_says(model: str, flag: str) -> bool:
     """The registered model's class attribute ``flag`` (``Model.localises``, ``Model.has_targets``);
     False for a model not registered. evaluate keeps no rule of its own."""
@@ -137,32 +73,22 @@ def _model_says(model: str, flag: str) -> bool:
     return bool(getattr(REGISTRY.get(model), flag, False))
 
 
-def _target_row(r) -> TargetRow:
-    """A ``targets.csv`` row (dict of strings or numbers) as a :class:`TargetRow`."""
-    def num(v):
-        return None if v in (None, "") else float(v)
-
-    fields = r.get("fields") or ""
-    return TargetRow(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
-                     num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
-                     tuple(int(v) for v in str(fields).split()))
-
-
 def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames, models, param_set=None,
                     params=None, origin="", ident=None, incomplete=None, video_known=True, target_rows=(),
                     targets_known=True):
     from .batch import param_label
 
-    per: dict[str, _Run] = {}
+    per: dict[str, ModelRun] = {}
 
     def new(m, fields):
         if params or param_set in (None, "", "default"):
             label = param_label(m, params)
         else:  # a parameter set whose overrides are not recorded
             label = f"{m}@{param_set}"
-        return _Run(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
-                    dict(params or {}), origin or str(source), ident, incomplete, video_known,
-                    has_targets=_model_says(m, "has_targets") and targets_known, localises=_model_says(m, "localises"))
+        return ModelRun(str(source), m, label, fps, size, start, n_frames, list(fields), {}, {}, param_set,
+                        dict(params or {}), origin or str(source), ident, incomplete, video_known,
+                        has_targets=_model_says(m, "has_targets") and targets_known,
+                        localises=_model_says(m, "localises"))
 
     for r in rows:
         m = r["model"]
@@ -182,7 +108,7 @@ def _runs_from_rows(source, rows, fields_by_model, *, fps, size, start, n_frames
     for r in target_rows:
         run = per.get(r["model"])
         if run is not None:
-            run.frame_targets.setdefault(int(r["frame"]), []).append(_target_row(r))
+            run.frame_targets.setdefault(int(r["frame"]), []).append(TargetRow.from_row(r))
     return list(per.values())
 
 
@@ -197,7 +123,7 @@ def _incomplete_reason(n_frames, interrupted, truncated, message=None, complete=
     return None
 
 
-def _runs_from_result(res, models, origin=None) -> list["_Run"]:
+def _runs_from_result(res, models, origin=None) -> list[ModelRun]:
     reason = _incomplete_reason(res.n_frames, getattr(res, "interrupted", False), getattr(res, "truncated", False),
                                 getattr(res, "message", None))
     return _runs_from_rows(res.source, res.rows, res.fields, fps=res.fps, size=tuple(res.size), start=res.start,
@@ -205,7 +131,7 @@ def _runs_from_result(res, models, origin=None) -> list["_Run"]:
                            ident=("object", id(res)), incomplete=reason, target_rows=res.targets)
 
 
-def _read_folder(folder: Path, models) -> list["_Run"]:
+def _read_folder(folder: Path, models) -> list[ModelRun]:
     csv_path = folder / "responses.csv"
     with open(csv_path, newline="", encoding="utf-8") as f:
         reader = csv.DictReader(f)
@@ -267,7 +193,7 @@ def _read_folder(folder: Path, models) -> list["_Run"]:
                 try:
                     target_rows = [r for r in reader if r.get("frame") not in (None, "")]
                     for r in target_rows:
-                        int(r["frame"]), _target_row(r)
+                        int(r["frame"]), TargetRow.from_row(r)
                 except (TypeError, ValueError, KeyError):
                     raise InputValueError(f"{tp}: malformed row") from None
     return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
@@ -329,364 +255,6 @@ def _expand_inputs(results, notes: list[str]) -> list:
             notes.append(f"{name}: {dup} of its {len(cands)} result folders are also given by "
                          f"{', '.join(earlier)}; each is scored once")
     return items
-
-
-# ---------------------------------------------------------------------------
-# scoring
-# ---------------------------------------------------------------------------
-def _mean(values) -> float | None:
-    values = [v for v in values if v is not None]
-    return sum(values) / len(values) if values else None
-
-
-def _with_approach(o: ObjectTruth) -> ObjectTruth | None:
-    """``o`` with an ``approach`` interval for the paper's object metrics: its own, else (a 3-D
-    collision or pass-by given with a track but no ``approach``) its tracked frames; None
-    without either (nothing to score it on)."""
-    if o.approach is not None:
-        return o
-    if not o.track:
-        return None
-    return replace(o, approach=(o.track[0].frame, o.track[-1].frame + 1))
-
-
-def _score_run(run: _Run, truth: VideoTruth, *, radius: float, tail: int) -> tuple[dict, list[dict]]:
-    run = run.in_pixels_of(truth)
-    first, last = run.start, run.start + run.n_frames  # processed frames [first, last)
-    localises = run.localises
-
-    def fields_at(f):
-        return run.frame_fields.get(f, ())
-
-    births: dict[int, tuple[int, float, float]] = {}
-    for f in sorted(run.frame_fields):
-        for fid, x, y, _ in fields_at(f):
-            births.setdefault(fid, (f, x, y))
-
-    approaching = [a for a in (_with_approach(o) for o in truth.objects if o.approaching) if a is not None]
-
-    objects = []
-    outside = 0
-    for o in approaching:
-        w0, w1 = max(o.approach[0], first), min(o.approach[1] + tail, last)
-        if w0 >= w1:
-            outside += 1  # outside the processed frames: not scored, counted
-            continue
-        a0 = o.approach[0]
-        rec = {"model": run.label, "video": truth.key, "object": o.id, "onset": a0,
-               "approach": list(o.approach), "detected": None, "detect_frame": None, "latency_field": None,
-               "field": None, "error_detect": None, "error_life": None, "fields": None,
-               "alarmed": False, "alarm_frame": None, "latency_alarm": None}
-        if localises:
-            rec["detected"] = False
-            for f in range(w0, w1):
-                near = [(centre_distance(x, y, o, f), fid) for fid, x, y, _ in fields_at(f)]
-                near = [n for n in near if n[0] <= radius]
-                if near:
-                    d, fid = min(near)
-                    rec.update(detected=True, detect_frame=f, latency_field=f - a0, field=fid,
-                               error_detect=round(d, 2))
-                    break
-            if rec["detected"]:
-                errs = [centre_distance(x, y, o, f) for f in range(rec["detect_frame"], min(o.life_end(), last))
-                        for fid, x, y, _ in fields_at(f) if fid == rec["field"]]
-                rec["error_life"] = round(sum(errs) / len(errs), 2) if errs else None
-            rec["fields"] = sum(1 for b, x, y in births.values()
-                                if w0 <= b < w1 and centre_distance(x, y, o, b) <= radius)
-        for f in range(w0, w1):
-            if any(x is None or centre_distance(x, y, o, f) <= radius for _, x, y in run.alarms_at(f)):
-                rec.update(alarmed=True, alarm_frame=f, latency_alarm=f - a0)
-                break
-        objects.append(rec)
-
-    # false alarms: alarm onsets (per field for localising models, per frame signal otherwise) that
-    # no approaching object explains (mlplc2.evaluation.tracks.alarm_explained)
-    def explained(f, x=None, y=None):
-        return alarm_explained(f, approaching, x, y, radius=radius, tail=tail)
-
-    fa_events = fa_frames = 0
-    alarm_frames = sorted(f for f, a in run.frame_alarm.items() if a)
-    prev: set = set()   # the alarms of the frame before
-    for f in range(first, last):
-        now = run.alarms_at(f)
-        bad = [fid for fid, x, y in now if not explained(f, x, y)]
-        fa_frames += bool(bad)
-        fa_events += sum(fid not in prev for fid in bad)
-        prev = {fid for fid, _, _ in now}
-    if not truth.object_level:  # a clip-level label only: no object-level false alarms
-        fa_events = fa_frames = None
-    video = {"model": run.label, "video": truth.key, "source": run.source, "frames": run.n_frames,
-             "seconds": round(run.n_frames / run.fps, 6), "localises": localises,
-             "complete": run.incomplete is None, "object_level": truth.object_level,
-             "fields": len(run.fields) if localises or run.fields else None,
-             "objects": len(objects), "objects_outside": outside,
-             "detected": sum(1 for r in objects if r["detected"]),
-             "alarmed": sum(1 for r in objects if r["alarmed"]),
-             "false_alarms": fa_events, "false_alarm_frames": fa_frames,
-             "first_alarm_frame": alarm_frames[0] if alarm_frames else None,
-             "label": truth.label, "collision_frame": truth.collision_frame, "outcome": None,
-             "warning_s": None}
-    if truth.label is not None:
-        if truth.label == "collision":
-            cf = truth.collision_frame
-            before = [f for f in alarm_frames if cf is None or f < cf]
-            if before:
-                video["outcome"] = "TP"
-                if cf is not None:
-                    video["warning_s"] = round((cf - before[0]) / run.fps, 4)
-            else:
-                video["outcome"] = "FN"
-        else:
-            video["outcome"] = "FP" if alarm_frames else "TN"
-    return video, objects
-
-
-# ---------------------------------------------------------------------------
-# warning metrics (3-D truth with kinds, and labelled clips)
-# ---------------------------------------------------------------------------
-def _warning_truth(truth: VideoTruth) -> bool:
-    """Whether the truth says which objects will hit (3-D kinds, or a clip label)."""
-    return truth.label is not None or any(o.kind is not None for o in truth.objects)
-
-
-def _median(values) -> float | None:
-    v = [x for x in values if x is not None]
-    return float(statistics.median(v)) if v else None
-
-
-def _quantile(values, q: float) -> float | None:
-    """The ``q`` quantile (linear interpolation, as ``numpy.quantile``)."""
-    v = sorted(x for x in values if x is not None)
-    if not v:
-        return None
-    pos = q * (len(v) - 1)
-    lo = int(math.floor(pos))
-    hi = min(lo + 1, len(v) - 1)
-    return v[lo] + (pos - lo) * (v[hi] - v[lo])
-
-
-def _score_warnings(run: _Run, truth: VideoTruth, *, radius: float) -> tuple[dict, list[dict]]:
-    """The warning metrics of one run (``docs/evaluation.md``, "Warning metrics").
-
-    A model's warning is its targets' warnings (models with targets), else its alarm: the fields
-    in alarm of a model that localises, the frame's alarm of one that does not. Collision objects
-    (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
-    (:func:`mlplc2.evaluation.tracks.on_object`) before contact; every other warning is false, with its
-    cause (:func:`mlplc2.evaluation.tracks.warning_cause`), except within ``LATE_S`` after a contact, on
-    the object that hit. On a labelled clip, frames from the contact on are not scored, and a
-    warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
-    collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were
-    processed (an interrupted or partial run) is not scored, only counted (``collision_objects_outside``).
-    """
-    run = run.in_pixels_of(truth)
-    first, last = run.start, run.start + run.n_frames
-    fps = run.fps
-    clip = truth.label is not None
-    collider = truth.collider
-    if clip and truth.label == "collision" and collider is None:  # no track: any warning may be on it
-        collider = ObjectTruth(id="collider", kind="collision", contact_frame=truth.contact_frame)
-    blind = collider is not None and not collider.track   # the collider's position is unknown
-    colliders = [o for o in truth.objects if o.collides] + ([collider] if collider is not None else [])
-    late = int(round(LATE_S * fps))
-    end = last
-    if clip and truth.label == "collision" and truth.contact_frame is not None:
-        end = min(last, int(math.ceil(truth.contact_frame)))
-    early_before = None
-    if clip and truth.danger_onset_frame is not None:
-        early_before = truth.danger_onset_frame - EARLY_S * fps
-    localises = run.localises
-
-    def warnings_at(f):
-        """(key, x, y) of every warning in frame f (key: target or field id; x None: a global alarm)."""
-        if run.has_targets:
-            return [(t.id, t.x, t.y) for t in run.frame_targets.get(f, ()) if t.warning]
-        return run.alarms_at(f)
-
-    objects = []
-    outside = 0
-    for o in colliders:
-        cf = o.contact_frame if o.contact_frame is not None else (truth.contact_frame if o is collider else None)
-        start = max(first, o.track[0].frame) if o.track and o is not collider else first
-        stop = min(end, int(math.ceil(cf)) if cf is not None else last)
-        if start >= stop:
-            outside += 1
-            continue
-        rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
-               "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
-               "ttc_at_warning_s": None, "warning_distance_px": None, "targets": None, "ttc_frames": 0,
-               "ttc_estimated": 0, "ttc_errors": []}
-        ids = set()
-        for f in range(start, stop):
-            if not rec["warned"] and (early_before is None or f >= early_before):
-                for key, x, y in warnings_at(f):
-                    if x is None or (blind and o is collider) or on_object(x, y, o, f, radius):
-                        c = o.center_at(f)
-                        true = o.ttc_at(f, fps)
-                        rec.update(warned=True, warning_frame=f,
-                                   lead_s=None if cf is None else round((cf - f) / fps, 4),
-                                   ttc_at_warning_s=None if true is None else round(true, 4),
-                                   warning_distance_px=None if x is None or c is None else round(
-                                       math.hypot(x - c[0], y - c[1]), 2))
-                        break
-            # fragmentation and time to contact: the targets (fields) on the object while in view
-            if o.track and not o.in_track(f) and o is not collider:
-                continue
-            width = o.width_at(f)
-            # fragmentation counts while the object fits in the frame: in the last frames before
-            # contact it covers the view, and every target anywhere lies on it
-            fits = width is None or truth.size is None or width <= max(truth.size)
-            if run.has_targets:
-                on = [t for t in run.frame_targets.get(f, ()) if on_object(t.x, t.y, o, f, radius)]
-                if fits:
-                    ids.update(t.id for t in on)
-                true = o.ttc_at(f, fps)
-                if o is not collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
-                        and true > 0:
-                    rec["ttc_frames"] += 1
-                    est = [t for t in on if t.ttc_s is not None and t.ttc_s > 0]
-                    if est:
-                        c = o.center_at(f)
-                        t = min(est, key=lambda t: math.hypot(t.x - c[0], t.y - c[1]))
-                        rec["ttc_estimated"] += 1
-                        rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
-            elif localises and fits:
-                ids.update(fid for fid, x, y, _ in run.frame_fields.get(f, ()) if on_object(x, y, o, f, radius))
-        rec["targets"] = len(ids) if (run.has_targets or localises) else None
-        objects.append(rec)
-
-    # false warnings: per frame, per cause; episodes per (target, cause)
-    false_frames: dict[str, set[int]] = {}
-    runs: dict[tuple, list[int]] = {}
-
-    def just_hit(x, y, f):
-        """A warning up to LATE_S after a collision object's contact, where it last was."""
-        for o in colliders:
-            cf = o.contact_frame
-            if cf is not None and cf <= f <= cf + late and (x is None or on_object(x, y, o, min(f, cf), radius)):
-                return True
-        return False
-
-    for f in range(first, end):
-        for key, x, y in warnings_at(f):
-            if just_hit(x, y, f):
-                continue
-            if early_before is not None and f < early_before:
-                cause = "early"
-            elif blind:
-                continue                     # a collision clip without a track: on its collider
-            else:
-                verdict, _ = warning_cause(x, y, f, truth, radius=radius, tail=late)
-                if verdict == "true":
-                    continue
-                cause = verdict if not clip else "elsewhere"
-            false_frames.setdefault(cause, set()).add(f)
-            runs.setdefault((key, cause), []).append(f)
-    episodes_by: dict[str, int] = {}
-    for (key, cause), frames in runs.items():
-        episodes_by[cause] = episodes_by.get(cause, 0) + episodes(frames)
-    all_false = set().union(*false_frames.values()) if false_frames else set()
-    outcome = None
-    if clip:
-        warned = any(r["warned"] for r in objects)
-        outcome = {"label": truth.label, "warned": warned if truth.label == "collision" else None,
-                   "missed": (not warned) if truth.label == "collision" else None, "false": bool(all_false),
-                   "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None)}
-    video = {"model": run.label, "video": truth.key, "frames_scored": max(end - first, 0), "clip": clip,
-             "collision_objects_outside": outside,
-             "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
-             "false_frames_by_cause": {c: len(v) for c, v in sorted(false_frames.items())},
-             "false_episodes_by_cause": dict(sorted(episodes_by.items())), "outcome": outcome}
-    return video, objects
-
-
-def _summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) -> dict:
-    """Per model: collision objects warned, lead time, false warnings by cause, TTC errors, fragmentation."""
-    vids = [v for v in wvideos if v["model"] == label]
-    objs = [o for o in wobjects if o["model"] == label]
-    if not vids:
-        return {}
-    synth = [v for v in vids if not v["clip"]]
-    sobjs = [o for o in objs if not any(v["video"] == o["video"] and v["clip"] for v in vids)]
-    warned = [o for o in sobjs if o["warned"]]
-    frames = sum(v["frames_scored"] for v in synth)
-    per_k = (lambda n: round(1000.0 * n / frames, 3)) if frames else (lambda n: None)
-    s: dict[str, Any] = {
-        "collision_objects": len(sobjs), "warned": len(warned),
-        "collision_objects_outside": sum(v["collision_objects_outside"] for v in synth),
-        "warned_rate": round(len(warned) / len(sobjs), 4) if sobjs else None,
-        "lead_median_s": _median(o["lead_s"] for o in warned),
-        "lead_p10_s": _quantile([o["lead_s"] for o in warned], 0.1),
-        "ttc_at_warning_median_s": _median(o["ttc_at_warning_s"] for o in warned),
-        "warning_distance_median_px": _median(o["warning_distance_px"] for o in warned),
-        "frames": frames,
-        "false_frames_per_1000": per_k(sum(v["false_frames"] for v in synth)),
-        "false_episodes_per_1000": per_k(sum(v["false_episodes"] for v in synth)),
-        "false_frames_per_1000_by_cause": {c: per_k(sum(v["false_frames_by_cause"].get(c, 0) for v in synth))
-                                           for c in CAUSES},
-        "false_episodes_per_1000_by_cause": {c: per_k(sum(v["false_episodes_by_cause"].get(c, 0) for v in synth))
-                                             for c in CAUSES},
-        "false_frames_pct": round(100.0 * sum(v["false_frames"] for v in synth) / frames, 3) if frames else None,
-        "fragmentation": _mean(o["targets"] for o in sobjs if o["targets"] is not None),
-    }
-    errs = [e for o in sobjs for e in o["ttc_errors"]]
-    for lo, hi in TTC_BINS:
-        b = [(t, e) for t, e in errs if lo <= t < hi]
-        key = f"{lo:g}-{hi:g}s"
-        s[f"ttc_rte_pct_{key}"] = None if not b else round(100.0 * _median(abs(e - t) / t for t, e in b), 2)
-        s[f"ttc_mid_{key}"] = None if not b else round(_median(mid_error(t, e) for t, e in b), 1)
-        s[f"ttc_n_{key}"] = len(b)
-    tf = sum(o["ttc_frames"] for o in sobjs)
-    s["ttc_coverage"] = round(sum(o["ttc_estimated"] for o in sobjs) / tf, 4) if tf else None
-    clips = [v for v in vids if v["clip"]]
-    cc = [v for v in clips if v["outcome"]["label"] == "collision"]
-    s.update(clips=len(clips), clips_collision=len(cc), clips_warned=sum(bool(v["outcome"]["warned"]) for v in cc),
-             clips_missed=sum(bool(v["outcome"]["missed"]) for v in cc),
-             clips_false=sum(bool(v["outcome"]["false"]) for v in clips),
-             clip_lead_median_s=_median(v["outcome"]["lead_s"] for v in cc if v["outcome"]["warned"]))
-    return s
-
-
-def _summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
-    vids = [v for v in videos if v["model"] == label]
-    objs = [o for o in objects if o["model"] == label]
-    localises = any(v["localises"] for v in vids)
-    minutes = sum(v["seconds"] for v in vids) / 60.0
-    obj_vids = [v for v in vids if v["object_level"]]  # false alarms: object-level truth only
-    obj_minutes = sum(v["seconds"] for v in obj_vids) / 60.0
-    s: dict[str, Any] = {"model": label, "videos": len(vids), "minutes": round(minutes, 4),
-                         "localises": localises, "objects": len(objs),
-                         "objects_outside": sum(v["objects_outside"] for v in vids),
-                         "incomplete_videos": sum(1 for v in vids if not v["complete"])}
-    if localises:
-        det = [o for o in objs if o["detected"]]
-        s.update(detected=len(det), detection_rate=len(det) / len(objs) if objs else None,
-                 latency_field=_mean(o["latency_field"] for o in det),
-                 error_detect=_mean(o["error_detect"] for o in det),
-                 error_life=_mean(o["error_life"] for o in det),
-                 fields_per_object=_mean(o["fields"] for o in objs))
-    else:
-        s.update(detected=None, detection_rate=None, latency_field=None, error_detect=None, error_life=None,
-                 fields_per_object=None)
-    al = [o for o in objs if o["alarmed"]]
-    fa = sum(v["false_alarms"] for v in obj_vids) if obj_vids else None
-    fields = [v["fields"] for v in vids if v["fields"] is not None]
-    s.update(alarmed=len(al), alarm_rate=len(al) / len(objs) if objs else None,
-             latency_alarm=_mean(o["latency_alarm"] for o in al),
-             fields_total=sum(fields) if fields else None,
-             false_alarms=fa,
-             false_alarm_frames=sum(v["false_alarm_frames"] for v in obj_vids) if obj_vids else None,
-             false_alarms_per_min=fa / obj_minutes if obj_vids and obj_minutes > 0 else None)
-    clips = [v for v in vids if v["outcome"] is not None]
-    tp, fp, tn, fn = (sum(v["outcome"] == o for v in clips) for o in ("TP", "FP", "TN", "FN"))
-    s.update(clips=len(clips), tp=tp, fp=fp, tn=tn, fn=fn,
-             accuracy=(tp + tn) / len(clips) if clips else None,
-             precision=tp / (tp + fp) if tp + fp else None,
-             recall=tp / (tp + fn) if tp + fn else None,
-             warning_s=_mean(v["warning_s"] for v in clips if v["outcome"] == "TP"))
-    for k, v in s.items():
-        if isinstance(v, float):
-            s[k] = round(v, 4)
-    return s
 
 
 # ---------------------------------------------------------------------------
@@ -970,9 +538,7 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     -------
     Evaluation
     """
-    from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
     from .models.base import available_models, resolve_names
-    from .runner import RunResult, run
 
     if models is not None:
         models = resolve_names(models)
@@ -984,7 +550,40 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
 
     notes: list[str] = []     # warnings, in order
     problems: list[str] = []  # inputs not scored for another reason than missing ground truth
-    runs: list[_Run] = []
+    runs = _collect_runs(results, truth, models, run_options, progress, notes, problems)
+    sc = _score_runs(runs, truth, problems, radius=match_radius, tail=tail)
+    for origin, (reason, n) in sc.incomplete.items():
+        notes.append(f"{origin}: incomplete results ({reason}); scored as they are, "
+                     f"{n} approaching object(s) outside the processed frames not scored")
+    if not sc.videos:
+        _issue(notes)
+        raise _nothing_to_evaluate(problems, sc.skipped, truth)
+    notes.extend(f"{p}; not scored" for p in problems)
+    _issue(notes)
+    order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
+    labels = sorted(sc.by_label, key=lambda lb: _rank(sc.by_label[lb], lb, order))
+    summary = {lb: {"model": lb, "model_name": sc.by_label[lb].model,
+                    "param_set": sc.by_label[lb].param_set or "default", "params": sc.by_label[lb].params,
+                    **summarise(lb, sc.videos, sc.objects),
+                    "warnings": summarise_warnings(lb, sc.wvideos, sc.wobjects) or None} for lb in labels}
+    sc.wvideos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
+    sc.wobjects.sort(key=lambda o: (labels.index(o["model"]), o["video"], str(o["object"])))
+    sc.videos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
+    sc.objects.sort(key=lambda o: (labels.index(o["model"]), o["video"], o["onset"], str(o["object"])))
+    settings = {"ground_truth": truth.source, "match_radius": match_radius, "tail": tail}
+    return Evaluation(summary, sc.videos, sc.objects, settings, sc.skipped, notes, sc.wvideos, sc.wobjects)
+
+
+def _collect_runs(results, truth: GroundTruth, models, run_options, progress: bool, notes: list[str],
+                  problems: list[str]) -> list[ModelRun]:
+    """The runs of every input (:func:`_expand_inputs`): RunResults and results folders as they are,
+    videos run first (those without ground truth are not run: a placeholder run without a model);
+    inputs that are neither go to ``problems``."""
+    from .io import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS
+    from .models.base import available_models
+    from .runner import RunResult, run
+
+    runs: list[ModelRun] = []
     for item in _expand_inputs(results, notes):
         if isinstance(item, RunResult):
             runs.extend(_runs_from_result(item, models))
@@ -1002,7 +601,7 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                     problems.append(f"{item}: not a results folder (responses.csv + fields.json) nor a video "
                                     f"({', '.join(VIDEO_EXTENSIONS)}) or image")
                 else:
-                    runs.append(_Run(str(item), "", "", 30.0, None, 0, 0, [], {}, {}))
+                    runs.append(ModelRun(str(item), "", "", 30.0, None, 0, 0, [], {}, {}))
                 continue
             names = models or available_models()
             res = run(item, names, out=False, quiet=not progress, **dict(run_options or {}))
@@ -1010,14 +609,32 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
         else:
             raise InputValueError(f"cannot evaluate {type(item).__name__}: give a RunResult, a results folder "
                                   f"or a video path")
-    videos: list[dict] = []
-    objects: list[dict] = []
-    wvideos: list[dict] = []     # warning metrics, per (model, video) and per collision object
-    wobjects: list[dict] = []
-    skipped: list[str] = []
-    claimed: dict[tuple[str, str], _Run] = {}  # (model label, video) -> the run scored for it
-    by_label: dict[str, _Run] = {}  # model label -> a run scored under it (its model and parameters)
-    incomplete: dict[str, tuple[str, int]] = {}  # origin -> (reason, approaching objects outside)
+    return runs
+
+
+@dataclass
+class _Scores:
+    """The scores of every run, as :func:`_score_runs` gathers them: the per-(model, video) and
+    per-object rows (``videos``, ``objects``; ``wvideos``, ``wobjects``: the warning metrics), the
+    videos without ground truth (``skipped``), a run per model label (``by_label``: its model and
+    parameters) and, per incomplete origin, (reason, approaching objects outside)."""
+
+    videos: list[dict] = field(default_factory=list)
+    objects: list[dict] = field(default_factory=list)
+    wvideos: list[dict] = field(default_factory=list)
+    wobjects: list[dict] = field(default_factory=list)
+    skipped: list[str] = field(default_factory=list)
+    by_label: dict[str, ModelRun] = field(default_factory=dict)
+    incomplete: dict[str, tuple[str, int]] = field(default_factory=dict)
+
+
+def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *, radius: float,
+                tail: int) -> _Scores:
+    """Score each run against its video's truth (:func:`~mlplc2.evaluation.score.score_run`, and
+    :func:`~mlplc2.evaluation.score.score_warnings` where the truth says which objects will hit);
+    two runs of one label and video from different inputs are an error."""
+    sc = _Scores()
+    claimed: dict[tuple[str, str], ModelRun] = {}  # (model label, video) -> the run scored for it
     for r in runs:
         t = truth.match(r.source) if r.model else None
         if t is None and r.model and not r.video_known:
@@ -1026,8 +643,8 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                 problems.append(msg)
             continue
         if t is None:
-            if r.source not in skipped:
-                skipped.append(r.source)
+            if r.source not in sc.skipped:
+                sc.skipped.append(r.source)
             continue
         key = (r.label, _video_key(r.source))
         prev = claimed.setdefault(key, r)
@@ -1035,49 +652,37 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
             other = r.origin if r.origin != prev.origin else f"another {r.origin.removeprefix('a ')}"
             raise InputValueError(f"{prev.origin} and {other} both hold {r.label} results for {r.source}; "
                                   f"evaluate one of them (or each separately)")
-        v, o = _score_run(r, t, radius=match_radius, tail=tail)
-        by_label.setdefault(r.label, r)
-        videos.append(v)
-        objects.extend(o)
-        if _warning_truth(t):
-            wv, wo = _score_warnings(r, t, radius=match_radius)
-            wvideos.append(wv)
-            wobjects.extend(wo)
+        v, o = score_run(r, t, radius=radius, tail=tail)
+        sc.by_label.setdefault(r.label, r)
+        sc.videos.append(v)
+        sc.objects.extend(o)
+        if warning_truth(t):
+            wv, wo = score_warnings(r, t, radius=radius)
+            sc.wvideos.append(wv)
+            sc.wobjects.extend(wo)
         if r.incomplete is not None:
-            reason, n = incomplete.get(r.origin, (r.incomplete, 0))
-            incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
-    for origin, (reason, n) in incomplete.items():
-        notes.append(f"{origin}: incomplete results ({reason}); scored as they are, "
-                     f"{n} approaching object(s) outside the processed frames not scored")
-    if not videos:
-        _issue(notes)
-        if problems:
-            raise InputValueError(f"nothing to evaluate: {'; '.join(problems[:3])}"
-                                  f"{' ...' if len(problems) > 3 else ''}")
-        if skipped:
-            raise InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
-                                  f"{' ...' if len(skipped) > 3 else ''}")
-        raise InputValueError("nothing to evaluate (no model output in the results)")
-    notes.extend(f"{p}; not scored" for p in problems)
-    _issue(notes)
-    order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
+            reason, n = sc.incomplete.get(r.origin, (r.incomplete, 0))
+            sc.incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
+    return sc
 
-    def rank(lb):  # model order, then parameter values (numbers as numbers: t_a=8 before t_a=12)
-        r = by_label[lb]
-        values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)
-                   else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(r.params.items())]
-        return order.index(r.model) if r.model in order else 99, r.model, values, lb
 
-    labels = sorted(by_label, key=rank)
-    summary = {lb: {"model": lb, "model_name": by_label[lb].model, "param_set": by_label[lb].param_set or "default",
-                    "params": by_label[lb].params, **_summarise(lb, videos, objects),
-                    "warnings": _summarise_warnings(lb, wvideos, wobjects) or None} for lb in labels}
-    wvideos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
-    wobjects.sort(key=lambda o: (labels.index(o["model"]), o["video"], str(o["object"])))
-    videos.sort(key=lambda v: (labels.index(v["model"]), v["video"]))
-    objects.sort(key=lambda o: (labels.index(o["model"]), o["video"], o["onset"], str(o["object"])))
-    settings = {"ground_truth": truth.source, "match_radius": match_radius, "tail": tail}
-    return Evaluation(summary, videos, objects, settings, skipped, notes, wvideos, wobjects)
+def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundTruth) -> InputValueError:
+    """The error when no run was scored: the problems of the inputs, else the videos without truth."""
+    if problems:
+        return InputValueError(f"nothing to evaluate: {'; '.join(problems[:3])}"
+                               f"{' ...' if len(problems) > 3 else ''}")
+    if skipped:
+        return InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
+                               f"{' ...' if len(skipped) > 3 else ''}")
+    return InputValueError("nothing to evaluate (no model output in the results)")
+
+
+def _rank(r: ModelRun, label: str, order: list[str]) -> tuple:
+    """Sort key of a model label: model order, then parameter values (numbers as numbers: t_a=8
+    before t_a=12)."""
+    values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)
+               else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(r.params.items())]
+    return order.index(r.model) if r.model in order else 99, r.model, values, label
 
 
 def _video_key(source: str) -> str:

@@ -1,4 +1,4 @@
-"""What models said, frame by frame, and how it is held against the truth.
+"""What models said, frame by frame: the one recorder of per-frame outputs.
 
 One home for what every scorer and recorder needs (``mlplc2 run``, ``mlplc2 evaluate``,
 ``mlplc2 benchmark``, ``mlplc2 reproduce``, the tests):
@@ -6,28 +6,18 @@ One home for what every scorer and recorder needs (``mlplc2 run``, ``mlplc2 eval
 :class:`Record` / :class:`Recorder`
     one model's outputs on one video: per frame the global alarm and response, the
     attention fields (id, centre, response, alarm) and the targets (id, centre, size, time
-    to contact, miss, warning); per field its life (birth, death, peak, first alarm) and per
-    target its summary. A :class:`Recorder` fills Records from :class:`~mlplc2.Output`
-    objects as a video is processed: its series may be switched off and the fields that died
-    spilled to a temporary file for long runs (``mlplc2 run``, whose ``fields.json`` is
+    to contact, miss, warning: :class:`TargetRow`); per field its life (birth, death, peak,
+    first alarm: :class:`FieldHistory`) and per target its summary (:class:`TargetHistory`).
+    A :class:`Recorder` fills Records from :class:`~mlplc2.Output` objects as a video is
+    processed: its series may be switched off and the fields that died spilled to a
+    temporary file for long runs (``mlplc2 run``, whose ``fields.json`` is
     :meth:`Recorder.summaries` and :meth:`Recorder.target_summaries`); :func:`record` runs a
     model over frames with every series (``mlplc2 reproduce``, the tests).
-matching
-    :func:`centre_distance` (the paper's metrics: a field stands for an object when its centre
-    lies within :data:`DEFAULT_MATCH_RADIUS` of the object's centre; :func:`fields_near`,
-    :func:`first_field`) and :func:`box_distance` (the warning metrics: a target is on an
-    object when its centre lies within the match radius of the object's box, so large objects
-    are matched anywhere on them; :func:`on_object`).
-false alarms (the paper's metrics)
-    :func:`alarm_explained`: an alarm is explained when it lies within the match radius of an
-    object that approaches, up to :data:`DEFAULT_TAIL` frames after its approach (a global
-    alarm: when any object does); :func:`false_alarms` lists a Record's unexplained ones.
-false warnings (the warning metrics, another question)
-    :func:`warning_cause`: a warning is true when it is on an object on a collision course
-    before its contact; otherwise its cause is ``"pass"`` (on a pass-by object),
-    ``"distractor"`` (on a receding, translating or static object) or ``"background"``.
+:func:`response_rows`
+    the ``responses.csv`` rows of one output (the rounding of the output files).
 
-Coordinates are those of the ground truth (the video's own pixels).
+Holding a Record against the ground truth is :mod:`mlplc2.evaluation.match`.
+Coordinates are those of the video (its own pixels, the ground truth's).
 """
 
 from __future__ import annotations
@@ -35,29 +25,15 @@ from __future__ import annotations
 import json
 import math
 import tempfile
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-from .truth import ObjectTruth, VideoTruth, load
-
-__all__ = ["FieldTrack", "TargetRow", "TargetTrack", "Record", "Recorder", "record", "centre_distance",
-           "fields_near", "first_field", "box_distance", "on_object", "alarm_explained", "false_alarms",
-           "warning_cause", "episodes", "response_rows", "match_fields", "DEFAULT_MATCH_RADIUS", "DEFAULT_TAIL", "CAUSES"]
-
-#: Match radius in ground-truth pixels (a field or target this close stands for the object).
-DEFAULT_MATCH_RADIUS = 20.0
-#: Frames after the end of an approach during which a detection or alarm still counts for it.
-DEFAULT_TAIL = 25
-#: Causes of a false warning (:func:`warning_cause`).
-CAUSES = ("pass", "distractor", "background")
+__all__ = ["FieldHistory", "TargetRow", "TargetHistory", "Record", "Recorder", "record", "response_rows"]
 
 
-# ---------------------------------------------------------------------------
-# records
-# ---------------------------------------------------------------------------
 def _px(v: float | None) -> float | None:
     """A position or size in the output files: px, 2 decimals."""
     return None if v is None else round(float(v), 2)
@@ -89,7 +65,7 @@ def _opt4(v: float | None) -> float | None:
 
 
 @dataclass
-class FieldTrack:
+class FieldHistory:
     """One attention field over its life (frames are the video's frame indices).
 
     ``x``, ``y``: its centre at its peak response (the first frame of a plateau), in video
@@ -145,6 +121,17 @@ class TargetRow:
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
 
+    @classmethod
+    def from_row(cls, r) -> "TargetRow":
+        """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``)."""
+        def num(v):
+            return None if v in (None, "") else float(v)
+
+        fields = r.get("fields") or ""
+        return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
+                   num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
+                   tuple(int(v) for v in str(fields).split()))
+
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
         return {"x": _px(self.x), "y": _px(self.y), "width": _px(self.width), "height": _px(self.height),
@@ -154,7 +141,7 @@ class TargetRow:
 
 
 @dataclass
-class TargetTrack:
+class TargetHistory:
     """One target over its life: the summary ``fields.json`` writes under ``"targets"``
     (docs/targets.md): life, frames, first estimate, first warning and the estimates then."""
 
@@ -182,8 +169,8 @@ class TargetTrack:
 class Record:
     """One model's outputs on one video.
 
-    Always: ``fields`` (id -> :class:`FieldTrack`, their summaries; with ``spill`` only the
-    live ones), ``targets`` (id -> :class:`TargetTrack`), ``alarm_count`` and
+    Always: ``fields`` (id -> :class:`FieldHistory`, their summaries; with ``spill`` only the
+    live ones), ``targets`` (id -> :class:`TargetHistory`), ``alarm_count`` and
     ``first_alarm_frame`` (frames with ``Output.collision``). With ``series`` (the default)
     also per frame: ``alarm[frame]`` (``Output.collision``), ``response_at[frame]``
     (``Output.response``), ``fields_at[frame]``: ``(field_id, x, y, response, collision)`` of
@@ -202,8 +189,8 @@ class Record:
     response_at: dict[int, float] = field(default_factory=dict)
     fields_at: dict[int, list[tuple[int, float, float, float, bool]]] = field(default_factory=dict)
     targets_at: dict[int, list[TargetRow]] = field(default_factory=dict)
-    fields: dict[int, FieldTrack] = field(default_factory=dict)
-    targets: dict[int, TargetTrack] = field(default_factory=dict)
+    fields: dict[int, FieldHistory] = field(default_factory=dict)
+    targets: dict[int, TargetHistory] = field(default_factory=dict)
     alarm_count: int = 0
     first_alarm_frame: int | None = None
     has_targets: bool = False
@@ -225,7 +212,7 @@ class Record:
         """``Output.collision`` of every processed frame (series), as an array."""
         return np.array([bool(self.alarm.get(f)) for f in self.frames], dtype=bool)
 
-    def alarmed(self) -> list[FieldTrack]:
+    def alarmed(self) -> list[FieldHistory]:
         """The fields that raised an alarm, in order of birth."""
         return [f for f in self.fields.values() if f.first_alarm_frame is not None]
 
@@ -278,7 +265,7 @@ class Recorder:
             x, y = self.to_input(f.x, f.y)
             ft = rec.fields.get(f.id)
             if ft is None:
-                ft = rec.fields[f.id] = FieldTrack(f.id, float(x), float(y), float(f.radius), f.born + self.offset,
+                ft = rec.fields[f.id] = FieldHistory(f.id, float(x), float(y), float(f.radius), f.born + self.offset,
                                                    peak_response=float(f.response), peak_frame=index)
             elif f.response > ft.peak_response:      # the first frame of a plateau stays the peak
                 ft.peak_response, ft.peak_frame = float(f.response), index
@@ -323,7 +310,7 @@ class Recorder:
             seen.add(t.id)
             tt = rec.targets.get(t.id)
             if tt is None:
-                tt = rec.targets[t.id] = TargetTrack(t.id, born=index)
+                tt = rec.targets[t.id] = TargetHistory(t.id, born=index)
             tt.frames += 1
             tt.fields.update(t.fields)
             if t.ttc_s is not None and tt.first_ttc_frame is None:
@@ -378,163 +365,3 @@ def record(model, frames, *, progress=None) -> Record:
         if progress is not None:
             progress.update(1)
     return rec.records[model.name]
-
-
-# ---------------------------------------------------------------------------
-# matching
-# ---------------------------------------------------------------------------
-def centre_distance(x: float, y: float, obj: ObjectTruth, frame: int) -> float:
-    """Distance (px) from (x, y) to the object's centre at ``frame`` (inf without a centre)."""
-    c = obj.center_at(frame)
-    return math.inf if c is None else math.hypot(x - c[0], y - c[1])
-
-
-def fields_near(fields: Iterable[FieldTrack], obj: ObjectTruth, start: int, end: int,
-                radius: float = DEFAULT_MATCH_RADIUS) -> list[FieldTrack]:
-    """The fields born in ``[start, end)`` that stand for ``obj``: their centre lies within
-    ``radius`` of the object's at their birth (:func:`centre_distance`); in the order given."""
-    return [f for f in fields if start <= f.born < end and centre_distance(f.x, f.y, obj, f.born) <= radius]
-
-
-def first_field(rec: Record, obj: ObjectTruth,
-                radius: float = DEFAULT_MATCH_RADIUS) -> tuple[FieldTrack, int, float] | None:
-    """The paper's detection of an approaching ``obj``: the first field born during its
-    approach that stands for it (:func:`fields_near`; the nearest of those born first), with
-    its latency (frames from the approach onset) and centre error (px); None if there is none."""
-    a0, a1 = obj.approach
-    hits = fields_near(rec.fields.values(), obj, a0, a1, radius)
-    if not hits:
-        return None
-    f = min(hits, key=lambda f: (f.born, centre_distance(f.x, f.y, obj, f.born)))
-    return f, f.born - a0, centre_distance(f.x, f.y, obj, f.born)
-
-
-def box_distance(x: float, y: float, obj: ObjectTruth, frame: int) -> float:
-    """Distance (px) from (x, y) to the object's box at ``frame`` (0 inside it); the centre
-    distance when its size is unknown."""
-    c = obj.center_at(frame)
-    if c is None:
-        return math.inf
-    p = obj.point_at(frame)
-    w = obj.width_at(frame)
-    h = p.height if p is not None and p.height is not None else w
-    if w is None:
-        return math.hypot(x - c[0], y - c[1])
-    dx = max(abs(x - c[0]) - w / 2.0, 0.0)
-    dy = max(abs(y - c[1]) - h / 2.0, 0.0)
-    return math.hypot(dx, dy)
-
-
-def on_object(x: float, y: float, obj: ObjectTruth, frame: int, radius: float = DEFAULT_MATCH_RADIUS) -> bool:
-    """Whether (x, y) is on ``obj`` at ``frame``: within ``radius`` of its box (:func:`box_distance`)."""
-    return box_distance(x, y, obj, frame) <= radius
-
-
-# ---------------------------------------------------------------------------
-# false alarms (the paper's metrics) and false warnings (the warning metrics)
-# ---------------------------------------------------------------------------
-def alarm_explained(frame: int, objects: Iterable[ObjectTruth], x: float | None = None, y: float | None = None, *,
-                    radius: float = DEFAULT_MATCH_RADIUS, tail: int = DEFAULT_TAIL) -> bool:
-    """The paper's rule for an alarm: it is explained when an object approaches at ``frame``
-    or did up to ``tail`` frames before (``[approach start, approach end + tail)``) and, for
-    the alarm of a field at ``(x, y)``, the field lies within ``radius`` of that object's
-    centre (:func:`centre_distance`). A global alarm (``x`` None) needs only the time."""
-    for o in objects:
-        if o.approach is not None and o.approach[0] <= frame < o.approach[1] + tail \
-                and (x is None or centre_distance(x, y, o, frame) <= radius):
-            return True
-    return False
-
-
-def false_alarms(rec: Record, objects: Sequence[ObjectTruth], *, radius: float = DEFAULT_MATCH_RADIUS,
-                 tail: int = DEFAULT_TAIL) -> list[tuple[int, int]]:
-    """``(frame, field id)`` of every frame in which a field is in alarm that
-    :func:`alarm_explained` does not explain, by frame then id (needs the series)."""
-    return sorted((frame, fid) for frame, rows in rec.fields_at.items() for fid, x, y, _, alarm in rows
-                  if alarm and not alarm_explained(frame, objects, x, y, radius=radius, tail=tail))
-
-
-def _present(obj: ObjectTruth, frame: int) -> bool:
-    """Whether ``obj`` is in the video at ``frame`` (in view for tracked 3-D truth)."""
-    if obj.kind is not None and obj.track:
-        return obj.in_track(frame)
-    if obj.span is not None:
-        return obj.span[0] <= frame < obj.span[1]
-    return obj.in_track(frame) if obj.track else True
-
-
-def warning_cause(x: float | None, y: float | None, frame: int, truth: VideoTruth, *,
-                  radius: float = DEFAULT_MATCH_RADIUS, tail: int = 0) -> tuple[str, ObjectTruth | None]:
-    """Whether a warning at (x, y) in ``frame`` is true, and on what.
-
-    Returns ``("true", obj)`` for a warning on an object on a collision course (``collides``;
-    the labelled ``collider`` of a clip) up to ``tail`` frames after its contact, else
-    ``(cause, obj)`` with cause one of :data:`CAUSES`: ``"pass"`` (on a pass-by object),
-    ``"distractor"`` (on another object: receding, translating, static, or a collider after its
-    contact) or ``"background"`` (on no object; ``obj`` None). A warning without a position
-    (``x`` None: a global alarm) is true while a collision object is in view before its
-    contact, else it takes the cause of the objects in view (pass-by first).
-    """
-    objects = list(truth.objects) + ([truth.collider] if truth.collider is not None else [])
-    cands = []
-    for o in objects:
-        if not _present(o, frame) and not (o is truth.collider):
-            continue
-        if x is None:
-            cands.append((0.0, o))
-        else:
-            d = box_distance(x, y, o, frame)
-            if d <= radius:
-                cands.append((d, o))
-
-    def live(o):
-        return o.collides and (o.contact_frame is None or frame <= o.contact_frame + tail)
-
-    # the nearest candidate of the first class that has one (min keeps the first of equals)
-    for verdict, of in (("true", live), ("pass", lambda o: o.kind == "pass"), ("distractor", lambda o: True)):
-        hits = [c for c in cands if of(c[1])]
-        if hits:
-            return verdict, min(hits, key=lambda c: c[0])[1]
-    return "background", None
-
-
-def episodes(frames: Iterable[int]) -> int:
-    """Number of runs of consecutive frames in ``frames``."""
-    frames = set(frames)
-    return sum(f - 1 not in frames for f in frames)
-
-
-def match_fields(fields: list[dict], truth, *, radius: float = DEFAULT_MATCH_RADIUS) -> list[dict]:
-    """For each ground-truth object with a centre, the field that stands for it.
-
-    Among the fields born while the object is on screen, the one with the largest peak
-    response whose centre lies within ``radius`` px of the object's
-    (:func:`mlplc2.evaluation.tracks.centre_distance`, the matcher of the paper's metrics), else the
-    nearest one (``None`` when no field was born meanwhile). ``fields``: field summaries
-    (``fields.json``); ``truth``: the demo's ground truth (a JSON entry) or a
-    :class:`~mlplc2.evaluation.truth.VideoTruth`.
-    """
-    video = truth if isinstance(truth, VideoTruth) else next(iter(load(truth).values()))
-    matches = []
-    for obj in video.objects:
-        if obj.center is None:
-            continue
-        t0, t1 = obj.span or (0, math.inf)
-        cand = [f for f in fields if t0 <= f["born"] < t1]
-
-        def dist(f):
-            return centre_distance(f["x"], f["y"], obj, f["born"])
-
-        near = [f for f in cand if dist(f) <= radius]
-        if near:  # the strongest field near the object (a field may be replaced while it looms)
-            best = max(near, key=lambda f: (f["peak_response"], -f["born"]))
-        else:
-            best = min(cand, key=dist, default=None)
-        matches.append({
-            "object": obj.id, "center": list(obj.center), "frames": [t0, t1],
-            "field": None if best is None else best["id"],
-            "field_center": None if best is None else [best["x"], best["y"]],
-            "distance": None if best is None else round(dist(best), 1),
-            "first_alarm_frame": None if best is None else best["first_alarm_frame"],
-        })
-    return matches

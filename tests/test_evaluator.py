@@ -1,4 +1,4 @@
-"""mlplc2.evaluate: runs scored against ground truth.
+"""mlplc2.evaluate (mlplc2.evaluator, scores of mlplc2.evaluation.score): runs scored against ground truth.
 
 * The paper's metrics: the loader, object-level and clip-level metrics on a generated scene
   and on hand-made rows, inputs given twice, incomplete results, the CLI.
@@ -22,7 +22,7 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2._validation import InputError, InputTypeError, InputValueError
 from mlplc2.cli import main
-from mlplc2.evaluate import EARLY_S, LATE_S, Evaluation, EvaluationWarning, evaluate, load_ground_truth
+from mlplc2.evaluator import EARLY_S, LATE_S, Evaluation, EvaluationWarning, evaluate, load_ground_truth
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, TARGET_COLUMNS, RunResult
 from mlplc2.evaluation.truth import TRACK_COLUMNS
