@@ -190,8 +190,10 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hfov", type=_hfov, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
-    p.add_argument("--backend", choices=("opencv", "pyav"), default="opencv",
+    p.add_argument("--decoder", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv)")
+    p.add_argument("--backend", dest="decoder", choices=("opencv", "pyav"), default=argparse.SUPPRESS,
+                   help=argparse.SUPPRESS)  # the old name of --decoder, kept for old command lines
     _add_repeat_options(p, f"hold the models' output on duplicated frames: frames in which no pixel "
                           f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
                           f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
@@ -213,7 +215,7 @@ def _cmd_run(args) -> int:
             result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=_repeat_threshold(args),
-                         backend=args.backend, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
+                         decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                          target_params=_target_options(args) or None)
         except RunInterrupted as exc:
             return _report_interrupt(exc)

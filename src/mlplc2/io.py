@@ -11,7 +11,7 @@ Frames are always RGB ``uint8`` arrays of shape ``(H, W, 3)``. Sizes are given
 as ``(W, H)`` (OpenCV convention), shapes as ``(H, W)`` (numpy convention).
 
 OpenCV is the default decoder. PyAV, also a core dependency, decodes on request
-(``backend="pyav"``) and encodes every MP4 as H.264, which browsers play. Where PyAV is
+(``decoder="pyav"``) and encodes every MP4 as H.264, which browsers play. Where PyAV is
 missing or its FFmpeg has no H.264 encoder, MP4 files are written by OpenCV
 (``mp4v``, which browsers do not play), with one :class:`VideoCodecWarning`.
 """
@@ -208,7 +208,7 @@ class _PyAVDecoder(_Decoder):
         try:
             import av
         except ImportError:
-            raise InputError("backend 'pyav' needs PyAV, which is not installed: pip install av") from None
+            raise InputError("decoder 'pyav' needs PyAV, which is not installed: pip install av") from None
         self.name = name
         self._av = av
         try:
@@ -333,10 +333,10 @@ def _image_files(source: str) -> tuple[list[str], str]:
     return sorted(images, key=_natural_key), source
 
 
-def _open_decoder(source, backend: str) -> tuple[_Decoder, str]:
+def _open_decoder(source, decoder: str) -> tuple[_Decoder, str]:
     """Return (decoder, kind) with kind in {'video', 'images', 'camera'}."""
-    if backend not in ("opencv", "pyav"):
-        raise InputValueError(f"unknown backend {backend!r}; choose 'opencv' or 'pyav'")
+    if decoder not in ("opencv", "pyav"):
+        raise InputValueError(f"unknown decoder {decoder!r}; choose 'opencv' or 'pyav'")
     if is_camera(source):
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
@@ -354,7 +354,7 @@ def _open_decoder(source, backend: str) -> tuple[_Decoder, str]:
     if os.path.isfile(source):
         if Path(source).suffix.lower() in IMAGE_EXTENSIONS:
             return _ImageDecoder([source], source), "images"
-        if backend == "pyav":
+        if decoder == "pyav":
             return _PyAVDecoder(source, source), "video"
         return _OpenCVDecoder(source, source), "video"
     if any(ch in source for ch in "*?["):
@@ -554,7 +554,7 @@ class FrameSource:
 
 
 def open_source(source, *, fps=None, start: int = 0, end: int | None = None, resize=None, scale=None,
-                keep_original: bool = False, backend: str = "opencv") -> FrameSource:
+                keep_original: bool = False, decoder: str = "opencv") -> FrameSource:
     """Open a video file, a folder of images, a glob pattern or a camera for streaming.
 
     Parameters
@@ -574,7 +574,7 @@ def open_source(source, *, fps=None, start: int = 0, end: int | None = None, res
         Or resize by this factor (e.g. 0.5). Not together with ``resize``.
     keep_original : bool
         Also yield the frame at the input size: items ``(index, frame, original)``.
-    backend : {'opencv', 'pyav'}
+    decoder : {'opencv', 'pyav'}
         Video decoder.
 
     Returns
@@ -598,12 +598,12 @@ def open_source(source, *, fps=None, start: int = 0, end: int | None = None, res
         resize = parse_resize(resize)
     if fps is not None:
         fps = check_fps(fps)
-    decoder, kind = _open_decoder(source, backend)
-    return FrameSource(decoder, kind, fps=fps, start=start, end=end, resize=resize, scale=scale,
+    reader, kind = _open_decoder(source, decoder)
+    return FrameSource(reader, kind, fps=fps, start=start, end=end, resize=resize, scale=scale,
                        keep_original=keep_original)
 
 
-def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
+def read_video(path, *, decoder: str = "opencv") -> tuple[np.ndarray, float]:
     """Decode a whole video into memory.
 
     Returns
@@ -626,7 +626,7 @@ def read_video(path, *, backend: str = "opencv") -> tuple[np.ndarray, float]:
     """
     if is_camera(path):
         raise InputValueError("read_video reads files; use open_source for a camera")
-    src = open_source(path, backend=backend)
+    src = open_source(path, decoder=decoder)
     frames = [f for _, f in src]
     if src.truncated:
         warnings.warn(src.message, TruncatedInputWarning, stacklevel=2)
@@ -666,7 +666,7 @@ class VideoWriter:
     ``path`` when :meth:`close` succeeds; :meth:`abort` deletes it instead.
     """
 
-    def __init__(self, path, fps: float, size: tuple[int, int], *, backend: str | None = None,
+    def __init__(self, path, fps: float, size: tuple[int, int], *, encoder: str | None = None,
                  quality: int = 23):
         self.path = Path(path)
         self.fps = check_fps(fps)
@@ -677,18 +677,18 @@ class VideoWriter:
         check_video_output(self.path)
         suffix = self.path.suffix.lower()
         self.codec = "mjpg" if suffix == ".avi" else "h264"
-        if backend is None:
-            backend = "opencv"
+        if encoder is None:
+            encoder = "opencv"
             if self.codec == "h264":
                 why = _h264_unavailable()
                 if why is None:
-                    backend = "pyav"
+                    encoder = "pyav"
                 else:
                     warnings.warn(f"{self.path.name}: written as MP4 'mp4v' by OpenCV, which browsers do not "
                                   f"play, not H.264: {why}", VideoCodecWarning, stacklevel=3)
-        self.backend = backend
-        if backend not in ("pyav", "opencv"):
-            raise InputValueError(f"unknown backend {backend!r}; choose 'opencv' or 'pyav'")
+        self.encoder = encoder
+        if encoder not in ("pyav", "opencv"):
+            raise InputValueError(f"unknown encoder {encoder!r}; choose 'opencv' or 'pyav'")
         self.tmp = temporary_path(self.path)
         self.n_frames = 0
         self._closed = False
@@ -700,7 +700,7 @@ class VideoWriter:
 
     def _open(self, quality) -> None:
         w, h = self.size
-        if self.backend == "pyav":
+        if self.encoder == "pyav":
             import av
 
             self.enc_size = (w + w % 2, h + h % 2)
@@ -735,7 +735,7 @@ class VideoWriter:
         ew, eh = self.enc_size
         if (ew, eh) != (w, h):
             rgb = np.pad(rgb, ((0, eh - h), (0, ew - w), (0, 0)))
-        if self.backend == "pyav":
+        if self.encoder == "pyav":
             import av
 
             vf = av.VideoFrame.from_ndarray(np.ascontiguousarray(rgb), format="rgb24")
@@ -751,7 +751,7 @@ class VideoWriter:
             return self.path
         self._closed = True
         try:
-            if self.backend == "pyav":
+            if self.encoder == "pyav":
                 for packet in self._stream.encode():
                     self._container.mux(packet)
                 self._container.close()
@@ -772,7 +772,7 @@ class VideoWriter:
             return
         self._closed = True
         try:
-            if self.backend == "pyav":
+            if self.encoder == "pyav":
                 self._container.close()
             else:
                 self._writer.release()
@@ -797,7 +797,7 @@ class VideoWriter:
 
 
 def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int, int] | None = None, *,
-                backend: str | None = None, quality: int = 23) -> Path:
+                encoder: str | None = None, quality: int = 23) -> Path:
     """Write ``frames`` (grey or RGB uint8) to ``path`` atomically; see :class:`VideoWriter`
     (``quality``: the H.264 CRF, lower is closer to lossless).
 
@@ -812,7 +812,7 @@ def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int,
             raise InputValueError(f"{path}: no frames to write") from None
         size = (first.shape[1], first.shape[0])
         it = itertools.chain([first], it)
-    with VideoWriter(path, fps, size, backend=backend, quality=quality) as writer:
+    with VideoWriter(path, fps, size, encoder=encoder, quality=quality) as writer:
         for frame in it:
             writer.write(frame)
     return writer.path
