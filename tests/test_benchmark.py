@@ -162,9 +162,9 @@ def built(monkeypatch):
     seen = []
     real = runner_module._build_models
 
-    def spy(models, fps, params, hfov_deg=None, repeat_threshold=None, target_params=None):
-        seen.append(target_params)
-        return real(models, fps, params, hfov_deg, repeat_threshold, target_params)
+    def spy(models, fps, options):
+        seen.append(options.target_params)
+        return real(models, fps, options)
 
     monkeypatch.setattr(runner_module, "_build_models", spy)
     return seen
@@ -191,5 +191,5 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     done = json.loads(next((tmp_path / "b").rglob("done.json")).read_text())
     assert done["run_options"] == {"target_params": {"horizon_s": 3.0}}
     # and mlplc2.run makes them the models' TargetParams
-    model = runner_module._build_models(["mlplc2"], 30.0, None, target_params=built[0])[0]
+    model = runner_module._build_models(["mlplc2"], 30.0, runner_module.RunOptions(target_params=built[0]))[0]
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)

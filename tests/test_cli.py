@@ -502,12 +502,12 @@ def test_bench_rejects_more_threads_than_the_machine_allows(capsys):
     assert f"got {n}" in _one_error_line(capsys.readouterr().err)
 
 
-def test_run_backend_option_reaches_the_decoder(data, tmp_path, monkeypatch, capsys):
-    """--backend pyav decodes with PyAV: without PyAV importable it is a one-line error (it used
+def test_run_decoder_option_reaches_the_decoder(data, tmp_path, monkeypatch, capsys):
+    """--decoder pyav (or its old name --backend) decodes with PyAV: without PyAV importable it is a one-line error (it used
     to be ignored, and the run decoded with OpenCV)."""
     pytest.importorskip("av")
     out = tmp_path / "o"
-    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "6", "--backend", "pyav", "-q"]) == 0
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "6", "--decoder", "pyav", "-q"]) == 0
     assert json.loads((out / "fields.json").read_text())["n_frames"] == 6
     monkeypatch.setitem(sys.modules, "av", None)   # import av now fails
     assert main(["run", str(data["avi"]), "--out", str(tmp_path / "p"), "--backend", "pyav", "-q"]) == 2

@@ -51,7 +51,7 @@ def test_read_video_shape_fps_rgb(videos, kind):
 def test_read_video_pyav_backend_matches_opencv(videos):
     paths, _ = videos
     a, fa = read_video(paths["avi"])
-    b, fb = read_video(paths["avi"], backend="pyav")
+    b, fb = read_video(paths["avi"], decoder="pyav")
     assert a.shape == b.shape and fa == fb
     assert np.abs(a.astype(int) - b).mean() < 3
 
@@ -230,8 +230,8 @@ def test_write_odd_size_mp4_is_padded(tmp_path):
 
 def test_write_avi_and_opencv_mp4_and_grey(tmp_path):
     grey = [np.full((H, W), 128, np.uint8)] * 6
-    for name, backend in (("g.avi", None), ("g.mp4", "opencv")):
-        p = write_video(tmp_path / name, grey, 30.0, (W, H), backend=backend)
+    for name, encoder in (("g.avi", None), ("g.mp4", "opencv")):
+        p = write_video(tmp_path / name, grey, 30.0, (W, H), encoder=encoder)
         arr, fps = read_video(p)
         assert arr.shape == (6, H, W, 3) and fps == pytest.approx(30.0)
         assert abs(float(arr.mean()) - 128) < 4

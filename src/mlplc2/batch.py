@@ -19,15 +19,15 @@ retried by the next run. Ctrl-C raises :class:`BatchInterrupted` after writing
 Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
 cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
 after the other in this process without it.
+
+The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.sweep`.
 """
 
 from __future__ import annotations
 
 import contextlib
 import dataclasses
-import functools
 import hashlib
-import itertools
 import json
 import logging
 import math
@@ -45,6 +45,8 @@ from urllib.parse import urlsplit
 from ._files import atomic_path, write_csv, write_json
 from ._signals import interrupts
 from ._validation import InputError, InputTypeError, InputValueError, check_int
+from .sweep import (model_overrides, model_params, param_label, param_set_id, param_sets, parse_sweep,
+                    restrict)
 
 __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_params", "parse_sweep",
            "start_local_cluster", "param_label", "RESULT_COLUMNS", "DONE_MARKER"]
@@ -57,249 +59,6 @@ DONE_MARKER = "done.json"
 _DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"
 
 
-# ---------------------------------------------------------------------------
-# inputs and parameter sets
-# ---------------------------------------------------------------------------
-def _parse_value(text: str):
-    text = text.strip()
-    try:
-        return json.loads(text)
-    except json.JSONDecodeError:
-        return text
-
-
-def parse_sweep(specs) -> dict[str, list]:
-    """``["t_a=8,10,12", "beta=1.5"]`` (or a dict name -> values) -> ``{name: [values]}``.
-
-    Values are parsed as JSON scalars (``10`` int, ``1.5`` float, ``true``,
-    else a string). ``MODEL.NAME=...`` sweeps a parameter of one model only
-    (e.g. ``lgmd2.some_param``)."""
-    if specs is None:
-        return {}
-    if isinstance(specs, Mapping):
-        return {str(k): list(v) if isinstance(v, (list, tuple)) else [v] for k, v in specs.items()}
-    if isinstance(specs, str):
-        specs = [specs]
-    sweep: dict[str, list] = {}
-    for spec in specs:
-        name, sep, values = str(spec).partition("=")
-        name = name.strip()
-        if not sep or not name or not values.strip():
-            raise InputValueError(f"--sweep {spec!r}: expected PARAM=V1,V2,...")
-        vals = [_parse_value(v) for v in values.split(",") if v.strip()]
-        if name in sweep:
-            raise InputValueError(f"--sweep: parameter {name!r} given twice")
-        sweep[name] = vals
-    return sweep
-
-
-@functools.lru_cache(maxsize=None)
-def _param_class(model: str):
-    from .models.base import get_model
-
-    return type(get_model(model)(fps=30.0).params)
-
-
-def _lplc2_family(model: str) -> bool:
-    """Whether ``model`` takes :class:`~mlplc2.params.Params` (the LPLC2 family): the flat overrides apply to it."""
-    from .params import Params
-
-    return _param_class(model) is Params
-
-
-def _model_overrides(pset: Mapping, model: str) -> dict:
-    """The parameter overrides of ``pset`` that apply to ``model``: flat keys
-    (``Params`` fields) for the LPLC2 family, plus a ``{model: {...}}`` section."""
-    flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
-    section = pset.get(model) if isinstance(pset.get(model), Mapping) else {}
-    return {**(flat if _lplc2_family(model) else {}), **section}
-
-
-def model_params(pset: Mapping, model: str):
-    """The parameter object of ``model`` for parameter set ``pset`` (one of :func:`param_sets`),
-    or None where ``pset`` changes none of its parameters (the model's defaults)."""
-    over = _model_overrides(pset, model)
-    if not over:
-        return None
-    cls = _param_class(model)
-    try:
-        return cls().replace(**over)
-    except (TypeError, ValueError) as exc:
-        raise InputValueError(f"parameters for {model}: {exc}") from None
-
-
-def _is_number(value) -> bool:
-    return isinstance(value, (int, float)) and not isinstance(value, bool)
-
-
-def _check_types(cls, over: Mapping, prefix: str = "") -> None:
-    """A one-line error naming the parameter for an override of the wrong type
-    (``t_a="abc"``), before the parameter class's own range checks."""
-    defaults = {f.name: f.default for f in dataclasses.fields(cls)}
-    for name, value in over.items():
-        default = defaults.get(name, dataclasses.MISSING)
-        if isinstance(default, bool):
-            ok, want = isinstance(value, bool), "true or false"
-        elif _is_number(default):
-            ok, want = _is_number(value), "a number"
-        elif isinstance(default, str):
-            ok, want = isinstance(value, str), "a string"
-        elif isinstance(default, tuple):
-            ok = isinstance(value, (list, tuple)) and len(value) == len(default) and all(map(_is_number, value))
-            want = f"a list of {len(default)} numbers"
-        else:  # unknown names are reported by replace(); other types are left to the class
-            continue
-        if not ok:
-            raise InputTypeError(f"parameters: {prefix}{name} must be {want}, got {value!r}")
-
-
-def _is_default(value, default) -> bool:
-    if isinstance(default, tuple) and isinstance(value, (list, tuple)):
-        value, default = list(value), list(default)
-    return isinstance(value, bool) == isinstance(default, bool) and value == default
-
-
-def _drop_defaults(pset: Mapping) -> dict:
-    """``pset`` without the overrides equal to the default value (``t_a=10`` is no
-    override), so that a parameter set of default values has the id ``default``."""
-    from .params import Params
-
-    flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
-    base = Params().to_dict()
-    out = {k: v for k, v in flat.items() if not _is_default(v, base[k])}
-    for model, section in pset.items():
-        if not isinstance(section, Mapping):
-            continue
-        own = _param_class(model)().to_dict()
-        if _lplc2_family(model):  # its section overrides the flat values for it
-            own.update(flat)
-        keep = {k: v for k, v in section.items() if not _is_default(v, own[k])}
-        if keep:
-            out[model] = keep
-    return out
-
-
-def _restrict(pset: Mapping, model: str) -> dict:
-    """The part of parameter set ``pset`` that ``model`` uses (flat Params fields
-    for the LPLC2 family, plus its own section)."""
-    own = {k: v for k, v in pset.items() if not isinstance(v, Mapping)} if _lplc2_family(model) else {}
-    if isinstance(pset.get(model), Mapping) and pset[model]:
-        own[model] = dict(pset[model])
-    return own
-
-
-def param_set_id(pset: Mapping) -> str:
-    """Stable id: ``default`` for no overrides, else ``p`` + 8 hex digits of a hash of the sorted JSON."""
-    if not pset:
-        return "default"
-    text = json.dumps(pset, sort_keys=True, separators=(",", ":"))
-    return "p" + hashlib.sha1(text.encode()).hexdigest()[:8]
-
-
-def param_label(model: str, overrides: Mapping | None = None, *, shared: Mapping | None = None,
-                width: int | None = None, tag: str = "") -> str:
-    """What people read for ``model`` run with parameter ``overrides``: ``mlplc2`` without
-    overrides, else ``mlplc2[r_af=30,t_a=8]`` (names sorted; values as JSON, text bare; a
-    section ``{"lgmd2": {...}}`` as ``lgmd2.NAME=...``). Unlike the id of :func:`param_set_id`
-    (the folder names), it names the parameters.
-
-    For tables: the overrides in ``shared`` (common to every label shown next to this one) are
-    left out, as a leading ``…``; with ``width``, a label still longer is cut at a parameter
-    boundary, ``…`` for the rest, and ends with `` tag`` (a parameter set id keeps cut labels apart).
-    """
-    def items(over) -> list[str]:
-        out = []
-        for name, value in sorted((over or {}).items()):
-            pairs = sorted(value.items()) if isinstance(value, Mapping) else [(None, value)]
-            for sub, v in pairs:
-                text = v if isinstance(v, str) else json.dumps(v, separators=(",", ":"))
-                out.append(f"{name if sub is None else f'{name}.{sub}'}={text}")
-        return out
-
-    left_out = set(items(shared))
-    kept = [i for i in items(overrides) if i not in left_out]
-    if left_out and len(kept) < len(items(overrides)):
-        kept.insert(0, "…")
-    label = f"{model}[{','.join(kept)}]" if kept else model
-    if width is None or len(label) <= width:
-        return label
-    cut: list[str] = []
-    for item in kept:
-        if cut and len(model) + sum(len(c) + 1 for c in cut) + len(item) + 4 > width:
-            break
-        cut.append(item)
-    return f"{model}[{','.join(cut)},…]" + (f" {tag}" if tag else "")
-
-
-def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> list[dict]:
-    """Parameter sets: the overrides in ``params`` (a dict, or a JSON file of
-    ``Params`` fields, with optional ``{"lgmd2": {...}}`` sections per model)
-    combined with every point of the Cartesian product of ``sweep``.
-
-    Every override is checked (name, type, value) against its parameter class,
-    whether or not its model is in ``models``; each set is also checked by
-    building the parameters of every model in ``models``. Overrides equal to
-    the default value are dropped (a set of defaults is ``{}``, id ``default``).
-    """
-    from .models.base import available_models
-    from .params import Params
-
-    base: dict = {}
-    if params is not None:
-        if isinstance(params, (str, Path)):
-            path = Path(params)
-            if not path.is_file():
-                raise InputValueError(f"{path}: parameter file not found")
-            try:
-                base = json.loads(path.read_text(encoding="utf-8"))
-            except json.JSONDecodeError as exc:
-                raise InputValueError(f"{path}: not valid JSON ({exc})") from None
-        elif hasattr(params, "to_dict"):
-            default = Params().to_dict()
-            base = {k: v for k, v in params.to_dict().items() if default.get(k) != v}
-        else:
-            base = dict(params)
-        if not isinstance(base, Mapping):
-            raise InputValueError("--params: expected a JSON object {name: value}")
-        base = {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in base.items()}
-    sweep = parse_sweep(sweep)
-    names = list(sweep)
-    sets = []
-    for combo in itertools.product(*(sweep[n] for n in names)) if names else [()]:
-        pset = json.loads(json.dumps(base))
-        for name, value in zip(names, combo):
-            model, dot, pname = name.partition(".")
-            if dot:
-                pset.setdefault(model, {})[pname] = value
-            else:
-                pset[name] = value
-        sets.append(pset)
-    pnames = set(Params().to_dict())
-    for pset in sets:
-        for k, v in pset.items():
-            if isinstance(v, Mapping):
-                if k not in available_models():
-                    raise InputValueError(f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
-            elif k not in pnames:
-                raise InputValueError(f"parameters: unknown parameter {k!r} (Params fields: see help(mlplc2.Params); "
-                                      f"other models' parameters go in a section {{\"lgmd2\": {{...}}}} or "
-                                      f"--sweep lgmd2.NAME=...)")
-        flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
-        _check_types(Params, flat)
-        if flat:  # Params fields are checked even when no LPLC2-family model runs
-            try:
-                Params().replace(**flat)
-            except (TypeError, ValueError) as exc:
-                raise InputValueError(f"parameters: {exc}") from None
-        sections = [k for k, v in pset.items() if isinstance(v, Mapping)]
-        for m in sections:
-            _check_types(_param_class(m), pset[m], f"{m}.")
-        for m in dict.fromkeys([*models, *sections]):  # every model given a section, run or not
-            model_params(pset, m)
-    unique = {}
-    for pset in map(_drop_defaults, sets):  # t_a=10,10.0 is one set
-        unique.setdefault(param_set_id(pset), pset)
-    return list(unique.values())
 
 
 # ---------------------------------------------------------------------------
@@ -652,6 +411,20 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
     from .models.base import resolve_names
 
     names = resolve_names(models)
+    workers, sequential = _check_cluster_options(scheduler, workers, client, parquet)
+    from .io import expand_inputs
+
+    videos = expand_inputs(inputs)
+    sets = param_sets(params, sweep, names)
+    ids = {param_set_id(s): s for s in sets}
+    plan = _plan(videos, ids, names, Path(out), dict(run_options or {}), plot)
+    state = _BatchState(plan, *_saved_rows(plan.tasks, force, plot))
+    return _run_jobs(state, scheduler, workers, client, sequential, progress, parquet)
+
+
+def _check_cluster_options(scheduler, workers, client, parquet: bool) -> tuple[int | None, bool]:
+    """Check the cluster options (and that Dask, pandas and pyarrow are there when needed):
+    ``workers`` checked, and whether the tasks run here one after the other, without Dask."""
     if workers is not None:
         workers = check_int(workers, "workers", minimum=0)
     if client is not None and (scheduler is not None or workers is not None):
@@ -673,35 +446,49 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
             import pyarrow  # noqa: F401
         except ImportError:
             raise InputValueError("parquet=True needs pandas and pyarrow: pip install pandas pyarrow") from None
-    from .io import expand_inputs
+    return workers, sequential
 
-    videos = expand_inputs(inputs)
-    sets = param_sets(params, sweep, names)
-    ids = {param_set_id(s): s for s in sets}
-    out = Path(out)
+
+@dataclass
+class _Plan:
+    """The tasks of a batch, and per row of ``results.csv`` its (task index, parameter set id)."""
+
+    videos: list[str]
+    ids: dict[str, dict]
+    out: Path
+    tasks: list[dict]
+    slots: list[tuple[int, str]]
+
+
+def _plan(videos: list[str], ids: dict[str, dict], names: list[str], out: Path, run_options: dict,
+          plot: bool) -> _Plan:
+    """One row per (video, parameter set, model); one task per distinct (video, model, the
+    parameters that apply to that model): an LGMD model is not rerun for each value of a
+    swept Params field it does not use."""
     keys = _video_keys(videos)
-    run_options = dict(run_options or {})
-    # One row per (video, parameter set, model); one task per distinct (video, model, the
-    # parameters that apply to that model): an LGMD model is not rerun for each value of a
-    # swept Params field it does not use.
     tasks: list[dict] = []
     slots: list[tuple[int, str]] = []  # per row: (task index, parameter set id)
     by_out: dict[str, int] = {}
     for v in videos:
         for pid, pset in ids.items():
             for m in names:
-                own = _restrict(pset, m)
+                own = restrict(pset, m)
                 rel = Path(keys[v]) / param_set_id(own) / m
                 key = rel.as_posix()
                 if key not in by_out:
                     by_out[key] = len(tasks)
-                    over = _model_overrides(own, m)
+                    over = model_overrides(own, m)
                     tasks.append({"video": v, "model": m, "label": param_label(m, over),
                                   "param_set": param_set_id(own), "pset": own, "overrides": over,
                                   "out": str((out / rel).resolve()), "rel_out": key, "plot": plot,
                                   "run_options": _model_run_options(run_options, m)})
                 slots.append((by_out[key], pid))
+    return _Plan(videos, ids, out, tasks, slots)
 
+
+def _saved_rows(tasks: list[dict], force: bool, plot: bool) -> tuple[dict[int, dict], list[int], list[int]]:
+    """The rows of the tasks already done (``done.json``), the tasks to run, and the finished
+    tasks that only lack ``responses.png``."""
     rows: dict[int, dict] = {}
     todo = []    # tasks to run
     replot = []  # finished tasks that only lack responses.png
@@ -713,39 +500,62 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         rows[i] = saved
         if plot and saved.get("n_frames") and not (Path(t["out"]) / "responses.png").is_file():
             replot.append(i)
-    jobs = [(i, tasks[i]) for i in todo] + [(i, {**tasks[i], "replot": True}) for i in replot]
-    skipped = len(tasks) - len(todo)
-    t0 = time.perf_counter()
+    return rows, todo, replot
+
+
+@dataclass
+class _BatchState:
+    """A batch as it runs: the rows so far and what is left."""
+
+    plan: _Plan
+    rows: dict[int, dict]
+    todo: list[int]
+    replot: list[int]
+    used: str = "sync"
+    finished: set[int] = dataclasses.field(default_factory=set)  # jobs done in this call
+    t0: float = 0.0
+
+    def jobs(self) -> list[tuple[int, dict]]:
+        tasks = self.plan.tasks
+        return [(i, tasks[i]) for i in self.todo] + [(i, {**tasks[i], "replot": True}) for i in self.replot]
+
+    def result(self) -> BatchResult:
+        """The result of the tasks done (read back, or finished now)."""
+        plan, rows, tasks = self.plan, self.rows, self.plan.tasks
+        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in plan.slots if i in rows]
+        ran = [i for i in self.todo if i in self.finished]
+        return BatchResult(rows=ordered, table=plan.out / "results.csv", out=plan.out, videos=plan.videos,
+                           param_sets=plan.ids, ran=len(ran), skipped=len(tasks) - len(self.todo),
+                           failed=sum(r["status"] == "error" for r in ordered),
+                           seconds=time.perf_counter() - self.t0, scheduler=self.used, tasks=len(tasks),
+                           plotted=sum(i in self.finished for i in self.replot),
+                           failed_runs=sum(rows[i]["status"] == "error" for i in ran))
+
+
+def _run_jobs(state: _BatchState, scheduler, workers, client, sequential: bool, progress: bool,
+              parquet: bool) -> BatchResult:
+    """Run the jobs (here or on the cluster), with a progress bar; write ``results.csv``."""
+    jobs = state.jobs()
+    tasks, out, rows = state.plan.tasks, state.plan.out, state.rows
+    state.t0 = time.perf_counter()
     from tqdm import tqdm
 
     bar = tqdm(total=len(tasks), initial=len(tasks) - len(jobs), disable=not progress, unit="task",
                file=sys.stderr, desc="batch", dynamic_ncols=True)
-    used = "sync"
-    finished: set[int] = set()  # jobs done in this call
     prepared = False
-
-    def result() -> BatchResult:  # of the tasks done (read back, or finished now)
-        ordered = [{**rows[i], "label": tasks[i]["label"], "param_set": pid} for i, pid in slots if i in rows]
-        ran = [i for i in todo if i in finished]
-        return BatchResult(rows=ordered, table=out / "results.csv", out=out, videos=videos, param_sets=ids,
-                           ran=len(ran), skipped=skipped, failed=sum(r["status"] == "error" for r in ordered),
-                           seconds=time.perf_counter() - t0, scheduler=used, tasks=len(tasks),
-                           plotted=sum(i in finished for i in replot),
-                           failed_runs=sum(rows[i]["status"] == "error" for i in ran))
-
     try:
         with contextlib.nullcontext((None, "sync")) if sequential or not jobs else \
-                _client(scheduler, workers, client) as (c, used):
+                _client(scheduler, workers, client) as (c, state.used):
             out.mkdir(parents=True, exist_ok=True)  # once the cluster is up: nothing is written before
-            for pid, pset in ids.items():  # what each parameter set id stands for
+            for pid, pset in state.plan.ids.items():  # what each parameter set id stands for
                 write_json(out / f"param_set_{pid}.json", pset)
             prepared = True
             for i, row in _completed(jobs, c):
                 rows[i] = row
-                finished.add(i)
+                state.finished.add(i)
                 bar.update()
     except KeyboardInterrupt:
-        res = result()
+        res = state.result()
         if prepared:
             _write_table(res.rows, out, parquet)
             message = f"interrupted with {len(rows)} of {len(tasks)} task(s) done; their rows are in {res.table}"
@@ -756,6 +566,6 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         raise BatchInterrupted(message, res) from None
     finally:
         bar.close()
-    res = result()
+    res = state.result()
     _write_table(res.rows, out, parquet)
     return res

@@ -25,6 +25,10 @@ steps every model on each frame, writing as it goes:
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
+
+Its options are one :class:`RunOptions` (keywords of :func:`run` build it); the models are
+built from them. What a run gives, :class:`~mlplc2.run_result.RunResult` and the columns of
+its files, is in :mod:`mlplc2.run_result` (re-exported here).
 """
 
 from __future__ import annotations
@@ -37,7 +41,7 @@ import sys
 import time
 import warnings
 from collections.abc import Iterable, Mapping, Sequence
-from dataclasses import dataclass, field
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
@@ -51,123 +55,12 @@ from .plots import DRAW_FIELDS
 from .targets import TargetParams, check_hfov
 from .evaluation.match import match_fields
 from .evaluation.record import Recorder, response_rows
+from .run_result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
-__all__ = ["run", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
+__all__ = ["run", "RunOptions", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir", "demo", "DemoResult"]
 
 log = logging.getLogger(__name__)
-
-#: Columns of ``responses.csv``, in order.
-COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
-#: Columns of ``targets.csv``, in order (``docs/targets.md``): positions and sizes in input pixels,
-#: the bearing in degrees (empty without a field of view).
-TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
-                  "azimuth_deg", "elevation_deg")
-
-
-class RunInterrupted(KeyboardInterrupt):
-    """Ctrl-C during :func:`run`; the outputs for the frames done were written.
-
-    ``.result`` is the :class:`RunResult` of the frames processed.
-    """
-
-    def __init__(self, result: "RunResult"):
-        super().__init__(f"interrupted after {result.n_frames} frames")
-        self.result = result
-
-
-@dataclass
-class RunResult:
-    """What :func:`run` computed.
-
-    Attributes
-    ----------
-    rows : list of dict
-        The rows of ``responses.csv`` (keys :data:`COLUMNS`; ``None`` where the
-        CSV cell is empty; ``collision`` is 0 or 1). Empty when the run was made
-        with ``keep_rows=False`` (the rows are then only in the CSV).
-    alarms : dict
-        Per model name, the frames with the collision flag set: ``{"count": n,
-        "first": frame or None}`` (kept whatever ``keep_rows`` says).
-    fields : dict
-        Per model name, the list of field summaries written to ``fields.json``.
-    fps : float
-        Frame rate used (``time_s = frame / fps``).
-    n_frames : int
-        Frames processed.
-    truncated : bool
-        The input stopped decoding early (see ``message``).
-    interrupted : bool
-        The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
-    seconds : float
-        Wall time of the frame loop (decoding, models, writing the per-frame outputs),
-        in seconds; ``n_frames / seconds`` is the processing rate.
-    files : dict
-        Output name -> path of the files written (empty with ``out=False``).
-    """
-
-    source: str
-    models: list[str]
-    fps: float
-    size: tuple[int, int]
-    model_size: tuple[int, int]
-    start: int = 0
-    n_frames: int = 0
-    rows: list[dict] = field(default_factory=list)
-    fields: dict[str, list[dict]] = field(default_factory=dict)
-    truncated: bool = False
-    interrupted: bool = False
-    message: str | None = None
-    out: Path | None = None
-    files: dict[str, Path] = field(default_factory=dict)
-    targets: list[dict] = field(default_factory=list)
-    """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
-    alarms: dict[str, dict] = field(default_factory=dict)
-    hfov_deg: float | None = None
-    seconds: float = 0.0
-    target_summaries: dict[str, list[dict]] = field(default_factory=dict)
-    """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
-    repeated: dict[str, int] = field(default_factory=dict)
-    """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
-    duplicated: bool = False
-    """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
-    the copies from the start (:data:`PRESCAN_FRAMES`)."""
-
-    def to_dataframe(self):
-        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
-        run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("RunResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
-        if not self.rows and self.n_frames:
-            path = self.files.get("responses.csv")
-            if path is None or not Path(path).is_file():
-                raise InputValueError("this run kept no rows (keep_rows=False) and wrote no responses.csv")
-            df = pd.read_csv(path)
-        else:
-            df = pd.DataFrame(self.rows, columns=list(COLUMNS))
-        return df.astype({"field_id": "Int64", "x": "float64", "y": "float64", "collision": bool})
-
-    def summary(self) -> dict[str, Any]:
-        """The content of ``fields.json``."""
-        return {
-            "video": self.source,
-            "fps": self.fps,
-            "size": list(self.size),
-            "model_size": list(self.model_size),
-            "start": self.start,
-            "n_frames": self.n_frames,
-            "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted),
-            "truncated": self.truncated,
-            "interrupted": self.interrupted,
-            "hfov_deg": self.hfov_deg,
-            "models": self.fields,
-            "targets": self.target_summaries,
-            "duplicated": self.duplicated,
-            "frames_held": self.repeated,
-        }
 
 
 def default_out_dir(source) -> Path:
@@ -187,12 +80,123 @@ def default_out_dir(source) -> Path:
     return p.parent / f"{p.stem}_mlplc2"
 
 
-def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold="model default",
-                  target_params=None) -> list[Model]:
-    target_params = TargetParams.coerce(target_params, "target_params")
+@dataclass(frozen=True)
+class RunOptions:
+    """How :func:`run` reads the input, builds the models and writes the outputs.
+
+    ``mlplc2.run(source, models, fps=..., video=...)`` builds one from its keywords;
+    ``run(source, models, options=RunOptions(...), video=True)`` takes one and changes the
+    fields given as keywords. Nothing is checked here: :func:`run` checks the values in the
+    order it uses them.
+
+    Attributes
+    ----------
+    fps : float, optional
+        Frame rate to use instead of the container's (images: 30).
+    resize : (W, H) or 'WxH', optional
+        Frames are resized before the models see them; field coordinates in
+        the outputs are mapped back to input pixels (``x * W_in / W``).
+    scale : float, optional
+        Or resize by a factor.
+    start, end : int
+        Process source frames ``start <= frame < end``.
+    decoder : {'opencv', 'pyav'}
+        Video decoder (:func:`mlplc2.io.open_source`).
+    params : Params or dict, optional
+        Passed as ``params=`` to every model, or a dict ``{name: params}``.
+    hfov_deg : float, optional
+        Horizontal field of view of the camera in degrees, given to the models
+        with attention fields: bearings in ``targets.csv`` / ``fields.json`` are
+        then degrees from the optical axis (else input pixels from the image
+        centre); see ``docs/targets.md``.
+    repeat_threshold : float, "auto" or None, optional
+        Treat a frame in which no pixel differs from the last processed one by more than
+        this many grey levels as a duplicate: the models hold their last output for it
+        (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
+        paper's clips). ``"auto"`` (the models' default): 16 while the video looks duplicated;
+        None: every frame steps the models. Not given (``"model default"``): the models' own setting.
+    target_params : TargetParams or dict, optional
+        Settings of the targets (time to contact, course, warning: ``horizon_s``,
+        ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
+        targets; a dict gives the fields to change from the defaults.
+    video : bool
+        Also write ``annotated.mp4``: the input frames with the fields of the
+        first LPLC2-family model drawn, and every model's response in a header
+        (:func:`mlplc2.plots.annotate_frame`).
+    draw_fields : {'auto', 'none', 'responding', 'all'}
+        Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
+        none for a model with targets, else those that respond (response > 0) or are in
+        alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
+    plot : bool
+        Write ``responses.png``.
+    keep_rows : bool
+        Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
+        ``.targets`` (default). Set False for long or live runs: memory then stays
+        flat whatever the length (the rows are in the CSV files, and the summaries of fields
+        that have died wait in a temporary file until ``fields.json`` is written; the CLI does
+        this). ``RunResult.to_dataframe()`` then reads ``responses.csv``.
+    quiet : bool
+        No progress bar.
+    progress : bool
+        Show a tqdm progress bar on stderr (unless ``quiet``).
+    """
+
+    fps: float | None = None
+    resize: Any = None
+    scale: float | None = None
+    start: int = 0
+    end: int | None = None
+    decoder: str = "opencv"
+    params: Any = None
+    hfov_deg: float | None = None
+    repeat_threshold: float | str | None = "model default"
+    target_params: Any = None
+    video: bool = False
+    draw_fields: str = "auto"
+    plot: bool = True
+    keep_rows: bool = True
+    quiet: bool = False
+    progress: bool = True
+
+    def source_options(self) -> dict[str, Any]:
+        """The keywords of :func:`mlplc2.io.open_source` that choose the frames."""
+        return {"fps": self.fps, "start": self.start, "end": self.end, "resize": self.resize,
+                "scale": self.scale, "decoder": self.decoder}
+
+
+_OPTION_NAMES = tuple(f.name for f in fields(RunOptions))
+
+
+def _run_options(options: RunOptions | None, keywords: Mapping[str, Any]) -> RunOptions:
+    """``options`` with the fields given as keywords changed (no ``options``: the defaults)."""
+    unknown = [k for k in keywords if k not in _OPTION_NAMES]
+    if unknown:
+        raise TypeError(f"run() got an unexpected keyword argument {unknown[0]!r}")
+    if options is None:
+        return RunOptions(**keywords)
+    if not isinstance(options, RunOptions):
+        raise InputTypeError(f"options must be a RunOptions, got {type(options).__name__}")
+    return replace(options, **keywords)
+
+
+def _model_list(models) -> list:
+    """Model instances as given, registry names and groups resolved to names."""
     if isinstance(models, (str, Model)):
         models = [models]
-    names = [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
+    if not isinstance(models, Iterable):
+        raise InputTypeError(f"models must be a model, a model name or a list of them, got {type(models).__name__}")
+    return [n for m in models for n in ([m] if isinstance(m, Model) else resolve_names(m))]
+
+
+def _names(models: list) -> list[str]:
+    return [m.name if isinstance(m, Model) else str(m).strip().lower() for m in models]
+
+
+def _model_options(options: RunOptions, names: list[str]) -> RunOptions:
+    """``options`` with ``target_params`` coerced and a dict of ``params`` keyed by model name
+    (lower case); a key that names no model of the run is an error."""
+    target_params = TargetParams.coerce(options.target_params, "target_params")
+    params = options.params
     if isinstance(params, Mapping):
         params = {str(k).strip().lower(): v for k, v in params.items()}
         unknown = sorted(k for k in params if k not in names)
@@ -200,35 +204,55 @@ def _build_models(models, fps: float, params, hfov_deg=None, repeat_threshold="m
             raise InputValueError(f"params: {', '.join(unknown)} is not a model of this run "
                                   f"({', '.join(dict.fromkeys(names))}); give one Params for every "
                                   f"model or a dict {{model name: params}}")
+    return replace(options, params=params, target_params=target_params)
+
+
+def _new_model(name: str, fps: float, options: RunOptions, **override) -> Model:
+    """The registry model ``name`` built with the run's options (``override``: keywords that win)."""
+    cls = get_model(name)
+    p = options.params.get(name) if isinstance(options.params, Mapping) else options.params
+    kw = {"hfov_deg": options.hfov_deg} if (options.hfov_deg is not None and cls.has_targets) else {}
+    if options.target_params is not None and cls.has_targets:
+        kw["target_params"] = options.target_params
+    if options.repeat_threshold != "model default":
+        kw["repeat_threshold"] = options.repeat_threshold
+    kw.update(override)
+    return cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
+
+
+def _adopt_instance(m: Model, models: list, fps: float, options: RunOptions) -> Model:
+    """A model instance the caller built: reset, and given the run's field of view, repeat
+    threshold and target settings where the run has them (the caller's object is the one that runs)."""
+    if sum(isinstance(o, Model) and o.name == m.name for o in models) > 1:
+        raise InputValueError(f"two models named {m.name!r} in one run: results are kept per "
+                              f"model name; run them separately")
+    if abs(m.fps - fps) > 1e-6 * fps:
+        warnings.warn(f"model {m.name!r} was built for {m.fps:g} fps but the input runs at "
+                      f"{fps:g} fps; its time constants and time-to-collision use {m.fps:g}",
+                      stacklevel=6)
+    m.reset()
+    if options.hfov_deg is not None and hasattr(m, "hfov_deg"):
+        m.hfov_deg = check_hfov(options.hfov_deg)
+    if options.repeat_threshold != "model default":
+        m.repeat_threshold = check_repeat_threshold(options.repeat_threshold)
+    if options.target_params is not None and m.has_targets:
+        m.target_params = options.target_params
+    return m
+
+
+def _build_models(models: list, fps: float, options: RunOptions) -> list[Model]:
+    """One model per name (the first of each), built from the options, or adopted when given built."""
+    options = _model_options(options, _names(models))
     built: list[Model] = []
     seen = set()
     for m in models:
         if isinstance(m, Model):
-            if m.name in seen or sum(isinstance(o, Model) and o.name == m.name for o in models) > 1:
+            if m.name in seen:
                 raise InputValueError(f"two models named {m.name!r} in one run: results are kept per "
                                       f"model name; run them separately")
-            if abs(m.fps - fps) > 1e-6 * fps:
-                warnings.warn(f"model {m.name!r} was built for {m.fps:g} fps but the input runs at "
-                              f"{fps:g} fps; its time constants and time-to-collision use {m.fps:g}",
-                              stacklevel=4)
-            model = m
-            model.reset()
-            if hfov_deg is not None and hasattr(model, "hfov_deg"):
-                model.hfov_deg = check_hfov(hfov_deg)
-            if repeat_threshold != "model default":
-                model.repeat_threshold = check_repeat_threshold(repeat_threshold)
-            if target_params is not None and model.has_targets:
-                model.target_params = target_params
+            model = _adopt_instance(m, models, fps, options)
         else:
-            name = str(m).strip().lower()
-            cls = get_model(name)
-            p = params.get(name) if isinstance(params, Mapping) else params
-            kw = {"hfov_deg": hfov_deg} if (hfov_deg is not None and cls.has_targets) else {}
-            if target_params is not None and cls.has_targets:
-                kw["target_params"] = target_params
-            if repeat_threshold != "model default":
-                kw["repeat_threshold"] = repeat_threshold
-            model = cls(fps=fps, **kw) if p is None else cls(fps=fps, params=p, **kw)
+            model = _new_model(str(m).strip().lower(), fps, options)
         if model.name in seen:
             continue
         seen.add(model.name)
@@ -248,12 +272,45 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
                               f"the models need at least {need}x{need}")
 
 
-def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, fps=None, resize=None,
-        scale=None, start: int = 0, end: int | None = None, video: bool = False, quiet: bool = False,
-        params=None, progress: bool = True, plot: bool = True, backend: str = "opencv",
-        hfov_deg: float | None = None, keep_rows: bool = True,
-        repeat_threshold: float | str | None = "model default", draw_fields: str = "auto",
-        target_params=None) -> RunResult:
+def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool]:
+    """The run's models, and whether the first frames looked duplicated (:func:`_prescan_repeats`:
+    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on)."""
+    built = _build_models(models, src.fps, options)
+    _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+    auto = [m for m in built if m.repeat_threshold == "auto"]
+    duplicated = _prescan_repeats(source, auto, src, options)
+    if duplicated:
+        built = [_holding(m, models, src.fps, options) if m in auto else m for m in built]
+    return built, duplicated
+
+
+def _holding(m: Model, models: list, fps: float, options: RunOptions) -> Model:
+    """Model ``m`` holding duplicated frames from the start (``REPEAT_THRESHOLD``): a registry
+    model is built so; a caller's instance is set so."""
+    if any(m is o for o in models):
+        m.repeat_threshold = REPEAT_THRESHOLD
+        return m
+    return _new_model(m.name, fps, _model_options(options, _names(models)), repeat_threshold=REPEAT_THRESHOLD)
+
+
+def _prepare_out_dir(source, src: FrameSource, out) -> Path:
+    """The output folder, created, without the outputs of an earlier run (:data:`RUN_OUTPUTS`)."""
+    out_dir = Path(out) if out is not None else default_out_dir(source)
+    if src.kind == "images" and out_dir.is_dir() and isinstance(source, (str, Path)) \
+            and Path(source).is_dir() and out_dir.resolve() == Path(source).resolve():
+        raise InputValueError(f"{out_dir}: the output folder is the folder of input frames; "
+                              f"choose another --out")
+    if out_dir.exists() and not out_dir.is_dir():
+        raise InputValueError(f"{out_dir}: is a file, expected a folder for the outputs")
+    out_dir.mkdir(parents=True, exist_ok=True)
+    for p in (out_dir / name for name in RUN_OUTPUTS):  # an earlier run's: never mix two runs
+        if p.is_file() or p.is_symlink():
+            p.unlink()
+    return out_dir
+
+
+def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, options: RunOptions | None = None,
+        **keywords) -> RunResult:
     """Run models over a video, a folder of images, a glob pattern or a camera.
 
     Parameters
@@ -262,58 +319,18 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         Input; see :func:`mlplc2.io.open_source`.
     models : sequence of str or Model
         Registry names (``mlplc2.available_models()``) or model instances. All
-        models see the same decoded frames (decoded once).
+        models see the same decoded frames (decoded once). An instance is reset and
+        given the run's ``hfov_deg``, ``repeat_threshold`` and ``target_params`` where set.
     out : path, None or False
         Output folder (created). ``None``: ``<stem>_mlplc2/`` next to the
         input. ``False``: write nothing, only return the result.
-    fps : float, optional
-        Frame rate to use instead of the container's (images: 30).
-    resize : (W, H) or 'WxH', optional
-        Frames are resized before the models see them; field coordinates in
-        the outputs are mapped back to input pixels (``x * W_in / W``).
-    scale : float, optional
-        Or resize by a factor.
-    start, end : int
-        Process source frames ``start <= frame < end``.
-    video : bool
-        Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header
-        (:func:`mlplc2.plots.annotate_frame`).
-    quiet : bool
-        No progress bar.
-    params : Params or dict, optional
-        Passed as ``params=`` to every model, or a dict ``{name: params}``.
-    progress : bool
-        Show a tqdm progress bar on stderr (unless ``quiet``).
-    plot : bool
-        Write ``responses.png``.
-    backend : {'opencv', 'pyav'}
-        Video decoder.
-    hfov_deg : float, optional
-        Horizontal field of view of the camera in degrees, given to the models
-        with attention fields: bearings in ``targets.csv`` / ``fields.json`` are
-        then degrees from the optical axis (else input pixels from the image
-        centre); see ``docs/targets.md``.
-    keep_rows : bool
-        Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
-        ``.targets`` (default). Set False for long or live runs: memory then stays
-        flat whatever the length (the rows are in the CSV files, and the summaries of fields
-        that have died wait in a temporary file until ``fields.json`` is written; the CLI does
-        this). ``RunResult.to_dataframe()`` then reads ``responses.csv``.
-    repeat_threshold : float, "auto" or None, optional
-        Treat a frame in which no pixel differs from the last processed one by more than
-        this many grey levels as a duplicate: the models hold their last output for it
-        (``Model.repeat_threshold``; 16 suits videos made by repeating frames, such as the
-        paper's clips). ``"auto"`` (the models' default): 16 while the video looks duplicated;
-        None: every frame steps the models. Not given: the models' own setting.
-    target_params : TargetParams or dict, optional
-        Settings of the targets (time to contact, course, warning: ``horizon_s``,
-        ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
-        targets; a dict gives the fields to change from the defaults.
-    draw_fields : {'auto', 'none', 'responding', 'all'}
-        Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
-        none for a model with targets, else those that respond (response > 0) or are in
-        alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
+    options : RunOptions, optional
+        How to read, build and write (:class:`RunOptions`; default: its defaults).
+    **keywords
+        Fields of :class:`RunOptions` (``fps``, ``resize``, ``scale``, ``start``, ``end``,
+        ``video``, ``quiet``, ``params``, ``progress``, ``plot``, ``decoder``, ``hfov_deg``,
+        ``keep_rows``, ``repeat_threshold``, ``draw_fields``, ``target_params``), which
+        replace those of ``options``.
 
     Returns
     -------
@@ -335,66 +352,40 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         and ``result.truncated`` is True.
     """
     # Validate everything cheap before decoding anything.
-    if isinstance(models, (str, Model)):
-        models = [models]
-    if not isinstance(models, Iterable):
-        raise InputTypeError(f"models must be a model, a model name or a list of them, got {type(models).__name__}")
-    models = [n for m in models for n in ([m] if isinstance(m, Model) else resolve_names(m))]
-    if draw_fields not in DRAW_FIELDS:
-        raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, got {draw_fields!r}")
-    src = open_source(source, fps=fps, start=start, end=end, resize=resize, scale=scale,
-                      keep_original=video, backend=backend)
+    options = _run_options(options, keywords)
+    models = _model_list(models)
+    if options.draw_fields not in DRAW_FIELDS:
+        raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, "
+                              f"got {options.draw_fields!r}")
+    src = open_source(source, keep_original=options.video, **options.source_options())
     try:
-        built = _build_models(models, src.fps, params, hfov_deg, repeat_threshold, target_params)
-        _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
-        duplicated = _prescan_repeats(source, built, src, fps=fps, start=start, end=end, resize=resize,
-                                      scale=scale, backend=backend)
+        built, duplicated = _prepare_models(source, models, src, options)
+        out_dir = None if out is False else _prepare_out_dir(source, src, out)
     except BaseException:
         src.close()
         raise
-    names = [m.name for m in built]
-    result = RunResult(source=str(source), models=names, fps=src.fps, size=src.size,
-                       model_size=src.out_size, start=src.start, duplicated=duplicated,
+    result = RunResult(source=str(source), models=[m.name for m in built], fps=src.fps, size=src.size,
+                       model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
-    out_dir = None
-    if out is not False:
-        out_dir = Path(out) if out is not None else default_out_dir(source)
-        try:
-            if src.kind == "images" and out_dir.is_dir() and isinstance(source, (str, Path)) \
-                    and Path(source).is_dir() and out_dir.resolve() == Path(source).resolve():
-                raise InputValueError(f"{out_dir}: the output folder is the folder of input frames; "
-                                      f"choose another --out")
-            if out_dir.exists() and not out_dir.is_dir():
-                raise InputValueError(f"{out_dir}: is a file, expected a folder for the outputs")
-            out_dir.mkdir(parents=True, exist_ok=True)
-            for p in (out_dir / name for name in RUN_OUTPUTS):  # an earlier run's: never mix two runs
-                if p.is_file() or p.is_symlink():
-                    p.unlink()
-        except BaseException:
-            src.close()
-            raise
-        result.out = out_dir
-    return _loop(src, built, names, result, out_dir, video=video, show=progress and not quiet, plot=plot,
-                 keep_rows=keep_rows, draw_fields=draw_fields)
+    return _loop(src, built, result, out_dir, options)
 
 
 #: Frames of a video :func:`run` looks at first to tell whether its frames were duplicated.
 PRESCAN_FRAMES = 60
 
 
-def _prescan_repeats(source, models, src: FrameSource, **options) -> bool:
-    """For a video or image sequence with models whose ``repeat_threshold`` is ``"auto"``: whether
-    its first :data:`PRESCAN_FRAMES` frames look duplicated (:func:`mlplc2.models.base.looks_duplicated`,
+def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOptions) -> bool:
+    """For a video or image sequence with models whose ``repeat_threshold`` is ``"auto"`` (``auto``):
+    whether its first :data:`PRESCAN_FRAMES` frames look duplicated (:func:`mlplc2.models.base.looks_duplicated`,
     measured at the models' working size). If so those models hold duplicates from the first frame
     on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera is not scanned."""
     import cv2
 
-    auto = [m for m in models if m.repeat_threshold == "auto"]
     if not auto or src.kind == "camera":
         return False
     width = min((m.work_width for m in auto if m.work_width is not None), default=None)
-    scan = open_source(source, **options)
+    scan = open_source(source, **options.source_options())
     diffs, prev = [], None
     try:
         for k, item in enumerate(scan):
@@ -409,11 +400,7 @@ def _prescan_repeats(source, models, src: FrameSource, **options) -> bool:
             prev = g
     finally:
         scan.close()
-    if not looks_duplicated(diffs):
-        return False
-    for m in auto:
-        m.repeat_threshold = REPEAT_THRESHOLD
-    return True
+    return looks_duplicated(diffs)
 
 
 #: The files a run writes into its output folder (all of them, whatever the options). :func:`run`
@@ -442,80 +429,72 @@ class _CsvFile:
         self._buf.truncate()
 
 
-def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, show, plot,
-          keep_rows=True, draw_fields="auto") -> RunResult:
-    from tqdm import tqdm
+class _Frames:
+    """The per-frame work of :func:`run`: step every model, record, write each output's share."""
 
-    recorder = Recorder(built, fps=src.fps, source=str(src.name), size=src.size, offset=src.start,
-                        to_input=src.to_input, series=False, spill=not keep_rows)
-    primary = next((i for i, m in enumerate(built) if m.has_fields), None)  # the model drawn on the video
-    field_shape = getattr(built[primary].params, "field_shape", "square") if primary is not None else "square"
-    responses = targets = vw = None
-    interrupted = False
-    bar = None
-    # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
-    # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
-    with interrupts(defer=True) as stop:
-        t0 = time.perf_counter()
-        try:
-            if out_dir is not None:
-                responses = _CsvFile(out_dir / "responses.csv", COLUMNS)
-                result.files["responses.csv"] = responses.path
-                if any(m.has_targets for m in built):
-                    targets = _CsvFile(out_dir / "targets.csv", TARGET_COLUMNS)
-                    result.files["targets.csv"] = targets.path
-                if video:
-                    vw = VideoWriter(out_dir / "annotated.mp4", src.fps, src.size)
-            bar = tqdm(total=src.total, disable=not show, unit="frame", file=sys.stderr,
-                       desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
-            to_input = src.to_input
-            fps = src.fps
-            t0 = time.perf_counter()
-            for item in stop.between(src):
-                index, frame = item[0], item[1]
-                outputs = [m.step(frame) for m in built]
-                time_s = round(index / fps, 6)
-                frame_rows = [row for name, out in zip(names, outputs)
-                              for row in response_rows(index, time_s, name, out, to_input)]
-                if vw is not None:
-                    from .plots import annotate_frame
+    def __init__(self, src: FrameSource, built: list[Model], result: RunResult, options: RunOptions):
+        self.src, self.built, self.result, self.options = src, built, result, options
+        self.names = result.models
+        self.recorder = Recorder(built, fps=src.fps, source=str(src.name), size=src.size, offset=src.start,
+                                 to_input=src.to_input, series=False, spill=not options.keep_rows)
+        self.primary = next((i for i, m in enumerate(built) if m.has_fields), None)  # the model drawn on the video
+        self.field_shape = (getattr(built[self.primary].params, "field_shape", "square")
+                            if self.primary is not None else "square")
+        self.responses = self.targets = self.vw = None
 
-                    vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=primary,
-                                            index=index, field_shape=field_shape, draw_fields=draw_fields))
-                # The frame's share of every output, together (a few dict updates and two writes).
-                target_rows = []
-                for name, out in zip(names, outputs):
-                    if out.repeated:
-                        result.repeated[name] = result.repeated.get(name, 0) + 1
-                    target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
-                                       for t in recorder.update(index, name, out))
-                if targets is not None and target_rows:
-                    targets.write(target_rows)
-                if responses is not None:
-                    responses.write(frame_rows)
-                if keep_rows:
-                    result.targets.extend(target_rows)
-                    result.rows.extend(frame_rows)
-                result.n_frames += 1
-                bar.update()
-        except KeyboardInterrupt:
-            interrupted = True
-        except BaseException:
-            if vw is not None:
-                vw.abort()
-            raise
-        finally:
-            result.seconds = time.perf_counter() - t0
-            if bar is not None:
-                bar.close()
-            for f in (responses, targets):
-                if f is not None:
-                    f.file.close()
-            src.close()
+    def open(self, out_dir: Path | None) -> None:
+        """The per-frame outputs: ``responses.csv``, ``targets.csv`` and ``annotated.mp4``."""
+        if out_dir is None:
+            return
+        self.responses = _CsvFile(out_dir / "responses.csv", COLUMNS)
+        self.result.files["responses.csv"] = self.responses.path
+        if any(m.has_targets for m in self.built):
+            self.targets = _CsvFile(out_dir / "targets.csv", TARGET_COLUMNS)
+            self.result.files["targets.csv"] = self.targets.path
+        if self.options.video:
+            self.vw = VideoWriter(out_dir / "annotated.mp4", self.src.fps, self.src.size)
 
+    def step(self, item: tuple) -> None:
+        """One frame: the models step, then the frame's share of every output, together."""
+        index, frame = item[0], item[1]
+        names, result, src = self.names, self.result, self.src
+        outputs = [m.step(frame) for m in self.built]
+        time_s = round(index / src.fps, 6)
+        frame_rows = [row for name, out in zip(names, outputs)
+                      for row in response_rows(index, time_s, name, out, src.to_input)]
+        if self.vw is not None:
+            from .plots import annotate_frame
+
+            self.vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
+                                         index=index, field_shape=self.field_shape,
+                                         draw_fields=self.options.draw_fields))
+        # The frame's share of every output, together (a few dict updates and two writes).
+        target_rows = []
+        for name, out in zip(names, outputs):
+            if out.repeated:
+                result.repeated[name] = result.repeated.get(name, 0) + 1
+            target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
+                               for t in self.recorder.update(index, name, out))
+        if self.targets is not None and target_rows:
+            self.targets.write(target_rows)
+        if self.responses is not None:
+            self.responses.write(frame_rows)
+        if self.options.keep_rows:
+            result.targets.extend(target_rows)
+            result.rows.extend(frame_rows)
+        result.n_frames += 1
+
+    def close_csv(self) -> None:
+        for f in (self.responses, self.targets):
+            if f is not None:
+                f.file.close()
+
+    def summarise(self, interrupted: bool) -> None:
+        """The run's end state and the summaries of its fields and targets into ``result``."""
+        result, recorder, names = self.result, self.recorder, self.names
         result.interrupted = interrupted
-        result.truncated = src.truncated
-        result.message = src.message
+        result.truncated = self.src.truncated
+        result.message = self.src.message
         # Fields still alive at the end keep died = None.
         with recorder:
             result.fields = {name: recorder.summaries(name) for name in names}
@@ -523,12 +502,45 @@ def _loop(src: FrameSource, built, names, result: RunResult, out_dir, *, video, 
                                        if recorder.records[name].has_targets}
             result.alarms = {name: {"count": r.alarm_count, "first": r.first_alarm_frame}
                              for name, r in recorder.records.items()}
+
+
+def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, options: RunOptions) -> RunResult:
+    from tqdm import tqdm
+
+    frames = _Frames(src, built, result, options)
+    interrupted = False
+    bar = None
+    # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
+    # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
+    with interrupts(defer=True) as stop:
+        t0 = time.perf_counter()
+        try:
+            frames.open(out_dir)
+            bar = tqdm(total=src.total, disable=not (options.progress and not options.quiet), unit="frame",
+                       file=sys.stderr, desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
+            t0 = time.perf_counter()
+            for item in stop.between(src):
+                frames.step(item)
+                bar.update()
+        except KeyboardInterrupt:
+            interrupted = True
+        except BaseException:
+            if frames.vw is not None:
+                frames.vw.abort()
+            raise
+        finally:
+            result.seconds = time.perf_counter() - t0
+            if bar is not None:
+                bar.close()
+            frames.close_csv()
+            src.close()
+        frames.summarise(interrupted)
         if out_dir is not None:
             try:
-                _finish(result, out_dir, vw, plot)
+                _finish(result, out_dir, frames.vw, options.plot)
             except BaseException:
-                if vw is not None:
-                    vw.abort()
+                if frames.vw is not None:
+                    frames.vw.abort()
                 raise
         if result.truncated:
             warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)

@@ -319,7 +319,7 @@ def test_duplicated_video_detected_by_default():
         model = cls(fps=30.0)
         assert not any(model.step(f).repeated for f in slow.frames)
     with pytest.raises(InputError):
-        cli._repeat_threshold(cli.build_parser().parse_args(["run", "x.avi", "--every-frame", "--skip-repeats"]))
+        cli.common.repeat_threshold_option(cli.build_parser().parse_args(["run", "x.avi", "--every-frame", "--skip-repeats"]))
 
 
 def test_a_still_scene_is_not_held_forever():

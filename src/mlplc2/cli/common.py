@@ -1,0 +1,150 @@
+"""What every ``mlplc2`` subcommand shares: the exit codes, the one-line parser errors, the
+:class:`Subcommand` entry, printing (:func:`say`, :func:`warn`), the number types of the
+options, and the repeat (``--skip-repeats``, ...) and warning (``--horizon``, ``--max-miss``)
+options with the run options they give.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+from collections.abc import Callable
+from dataclasses import dataclass
+
+from .._validation import InputValueError
+from ..io import parse_resize
+from ..models.base import REPEAT_THRESHOLD
+
+EXIT_OK = 0
+EXIT_INPUT = 2
+#: A truncated/damaged input still gives outputs but exits non-zero (same code as bad input).
+EXIT_TRUNCATED = 2
+EXIT_INTERRUPTED = 130
+
+PROG = "mlplc2"
+
+
+class UsageError(Exception):
+    """argparse error turned into an exception (one line, exit 2)."""
+
+
+class Parser(argparse.ArgumentParser):
+    def error(self, message):  # noqa: D102 - one line instead of usage + message
+        raise UsageError(f"{message} (see '{self.prog} --help')")
+
+
+@dataclass(frozen=True)
+class Subcommand:
+    """One ``mlplc2 NAME`` subcommand.
+
+    ``add_arguments(parser)`` declares its options; ``handler(args) -> int``
+    runs it and returns the exit code (raise :class:`InputError` for bad
+    input: :func:`main` turns it into one line and exit 2).
+    """
+
+    name: str
+    help: str
+    add_arguments: Callable[[argparse.ArgumentParser], None]
+    handler: Callable[[argparse.Namespace], int]
+
+
+def say(args, *lines: str) -> None:
+    if not getattr(args, "quiet", False):
+        for line in lines:
+            print(line)
+
+
+def warn(message: str) -> None:
+    print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+def number_type(cast, ok, expected: str):
+    """An argparse ``type``: ``cast(text)``, accepted when ``ok(value)``; else
+    "expected <expected>, got '<text>'" (argparse turns it into a one-line usage error)."""
+
+    def parse(text: str):
+        try:
+            value = cast(text)
+        except ValueError:
+            value = None
+        if value is None or not ok(value):
+            raise argparse.ArgumentTypeError(f"expected {expected}, got {text!r}")
+        return value
+
+    return parse
+
+
+nonneg_int = number_type(int, lambda v: v >= 0, "an integer >= 0")
+pos_int = number_type(int, lambda v: v >= 1, "a positive integer")
+pos_float = number_type(float, lambda v: math.isfinite(v) and v > 0, "a positive number")
+hfov_degrees = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "degrees in (0, 180)")
+nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
+
+
+def add_repeat_options(p: argparse.ArgumentParser, help: str) -> None:
+    """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``), ``--repeat-level N``
+    (that threshold instead; implies skipping) and ``--every-frame`` (never hold), read back by
+    :func:`repeat_threshold_option`; without them the models detect duplicated frames themselves."""
+    p.add_argument("--skip-repeats", action="store_true", help=help)
+    p.add_argument("--repeat-level", type=nonneg_float, metavar="N",
+                   help=f"grey-level change up to which a frame counts as a repeat (default "
+                        f"{REPEAT_THRESHOLD:g}); implies --skip-repeats")
+    p.add_argument("--every-frame", action="store_true",
+                   help="step the models on every frame, duplicates too (by default the models hold "
+                        "their output on duplicated frames when the video looks duplicated)")
+
+
+def repeat_threshold_option(args) -> float | str | None:
+    """``Model.repeat_threshold`` asked for by :func:`add_repeat_options`: a level, None
+    (``--every-frame``) or ``"auto"`` (no option: the models' duplicate detection)."""
+    if args.every_frame and (args.skip_repeats or args.repeat_level is not None):
+        raise InputValueError("--every-frame cannot be combined with --skip-repeats or --repeat-level")
+    if args.repeat_level is not None:
+        return args.repeat_level
+    if args.skip_repeats:
+        return REPEAT_THRESHOLD
+    return None if args.every_frame else "auto"
+
+
+def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
+    """``--horizon S`` and ``--max-miss W``: the warning settings of the target layer
+    (``TargetParams.horizon_s``, ``.max_miss``), read back by :func:`target_options`."""
+    from ..targets import TargetParams
+
+    d = TargetParams()
+    p.add_argument("--horizon", type=nonneg_float, metavar="S",
+                   help=f"{what}a target warns only when its time to contact is at most S seconds "
+                        f"(TargetParams.horizon_s, default {d.horizon_s:g}; docs/targets.md)")
+    p.add_argument("--max-miss", type=nonneg_float, metavar="W",
+                   help=f"{what}... and its predicted miss at contact at most W object widths "
+                        f"(TargetParams.max_miss, default {d.max_miss:g})")
+
+
+def target_options(args) -> dict:
+    """The ``target_params`` of :func:`mlplc2.run` asked for by :func:`add_warning_options`: a
+    dict of :class:`~mlplc2.targets.TargetParams` fields (JSON-able, for batch tasks; empty: the
+    defaults), checked here so that a bad value is one error before anything runs."""
+    from ..targets import TargetParams
+
+    options = {}
+    if args.horizon is not None:
+        options["horizon_s"] = args.horizon
+    if args.max_miss is not None:
+        options["max_miss"] = args.max_miss
+    TargetParams().replace(**options)
+    return options
+
+
+def video_run_options(args) -> dict:
+    """The ``run_options`` of ``mlplc2 evaluate`` and ``batch``: ``--resize``, the repeat and the warning options."""
+    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    if repeat_threshold_option(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
+        options["repeat_threshold"] = repeat_threshold_option(args)
+    if target_options(args):  # --horizon / --max-miss: part of each task's options
+        options["target_params"] = target_options(args)
+    return options
+
+
+def one_line(text: str) -> str:
+    return " ".join(text.split()) or "unknown error"

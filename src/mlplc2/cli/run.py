@@ -1,0 +1,172 @@
+"""``mlplc2 run`` (models on a video, an image folder or a camera; :func:`mlplc2.run`) and
+``mlplc2 demo`` (:func:`mlplc2.runner.demo`), with their printed summaries.
+"""
+
+from __future__ import annotations
+
+import argparse
+import math
+import sys
+import warnings
+
+from .._validation import InputValueError
+from ..io import parse_resize
+from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
+from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
+                     add_warning_options, hfov_degrees, nonneg_int, pos_float, repeat_threshold_option, say,
+                     target_options, warn)
+
+
+def _add_run(p: argparse.ArgumentParser) -> None:
+    p.add_argument("source", help="video file (AVI, MP4, ...), folder of images, glob pattern "
+                                  "('frames/*.png', quoted) or camera index (0, 1, ...)")
+    p.add_argument("--model", "-m", action="append", metavar="NAME",
+                   help=f"model(s) to run, repeatable or comma-separated; one of "
+                        f"{', '.join(available_models())} (default: mlplc2)")
+    p.add_argument("--out", "-o", metavar="DIR",
+                   help="output folder (default: <stem>_mlplc2/ next to the input)")
+    p.add_argument("--fps", type=pos_float, metavar="F",
+                   help="frame rate to assume (default: the video's; images: 30)")
+    size = p.add_mutually_exclusive_group()
+    size.add_argument("--resize", metavar="WxH",
+                      help="resize frames before the models (e.g. 320x240); coordinates in the "
+                           "outputs stay in input pixels")
+    size.add_argument("--scale", type=pos_float, metavar="S", help="resize by a factor (e.g. 0.5)")
+    p.add_argument("--start", type=nonneg_int, default=0, metavar="N", help="first frame (0-based)")
+    p.add_argument("--end", type=nonneg_int, metavar="N", help="stop before this frame")
+    p.add_argument("--video", action="store_true", help="also write annotated.mp4 with the targets drawn")
+    fields = p.add_mutually_exclusive_group()
+    fields.add_argument("--fields", action="store_true",
+                        help="with --video: also draw the attention fields that respond or alarm (by default "
+                             "the video shows the targets only)")
+    fields.add_argument("--all-fields", action="store_true",
+                        help="with --video: also draw every attention field")
+    p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
+                   help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
+                        "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
+    p.add_argument("--decoder", choices=("opencv", "pyav"), default="opencv",
+                   help="video decoder (default: opencv)")
+    p.add_argument("--backend", dest="decoder", choices=("opencv", "pyav"), default=argparse.SUPPRESS,
+                   help=argparse.SUPPRESS)  # the old name of --decoder, kept for old command lines
+    add_repeat_options(p, f"hold the models' output on duplicated frames: frames in which no pixel "
+                          f"changed by more than {REPEAT_THRESHOLD:g} grey levels (--repeat-level) since the "
+                          f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
+                          f"repeated to raise the frame rate (docs/model.md)")
+    add_warning_options(p)
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+
+def _cmd_run(args) -> int:
+    from ..runner import RunInterrupted, TruncatedInputWarning, run
+
+    models = resolve_names(args.model or ["mlplc2"], what="--model")
+    resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
+    if args.end is not None and args.end <= args.start:
+        raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
+    with warnings.catch_warnings():
+        warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
+        try:
+            result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
+                         start=args.start, end=args.end, video=args.video, quiet=args.quiet,
+                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
+                         decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
+                         target_params=target_options(args) or None)
+        except RunInterrupted as exc:
+            return _report_interrupt(exc)
+    _print_run_summary(args, result)
+    if result.truncated:
+        warn(result.message)
+        return EXIT_TRUNCATED
+    return EXIT_OK
+
+
+def _timing(result) -> str:
+    """``in 12.3 s (32.5 frames/s)``: the wall time of a run's frame loop and its rate."""
+    rate = result.n_frames / result.seconds if result.seconds > 0 else math.inf
+    return f"in {result.seconds:.1f} s ({rate:.1f} frames/s)"
+
+
+def _report_interrupt(exc) -> int:
+    """One line for a run stopped by Ctrl-C or SIGTERM (``runner.RunInterrupted``)."""
+    res = exc.result
+    print(f"{PROG}: interrupted after {res.n_frames} frames; outputs for them are in {res.out}", file=sys.stderr)
+    return EXIT_INTERRUPTED
+
+
+def _print_run_summary(args, result) -> None:
+    w, h = result.size
+    mw, mh = result.model_size
+    size = f"{w}x{h}" + (f" -> {mw}x{mh}" if (mw, mh) != (w, h) else "")
+    lines = [f"{result.n_frames} frames of {result.source} ({size}, {result.fps:g} fps) {_timing(result)}"]
+    for name in result.models:
+        fields = result.fields.get(name, [])
+        if fields:
+            alarms = [f for f in fields if f["first_alarm_frame"] is not None]
+            lines.append(f"  {name}: {len(fields)} field(s), {len(alarms)} in alarm")
+            for f in sorted(fields, key=lambda f: -f["peak_response"])[:6]:
+                alarm = f", alarm at frame {f['first_alarm_frame']}" if f["first_alarm_frame"] is not None else ""
+                lines.append(f"    #{f['id']} at ({f['x']:.0f}, {f['y']:.0f}), frames {f['born']}-"
+                             f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
+                             f"at frame {f['peak_frame']}{alarm}")
+        else:
+            first_alarm = result.alarms[name]["first"]
+            first = f", first alarm at frame {first_alarm}" if first_alarm is not None else ", no alarm"
+            lines.append(f"  {name}: no fields{first}")
+        targets = result.target_summaries.get(name)
+        if targets:
+            warned = [t for t in targets if t["first_warning_frame"] is not None]
+            lines.append(f"  {name}: {len(targets)} target(s), {len(warned)} warned"
+                         + (f" (first warning at frame {min(t['first_warning_frame'] for t in warned)})"
+                            if warned else ""))
+    if result.out is not None:
+        lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
+    say(args, *lines)
+    held = max(result.repeated.values(), default=0)
+    if held and not (args.quiet or args.skip_repeats or args.repeat_level is not None):
+        print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
+              f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
+
+
+# ---------------------------------------------------------------------------
+# demo
+# ---------------------------------------------------------------------------
+def _add_demo(p: argparse.ArgumentParser) -> None:
+    p.add_argument("--out", "-o", default="mlplc2_demo", metavar="DIR",
+                   help="folder for demo.mp4, its ground truth and the outputs (default: ./mlplc2_demo)")
+    p.add_argument("--scene", choices=("four_phase", "six_objects"), default="four_phase",
+                   help="which multi-object scene (default: four_phase, 400 frames)")
+    p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+
+
+def _cmd_demo(args) -> int:
+    from ..runner import RunInterrupted, demo
+
+    try:
+        d = demo(args.out, scene=args.scene, quiet=args.quiet)
+    except RunInterrupted as exc:
+        return _report_interrupt(exc)
+    lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)} "
+             f"{_timing(d.result)}",
+             "  object  centre        frames    mlplc2 field  centre        error   first alarm"]
+    for m in d.matches:
+        cx, cy = m["center"]
+        t0, t1 = m["frames"]
+        if m["field"] is None:
+            lines.append(f"  {m['object']:>6}  ({cx:>3.0f}, {cy:>3.0f})  {t0:>3}-{t1:<4}  none")
+            continue
+        fx, fy = m["field_center"]
+        alarm = "-" if m["first_alarm_frame"] is None else str(m["first_alarm_frame"])
+        lines.append(f"  {m['object']:>6}  ({cx:>3.0f}, {cy:>3.0f})  {t0:>3}-{t1:<4}  #{m['field']:<11} "
+                     f"({fx:>3.0f}, {fy:>3.0f})  {m['distance']:>5.1f}px  {alarm}")
+    n_fields = len(d.result.fields.get("mlplc2", []))
+    matched = {m["field"] for m in d.matches if m["field"] is not None}
+    lines.append(f"  mlplc2 made {n_fields} field(s); {len(matched)} matched an object")
+    lines.append(f"outputs in {d.result.out}: {', '.join(sorted(d.result.files))}")
+    say(args, *lines)
+    return EXIT_OK
+
+
+RUN = Subcommand("run", "run models on a video, image folder or camera; write CSV, JSON, PNG (and MP4)",
+                 _add_run, _cmd_run)
+DEMO = Subcommand("demo", "generate a multi-object scene, run the models on it, compare with the truth",
+                  _add_demo, _cmd_demo)

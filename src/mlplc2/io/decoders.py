@@ -1,0 +1,249 @@
+"""Decoders: one per kind of input (a video by OpenCV or PyAV, a sequence of images, a camera),
+each an iterator of RGB frames with its fps, size and frame count; :func:`open_decoder` picks
+one for a source, :func:`expand_inputs` lists the inputs of a batch.
+"""
+
+from __future__ import annotations
+
+import glob as _glob
+import logging
+import math
+import os
+import re
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import InputError, InputTypeError, InputValueError
+from .formats import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, is_camera
+
+log = logging.getLogger(__name__)
+
+
+def _natural_key(path: str):
+    """Sort key: 'frame2.png' before 'frame10.png'."""
+    return [int(tok) if tok.isdigit() else tok.lower() for tok in re.split(r"(\d+)", path)]
+
+
+
+# ---------------------------------------------------------------------------
+# decoders: each is an iterator of RGB frames plus fps / size / count
+# ---------------------------------------------------------------------------
+class Decoder:
+    """Base of the per-kind decoders (all run in one thread at a time)."""
+
+    fps: float | None = None
+    size: tuple[int, int] = (0, 0)
+    frame_count: int | None = None
+    name: str = ""
+
+    def skip(self, n: int) -> int:
+        """Skip ``n`` frames; return how many were really skipped."""
+        done = 0
+        while done < n and self.grab():
+            done += 1
+        return done
+
+    def grab(self) -> bool:
+        """Skip one frame; False at the end."""
+        return self.read() is not None
+
+    def read(self) -> np.ndarray | None:  # pragma: no cover - abstract
+        raise NotImplementedError
+
+    def close(self) -> None:
+        pass
+
+
+class _OpenCVDecoder(Decoder):
+    def __init__(self, target, name: str, camera: bool = False):
+        import cv2
+
+        self._cv2 = cv2
+        self.name = name
+        self.cap = cv2.VideoCapture(target)
+        if not self.cap.isOpened():
+            self.cap.release()
+            if camera:
+                raise InputValueError(f"cannot open camera {target}")
+            raise InputValueError(f"{name}: not a video file OpenCV can read (unknown format or damaged)")
+        fps = self.cap.get(cv2.CAP_PROP_FPS)
+        self.fps = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
+        count = self.cap.get(cv2.CAP_PROP_FRAME_COUNT)
+        self.frame_count = int(count) if not camera and count and count > 0 else None
+        self.size = (int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
+
+    def grab(self) -> bool:
+        return self.cap.grab()
+
+    def read(self):
+        ok, frame = self.cap.read()
+        if not ok or frame is None:
+            return None
+        if frame.ndim == 2:
+            return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
+        return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
+
+    def close(self):
+        self.cap.release()
+
+
+class _PyAVDecoder(Decoder):
+    def __init__(self, path: str, name: str):
+        try:
+            import av
+        except ImportError:
+            raise InputError("decoder 'pyav' needs PyAV, which is not installed: pip install av") from None
+        self.name = name
+        self._av = av
+        try:
+            self.container = av.open(path)
+        except av.error.FFmpegError:
+            raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
+        if not self.container.streams.video:
+            self.container.close()
+            raise InputValueError(f"{name}: has no video stream")
+        stream = self.container.streams.video[0]
+        stream.thread_type = "AUTO"
+        rate = stream.average_rate or stream.guessed_rate
+        self.fps = float(rate) if rate else None
+        self.frame_count = int(stream.frames) or None
+        self.size = (int(stream.codec_context.width), int(stream.codec_context.height))
+        self._frames = self.container.decode(stream)
+
+    def read(self):
+        try:
+            frame = next(self._frames)
+        except StopIteration:
+            return None
+        except self._av.error.FFmpegError as exc:
+            log.debug("PyAV stopped decoding %s: %s", self.name, exc)
+            return None
+        return frame.to_ndarray(format="rgb24")
+
+    def close(self):
+        self.container.close()
+
+
+class _ImageDecoder(Decoder):
+    def __init__(self, files: list[str], name: str):
+        import cv2
+
+        self._cv2 = cv2
+        self.name = name
+        self.files = files
+        self.frame_count = len(files)
+        self._i = 0
+        self.failed: str | None = None
+        first = cv2.imread(files[0], cv2.IMREAD_COLOR)
+        if first is None:
+            raise InputValueError(f"{files[0]}: not an image OpenCV can read")
+        self.size = (first.shape[1], first.shape[0])
+
+    def skip(self, n: int) -> int:
+        done = min(n, len(self.files) - self._i)
+        self._i += done
+        return done
+
+    def read(self):
+        if self._i >= len(self.files):
+            return None
+        path = self.files[self._i]
+        frame = self._cv2.imread(path, self._cv2.IMREAD_COLOR)
+        if frame is None:
+            self.failed = f"could not decode image {path}"
+            return None
+        if (frame.shape[1], frame.shape[0]) != self.size:
+            # Like an undecodable image: stop here, keep the outputs for the frames before.
+            w0, h0 = self.size
+            self.failed = f"image {path} is {frame.shape[1]}x{frame.shape[0]}, not {w0}x{h0} like the first image"
+            return None
+        self._i += 1
+        return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
+
+
+def expand_inputs(inputs) -> list[str]:
+    """Videos to process: files as given; a folder holding video files gives
+    each of them (sorted); a folder of images is one image-sequence input;
+    glob patterns are expanded. Missing paths raise InputValueError."""
+    if isinstance(inputs, (str, Path)):
+        inputs = [inputs]
+    out: list[str] = []
+    for item in inputs:
+        s = str(item)
+        p = Path(s)
+        if p.is_dir():
+            vids = sorted(str(q) for q in p.iterdir() if q.is_file() and q.suffix.lower() in VIDEO_EXTENSIONS)
+            if vids:
+                out.extend(vids)
+            elif any(q.suffix.lower() in IMAGE_EXTENSIONS for q in p.iterdir() if q.is_file()):
+                out.append(s)
+            else:
+                raise InputValueError(f"{s}: folder has neither videos nor images")
+        elif p.exists():
+            out.append(s)
+        elif any(ch in s for ch in "*?["):
+            matches = sorted(_glob.glob(s))
+            if not matches:
+                raise InputValueError(f"{s}: pattern matches no file")
+            out.extend(matches)
+        else:
+            raise InputValueError(f"{s}: no such file or folder")
+    first: dict[str, str] = {}  # each file once, where it first appears
+    for s in out:
+        first.setdefault(os.path.abspath(s), s)
+    unique = list(first.values())
+    if not unique:
+        raise InputValueError("no input videos")
+    return unique
+
+
+def _image_files(source: str) -> tuple[list[str], str]:
+    p = Path(source)
+    if p.is_dir():
+        files = [str(f) for f in p.iterdir() if f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS]
+        if not files:
+            videos = any(f.suffix.lower() in VIDEO_EXTENSIONS for f in p.iterdir())
+            hint = "; it holds videos: run them all with `mlplc2 batch`" if videos else ""
+            raise InputValueError(
+                f"{source}: directory has no images ({', '.join(e[1:] for e in IMAGE_EXTENSIONS[:5])}, ...)"
+                + hint)
+        return sorted(files, key=_natural_key), str(p)
+    files = [f for f in _glob.glob(source) if os.path.isfile(f)]
+    if not files:
+        raise InputValueError(f"{source}: no files match this pattern")
+    images = [f for f in files if Path(f).suffix.lower() in IMAGE_EXTENSIONS]
+    if not images:
+        raise InputValueError(f"{source}: the files matching this pattern are not images")
+    return sorted(images, key=_natural_key), source
+
+
+def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
+    """Return (decoder, kind) with kind in {'video', 'images', 'camera'}."""
+    if decoder not in ("opencv", "pyav"):
+        raise InputValueError(f"unknown decoder {decoder!r}; choose 'opencv' or 'pyav'")
+    if is_camera(source):
+        index = int(source)
+        return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
+    if isinstance(source, os.PathLike):
+        source = os.fspath(source)
+    if not isinstance(source, str):
+        shape = getattr(source, "shape", None)
+        what = type(source).__name__ + (f" of shape {tuple(shape)}" if shape is not None else "")
+        hint = ("; to run on frames in memory, step the model: model.run(frames)"
+                if shape is not None or hasattr(source, "frames") else "")
+        raise InputTypeError(f"source must be a path, a glob pattern or a camera index, got a {what}{hint}")
+    if os.path.isdir(source):
+        files, name = _image_files(source)
+        return _ImageDecoder(files, name), "images"
+    if os.path.isfile(source):
+        if Path(source).suffix.lower() in IMAGE_EXTENSIONS:
+            return _ImageDecoder([source], source), "images"
+        if decoder == "pyav":
+            return _PyAVDecoder(source, source), "video"
+        return _OpenCVDecoder(source, source), "video"
+    if any(ch in source for ch in "*?["):
+        files, name = _image_files(source)
+        return _ImageDecoder(files, name), "images"
+    raise InputValueError(f"{source}: no such file or directory")
+

@@ -1,0 +1,104 @@
+"""What :mod:`mlplc2.io` reads and writes: file suffixes, the frame format, sizes.
+
+Frames are always RGB ``uint8`` arrays of shape ``(H, W, 3)`` (:func:`to_rgb`). Sizes are
+given as ``(W, H)`` (OpenCV convention), shapes as ``(H, W)`` (numpy convention);
+:func:`parse_resize` and :func:`output_size` give the size the models see.
+"""
+
+from __future__ import annotations
+
+import math
+import os
+import re
+
+import numpy as np
+
+from .._validation import InputValueError
+
+#: File suffixes read as still images when a folder or a glob pattern is given.
+IMAGE_EXTENSIONS = (".png", ".jpg", ".jpeg", ".bmp", ".tif", ".tiff", ".webp", ".pgm", ".ppm", ".pbm")
+#: Suffixes :class:`VideoWriter` knows (.avi -> MJPG, anything else -> MP4).
+VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv")
+#: Frame rate assumed for image sequences and for videos that do not state one.
+DEFAULT_FPS = 30.0
+
+class TruncatedInputWarning(UserWarning):
+    """The input stopped decoding before its stated end; results cover the frames before."""
+
+
+class VideoCodecWarning(UserWarning):
+    """An MP4 is written with OpenCV's ``mp4v`` instead of H.264 (PyAV missing or without libx264)."""
+
+
+def parse_resize(text, *, name: str = "resize") -> tuple[int, int]:
+    """Parse ``'WxH'`` (e.g. ``'320x240'``) or a ``(W, H)`` pair into two positive ints.
+
+    ``name`` is the option named in the error message (the CLI passes ``--resize``).
+    """
+    if isinstance(text, str):
+        m = re.fullmatch(r"\s*(\d+)\s*[xX×,]\s*(\d+)\s*", text)
+        if not m:
+            raise InputValueError(f"bad {name} {text!r}: expected WxH with positive integers, e.g. 320x240")
+        w, h = int(m.group(1)), int(m.group(2))
+    else:
+        try:
+            w, h = (int(v) for v in text)
+        except (TypeError, ValueError):
+            raise InputValueError(f"bad {name} {text!r}: expected (W, H) or 'WxH', e.g. 320x240") from None
+    if w < 1 or h < 1:
+        raise InputValueError(f"bad {name} {text!r}: width and height must be positive")
+    _check_model_size(w, h, f"{name} {w}x{h}")
+    return w, h
+
+
+#: Largest frame (pixels) a resize or scale may ask for: 8K UHD, 7680 x 4320. The models keep
+#: ~26 float32 planes per stream (~3.5 GB at this size); a typo such as 20000x20000 would
+#: otherwise try to allocate tens of GB before failing.
+MAX_RESIZE_PIXELS = 7680 * 4320
+
+
+def output_size(w: int, h: int, resize, scale) -> tuple[int, int]:
+    """(W, H) the models see: the frame size, ``resize`` or the size times ``scale``."""
+    if resize is not None and scale is not None:
+        raise InputValueError("give either resize or scale, not both")
+    if resize is not None:
+        return parse_resize(resize)
+    if scale is None:
+        return int(w), int(h)
+    try:
+        s = float(scale)
+    except (TypeError, ValueError, OverflowError):
+        s = math.nan
+    if isinstance(scale, bool) or not math.isfinite(s) or s <= 0:
+        raise InputValueError(f"bad scale {scale!r}: expected a positive number")
+    _check_model_size(w * s, h * s, f"scale {scale!r} (frames of {w * s:.0f}x{h * s:.0f})")
+    return max(1, round(w * s)), max(1, round(h * s))
+
+
+def _check_model_size(w: float, h: float, what: str) -> None:
+    if w * h > MAX_RESIZE_PIXELS:
+        raise InputValueError(f"{what} is too large: {w * h / 1e6:.0f} megapixels, at most "
+                              f"{MAX_RESIZE_PIXELS / 1e6:.1f} (7680x4320)")
+
+
+def to_rgb(frame: np.ndarray) -> np.ndarray:
+    """Any uint8 grey / RGB / RGBA array -> (H, W, 3) RGB uint8."""
+    frame = np.asarray(frame)
+    if frame.dtype != np.uint8:
+        frame = np.clip(frame, 0, 255).astype(np.uint8)
+    if frame.ndim == 2:
+        frame = frame[:, :, None]
+    if frame.ndim == 3 and frame.shape[2] == 1:
+        return np.repeat(frame, 3, axis=2)
+    if frame.ndim == 3 and frame.shape[2] == 4:
+        return np.ascontiguousarray(frame[:, :, :3])
+    if frame.ndim == 3 and frame.shape[2] == 3:
+        return frame
+    raise InputValueError(f"frame must be (H, W), (H, W, 3) or (H, W, 4), got shape {frame.shape}")
+
+
+def is_camera(source) -> bool:
+    if isinstance(source, (int, np.integer)):
+        return not isinstance(source, bool)
+    return isinstance(source, str) and source.strip().isdigit() and not os.path.exists(source)
+

@@ -1,0 +1,290 @@
+"""The streaming source: :func:`open_source` gives a :class:`FrameSource`, which decodes in a
+background thread (decoding and the models overlap; memory does not depend on the video
+length) and resizes the frames; :func:`read_video` decodes a short clip into memory.
+"""
+
+from __future__ import annotations
+
+import queue
+import threading
+import warnings
+from collections.abc import Iterator
+
+import numpy as np
+
+from .._validation import InputValueError, check_fps
+from .decoders import Decoder, open_decoder
+from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, output_size, parse_resize
+
+_QUEUE_SIZE = 4
+
+
+# ---------------------------------------------------------------------------
+# the streaming source
+# ---------------------------------------------------------------------------
+class FrameSource:
+    """Iterable of ``(index, frame)`` decoded in a background thread.
+
+    Build it with :func:`open_source`. ``index`` is the frame's 0-based index
+    in the source (so the first frame yielded is ``start``); ``frame`` is RGB
+    ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing).
+    With ``keep_original=True`` the items are ``(index, frame, original)``,
+    ``original`` being the frame at the input size.
+
+    Attributes
+    ----------
+    fps : float
+        Frame rate: the ``fps`` given, else the container's, else 30.
+    size : (int, int)
+        ``(W, H)`` of the input frames.
+    out_size : (int, int)
+        ``(W, H)`` of the frames yielded (``size`` unless resized).
+    scale_x, scale_y : float
+        ``W_in / W_out`` and ``H_in / H_out``: multiply a model coordinate by
+        these to get input pixels (see :meth:`to_input`).
+    frame_count : int or None
+        Frames in the whole source as the container states it (None if unknown,
+        e.g. a camera).
+    total : int or None
+        Frames this source is expected to yield given ``start`` and ``end``.
+    n_read : int
+        Frames yielded so far.
+    truncated : bool
+        True when decoding stopped before the stated end (damaged or cut file);
+        :attr:`message` then names the frame where it stopped.
+    """
+
+    def __init__(self, decoder: Decoder, kind: str, *, fps=None, start: int = 0, end: int | None = None,
+                 resize=None, scale=None, keep_original: bool = False, queue_size: int = _QUEUE_SIZE):
+        self._dec = decoder
+        self.kind = kind
+        self.name = decoder.name
+        self.fps = check_fps(fps) if fps is not None else (decoder.fps or DEFAULT_FPS)
+        self.start = int(start)
+        self.end = None if end is None else int(end)
+        self.keep_original = keep_original
+        self.frame_count = decoder.frame_count
+        self.truncated = False
+        self.truncated_at: int | None = None
+        self.message: str | None = None
+        self.n_read = 0
+        # First frame read now, in the caller's thread, so that empty or
+        # undecodable inputs fail at open time with a clear message.
+        skipped = decoder.skip(self.start) if self.start else 0
+        if skipped < self.start:
+            decoder.close()
+            raise InputValueError(f"{self.name}: start frame {self.start} is past the end ({skipped} frames)")
+        first = decoder.read() if (self.end is None or self.end > self.start) else None
+        if first is None:
+            decoder.close()
+            if self.end is not None and self.end <= self.start:
+                raise InputValueError(f"end ({self.end}) must be larger than start ({self.start})")
+            if self.start:
+                raise InputValueError(f"{self.name}: no frame at or after start frame {self.start}")
+            raise InputValueError(f"{self.name}: video has no frames (empty or undecodable)")
+        h, w = first.shape[:2]
+        self.size = (int(w), int(h))
+        try:
+            self.out_size = output_size(w, h, resize, scale)
+        except BaseException:
+            decoder.close()
+            raise
+        self.scale_x = w / self.out_size[0]
+        self.scale_y = h / self.out_size[1]
+        if self.frame_count is not None:
+            stop = self.frame_count if self.end is None else min(self.end, self.frame_count)
+            self.total: int | None = max(stop - self.start, 0)
+        else:
+            self.total = None if self.end is None else self.end - self.start
+        self._first = first
+        self._queue: queue.Queue = queue.Queue(maxsize=queue_size)
+        self._stop = threading.Event()
+        self._thread: threading.Thread | None = None
+        self._iterated = False
+
+    # -- mapping --------------------------------------------------------------
+    @property
+    def resized(self) -> bool:
+        return self.out_size != self.size
+
+    def to_input(self, x: float, y: float) -> tuple[float, float]:
+        """Map a point from model (resized) pixels to input pixels:
+        ``(x * W_in / W_out, y * H_in / H_out)``."""
+        return x * self.scale_x, y * self.scale_y
+
+    # -- decoding thread ------------------------------------------------------
+    def _prepare(self, frame: np.ndarray):
+        if self.resized:
+            import cv2
+
+            small = cv2.resize(frame, self.out_size, interpolation=cv2.INTER_AREA)
+        else:
+            small = frame
+        return (small, frame) if self.keep_original else (small,)
+
+    def _put(self, item) -> bool:
+        while not self._stop.is_set():
+            try:
+                self._queue.put(item, timeout=0.1)
+                return True
+            except queue.Full:
+                continue
+        return False
+
+    def _work(self) -> None:
+        dec = self._dec
+        index = self.start
+        try:
+            frame = self._first
+            self._first = None
+            while frame is not None:
+                if not self._put(("frame", index, self._prepare(frame))):
+                    return
+                index += 1
+                if self.end is not None and index >= self.end:
+                    break
+                frame = dec.read()
+            self._put(("end", index, None))
+        except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
+            self._put(("error", index, exc))
+        finally:
+            dec.close()
+
+    def __iter__(self) -> Iterator[tuple]:
+        if self._iterated:
+            raise RuntimeError("a FrameSource can be iterated only once")
+        self._iterated = True
+        self._thread = threading.Thread(target=self._work, name="mlplc2-decode", daemon=True)
+        self._thread.start()
+        try:
+            while True:
+                kind, index, payload = self._queue.get()
+                if kind == "frame":
+                    self.n_read += 1
+                    yield (index, *payload)
+                elif kind == "end":
+                    self._check_end(index)
+                    return
+                else:
+                    raise payload
+        finally:
+            self.close()
+
+    def _check_end(self, index: int) -> None:
+        """Decide whether the stream stopped early (index = first frame not decoded)."""
+        expected = self.frame_count if self.end is None else (
+            min(self.end, self.frame_count) if self.frame_count is not None else None)
+        failed_image = getattr(self._dec, "failed", None)
+        if failed_image is not None:
+            self.truncated, self.truncated_at = True, index
+            self.message = f"{self.name}: {failed_image} (frame {index}); stopped there"
+        elif self.kind == "video" and expected is not None and index < expected:
+            self.truncated, self.truncated_at = True, index
+            self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
+                            "(file truncated or damaged); results cover frames before it")
+
+    def close(self) -> None:
+        """Stop the decoding thread and release the input (idempotent)."""
+        self._stop.set()
+        if self._thread is not None and self._thread is not threading.current_thread():
+            while self._thread.is_alive():
+                try:
+                    while True:
+                        self._queue.get_nowait()
+                except queue.Empty:
+                    pass
+                self._thread.join(timeout=0.05)
+        elif self._thread is None:
+            self._dec.close()
+
+    def __enter__(self) -> "FrameSource":
+        return self
+
+    def __exit__(self, *exc) -> None:
+        self.close()
+
+    def __repr__(self) -> str:
+        w, h = self.size
+        return (f"FrameSource({self.name!r}, kind={self.kind!r}, size={w}x{h}, "
+                f"out_size={self.out_size[0]}x{self.out_size[1]}, fps={self.fps:g}, frame_count={self.frame_count})")
+
+
+def open_source(source, *, fps=None, start: int = 0, end: int | None = None, resize=None, scale=None,
+                keep_original: bool = False, decoder: str = "opencv") -> FrameSource:
+    """Open a video file, a folder of images, a glob pattern or a camera for streaming.
+
+    Parameters
+    ----------
+    source : str, path-like or int
+        A video file (anything OpenCV/FFmpeg reads: AVI, MP4, ...), a folder
+        of images or a glob pattern such as ``'frames/*.png'`` (sorted
+        naturally: ``2.png`` before ``10.png``), or a camera index (an int or
+        a string of digits that is not an existing path).
+    fps : float, optional
+        Frame rate to use instead of the container's (images: default 30).
+    start, end : int
+        Yield frames ``start <= index < end`` (``end=None``: to the last).
+    resize : (W, H) or 'WxH', optional
+        Resize every frame to this size before yielding it.
+    scale : float, optional
+        Or resize by this factor (e.g. 0.5). Not together with ``resize``.
+    keep_original : bool
+        Also yield the frame at the input size: items ``(index, frame, original)``.
+    decoder : {'opencv', 'pyav'}
+        Video decoder.
+
+    Returns
+    -------
+    FrameSource
+        Iterate it once to get ``(index, frame)``; use it as a context manager
+        (or call ``close()``) to stop early.
+
+    Raises
+    ------
+    InputValueError
+        Missing file, directory without images, a file that is not a video,
+        a video with no frames, a bad ``resize``/``scale``/``start``/``end``.
+    """
+    start = int(start)
+    if start < 0:
+        raise InputValueError(f"start must be >= 0, got {start}")
+    if end is not None and int(end) <= start:
+        raise InputValueError(f"end ({end}) must be larger than start ({start})")
+    if resize is not None:
+        resize = parse_resize(resize)
+    if fps is not None:
+        fps = check_fps(fps)
+    reader, kind = open_decoder(source, decoder)
+    return FrameSource(reader, kind, fps=fps, start=start, end=end, resize=resize, scale=scale,
+                       keep_original=keep_original)
+
+
+def read_video(path, *, decoder: str = "opencv") -> tuple[np.ndarray, float]:
+    """Decode a whole video into memory.
+
+    Returns
+    -------
+    frames : ndarray, shape (T, H, W, 3), uint8
+        RGB frames.
+    fps : float
+        The container's frame rate (30 if it states none).
+
+    Raises
+    ------
+    InputValueError
+        Missing file, not a video, no frames.
+
+    Notes
+    -----
+    A truncated file gives the frames that decode, with a
+    :class:`TruncatedInputWarning` naming the frame where decoding stopped.
+    Use :func:`open_source` for long videos (memory independent of length).
+    """
+    if is_camera(path):
+        raise InputValueError("read_video reads files; use open_source for a camera")
+    src = open_source(path, decoder=decoder)
+    frames = [f for _, f in src]
+    if src.truncated:
+        warnings.warn(src.message, TruncatedInputWarning, stacklevel=2)
+    return np.stack(frames), src.fps
+

@@ -1,0 +1,127 @@
+"""What :func:`mlplc2.run` gives: :class:`RunResult` (the rows of ``responses.csv`` and
+``targets.csv``, the summaries of ``fields.json``), the columns of those files
+(:data:`COLUMNS`, :data:`TARGET_COLUMNS`), and :class:`RunInterrupted` (Ctrl-C during a run,
+carrying the result of the frames done).
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Any
+
+from ._validation import InputValueError
+
+__all__ = ["RunResult", "RunInterrupted", "COLUMNS", "TARGET_COLUMNS"]
+
+#: Columns of ``responses.csv``, in order.
+COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
+#: Columns of ``targets.csv``, in order (``docs/targets.md``): positions and sizes in input pixels,
+#: the bearing in degrees (empty without a field of view).
+TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
+                  "azimuth_deg", "elevation_deg")
+
+
+class RunInterrupted(KeyboardInterrupt):
+    """Ctrl-C during :func:`run`; the outputs for the frames done were written.
+
+    ``.result`` is the :class:`RunResult` of the frames processed.
+    """
+
+    def __init__(self, result: "RunResult"):
+        super().__init__(f"interrupted after {result.n_frames} frames")
+        self.result = result
+
+
+@dataclass
+class RunResult:
+    """What :func:`run` computed.
+
+    Attributes
+    ----------
+    rows : list of dict
+        The rows of ``responses.csv`` (keys :data:`COLUMNS`; ``None`` where the
+        CSV cell is empty; ``collision`` is 0 or 1). Empty when the run was made
+        with ``keep_rows=False`` (the rows are then only in the CSV).
+    alarms : dict
+        Per model name, the frames with the collision flag set: ``{"count": n,
+        "first": frame or None}`` (kept whatever ``keep_rows`` says).
+    fields : dict
+        Per model name, the list of field summaries written to ``fields.json``.
+    fps : float
+        Frame rate used (``time_s = frame / fps``).
+    n_frames : int
+        Frames processed.
+    truncated : bool
+        The input stopped decoding early (see ``message``).
+    interrupted : bool
+        The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
+    seconds : float
+        Wall time of the frame loop (decoding, models, writing the per-frame outputs),
+        in seconds; ``n_frames / seconds`` is the processing rate.
+    files : dict
+        Output name -> path of the files written (empty with ``out=False``).
+    """
+
+    source: str
+    models: list[str]
+    fps: float
+    size: tuple[int, int]
+    model_size: tuple[int, int]
+    start: int = 0
+    n_frames: int = 0
+    rows: list[dict] = field(default_factory=list)
+    fields: dict[str, list[dict]] = field(default_factory=dict)
+    truncated: bool = False
+    interrupted: bool = False
+    message: str | None = None
+    out: Path | None = None
+    files: dict[str, Path] = field(default_factory=dict)
+    targets: list[dict] = field(default_factory=list)
+    """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
+    alarms: dict[str, dict] = field(default_factory=dict)
+    hfov_deg: float | None = None
+    seconds: float = 0.0
+    target_summaries: dict[str, list[dict]] = field(default_factory=dict)
+    """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
+    repeated: dict[str, int] = field(default_factory=dict)
+    """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
+    duplicated: bool = False
+    """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
+    the copies from the start (:data:`mlplc2.runner.PRESCAN_FRAMES`)."""
+
+    def to_dataframe(self):
+        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
+        run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
+        try:
+            import pandas as pd
+        except ImportError:
+            raise ImportError("RunResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        if not self.rows and self.n_frames:
+            path = self.files.get("responses.csv")
+            if path is None or not Path(path).is_file():
+                raise InputValueError("this run kept no rows (keep_rows=False) and wrote no responses.csv")
+            df = pd.read_csv(path)
+        else:
+            df = pd.DataFrame(self.rows, columns=list(COLUMNS))
+        return df.astype({"field_id": "Int64", "x": "float64", "y": "float64", "collision": bool})
+
+    def summary(self) -> dict[str, Any]:
+        """The content of ``fields.json``."""
+        return {
+            "video": self.source,
+            "fps": self.fps,
+            "size": list(self.size),
+            "model_size": list(self.model_size),
+            "start": self.start,
+            "n_frames": self.n_frames,
+            "seconds": round(self.seconds, 3),
+            "complete": not (self.truncated or self.interrupted),
+            "truncated": self.truncated,
+            "interrupted": self.interrupted,
+            "hfov_deg": self.hfov_deg,
+            "models": self.fields,
+            "targets": self.target_summaries,
+            "duplicated": self.duplicated,
+            "frames_held": self.repeated,
+        }
