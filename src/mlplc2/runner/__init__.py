@@ -27,8 +27,8 @@ The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
 
 Its options are one :class:`RunOptions` (keywords of :func:`run` build it); the models are
-built from them. What a run gives, :class:`~mlplc2.run_result.RunResult` and the columns of
-its files, is in :mod:`mlplc2.run_result` (re-exported here).
+built from them. What a run gives, :class:`~mlplc2.runner.result.RunResult` and the columns of
+its files, is in :mod:`mlplc2.runner.result` (re-exported here).
 """
 
 from __future__ import annotations
@@ -45,17 +45,17 @@ from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
 
-from ._signals import interrupts
-from ._validation import InputTypeError, InputValueError, as_gray
-from ._files import write_json
-from .io import FrameSource, TruncatedInputWarning, VideoWriter, is_camera, open_source
-from .models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
+from .._signals import interrupts
+from .._validation import InputTypeError, InputValueError, as_gray
+from .._files import write_json
+from ..io import FrameSource, TruncatedInputWarning, VideoWriter, is_camera, open_source
+from ..models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
                           looks_duplicated, resolve_names)
-from .plots import DRAW_FIELDS
-from .targets import TargetParams, check_hfov
-from .evaluation.match import match_fields
-from .evaluation.record import Recorder, response_rows
-from .run_result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
+from ..plots import DRAW_FIELDS
+from ..targets import TargetParams, check_hfov
+from ..evaluation.match import match_fields
+from ..evaluation.record import Recorder, response_rows
+from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
 __all__ = ["run", "RunOptions", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir", "demo", "DemoResult"]
@@ -463,7 +463,7 @@ class _Frames:
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:
-            from .plots import annotate_frame
+            from ..plots import annotate_frame
 
             self.vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
                                          index=index, field_shape=self.field_shape,
@@ -559,7 +559,7 @@ def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool
         else:
             vw.abort()
     if plot and result.n_frames:
-        from .plots import plot_responses
+        from ..plots import plot_responses
 
         path = out_dir / "responses.png"
         title = f"{Path(result.source).name}: {', '.join(result.models)}"
@@ -600,7 +600,7 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
     ``matches`` has one entry per ground-truth object (see :func:`match_fields`):
     the mLPLC2 field that stands for it and the distance in pixels.
     """
-    from . import stimuli
+    from .. import stimuli
 
     out = Path(out)
     out.mkdir(parents=True, exist_ok=True)

@@ -20,7 +20,7 @@ Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
 cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
 after the other in this process without it.
 
-The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.sweep`.
+The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.batch.sweep`.
 """
 
 from __future__ import annotations
@@ -42,9 +42,9 @@ from pathlib import Path
 from typing import Any
 from urllib.parse import urlsplit
 
-from ._files import atomic_path, write_csv, write_json
-from ._signals import interrupts
-from ._validation import InputError, InputTypeError, InputValueError, check_int
+from .._files import atomic_path, write_csv, write_json
+from .._signals import interrupts
+from .._validation import InputError, InputTypeError, InputValueError, check_int
 from .sweep import (model_overrides, model_params, param_label, param_set_id, param_sets, parse_sweep,
                     restrict)
 
@@ -81,8 +81,8 @@ def run_task(task: dict) -> dict:
     row = _error_row(task)
     t0 = time.perf_counter()
     try:
-        from .io import TruncatedInputWarning
-        from .runner import run
+        from ..io import TruncatedInputWarning
+        from ..runner import run
 
         params = model_params(task["pset"], task["model"])
         (out / DONE_MARKER).unlink(missing_ok=True)  # the outputs are about to change
@@ -135,7 +135,7 @@ TITLE_WIDTH = 90
 def _plot(task: dict, note: str = "") -> None:
     """``responses.png`` of a task from its saved ``responses.csv`` and ``fields.json``, titled
     with its video and :func:`param_label` (as :func:`mlplc2.run` draws it, which names no parameters)."""
-    from .plots import plot_responses
+    from ..plots import plot_responses
 
     out = Path(task["out"])
     summary = json.loads((out / "fields.json").read_text(encoding="utf-8"))
@@ -346,7 +346,7 @@ def _completed(jobs: list[tuple[int, dict]], client) -> Iterator[tuple[int, dict
 def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
     """The run options that concern ``model``: the targets' settings only for models with
     targets (so that changing them does not rerun the others)."""
-    from .models.base import get_model
+    from ..models.base import get_model
 
     if "target_params" in options and not get_model(model).has_targets:
         return {k: v for k, v in options.items() if k != "target_params"}
@@ -408,11 +408,11 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
         On Ctrl-C (a ``KeyboardInterrupt``), after writing ``results.csv``
         for the tasks finished.
     """
-    from .models.base import resolve_names
+    from ..models.base import resolve_names
 
     names = resolve_names(models)
     workers, sequential = _check_cluster_options(scheduler, workers, client, parquet)
-    from .io import expand_inputs
+    from ..io import expand_inputs
 
     videos = expand_inputs(inputs)
     sets = param_sets(params, sweep, names)

@@ -10,7 +10,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
-from ._validation import InputValueError
+from .._validation import InputValueError
 
 __all__ = ["RunResult", "RunInterrupted", "COLUMNS", "TARGET_COLUMNS"]
 

@@ -14,7 +14,7 @@ import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from ._validation import InputTypeError, InputValueError
+from .._validation import InputTypeError, InputValueError
 
 __all__ = ["param_sets", "model_params", "parse_sweep", "param_set_id", "param_label", "restrict",
            "model_overrides"]
@@ -55,14 +55,14 @@ def parse_sweep(specs) -> dict[str, list]:
 
 @functools.lru_cache(maxsize=None)
 def _param_class(model: str):
-    from .models.base import get_model
+    from ..models.base import get_model
 
     return type(get_model(model)(fps=30.0).params)
 
 
 def _lplc2_family(model: str) -> bool:
     """Whether ``model`` takes :class:`~mlplc2.params.Params` (the LPLC2 family): the flat overrides apply to it."""
-    from .params import Params
+    from ..params import Params
 
     return _param_class(model) is Params
 
@@ -122,7 +122,7 @@ def _is_default(value, default) -> bool:
 def _drop_defaults(pset: Mapping) -> dict:
     """``pset`` without the overrides equal to the default value (``t_a=10`` is no
     override), so that a parameter set of default values has the id ``default``."""
-    from .params import Params
+    from ..params import Params
 
     flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
     base = Params().to_dict()
@@ -201,8 +201,8 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
     building the parameters of every model in ``models``. Overrides equal to
     the default value are dropped (a set of defaults is ``{}``, id ``default``).
     """
-    from .models.base import available_models
-    from .params import Params
+    from ..models.base import available_models
+    from ..params import Params
 
     base: dict = {}
     if params is not None:
