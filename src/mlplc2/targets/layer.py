@@ -18,7 +18,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-from ..camera import bearing
+from ..camera import bearing, warp
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import change_box
@@ -210,6 +210,31 @@ class TargetLayer:
         self._next = 1
         self._prev: list[np.ndarray] | None = None
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
+
+    def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
+        """Gaze stabilisation (as the front end's): the images kept of the last frames and every
+        target's box carried into this frame's pixels (``homography``: previous frame -> this one;
+        ``gray``: this frame, which fills what the turn uncovers). The turn adds to each track's
+        ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own."""
+        now = pyramid(gray)
+        w0 = gray.shape[1]
+
+        def level_h(k: int, shape) -> np.ndarray:
+            s = shape[1] / w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
+            sm = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5], [0.0, 0.0, 1.0]])
+            return sm @ homography @ np.linalg.inv(sm)
+
+        past = [[warp(img, level_h(k, img.shape), fill=now[k]) if k < len(now) and now[k].shape == img.shape
+                 else img for k, img in enumerate(levels)] for levels in self._past]
+        self._past.clear()
+        self._past.extend(past)
+        if self._prev is not None:
+            self._prev = self._past[-1]
+        for t in self._tracks:
+            x, y, z = homography @ np.array([t.cx, t.cy, 1.0])
+            dx, dy = x / z - t.cx, y / z - t.cy
+            t.cx, t.cy = t.cx + dx, t.cy + dy
+            t.ox, t.oy = t.ox + dx, t.oy + dy
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
