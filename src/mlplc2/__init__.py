@@ -8,9 +8,9 @@ from ._validation import InputError, InputWarning
 from .neuropils.attention import Field
 from .models import LGMD1, LGMD2, LPLC2, MLPLC2, SLPLC2, Output, available_models, get_model
 from .params import Params
-from .runner import RunResult, run
+from .runner import RunResult, run, stream
 from .evaluator import evaluate  # light: stdlib only at import time
 
 __all__ = ["Params", "MLPLC2", "SLPLC2", "LPLC2", "LGMD2", "LGMD1", "Output", "Field", "InputError", "InputWarning",
-           "available_models", "get_model", "run", "RunResult", "evaluate"]
+           "available_models", "get_model", "run", "stream", "RunResult", "evaluate"]
 __version__ = "0.1.0"

@@ -5,6 +5,7 @@
 from __future__ import annotations
 
 import argparse
+import contextlib
 import math
 import sys
 import warnings
@@ -13,13 +14,14 @@ from .._validation import InputValueError
 from ..io import parse_resize
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_warning_options, hfov_degrees, nonneg_int, pos_float, repeat_threshold_option, say,
+                     add_warning_options, hfov_degrees, nonneg_int, pos_float, pos_int, repeat_threshold_option, say,
                      target_options, warn)
 
 
 def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", help="video file (AVI, MP4, ...), folder of images, glob pattern "
-                                  "('frames/*.png', quoted) or camera index (0, 1, ...)")
+                                  "('frames/*.png', quoted), camera index (0, 1, ...), stream URL "
+                                  "(rtsp://..., http(s)://...) or - (a video piped to standard input)")
     p.add_argument("--model", "-m", action="append", metavar="NAME",
                    help=f"model(s) to run, repeatable or comma-separated; one of "
                         f"{', '.join(available_models())} (default: mlplc2)")
@@ -53,10 +55,28 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                           f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
                           f"repeated to raise the frame rate (docs/model.md)")
     add_warning_options(p)
+    p.add_argument("--jsonl", metavar="PATH|-",
+                   help="also write one JSON line per frame (targets, warning, skipped frames; docs/robot.md) "
+                        "to PATH or, with -, to standard output (everything else then goes to stderr), "
+                        "flushed as each frame is done")
+    p.add_argument("--live", action=argparse.BooleanOptionalAction, default=None,
+                   help="when the models fall behind, take the newest frame and skip the others (counted); "
+                        "default: on for cameras and rtsp:// (and other real-time) URLs, off for files, "
+                        "http(s):// and -")
+    p.add_argument("--max-frames", type=pos_int, metavar="N", help="stop after N frames")
+    p.add_argument("--duration", type=pos_float, metavar="S", help="stop after S seconds (wall clock)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
 
 
 def _cmd_run(args) -> int:
+    if args.jsonl != "-":
+        return _run(args, args.jsonl)
+    lines = sys.stdout
+    with contextlib.redirect_stdout(sys.stderr):  # stdout carries the JSON lines alone
+        return _run(args, lines)
+
+
+def _run(args, jsonl) -> int:
     from ..runner import RunInterrupted, TruncatedInputWarning, run
 
     models = resolve_names(args.model or ["mlplc2"], what="--model")
@@ -70,11 +90,14 @@ def _cmd_run(args) -> int:
                          start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                          hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
                          decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
-                         target_params=target_options(args) or None)
+                         target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
+                         max_frames=args.max_frames, duration_s=args.duration)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
-    if result.truncated:
+    if result.dropped:
+        print(f"{PROG}: {result.message}", file=sys.stderr)
+    elif result.truncated:
         warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
@@ -118,6 +141,12 @@ def _print_run_summary(args, result) -> None:
             lines.append(f"  {name}: {len(targets)} target(s), {len(warned)} warned"
                          + (f" (first warning at frame {min(t['first_warning_frame'] for t in warned)})"
                             if warned else ""))
+    if result.skipped:
+        lines.append(f"skipped {result.skipped} frame(s) of the live source: the models took the newest frame")
+    if result.latency:
+        lat = result.latency
+        lines.append(f"latency from decoding to results: median {lat['median_ms']:.1f} ms, "
+                     f"99th percentile {lat['p99_ms']:.1f} ms, max {lat['max_ms']:.1f} ms")
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)

@@ -10,12 +10,13 @@ import logging
 import math
 import os
 import re
+import sys
 from pathlib import Path
 
 import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
-from .formats import IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, is_camera
+from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_url
 
 log = logging.getLogger(__name__)
 
@@ -61,6 +62,9 @@ class _OpenCVDecoder(Decoder):
 
         self._cv2 = cv2
         self.name = name
+        self._camera = camera
+        #: Set when a camera stops delivering frames (a file simply ends).
+        self.error: str | None = None
         self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
@@ -79,6 +83,8 @@ class _OpenCVDecoder(Decoder):
     def read(self):
         ok, frame = self.cap.read()
         if not ok or frame is None:
+            if self._camera:
+                self.error = "the camera delivered no frame"
             return None
         if frame.ndim == 2:
             return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
@@ -89,16 +95,26 @@ class _OpenCVDecoder(Decoder):
 
 
 class _PyAVDecoder(Decoder):
-    def __init__(self, path: str, name: str):
+    """A video file, a URL (``stream=True``) or a binary file object (stdin) decoded by PyAV."""
+
+    #: Seconds PyAV waits to open a URL or for its next packet before the stream counts as dropped.
+    TIMEOUT_S = 10.0
+
+    def __init__(self, path, name: str, stream: bool = False):
         try:
             import av
         except ImportError:
             raise InputError("decoder 'pyav' needs PyAV, which is not installed: pip install av") from None
         self.name = name
         self._av = av
+        #: Why decoding of a stream stopped early (an FFmpeg error), None at a clean end.
+        self.error: str | None = None
+        options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
         try:
-            self.container = av.open(path)
-        except av.error.FFmpegError:
+            self.container = av.open(path, mode="r", options=options, timeout=self.TIMEOUT_S if stream else None)
+        except (av.error.FFmpegError, OSError) as exc:
+            if stream:
+                raise InputValueError(f"{name}: cannot open the stream ({_one_line(str(exc))})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
             self.container.close()
@@ -116,8 +132,9 @@ class _PyAVDecoder(Decoder):
             frame = next(self._frames)
         except StopIteration:
             return None
-        except self._av.error.FFmpegError as exc:
+        except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
+            self.error = _one_line(str(exc))
             return None
         return frame.to_ndarray(format="rgb24")
 
@@ -218,13 +235,24 @@ def _image_files(source: str) -> tuple[list[str], str]:
     return sorted(images, key=_natural_key), source
 
 
+def _one_line(text: str) -> str:
+    return " ".join(str(text).split()) or "unknown error"
+
+
 def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
-    """Return (decoder, kind) with kind in {'video', 'images', 'camera'}."""
+    """Return (decoder, kind) with kind in {'video', 'images', 'camera', 'stream'}.
+
+    A URL (:func:`~.formats.is_url`: RTSP, HTTP(S), ...) and ``'-'`` (standard input, any
+    container FFmpeg reads from a pipe) are streams, always decoded by PyAV."""
     if decoder not in ("opencv", "pyav"):
         raise InputValueError(f"unknown decoder {decoder!r}; choose 'opencv' or 'pyav'")
     if is_camera(source):
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
+    if source == STDIN:
+        return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
+    if is_url(source):
+        return _PyAVDecoder(source, source, stream=True), "stream"
     if isinstance(source, os.PathLike):
         source = os.fspath(source)
     if not isinstance(source, str):
@@ -232,7 +260,7 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         what = type(source).__name__ + (f" of shape {tuple(shape)}" if shape is not None else "")
         hint = ("; to run on frames in memory, step the model: model.run(frames)"
                 if shape is not None or hasattr(source, "frames") else "")
-        raise InputTypeError(f"source must be a path, a glob pattern or a camera index, got a {what}{hint}")
+        raise InputTypeError(f"source must be a path, a URL, '-', a glob pattern or a camera index, got a {what}{hint}")
     if os.path.isdir(source):
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"
@@ -245,5 +273,6 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
     if any(ch in source for ch in "*?["):
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"
-    raise InputValueError(f"{source}: no such file or directory")
+    raise InputValueError(f"{source}: no such file or directory (a stream: a URL such as rtsp://HOST/PATH "
+                          f"or http://HOST/PATH, or - for standard input)")
 

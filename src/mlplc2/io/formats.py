@@ -97,6 +97,25 @@ def to_rgb(frame: np.ndarray) -> np.ndarray:
     raise InputValueError(f"frame must be (H, W), (H, W, 3) or (H, W, 4), got shape {frame.shape}")
 
 
+#: The source that means standard input (``mlplc2 run -``).
+STDIN = "-"
+#: URL schemes of live streams: frames arrive in real time, so a run that falls behind takes the
+#: newest frame and skips the others (``open_source(live=None)``). HTTP(S) is not among them (it
+#: serves files as often as cameras): give ``live=True`` (``--live``) for an HTTP camera.
+LIVE_SCHEMES = ("rtsp", "rtsps", "rtmp", "rtmps", "rtp", "srt", "udp", "tcp")
+
+
+def is_url(source) -> bool:
+    """Whether ``source`` is a URL (``scheme://...``, e.g. ``rtsp://``, ``http://``) and not an existing path."""
+    return (isinstance(source, str) and re.match(r"[A-Za-z][A-Za-z0-9+.-]*://", source) is not None
+            and not os.path.exists(source))
+
+
+def is_live(source) -> bool:
+    """Whether ``source`` is live by default: a camera or a URL of :data:`LIVE_SCHEMES`."""
+    return is_camera(source) or (is_url(source) and source.split(":", 1)[0].lower() in LIVE_SCHEMES)
+
+
 def is_camera(source) -> bool:
     if isinstance(source, (int, np.integer)):
         return not isinstance(source, bool)

@@ -7,6 +7,7 @@ from __future__ import annotations
 
 import queue
 import threading
+import time
 import warnings
 from collections.abc import Iterator
 
@@ -14,7 +15,7 @@ import numpy as np
 
 from .._validation import InputValueError, check_fps
 from .decoders import Decoder, open_decoder
-from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, output_size, parse_resize
+from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
 _QUEUE_SIZE = 4
 
@@ -52,12 +53,31 @@ class FrameSource:
     truncated : bool
         True when decoding stopped before the stated end (damaged or cut file);
         :attr:`message` then names the frame where it stopped.
+    live : bool
+        Frames arrive in real time (a camera, an RTSP stream): the decoding thread never
+        waits for the consumer; it keeps only the newest decoded frame, so a consumer that
+        falls behind gets the newest frame and the ones in between are skipped (the gap in
+        ``index``; :attr:`skipped`, :attr:`n_skipped`). Not live (a file, HTTP, stdin): every
+        frame in order, the thread waits when the queue is full.
+    decoded_at : float
+        ``time.perf_counter()`` when the frame last yielded was decoded (and resized): the
+        start of its latency.
+    skipped : int
+        Frames skipped just before the frame last yielded (live only); :attr:`n_skipped` all of them.
+    dropped : bool
+        A stream or camera stopped with an error (connection lost, no frame): :attr:`message`
+        says so; the frames before it were yielded.
     """
 
     def __init__(self, decoder: Decoder, kind: str, *, fps=None, start: int = 0, end: int | None = None,
-                 resize=None, scale=None, keep_original: bool = False, queue_size: int = _QUEUE_SIZE):
+                 resize=None, scale=None, keep_original: bool = False, queue_size: int = _QUEUE_SIZE,
+                 live: bool = False):
         self._dec = decoder
         self.kind = kind
+        self.live = bool(live)
+        self.decoded_at = 0.0
+        self.skipped = self.n_skipped = 0
+        self.dropped = False
         self.name = decoder.name
         self.fps = check_fps(fps) if fps is not None else (decoder.fps or DEFAULT_FPS)
         self.start = int(start)
@@ -97,7 +117,7 @@ class FrameSource:
         else:
             self.total = None if self.end is None else self.end - self.start
         self._first = first
-        self._queue: queue.Queue = queue.Queue(maxsize=queue_size)
+        self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._iterated = False
@@ -123,12 +143,28 @@ class FrameSource:
         return (small, frame) if self.keep_original else (small,)
 
     def _put(self, item) -> bool:
+        if self.live and item[0] == "frame":
+            return self._replace(item)
         while not self._stop.is_set():
             try:
                 self._queue.put(item, timeout=0.1)
                 return True
             except queue.Full:
                 continue
+        return False
+
+    def _replace(self, item) -> bool:
+        """Live: put the newest frame, replacing a frame not yet taken (counted as skipped)."""
+        while not self._stop.is_set():
+            try:
+                self._queue.put_nowait(item)
+                return True
+            except queue.Full:
+                try:
+                    old = self._queue.get_nowait()
+                except queue.Empty:
+                    continue
+                item = (*item[:4], item[4] + old[4] + 1)
         return False
 
     def _work(self) -> None:
@@ -138,15 +174,16 @@ class FrameSource:
             frame = self._first
             self._first = None
             while frame is not None:
-                if not self._put(("frame", index, self._prepare(frame))):
+                payload = self._prepare(frame)
+                if not self._put(("frame", index, payload, time.perf_counter(), 0)):
                     return
                 index += 1
                 if self.end is not None and index >= self.end:
                     break
                 frame = dec.read()
-            self._put(("end", index, None))
+            self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
-            self._put(("error", index, exc))
+            self._put(("error", index, exc, 0.0, 0))
         finally:
             dec.close()
 
@@ -158,9 +195,10 @@ class FrameSource:
         self._thread.start()
         try:
             while True:
-                kind, index, payload = self._queue.get()
+                kind, index, payload, self.decoded_at, self.skipped = self._queue.get()
                 if kind == "frame":
                     self.n_read += 1
+                    self.n_skipped += self.skipped
                     yield (index, *payload)
                 elif kind == "end":
                     self._check_end(index)
@@ -175,7 +213,12 @@ class FrameSource:
         expected = self.frame_count if self.end is None else (
             min(self.end, self.frame_count) if self.frame_count is not None else None)
         failed_image = getattr(self._dec, "failed", None)
-        if failed_image is not None:
+        error = getattr(self._dec, "error", None)
+        if self.kind in ("stream", "camera") and error is not None:
+            self.dropped = True
+            self.message = (f"{self.name}: the stream stopped after {self.n_read} frames ({error}); "
+                            "results cover the frames before it")
+        elif failed_image is not None:
             self.truncated, self.truncated_at = True, index
             self.message = f"{self.name}: {failed_image} (frame {index}); stopped there"
         elif self.kind == "video" and expected is not None and index < expected:
@@ -210,16 +253,18 @@ class FrameSource:
 
 
 def open_source(source, *, fps=None, start: int = 0, end: int | None = None, resize=None, scale=None,
-                keep_original: bool = False, decoder: str = "opencv") -> FrameSource:
-    """Open a video file, a folder of images, a glob pattern or a camera for streaming.
+                keep_original: bool = False, decoder: str = "opencv", live: bool | None = None) -> FrameSource:
+    """Open a video file, a folder of images, a glob pattern, a camera or a stream for streaming.
 
     Parameters
     ----------
     source : str, path-like or int
         A video file (anything OpenCV/FFmpeg reads: AVI, MP4, ...), a folder
         of images or a glob pattern such as ``'frames/*.png'`` (sorted
-        naturally: ``2.png`` before ``10.png``), or a camera index (an int or
-        a string of digits that is not an existing path).
+        naturally: ``2.png`` before ``10.png``), a camera index (an int or
+        a string of digits that is not an existing path), a URL (``rtsp://``,
+        ``http(s)://``, anything FFmpeg opens; decoded by PyAV) or ``'-'``: standard input
+        (any container FFmpeg reads from a pipe; PyAV).
     fps : float, optional
         Frame rate to use instead of the container's (images: default 30).
     start, end : int
@@ -231,7 +276,11 @@ def open_source(source, *, fps=None, start: int = 0, end: int | None = None, res
     keep_original : bool
         Also yield the frame at the input size: items ``(index, frame, original)``.
     decoder : {'opencv', 'pyav'}
-        Video decoder.
+        Video decoder (of files; streams are decoded by PyAV, cameras by OpenCV).
+    live : bool, optional
+        Take the newest frame when the consumer falls behind, skipping the others
+        (:attr:`FrameSource.live`). Default: a camera and the URLs of
+        :data:`~mlplc2.io.formats.LIVE_SCHEMES` (RTSP, ...) are live; files, HTTP(S) and stdin not.
 
     Returns
     -------
@@ -256,7 +305,7 @@ def open_source(source, *, fps=None, start: int = 0, end: int | None = None, res
         fps = check_fps(fps)
     reader, kind = open_decoder(source, decoder)
     return FrameSource(reader, kind, fps=fps, start=start, end=end, resize=resize, scale=scale,
-                       keep_original=keep_original)
+                       keep_original=keep_original, live=is_live(source) if live is None else live)
 
 
 def read_video(path, *, decoder: str = "opencv") -> tuple[np.ndarray, float]:

@@ -33,14 +33,12 @@ its files, is in :mod:`mlplc2.runner.result` (re-exported here).
 
 from __future__ import annotations
 
-import csv
-import io
 import json
 import logging
 import sys
 import time
 import warnings
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Iterable, Iterator, Mapping, Sequence
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Any
@@ -49,24 +47,32 @@ from .._signals import interrupts
 from .._validation import InputTypeError, InputValueError, as_gray
 from .._files import write_json
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, is_camera, open_source
+from ..io.formats import STDIN, is_url
 from ..models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
                           looks_duplicated, resolve_names)
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
 from ..evaluation.record import Recorder, response_rows
+from .live import CsvFile, JsonLines, Latency, frame_record
 from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
-__all__ = ["run", "RunOptions", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
+__all__ = ["run", "stream", "RunOptions", "RunResult", "RunInterrupted", "TruncatedInputWarning", "COLUMNS", "TARGET_COLUMNS",
            "default_out_dir", "demo", "DemoResult"]
 
 log = logging.getLogger(__name__)
 
 
 def default_out_dir(source) -> Path:
-    """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``)."""
+    """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``; a URL:
+    ``./<last part of its path or host>_mlplc2``; stdin: ``./stdin_mlplc2``)."""
+    if isinstance(source, FrameSource):
+        source = source.name
     if is_camera(source):
         return Path.cwd() / f"camera{int(source)}_mlplc2"
+    if source == STDIN or is_url(source):
+        name = "stdin" if source == STDIN else Path(str(source).split("://", 1)[1].split("?")[0]).stem
+        return Path.cwd() / f"{''.join(c if c.isalnum() or c in '-_.' else '_' for c in name) or 'stream'}_mlplc2"
     p = Path(source)
     if p.is_dir():
         p = p.resolve()
@@ -139,6 +145,18 @@ class RunOptions:
         No progress bar.
     progress : bool
         Show a tqdm progress bar on stderr (unless ``quiet``).
+    live : bool, optional
+        Take the newest frame when the models fall behind, skipping the others (counted:
+        ``RunResult.skipped``, ``"skipped"`` on the stream); default: cameras and RTSP (and
+        other real-time URL schemes) are live, files, HTTP(S) and stdin not
+        (:func:`mlplc2.io.open_source`).
+    jsonl : path, '-' or text file, optional
+        Also write one JSON line per frame there (``'-'``: standard output), flushed as each
+        frame is done (:mod:`mlplc2.runner.live`; docs/robot.md).
+    max_frames : int, optional
+        Stop after this many frames (e.g. of a live source).
+    duration_s : float, optional
+        Stop after this many seconds of wall time.
     """
 
     fps: float | None = None
@@ -157,11 +175,20 @@ class RunOptions:
     keep_rows: bool = True
     quiet: bool = False
     progress: bool = True
+    live: bool | None = None
+    jsonl: Any = None
+    max_frames: int | None = None
+    duration_s: float | None = None
 
     def source_options(self) -> dict[str, Any]:
         """The keywords of :func:`mlplc2.io.open_source` that choose the frames."""
         return {"fps": self.fps, "start": self.start, "end": self.end, "resize": self.resize,
-                "scale": self.scale, "decoder": self.decoder}
+                "scale": self.scale, "decoder": self.decoder, "live": self.live}
+
+    def done(self, n_frames: int, seconds: float) -> bool:
+        """Whether a run that did ``n_frames`` in ``seconds`` stops here (``max_frames``, ``duration_s``)."""
+        return ((self.max_frames is not None and n_frames >= self.max_frames)
+                or (self.duration_s is not None and seconds >= self.duration_s))
 
 
 _OPTION_NAMES = tuple(f.name for f in fields(RunOptions))
@@ -351,24 +378,64 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         The input stopped decoding early; the outputs cover the frames decoded
         and ``result.truncated`` is True.
     """
-    # Validate everything cheap before decoding anything.
     options = _run_options(options, keywords)
+    src, built, result = _open(source, models, options, out)
+    return _loop(src, built, result, result.out, options)
+
+
+def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, options: RunOptions | None = None,
+           **keywords) -> Iterator[dict]:
+    """Run models over a source and yield each frame's results as it is done.
+
+    The same as ``mlplc2 run SOURCE --jsonl -`` from Python: each item is the dict of one JSON
+    line (schema 1, docs/robot.md: ``frame``, ``time_s``, ``skipped``, ``warning``, ``models``,
+    ``targets``). ``source``, ``model`` and the keywords are those of :func:`run` (``source`` may
+    also be an opened :class:`~mlplc2.io.FrameSource`); nothing is written. Stop by breaking out
+    of the loop (or ``max_frames`` / ``duration_s``); the source is then closed.
+
+    >>> for line in mlplc2.stream("rtsp://camera/stream", hfov_deg=90):   # doctest: +SKIP
+    ...     if line["warning"]:
+    ...         brake()
+    """
+    options = replace(_run_options(options, keywords), video=False, keep_rows=False)
+    src, built, result = _open(source, model, options, False)
+    frames = _Frames(src, built, result, options)
+    t0 = time.perf_counter()
+    try:
+        for item in src:
+            yield frames.step(item)
+            if options.done(result.n_frames, time.perf_counter() - t0):
+                break
+    finally:
+        src.close()
+
+
+def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[Model], RunResult]:
+    """The opened source, the built models and the result to fill (its ``out``: the folder
+    made, None for ``out=False``); everything cheap is checked before anything is decoded."""
     models = _model_list(models)
     if options.draw_fields not in DRAW_FIELDS:
         raise InputValueError(f"draw_fields must be one of {', '.join(map(repr, DRAW_FIELDS))}, "
                               f"got {options.draw_fields!r}")
-    src = open_source(source, keep_original=options.video, **options.source_options())
+    jsonl = options.jsonl
+    if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and Path(jsonl).is_dir():
+        raise InputValueError(f"{jsonl}: is a folder; jsonl takes a file or -")
+    if isinstance(source, FrameSource):
+        src = source
+    else:
+        src = open_source(source, keep_original=options.video, **options.source_options())
     try:
         built, duplicated = _prepare_models(source, models, src, options)
         out_dir = None if out is False else _prepare_out_dir(source, src, out)
     except BaseException:
         src.close()
         raise
-    result = RunResult(source=str(source), models=[m.name for m in built], fps=src.fps, size=src.size,
+    result = RunResult(source=str(src.name if isinstance(source, FrameSource) else source),
+                       models=[m.name for m in built], fps=src.fps, size=src.size,
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
-    return _loop(src, built, result, out_dir, options)
+    return src, built, result
 
 
 #: Frames of a video :func:`run` looks at first to tell whether its frames were duplicated.
@@ -379,10 +446,11 @@ def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOp
     """For a video or image sequence with models whose ``repeat_threshold`` is ``"auto"`` (``auto``):
     whether its first :data:`PRESCAN_FRAMES` frames look duplicated (:func:`mlplc2.models.base.looks_duplicated`,
     measured at the models' working size). If so those models hold duplicates from the first frame
-    on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera is not scanned."""
+    on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera and a stream
+    (URL, stdin: read once) are not scanned: their models find out after a few frames."""
     import cv2
 
-    if not auto or src.kind == "camera":
+    if not auto or src.kind in ("camera", "stream") or isinstance(source, FrameSource):
         return False
     width = min((m.work_width for m in auto if m.work_width is not None), default=None)
     scan = open_source(source, **options.source_options())
@@ -409,26 +477,6 @@ def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOp
 RUN_OUTPUTS = ("responses.csv", "targets.csv", "fields.json", "responses.png", "annotated.mp4")
 
 
-class _CsvFile:
-    """A CSV file of dict rows, header first; :meth:`write` makes one ``write()`` per frame, then
-    flushes: the file holds whole frames only."""
-
-    def __init__(self, path: Path, columns: Sequence[str]):
-        self.path = path
-        self.file = open(path, "w", newline="", buffering=1, encoding="utf-8")
-        self._buf = io.StringIO()
-        self._writer = csv.DictWriter(self._buf, fieldnames=columns, lineterminator="\n")
-        self._writer.writeheader()
-        self.write([])
-
-    def write(self, rows: list[dict]) -> None:
-        self._writer.writerows(rows)
-        self.file.write(self._buf.getvalue())
-        self.file.flush()
-        self._buf.seek(0)
-        self._buf.truncate()
-
-
 class _Frames:
     """The per-frame work of :func:`run`: step every model, record, write each output's share."""
 
@@ -440,22 +488,27 @@ class _Frames:
         self.primary = next((i for i, m in enumerate(built) if m.has_fields), None)  # the model drawn on the video
         self.field_shape = (getattr(built[self.primary].params, "field_shape", "square")
                             if self.primary is not None else "square")
-        self.responses = self.targets = self.vw = None
+        self.responses = self.targets = self.vw = self.lines = None
+        self.latency = Latency()
 
     def open(self, out_dir: Path | None) -> None:
-        """The per-frame outputs: ``responses.csv``, ``targets.csv`` and ``annotated.mp4``."""
+        """The per-frame outputs: the JSON lines, ``responses.csv``, ``targets.csv`` and ``annotated.mp4``."""
+        if self.options.jsonl is not None:
+            self.lines = JsonLines(self.options.jsonl)
         if out_dir is None:
             return
-        self.responses = _CsvFile(out_dir / "responses.csv", COLUMNS)
+        self.responses = CsvFile(out_dir / "responses.csv", COLUMNS)
         self.result.files["responses.csv"] = self.responses.path
         if any(m.has_targets for m in self.built):
-            self.targets = _CsvFile(out_dir / "targets.csv", TARGET_COLUMNS)
+            self.targets = CsvFile(out_dir / "targets.csv", TARGET_COLUMNS)
             self.result.files["targets.csv"] = self.targets.path
         if self.options.video:
             self.vw = VideoWriter(out_dir / "annotated.mp4", self.src.fps, self.src.size)
 
-    def step(self, item: tuple) -> None:
-        """One frame: the models step, then the frame's share of every output, together."""
+    def step(self, item: tuple) -> dict:
+        """One frame: the models step, then the frame's share of every output, together; returns
+        the frame's JSON line (:func:`~mlplc2.runner.live.frame_record`). Its latency runs from the
+        frame's decoding to the end of its writing."""
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
         outputs = [m.step(frame) for m in self.built]
@@ -479,22 +532,33 @@ class _Frames:
             self.targets.write(target_rows)
         if self.responses is not None:
             self.responses.write(frame_rows)
+        record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
+        if self.lines is not None:
+            self.lines.write(record)
         if self.options.keep_rows:
             result.targets.extend(target_rows)
             result.rows.extend(frame_rows)
         result.n_frames += 1
+        result.skipped += src.skipped
+        if result.n_frames > 1:  # the first frame's step builds the models' state (and compiles): not latency
+            self.latency.add(time.perf_counter() - src.decoded_at)
+        return record
 
     def close_csv(self) -> None:
         for f in (self.responses, self.targets):
             if f is not None:
                 f.file.close()
+        if self.lines is not None:
+            self.lines.close()
 
     def summarise(self, interrupted: bool) -> None:
         """The run's end state and the summaries of its fields and targets into ``result``."""
         result, recorder, names = self.result, self.recorder, self.names
         result.interrupted = interrupted
         result.truncated = self.src.truncated
+        result.dropped = self.src.dropped
         result.message = self.src.message
+        result.latency = self.latency.stats()
         # Fields still alive at the end keep died = None.
         with recorder:
             result.fields = {name: recorder.summaries(name) for name in names}
@@ -522,6 +586,8 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             for item in stop.between(src):
                 frames.step(item)
                 bar.update()
+                if options.done(result.n_frames, time.perf_counter() - t0):
+                    break
         except KeyboardInterrupt:
             interrupted = True
         except BaseException:

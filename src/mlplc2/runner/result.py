@@ -86,6 +86,12 @@ class RunResult:
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
     repeated: dict[str, int] = field(default_factory=dict)
     """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
+    skipped: int = 0
+    """Frames of a live source skipped because the models were behind (the newest frame was taken)."""
+    dropped: bool = False
+    """A stream or camera stopped with an error (``message`` says which); the results cover the frames before."""
+    latency: dict[str, float] = field(default_factory=dict)
+    """From a frame's decoding to the end of its outputs (its JSON line): ``median_ms``, ``p99_ms``, ``max_ms``."""
     duplicated: bool = False
     """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
     the copies from the start (:data:`mlplc2.runner.PRESCAN_FRAMES`)."""
@@ -124,4 +130,7 @@ class RunResult:
             "targets": self.target_summaries,
             "duplicated": self.duplicated,
             "frames_held": self.repeated,
+            "frames_skipped": self.skipped,
+            "dropped": self.dropped,
+            "latency_ms": self.latency,
         }
