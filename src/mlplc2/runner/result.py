@@ -122,7 +122,7 @@ class RunResult:
             "start": self.start,
             "n_frames": self.n_frames,
             "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted),
+            "complete": not (self.truncated or self.interrupted or self.dropped),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
             "hfov_deg": self.hfov_deg,

@@ -1,0 +1,191 @@
+"""Live sources and the stream of results (mlplc2.io streams, mlplc2.runner.live, ``mlplc2 run
+--jsonl``, ``mlplc2.stream``): a clip over HTTP and through stdin gives the file's results; the
+JSON lines arrive while the run goes on; a live source faster than the model keeps the delay
+bounded and counts the frames it skipped; a dropped stream keeps what was written."""
+
+from __future__ import annotations
+
+import functools
+import http.server
+import json
+import subprocess
+import sys
+import threading
+import time
+
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2.cli import main
+from mlplc2.io import FrameSource
+from mlplc2.io.decoders import Decoder
+from mlplc2.runner.live import Latency
+
+
+@pytest.fixture
+def http_dir(tmp_path):
+    """Serve ``tmp_path / "www"`` on 127.0.0.1; yields (folder, base URL)."""
+    root = tmp_path / "www"
+    root.mkdir()
+    handler = functools.partial(_QuietHandler, directory=str(root))
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), handler)
+    thread = threading.Thread(target=server.serve_forever, daemon=True)
+    thread.start()
+    yield root, f"http://127.0.0.1:{server.server_address[1]}"
+    server.shutdown()
+    server.server_close()
+
+
+class _QuietHandler(http.server.SimpleHTTPRequestHandler):
+    def log_message(self, *args):
+        pass
+
+
+def _lines(path):
+    return [json.loads(line) for line in path.read_text().splitlines()]
+
+
+def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, capsys):
+    clip = data["avi"]
+    root, base = http_dir
+    (root / "clip.avi").write_bytes(clip.read_bytes())
+    common = ["--every-frame", "-q"]
+    assert main(["run", str(clip), "-o", str(tmp_path / "f"), "--jsonl", str(tmp_path / "f.jsonl"), *common]) == 0
+    assert main(["run", f"{base}/clip.avi", "-o", str(tmp_path / "h"), "--jsonl", str(tmp_path / "h.jsonl"),
+                 *common]) == 0
+    with open(clip, "rb") as stdin:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-o", str(tmp_path / "s"),
+                               "--jsonl", "-", *common], stdin=stdin, capture_output=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    from_file = _lines(tmp_path / "f.jsonl")
+    assert len(from_file) == 60 and any(line["targets"] for line in from_file)
+    assert _lines(tmp_path / "h.jsonl") == from_file
+    assert [json.loads(line) for line in proc.stdout.decode().splitlines()] == from_file
+    for out in ("h", "s"):
+        assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
+
+
+def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
+    """The first line is read while the process still runs: its stdin (the clip) is not closed yet."""
+    clip = data["avi"].read_bytes()
+    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        try:
+            proc.stdin.write(clip[: len(clip) * 3 // 4])
+            proc.stdin.flush()
+            first = json.loads(proc.stdout.readline())
+            assert proc.poll() is None
+            proc.stdin.write(clip[len(clip) * 3 // 4:])
+            proc.stdin.close()
+            rest = proc.stdout.read().decode().splitlines()
+            err = proc.stderr.read().decode()
+            assert proc.wait(timeout=120) == 0, err
+        finally:
+            proc.kill()
+    assert first["schema"] == 1 and first["frame"] == 0 and first["skipped"] == 0
+    assert set(first) >= {"time_s", "warning", "targets", "models"}
+    assert len(rest) == 59 and all(line.startswith("{") for line in rest)  # stdout: the JSON lines alone
+    assert "60 frames of -" in err  # the summary went to stderr
+
+
+class _Clock(Decoder):
+    """A live camera stand-in: frame k is ready at ``t0 + k * period`` (read waits for it); a
+    square on noise that grows. ``produced`` counts the frames delivered so far."""
+
+    def __init__(self, n, period):
+        self.name, self.fps, self.size = "clock", 1.0 / period, (160, 120)
+        self.n, self.period, self.produced, self.t0 = n, period, 0, None
+        rng = np.random.default_rng(1)
+        self.bg = rng.integers(60, 200, (120, 160), dtype=np.uint8)
+
+    def read(self):
+        if self.produced >= self.n:
+            return None
+        self.t0 = time.perf_counter() if self.t0 is None else self.t0
+        wait = self.t0 + self.produced * self.period - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+        f = self.bg.copy()
+        s = 2 + self.produced // 4
+        f[60 - s:60 + s, 80 - s:80 + s] = 0
+        self.produced += 1
+        return np.repeat(f[:, :, None], 3, axis=2)
+
+
+@pytest.mark.parametrize("live", [True, False])
+def test_a_live_source_faster_than_the_model_skips_to_the_newest_frame(live):
+    period = 0.01                     # the source: 100 frames/s
+    dec = _Clock(120, period)
+    src = FrameSource(dec, "camera", live=live)
+    delays, lines = [], []
+    for line in mlplc2.stream(src, "mlplc2", repeat_threshold=None):
+        delays.append(time.perf_counter() - (dec.t0 + line["frame"] * period))  # since the scene was filmed
+        lines.append(line)
+        time.sleep(4 * period)         # the model, slowed to a quarter of the source's rate
+    frames = [line["frame"] for line in lines]
+    if live:
+        assert max(delays[1:]) < 0.25, delays  # (the first frame's step compiles): 4 periods + a step
+        assert sum(line["skipped"] for line in lines) == src.n_skipped > 60
+        assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
+        assert frames[-1] == 119 and len(frames) + src.n_skipped == 120
+    else:                               # a file is read frame by frame: nothing skipped, the lag grows
+        assert frames == list(range(120)) and src.n_skipped == 0 and delays[-1] > 1.0
+
+
+def test_run_stops_after_max_frames_and_reports_latency(data, tmp_path, capsys):
+    assert main(["run", str(data["avi"]), "-o", str(tmp_path / "o"), "--max-frames", "7"]) == 0
+    out = capsys.readouterr().out
+    assert out.startswith("7 frames of")
+    assert "latency from decoding to results: median" in out
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["n_frames"] == 7 and set(summary["latency_ms"]) == {"median_ms", "p99_ms", "max_ms"}
+
+
+class _DroppingHandler(http.server.BaseHTTPRequestHandler):
+    payload = b""
+
+    def do_GET(self):  # noqa: N802 - http.server's name
+        self.send_response(200)
+        self.send_header("Content-Length", str(len(self.payload)))
+        self.end_headers()
+        self.wfile.write(self.payload[: len(self.payload) // 2])   # then the connection drops
+        self.wfile.flush()
+        self.connection.shutdown(2)
+
+    def log_message(self, *args):
+        pass
+
+
+def test_a_dropped_stream_ends_cleanly_keeping_what_was_written(data, tmp_path, capsys):
+    handler = type("H", (_DroppingHandler,), {"payload": data["avi"].read_bytes()})
+    server = http.server.HTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    try:
+        url = f"http://127.0.0.1:{server.server_address[1]}/clip.avi"
+        code = main(["run", url, "-o", str(tmp_path / "o"), "--jsonl", str(tmp_path / "o.jsonl"), "-q"])
+    finally:
+        server.shutdown()
+        server.server_close()
+    err = capsys.readouterr().err
+    assert code == 0
+    assert len(err.strip().splitlines()) == 1 and "the stream stopped after" in err and "Traceback" not in err
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    n = summary["n_frames"]
+    assert 5 < n < 60 and summary["dropped"] and not summary["complete"]
+    assert len(_lines(tmp_path / "o.jsonl")) == n
+
+
+@pytest.mark.parametrize("source", ["rtsp://127.0.0.1:9/none", "http://127.0.0.1:9/none.mp4"])
+def test_an_unreachable_stream_is_one_line(source, capsys):
+    assert main(["run", source, "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"mlplc2: error: {source}: cannot open the stream") and "\n" not in err
+
+
+def test_latency_percentiles():
+    lat = Latency()
+    for ms in range(1, 201):            # 1 .. 200 ms
+        lat.add(ms / 1000)
+    assert lat.stats() == {"median_ms": 100.5, "p99_ms": 198.0, "max_ms": 200.0}
+    assert Latency().stats() == {}
