@@ -116,7 +116,7 @@ class _Clock(Decoder):
 @pytest.mark.parametrize("live", [True, False])
 def test_a_live_source_faster_than_the_model_skips_to_the_newest_frame(live):
     period = 0.01                     # the source: 100 frames/s
-    dec = _Clock(120, period)
+    dec = _Clock(60, period)
     src = FrameSource(dec, "camera", live=live)
     delays, lines = [], []
     for line in mlplc2.stream(src, "mlplc2", repeat_threshold=None):
@@ -126,11 +126,11 @@ def test_a_live_source_faster_than_the_model_skips_to_the_newest_frame(live):
     frames = [line["frame"] for line in lines]
     if live:
         assert max(delays[1:]) < 0.25, delays  # (the first frame's step compiles): 4 periods + a step
-        assert sum(line["skipped"] for line in lines) == src.n_skipped > 60
+        assert sum(line["skipped"] for line in lines) == src.n_skipped > 30
         assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
-        assert frames[-1] == 119 and len(frames) + src.n_skipped == 120
+        assert frames[-1] == 59 and len(frames) + src.n_skipped == 60
     else:                               # a file is read frame by frame: nothing skipped, the lag grows
-        assert frames == list(range(120)) and src.n_skipped == 0 and delays[-1] > 1.0
+        assert frames == list(range(60)) and src.n_skipped == 0 and delays[-1] > 1.0
 
 
 def test_run_stops_after_max_frames_and_reports_latency(data, tmp_path, capsys):

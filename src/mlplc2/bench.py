@@ -19,6 +19,11 @@ For every model and frame size it reports, measured in the same run:
   frame's output maps; Numba's row buffers and OpenCV's strip buffers are not traced and
   are a few rows).
 
+``mlplc2 bench --latency`` (:func:`time_latency`) times the whole ``mlplc2 run`` path instead, on
+an H.264 clip of the same scene at each source size (320x240, 1280x720): decoding alone, the
+model alone (on the frames in memory), ``run`` end to end (decoding in its thread beside the
+model, the JSON lines written), and the latency from a frame's decoding to its JSON line.
+
 The input is a procedural background scrolling by one pixel per frame with five dark squares
 approaching at different places and times (sizes scaled with the frame), so that mLPLC2
 keeps a few attention fields; the table reports the largest number of fields seen.
@@ -26,10 +31,13 @@ keeps a few attention fields; the table reports the largest number of fields see
 
 from __future__ import annotations
 
+import os
 import statistics
+import tempfile
 import time
 import tracemalloc
 from dataclasses import dataclass
+from pathlib import Path
 
 import numpy as np
 
@@ -37,9 +45,12 @@ from ._validation import InputValueError
 from .params import Params
 
 __all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
-           "run_bench", "format_table", "describe", "DEFAULT_SIZES"]
+           "run_bench", "format_table", "describe", "DEFAULT_SIZES", "LATENCY_SIZES", "LatencyRow",
+           "time_latency", "format_latency"]
 
 DEFAULT_SIZES = "100x100,320x240,640x480,1280x720"
+#: Source sizes of ``mlplc2 bench --latency``: the models' working width and an HD camera.
+LATENCY_SIZES = "320x240,1280x720"
 
 
 @dataclass
@@ -265,3 +276,90 @@ def describe(frames: int, rounds: int) -> str:
             f"front end: Eq. 1-12 alone. probe: fastest copy of the N float32 planes one stream touches "
             f"({traffic} plane reads+writes per frame in the kernels), same threads; 'x probe' = "
             f"ms/frame / probe. Load average after the run: {load}.")
+
+
+# ---------------------------------------------------------------------------
+# latency and end to end (mlplc2 bench --latency)
+# ---------------------------------------------------------------------------
+@dataclass
+class LatencyRow:
+    """Per source size: ms per frame of decoding alone, the model alone and ``run`` end to end,
+    and, played as a live camera at 30 frames/s, the latency from decoding to the JSON line (ms)
+    and the frames skipped."""
+
+    model: str
+    size: tuple[int, int]
+    frames: int
+    decode_ms: float
+    model_ms: float
+    run_ms: float
+    latency: dict
+    skipped: int = 0
+
+
+class _Paced:
+    """A decoder that hands out its frames no faster than ``fps`` by the wall clock, like a camera."""
+
+    def __init__(self, decoder, fps: float):
+        self._dec, self._period, self._t0, self._k = decoder, 1.0 / fps, None, 0
+        self.name, self.fps, self.size, self.frame_count = decoder.name, fps, decoder.size, None
+
+    def skip(self, n: int) -> int:
+        return self._dec.skip(n)
+
+    def read(self):
+        self._t0 = time.perf_counter() if self._t0 is None else self._t0
+        wait = self._t0 + self._k * self._period - time.perf_counter()
+        if wait > 0:
+            time.sleep(wait)
+        self._k += 1
+        return self._dec.read()
+
+    def close(self) -> None:
+        self._dec.close()
+
+
+def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc2") -> LatencyRow:
+    """Write the scene of :func:`synthetic_frames` at ``width`` x ``height`` as an H.264 MP4 (30
+    fps), then time, one after the other in this process: decoding it (:func:`mlplc2.io.open_source`,
+    every frame, nothing else), ``model`` stepping on the frames in memory (default settings: frames
+    wider than 320 px reduced; every frame stepped), :func:`mlplc2.run` on the clip writing its
+    JSON lines (``jsonl``) and CSV files (its frame loop's ms per frame), and ``run`` on the clip
+    played as a live camera (frames handed out at 30 frames/s; the newest taken): its latency
+    from a frame's decoding to its JSON line."""
+    from .io import FrameSource, open_source, write_video
+    from .io.decoders import open_decoder
+    from .models.base import get_model
+    from .runner import run
+
+    video = synthetic_frames(width, height, frames)
+    with tempfile.TemporaryDirectory(prefix="mlplc2-latency-") as tmp:
+        clip = write_video(Path(tmp) / "clip.mp4", video, 30.0)
+        t0 = time.perf_counter()
+        n = sum(1 for _ in open_source(clip))
+        decode = (time.perf_counter() - t0) / n
+        m = get_model(model)(fps=30.0, repeat_threshold=None)
+        m.step(video[0])  # warm-up: state built, kernels compiled
+        t0 = time.perf_counter()
+        for f in video[1:]:
+            m.step(f)
+        step = (time.perf_counter() - t0) / (len(video) - 1)
+        res = run(clip, [model], out=Path(tmp) / "out", jsonl=os.devnull, quiet=True, plot=False,
+                  repeat_threshold=None)
+        camera = FrameSource(_Paced(open_decoder(str(clip), "opencv")[0], 30.0), "camera", live=True)
+        live = run(camera, [model], out=Path(tmp) / "live", jsonl=os.devnull, quiet=True, plot=False,
+                   repeat_threshold=None)
+    return LatencyRow(model, (width, height), res.n_frames, 1e3 * decode, 1e3 * step,
+                      1e3 * res.seconds / max(res.n_frames, 1), live.latency, live.skipped)
+
+
+def format_latency(rows) -> str:
+    """A Markdown table of :class:`LatencyRow` s."""
+    lines = ["| model | source | frames | decode ms/frame | model ms/frame | run ms/frame | max(decode, model) | "
+             "decode + model | live: latency median ms | p99 ms | max ms | skipped |", "|" + "---|" * 12]
+    for r in rows:
+        lat = r.latency
+        lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.frames} | {r.decode_ms:.2f} | {r.model_ms:.2f} | "
+                     f"{r.run_ms:.2f} | {max(r.decode_ms, r.model_ms):.2f} | {r.decode_ms + r.model_ms:.2f} | "
+                     f"{lat.get('median_ms', 0):.1f} | {lat.get('p99_ms', 0):.1f} | {lat.get('max_ms', 0):.1f} | {r.skipped} |")
+    return "\n".join(lines)

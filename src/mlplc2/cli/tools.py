@@ -41,8 +41,14 @@ def _cmd_params(args) -> int:
 def _add_bench(p: argparse.ArgumentParser) -> None:
     from ..bench import DEFAULT_SIZES
 
-    p.add_argument("--sizes", default=DEFAULT_SIZES, metavar="WxH,...",
-                   help=f"frame sizes (default {DEFAULT_SIZES})")
+    from ..bench import LATENCY_SIZES
+
+    p.add_argument("--sizes", metavar="WxH,...",
+                   help=f"frame sizes (default {DEFAULT_SIZES}; with --latency {LATENCY_SIZES})")
+    p.add_argument("--latency", action="store_true",
+                   help="time `mlplc2 run` instead, on an H.264 clip per size: decoding alone, the model alone, "
+                        "run end to end, and the latency from a frame's decoding to its JSON line "
+                        "(median, 99th percentile, max)")
     p.add_argument("--models", "--model", "-m", dest="models", action="append", metavar="NAME",
                    help="LPLC2-family model(s), repeatable or comma-separated (default: mlplc2)")
     p.add_argument("--threads", type=pos_int, metavar="N",
@@ -58,14 +64,21 @@ def _add_bench(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_bench(args) -> int:
-    from ..bench import describe, format_table, parse_sizes, run_bench
+    from ..bench import DEFAULT_SIZES, describe, format_table, parse_sizes, run_bench
 
     names = resolve_names(args.models or ["mlplc2"], what="--models")
     family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
     bad = [n for n in names if n not in family]
     if bad:
         raise InputValueError(f"--models: {', '.join(bad)} not benchmarked; choose from {', '.join(family)}")
-    sizes = parse_sizes(args.sizes)
+    if args.latency:
+        from ..bench import LATENCY_SIZES, format_latency, time_latency
+
+        rows = [time_latency(w, h, frames=args.frames + 10, model=name)
+                for w, h in parse_sizes(args.sizes or LATENCY_SIZES) for name in names]
+        print(format_latency(rows))
+        return EXIT_OK
+    sizes = parse_sizes(args.sizes or DEFAULT_SIZES)
 
     def progress(msg):
         if not args.quiet:

@@ -122,6 +122,15 @@ class FrameSource:
         self._thread: threading.Thread | None = None
         self._iterated = False
 
+    def reduce_to(self, size: tuple[int, int]) -> None:
+        """Yield frames at ``size`` ``(W, H)`` from now on, reduced in the decoding thread (before
+        iterating; :func:`mlplc2.run` gives the models' working size here)."""
+        if self._iterated:
+            raise RuntimeError("reduce_to must be called before iterating")
+        self.out_size = (int(size[0]), int(size[1]))
+        self.scale_x = self.size[0] / self.out_size[0]
+        self.scale_y = self.size[1] / self.out_size[1]
+
     # -- mapping --------------------------------------------------------------
     @property
     def resized(self) -> bool:

@@ -304,6 +304,11 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+    widths = {m.work_width for m in built}
+    w, h = src.size
+    if len(widths) == 1 and None not in widths and not src.resized and w > (work := widths.pop()):
+        # The models' reduction to their working width (Model.work_width), done in the decoding thread.
+        src.reduce_to((work, max(int(round(h * work / w)), max(m.min_size for m in built))))
     auto = [m for m in built if m.repeat_threshold == "auto"]
     duplicated = _prescan_repeats(source, auto, src, options)
     if duplicated:
