@@ -189,3 +189,28 @@ def test_latency_percentiles():
         lat.add(ms / 1000)
     assert lat.stats() == {"median_ms": 100.5, "p99_ms": 198.0, "max_ms": 200.0}
     assert Latency().stats() == {}
+
+
+def test_wide_frames_are_reduced_to_the_working_width_in_the_decoding_thread(tmp_path):
+    """The models get 320 px frames from the decoding thread and give the answers of a model
+    that reduces the full frames itself (positions in input pixels)."""
+    from mlplc2.io import write_video
+
+    rng = np.random.default_rng(2)
+    bg = rng.integers(80, 220, (480, 640), dtype=np.uint8)
+    frames = []
+    for i in range(30):
+        f = bg.copy()
+        s = 4 + 6 * i
+        f[200 - s // 2:200 + s // 2, 400 - s // 2:400 + s // 2] = 0
+        frames.append(np.repeat(f[:, :, None], 3, axis=2))
+    clip = write_video(tmp_path / "wide.avi", frames, 30.0)
+    decoded = list(mlplc2.io.open_source(clip))
+    result = mlplc2.run(clip, ["mlplc2"], out=False, repeat_threshold=None, quiet=True)
+    assert result.size == (640, 480) and result.model_size == (320, 240)
+    model = mlplc2.MLPLC2(fps=30.0, repeat_threshold=None)
+    full = [model.step(f) for _, f in decoded][-1]
+    run_targets = [t for t in result.targets if t["frame"] == 29]
+    assert full.targets and len(run_targets) == len(full.targets)
+    for row, t in zip(run_targets, full.targets):
+        assert abs(row["x"] - t.x) < 2 and abs(row["y"] - t.y) < 2 and abs(row["width"] - t.width) < 3

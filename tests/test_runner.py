@@ -50,6 +50,7 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
     a, b = (json.loads((tmp_path / d / "fields.json").read_text()) for d in "ab")
     assert a.pop("seconds") > 0 and b.pop("seconds") > 0  # the measured wall time differs from run to run
+    assert a.pop("latency_ms")["max_ms"] > 0 and b.pop("latency_ms")["max_ms"] > 0  # and so do the latencies
     assert json.dumps(a) == json.dumps(b)  # the rest identical, in the same order
     # the table is read back from responses.csv
     pytest.importorskip("pandas")

@@ -249,7 +249,7 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
     if is_camera(source):
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
-    if source == STDIN:
+    if isinstance(source, str) and source == STDIN:
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, source, stream=True), "stream"

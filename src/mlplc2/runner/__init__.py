@@ -70,7 +70,7 @@ def default_out_dir(source) -> Path:
         source = source.name
     if is_camera(source):
         return Path.cwd() / f"camera{int(source)}_mlplc2"
-    if source == STDIN or is_url(source):
+    if (isinstance(source, str) and source == STDIN) or is_url(source):
         name = "stdin" if source == STDIN else Path(str(source).split("://", 1)[1].split("?")[0]).stem
         return Path.cwd() / f"{''.join(c if c.isalnum() or c in '-_.' else '_' for c in name) or 'stream'}_mlplc2"
     p = Path(source)
