@@ -213,4 +213,21 @@ def test_wide_frames_are_reduced_to_the_working_width_in_the_decoding_thread(tmp
     run_targets = [t for t in result.targets if t["frame"] == 29]
     assert full.targets and len(run_targets) == len(full.targets)
     for row, t in zip(run_targets, full.targets):
-        assert abs(row["x"] - t.x) < 2 and abs(row["y"] - t.y) < 2 and abs(row["width"] - t.width) < 3
+        assert abs(row["x"] - t.x) < 0.2 and abs(row["y"] - t.y) < 0.2 and abs(row["width"] - t.width) < 0.5
+        assert abs(row["ttc_s"] - t.ttc_s) < 0.01
+
+
+def test_the_consumer_of_docs_robot_md_brakes_on_a_warning(tmp_path):
+    """The ``brake.py`` of docs/robot.md, fed two JSON lines, prints one BRAKE line."""
+    from pathlib import Path
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot.md").read_text()
+    code = "# brake.py" + doc.split("```python\n# brake.py")[1].split("```")[0]
+    quiet = {"schema": 1, "frame": 3, "time_s": 0.1, "skipped": 0, "warning": False, "models": {}, "targets": []}
+    target = {"model": "mlplc2", "id": 1, "x": 1, "y": 1, "width": 9, "height": 9, "ttc_s": 0.42, "miss": 0.1,
+              "azimuth_deg": None, "elevation_deg": None, "warning": True}
+    loud = dict(quiet, frame=4, warning=True, targets=[target])
+    proc = subprocess.run([sys.executable, "-c", code], input=f"{json.dumps(quiet)}\n{json.dumps(loud)}\n",
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    assert proc.stdout == "BRAKE at frame 4: contact in 0.42 s\n"

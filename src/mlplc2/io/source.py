@@ -117,6 +117,7 @@ class FrameSource:
         else:
             self.total = None if self.end is None else self.end - self.start
         self._first = first
+        self._centres = False
         self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -130,6 +131,7 @@ class FrameSource:
         self.out_size = (int(size[0]), int(size[1]))
         self.scale_x = self.size[0] / self.out_size[0]
         self.scale_y = self.size[1] / self.out_size[1]
+        self._centres = True
 
     # -- mapping --------------------------------------------------------------
     @property
@@ -138,7 +140,10 @@ class FrameSource:
 
     def to_input(self, x: float, y: float) -> tuple[float, float]:
         """Map a point from model (resized) pixels to input pixels:
-        ``(x * W_in / W_out, y * H_in / H_out)``."""
+        ``(x * W_in / W_out, y * H_in / H_out)``; after :meth:`reduce_to`, pixel centres onto pixel
+        centres, ``(x + 0.5) * W_in / W_out - 0.5``, as a model reducing its frames itself does."""
+        if self._centres:
+            return (x + 0.5) * self.scale_x - 0.5, (y + 0.5) * self.scale_y - 0.5
         return x * self.scale_x, y * self.scale_y
 
     # -- decoding thread ------------------------------------------------------
