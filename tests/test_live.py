@@ -231,3 +231,15 @@ def test_the_consumer_of_docs_robot_md_brakes_on_a_warning(tmp_path):
                           capture_output=True, text=True, timeout=60)
     assert proc.returncode == 0, proc.stderr
     assert proc.stdout == "BRAKE at frame 4: contact in 0.42 s\n"
+
+
+def test_a_reader_that_goes_away_stops_the_run_keeping_its_outputs(data, tmp_path):
+    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", str(data["avi"]), "--jsonl", "-", "-q",
+                           "-o", str(tmp_path / "o")], stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        json.loads(proc.stdout.readline())
+        proc.stdout.close()  # the robot stack stops reading
+        err = proc.stderr.read().decode()
+        assert proc.wait(timeout=120) == 0, err
+    assert err.count("\n") == 1 and "the reader of the JSON lines went away" in err and "Traceback" not in err
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert 1 <= summary["n_frames"] < 60

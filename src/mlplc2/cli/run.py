@@ -95,7 +95,7 @@ def _run(args, jsonl) -> int:
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
-    if result.dropped:
+    if result.dropped or (result.message and not result.truncated):  # a dropped stream, a closed --jsonl pipe
         print(f"{PROG}: {result.message}", file=sys.stderr)
     elif result.truncated:
         warn(result.message)

@@ -538,8 +538,8 @@ class _Frames:
         if self.responses is not None:
             self.responses.write(frame_rows)
         record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
-        if self.lines is not None:
-            self.lines.write(record)
+        if self.lines is not None and not self.lines.write(record) and self.result.message is None:
+            self.result.message = f"the reader of the JSON lines went away (frame {index} not delivered); stopped there"
         if self.options.keep_rows:
             result.targets.extend(target_rows)
             result.rows.extend(frame_rows)
@@ -562,7 +562,7 @@ class _Frames:
         result.interrupted = interrupted
         result.truncated = self.src.truncated
         result.dropped = self.src.dropped
-        result.message = self.src.message
+        result.message = self.src.message or result.message
         result.latency = self.latency.stats()
         # Fields still alive at the end keep died = None.
         with recorder:
@@ -591,7 +591,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             for item in stop.between(src):
                 frames.step(item)
                 bar.update()
-                if options.done(result.n_frames, time.perf_counter() - t0):
+                if options.done(result.n_frames, time.perf_counter() - t0) or (frames.lines and frames.lines.gone):
                     break
         except KeyboardInterrupt:
             interrupted = True

@@ -11,6 +11,7 @@ import csv
 import io
 import json
 import math
+import os
 import sys
 from array import array
 from collections.abc import Sequence
@@ -70,6 +71,7 @@ class JsonLines:
 
     def __init__(self, target):
         self._own = False
+        self.gone = False
         if target == "-":
             self.file = sys.stdout
         elif hasattr(target, "write"):
@@ -80,9 +82,21 @@ class JsonLines:
             self.file = open(path, "w", encoding="utf-8")
             self._own = True
 
-    def write(self, record: dict) -> None:
-        self.file.write(json.dumps(record, separators=(",", ":")) + "\n")
-        self.file.flush()
+    def write(self, record: dict) -> bool:
+        """Write one line; False when its reader has gone (a closed pipe: nothing more is written)."""
+        if self.gone:
+            return False
+        try:
+            self.file.write(json.dumps(record, separators=(",", ":")) + "\n")
+            self.file.flush()
+        except BrokenPipeError:
+            self.gone = True
+            try:  # so that the interpreter's last flush of the pipe does not fail again
+                os.dup2(os.open(os.devnull, os.O_WRONLY), self.file.fileno())
+            except (OSError, ValueError):
+                pass
+            return False
+        return True
 
     def close(self) -> None:
         if self._own:
