@@ -243,3 +243,30 @@ def test_a_reader_that_goes_away_stops_the_run_keeping_its_outputs(data, tmp_pat
     assert err.count("\n") == 1 and "the reader of the JSON lines went away" in err and "Traceback" not in err
     summary = json.loads((tmp_path / "o" / "fields.json").read_text())
     assert 1 <= summary["n_frames"] < 60
+
+
+def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
+    """``tcp://`` (a live scheme, like ``rtsp://``, which has no server here): a sender faster than
+    real time; the run takes the newest frames, and the lines account for every frame."""
+    import socket
+
+    payload = data["avi"].read_bytes()
+    server = socket.create_server(("127.0.0.1", 0))
+
+    def send():
+        conn, _ = server.accept()
+        with conn:
+            conn.sendall(payload)
+
+    threading.Thread(target=send, daemon=True).start()
+    try:
+        url = f"tcp://127.0.0.1:{server.getsockname()[1]}"
+        assert main(["run", url, "-o", str(tmp_path / "o"), "--jsonl", str(tmp_path / "o.jsonl"), "-q",
+                     "--every-frame"]) == 0
+    finally:
+        server.close()
+    lines = _lines(tmp_path / "o.jsonl")
+    frames = [line["frame"] for line in lines]
+    assert frames[-1] == 59 and len(frames) + sum(line["skipped"] for line in lines) == 60
+    assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
+    assert json.loads((tmp_path / "o" / "fields.json").read_text())["frames_skipped"] == 60 - len(frames)
