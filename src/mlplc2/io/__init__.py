@@ -2,8 +2,10 @@
 
 * :func:`read_video` decodes a whole video into memory (for short clips).
 * :func:`open_source` streams frames one at a time from a video file, a folder
-  of images, a glob pattern or a camera, decoding in a background thread so
-  decoding and the model overlap; memory does not depend on the video length.
+  of images, a glob pattern, a camera, a URL (RTSP, HTTP(S), ...) or standard input
+  (``'-'``), decoding in a background thread so decoding and the model overlap; memory
+  does not depend on the video length. A live source (a camera, RTSP) keeps only the
+  newest frame when its consumer falls behind, counting the ones skipped.
 * :func:`write_video` / :class:`VideoWriter` write MP4 (H.264 via PyAV) or AVI
   (MJPG) atomically.
 
