@@ -144,3 +144,16 @@ def test_full_disk_during_video_keeps_the_other_outputs(data, tmp_path, monkeypa
     err = capsys.readouterr().err
     assert len(err.strip().splitlines()) == 1 and "annotated.mp4: No space left on device" in err, err
     assert (tmp_path / "cli" / "fields.json").is_file() and (tmp_path / "cli" / "responses.png").is_file()
+
+
+def test_responses_png_gets_the_targets_timeline(data, tmp_path, monkeypatch):
+    """responses.png is drawn with the targets (issue 24 item 4): their rows, or targets.csv when
+    the run keeps no rows."""
+    import mlplc2.plots
+
+    seen = []
+    monkeypatch.setattr(mlplc2.plots, "plot_responses", lambda rows, path, targets=None, **kw: seen.append(targets))
+    kept = run(str(data["avi"]), ["mlplc2"], out=tmp_path / "a", quiet=True, end=30)
+    run(str(data["avi"]), ["mlplc2"], out=tmp_path / "b", quiet=True, end=30, keep_rows=False)
+    assert kept.targets and seen[0] == kept.targets
+    assert seen[1] == tmp_path / "b" / "targets.csv"

@@ -19,9 +19,11 @@ steps every model on each frame, writing as it goes:
     the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
     space-separated).
 ``responses.png``
-    response against frame, one panel per model (see :mod:`mlplc2.plots`).
+    response against frame, one panel per model, and under a model with targets their time to
+    contact with the warning frames marked (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
-    (``video=True``) the input with the fields drawn (:func:`mlplc2.plots.annotate_frame`).
+    (``video=True``) the input with the targets (or fields) drawn, the warning target named in
+    the header (:func:`mlplc2.plots.annotate_frame`).
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
@@ -120,15 +122,15 @@ class RunOptions:
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
     video : bool
-        Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header
-        (:func:`mlplc2.plots.annotate_frame`).
+        Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
+        first model with targets or fields drawn, and a header row per model: its warning
+        target, its field alarm or its response (:func:`mlplc2.plots.annotate_frame`).
     draw_fields : {'auto', 'none', 'responding', 'all'}
         Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
         none for a model with targets, else those that respond (response > 0) or are in
         alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
     plot : bool
-        Write ``responses.png``.
+        Write ``responses.png`` (with the targets' timeline, :func:`mlplc2.plots.plot_timeline`).
     keep_rows : bool
         Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
         ``.targets`` (default). Set False for long or live runs: memory then stays
@@ -582,8 +584,9 @@ def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool
             why = "interrupted" if result.interrupted else result.error or "input truncated"
             title += f" ({why} after {result.n_frames} frames)"
         rows = result.rows or result.files.get("responses.csv")
+        targets = result.targets or result.files.get("targets.csv")
         if rows is not None:
-            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps)
+            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps, targets=targets)
         result.files["responses.png"] = path
     if vw is not None:
         if vw.n_frames:
