@@ -142,8 +142,10 @@ def _plot(task: dict, note: str = "") -> None:
     video = Path(str(summary.get("video") or task["video"])).name
     label = param_label(task["model"], task["overrides"], width=TITLE_WIDTH - len(video) - len(note),
                         tag=task["param_set"])
+    targets = out / "targets.csv"
     plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"),
-                   title=f"{video}: {label}{note}", fps=summary.get("fps"))
+                   title=f"{video}: {label}{note}", fps=summary.get("fps"),
+                   targets=targets if targets.is_file() else None)
 
 
 def _done_row(task: dict) -> dict | None:

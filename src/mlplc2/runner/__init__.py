@@ -19,9 +19,11 @@ steps every model on each frame, writing as it goes:
     the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
     space-separated).
 ``responses.png``
-    response against frame, one panel per model (see :mod:`mlplc2.plots`).
+    response against frame, one panel per model, and under a model with targets their time to
+    contact with the warning frames marked (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
-    (``video=True``) the input with the fields drawn (:func:`mlplc2.plots.annotate_frame`).
+    (``video=True``) the input with the targets (or fields) drawn, the warning target named in
+    the header (:func:`mlplc2.plots.annotate_frame`).
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
@@ -120,15 +122,15 @@ class RunOptions:
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
     video : bool
-        Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header
-        (:func:`mlplc2.plots.annotate_frame`).
+        Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
+        first model with targets or fields drawn, and a header row per model: its warning
+        target, its field alarm or its response (:func:`mlplc2.plots.annotate_frame`).
     draw_fields : {'auto', 'none', 'responding', 'all'}
         Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
         none for a model with targets, else those that respond (response > 0) or are in
         alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
     plot : bool
-        Write ``responses.png``.
+        Write ``responses.png`` (with the targets' timeline, :func:`mlplc2.plots.plot_timeline`).
     keep_rows : bool
         Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
         ``.targets`` (default). Set False for long or live runs: memory then stays
@@ -429,6 +431,11 @@ class _CsvFile:
         self._buf.truncate()
 
 
+class _VideoFailed(Exception):
+    """Writing ``annotated.mp4`` failed (an OSError such as a full disk): the run stops before the
+    frame, and :func:`_loop` still writes the summaries of the frames done."""
+
+
 class _Frames:
     """The per-frame work of :func:`run`: step every model, record, write each output's share."""
 
@@ -465,9 +472,12 @@ class _Frames:
         if self.vw is not None:
             from ..plots import annotate_frame
 
-            self.vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
-                                         index=index, field_shape=self.field_shape,
-                                         draw_fields=self.options.draw_fields))
+            img = annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
+                                 index=index, field_shape=self.field_shape, draw_fields=self.options.draw_fields)
+            try:
+                self.vw.write(img)
+            except OSError as exc:  # a full disk: this frame goes nowhere, the others' outputs are kept
+                raise _VideoFailed(exc) from exc
         # The frame's share of every output, together (a few dict updates and two writes).
         target_rows = []
         for name, out in zip(names, outputs):
@@ -489,10 +499,12 @@ class _Frames:
             if f is not None:
                 f.file.close()
 
-    def summarise(self, interrupted: bool) -> None:
+    def summarise(self, interrupted: bool, video_error: OSError | None = None) -> None:
         """The run's end state and the summaries of its fields and targets into ``result``."""
         result, recorder, names = self.result, self.recorder, self.names
         result.interrupted = interrupted
+        if video_error is not None:
+            result.error = f"annotated.mp4: {video_error.strerror or video_error}"
         result.truncated = self.src.truncated
         result.message = self.src.message
         # Fields still alive at the end keep died = None.
@@ -509,6 +521,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
 
     frames = _Frames(src, built, result, options)
     interrupted = False
+    video_error: OSError | None = None
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
@@ -524,6 +537,10 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 bar.update()
         except KeyboardInterrupt:
             interrupted = True
+        except _VideoFailed as exc:
+            video_error = exc.__cause__
+            frames.vw.abort()
+            frames.vw = None
         except BaseException:
             if frames.vw is not None:
                 frames.vw.abort()
@@ -534,7 +551,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 bar.close()
             frames.close_csv()
             src.close()
-        frames.summarise(interrupted)
+        frames.summarise(interrupted, video_error)
         if out_dir is not None:
             try:
                 _finish(result, out_dir, frames.vw, options.plot)
@@ -544,32 +561,38 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 raise
         if result.truncated:
             warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
+        if video_error is not None:
+            raise OSError(video_error.errno, f"{video_error.strerror or video_error}; the other outputs cover the "
+                          f"{result.n_frames} frames before", str(out_dir / "annotated.mp4")) from video_error
         if interrupted:
             raise RunInterrupted(result)
     return result
 
 
 def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool) -> None:
+    """The summaries, small ones first: ``fields.json``, ``responses.png``, then ``annotated.mp4``
+    (finishing the video may need more room than the disk has left)."""
     path = out_dir / "fields.json"
     write_json(path, result.summary())
     result.files["fields.json"] = path
-    if vw is not None:
-        if vw.n_frames:
-            result.files["annotated.mp4"] = vw.close()
-        else:
-            vw.abort()
     if plot and result.n_frames:
         from ..plots import plot_responses
 
         path = out_dir / "responses.png"
         title = f"{Path(result.source).name}: {', '.join(result.models)}"
-        if result.interrupted or result.truncated:
-            why = "interrupted" if result.interrupted else "input truncated"
+        if result.interrupted or result.truncated or result.error:
+            why = "interrupted" if result.interrupted else result.error or "input truncated"
             title += f" ({why} after {result.n_frames} frames)"
         rows = result.rows or result.files.get("responses.csv")
+        targets = result.targets or result.files.get("targets.csv")
         if rows is not None:
-            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps)
+            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps, targets=targets)
         result.files["responses.png"] = path
+    if vw is not None:
+        if vw.n_frames:
+            result.files["annotated.mp4"] = vw.close()
+        else:
+            vw.abort()
 
 
 # ---------------------------------------------------------------------------

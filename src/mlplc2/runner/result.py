@@ -56,6 +56,9 @@ class RunResult:
         The input stopped decoding early (see ``message``).
     interrupted : bool
         The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
+    error : str, optional
+        Why an output stopped the run (``annotated.mp4`` on a full disk): the other outputs
+        were written for the frames done, then :func:`run` raised the OSError.
     seconds : float
         Wall time of the frame loop (decoding, models, writing the per-frame outputs),
         in seconds; ``n_frames / seconds`` is the processing rate.
@@ -74,6 +77,7 @@ class RunResult:
     fields: dict[str, list[dict]] = field(default_factory=dict)
     truncated: bool = False
     interrupted: bool = False
+    error: str | None = None
     message: str | None = None
     out: Path | None = None
     files: dict[str, Path] = field(default_factory=dict)
@@ -116,9 +120,10 @@ class RunResult:
             "start": self.start,
             "n_frames": self.n_frames,
             "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted),
+            "complete": not (self.truncated or self.interrupted or self.error),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
+            "error": self.error,
             "hfov_deg": self.hfov_deg,
             "models": self.fields,
             "targets": self.target_summaries,
