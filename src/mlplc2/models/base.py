@@ -303,6 +303,14 @@ class Model(abc.ABC):
         self._last_out = out
         return out
 
+    def _work_point(self, point: tuple[float, float] | None) -> tuple[float, float] | None:
+        """``point`` (x, y), in the pixels of the frames given, in the working frame's pixels (the
+        inverse of the mapping of the outputs; None stays None)."""
+        if point is None or self._work is None:
+            return point
+        sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
+        return (point[0] + 0.5) * sx - 0.5, (point[1] + 0.5) * sy - 0.5
+
     def _repeat_level(self, gray: np.ndarray) -> float | None:
         """The repeat threshold for this frame: ``repeat_threshold``, or for ``"auto"``
         :data:`REPEAT_THRESHOLD` while the recent frames look duplicated (None otherwise)."""

@@ -507,6 +507,8 @@ class FlowTTC(Model):
         self._frames.append((cur, gray))
         self._levels = levels
         focal = focal_length(w, self.hfov_deg)
+        if tp.heading is not None:                         # the heading in working pixels
+            tp = tp.replace(heading=self._work_point(tp.heading))
         out = [estimate(t, tp, self.fps, index, (h, w), focal) for t in self._tracks]
         for t, o in zip(self._tracks, out):
             if o.looming:

@@ -123,9 +123,8 @@ class _LPLC2Family(Model):
         """This frame's fields, and the targets the target layer makes of them."""
         if self._layer is None:
             tp = self.target_params
-            if tp.heading is not None and self._work is not None:   # the heading in working pixels
-                sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
-                tp = tp.replace(heading=((tp.heading[0] + 0.5) * sx - 0.5, (tp.heading[1] + 0.5) * sy - 0.5))
+            if tp.heading is not None:                     # the heading in working pixels
+                tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
         targets = self._layer.step(gray, self.maps, self._fields, index)
