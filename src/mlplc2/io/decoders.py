@@ -84,7 +84,7 @@ class _OpenCVDecoder(Decoder):
         if not ok or frame is None:
             return None
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
-        self.time_s = ms / 1000.0 if ms and math.isfinite(ms) and ms > 0 else None
+        self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
         if frame.ndim == 2:
             return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
