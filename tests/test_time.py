@@ -93,3 +93,37 @@ def test_repeated_frames_step_with_the_real_interval():
         for ta, tb in zip(a.targets, b.targets):
             if ta.ttc_s is not None and tb.ttc_s is not None:
                 assert tb.ttc_s == pytest.approx(ta.ttc_s - 1 / FPS)
+
+
+def _vfr_video(path, times_ms):
+    """A small video whose frames carry the given timestamps (ms), as a variable-rate camera writes them."""
+    av = pytest.importorskip("av")
+    from fractions import Fraction
+
+    c = av.open(str(path), "w")
+    s = c.add_stream("mpeg4", rate=30)
+    s.width, s.height, s.pix_fmt = 64, 48, "yuv420p"
+    s.time_base = Fraction(1, 1000)
+    for i, t in enumerate(times_ms):
+        f = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 20 * i, np.uint8), format="rgb24")
+        f.pts, f.time_base = t, Fraction(1, 1000)
+        for p in s.encode(f):
+            c.mux(p)
+    for p in s.encode():
+        c.mux(p)
+    c.close()
+
+
+# the container's frame count is its duration times its rate (10 here): a variable-rate file reads as cut short
+@pytest.mark.filterwarnings("ignore::mlplc2.io.formats.TruncatedInputWarning")
+@pytest.mark.parametrize("decoder", ["opencv", "pyav"])
+def test_run_uses_the_container_timestamps(tmp_path, decoder):
+    import mlplc2
+
+    times = [0, 33, 67, 100, 167, 200, 300]              # two frames dropped
+    path = tmp_path / "vfr.mkv"
+    _vfr_video(path, times)
+    res = mlplc2.run(str(path), "lgmd1", out=False, decoder=decoder, quiet=True, plot=False)
+    assert [r["time_s"] for r in res.rows] == [t / 1000 for t in times]
+    res = mlplc2.run(str(path), "lgmd1", out=False, decoder=decoder, quiet=True, plot=False, fps=10.0)
+    assert [r["time_s"] for r in res.rows] == [round(i / 10.0, 6) for i in range(len(times))]
