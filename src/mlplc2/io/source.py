@@ -49,6 +49,10 @@ class FrameSource:
         Frames this source is expected to yield given ``start`` and ``end``.
     n_read : int
         Frames yielded so far.
+    time_s : float or None
+        Time (s) of the frame yielded last: the container's timestamp (PyAV ``frame.time``,
+        OpenCV ``CAP_PROP_POS_MSEC``), None where the source has none or ``fps`` was given
+        (frame count / fps then); pass it to ``Model.step(frame, t)``.
     truncated : bool
         True when decoding stopped before the stated end (damaged or cut file);
         :attr:`message` then names the frame where it stopped.
@@ -60,6 +64,9 @@ class FrameSource:
         self.kind = kind
         self.name = decoder.name
         self.fps = check_fps(fps) if fps is not None else (decoder.fps or DEFAULT_FPS)
+        # the container's timestamps, unless the caller set the rate (then frame count / fps)
+        self._timed = fps is None
+        self.time_s: float | None = None
         self.start = int(start)
         self.end = None if end is None else int(end)
         self.keep_original = keep_original
@@ -97,6 +104,7 @@ class FrameSource:
         else:
             self.total = None if self.end is None else self.end - self.start
         self._first = first
+        self._first_time = decoder.time_s
         self._queue: queue.Queue = queue.Queue(maxsize=queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -135,15 +143,16 @@ class FrameSource:
         dec = self._dec
         index = self.start
         try:
-            frame = self._first
+            frame, t = self._first, self._first_time
             self._first = None
             while frame is not None:
-                if not self._put(("frame", index, self._prepare(frame))):
+                if not self._put(("frame", index, (self._prepare(frame), t))):
                     return
                 index += 1
                 if self.end is not None and index >= self.end:
                     break
                 frame = dec.read()
+                t = dec.time_s
             self._put(("end", index, None))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
             self._put(("error", index, exc))
@@ -161,7 +170,8 @@ class FrameSource:
                 kind, index, payload = self._queue.get()
                 if kind == "frame":
                     self.n_read += 1
-                    yield (index, *payload)
+                    self.time_s = self._timestamp(payload[1])
+                    yield (index, *payload[0])
                 elif kind == "end":
                     self._check_end(index)
                     return
@@ -169,6 +179,18 @@ class FrameSource:
                     raise payload
         finally:
             self.close()
+
+    def _timestamp(self, t: float | None) -> float | None:
+        """The time (s) of the frame yielded next: the container's timestamp (None: the source has
+        none, or ``fps`` was given); one that is missing or does not increase (a damaged container)
+        is the last one plus 1 / fps. Without a timestamp on the first frame, None throughout."""
+        last = self.time_s
+        if last is None:
+            self._timed = self._timed and t is not None and self.n_read == 1
+            return t if self._timed else None
+        if t is None or not t > last:
+            return last + 1.0 / self.fps
+        return t
 
     def _check_end(self, index: int) -> None:
         """Decide whether the stream stopped early (index = first frame not decoded)."""

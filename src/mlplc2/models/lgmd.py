@@ -181,10 +181,8 @@ class LGMD2(Model):
         params = self._check_params(params, LGMD2Params, "params", "LGMD2Params")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         p = params
-        self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
-        self.alpha_off = tuple(lowpass_alpha(t, self.fps) for t in p.tau_off)
-        self.alpha_pm = lowpass_alpha(p.tau_pm, self.fps)
-        self.hp_sfa = highpass_coeff(p.tau_sfa, self.fps)
+        self._coeffs: dict = {}
+        self._use_interval(1)
         self._k_on = _ring_kernels(*p.on_kernel)
         self._k_off = _ring_kernels(*p.off_kernel)
         self._reset()
@@ -202,6 +200,19 @@ class LGMD2(Model):
         self.state: dict = {}
         """Scalars of the last frame (pm, w_on, w_off, sum_g, k, k_sfa, spikes), for inspection."""
 
+    def _use_interval(self, interval: float) -> None:
+        """The filter coefficients for a frame ``interval`` frame intervals after the last processed
+        one (the real interval tau_i = 1000 ``interval`` / fps ms; ``docs/model.md``, "Time"), cached."""
+        c = self._coeffs.get(interval)
+        if c is None:
+            if len(self._coeffs) > 64:
+                self._coeffs = {1: self._coeffs[1]}
+            p, rate = self.params, self.fps / interval
+            c = self._coeffs[interval] = (tuple(lowpass_alpha(t, rate) for t in p.tau_on),
+                                          tuple(lowpass_alpha(t, rate) for t in p.tau_off),
+                                          lowpass_alpha(p.tau_pm, rate), highpass_coeff(p.tau_sfa, rate))
+        self.alpha_on, self.alpha_off, self.alpha_pm, self.hp_sfa = c
+
     def _inhibition(self, x, x_prev, delayed_prev, alphas, kernels):
         total = None
         out = []
@@ -214,6 +225,7 @@ class LGMD2(Model):
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
+        self._use_interval(self.interval)
         pr = photoreceptors(gray, self._gray_prev)
         self._gray_prev = gray
         if self._on_prev is None:

@@ -66,7 +66,7 @@ class _LPLC2Family(Model):
         """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
         if self._camera is not None:
             self._stabilise(gray)
-        lm = self.frontend.step(gray)
+        lm = self.frontend.step(gray, self.interval)
         self.maps = lm
         return lm
 
@@ -127,7 +127,7 @@ class _LPLC2Family(Model):
                 tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
-        targets = self._layer.step(gray, self.maps, self._fields, index)
+        targets = self._layer.step(gray, self.maps, self._fields, index, self.clock)
         fields = tuple(f.snapshot() for f in self._fields)
         response = max((f.response for f in fields), default=0.0)
         collision = any(f.collision for f in fields)

@@ -465,8 +465,8 @@ class _Frames:
         """One frame: the models step, then the frame's share of every output, together."""
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
-        outputs = [m.step(frame) for m in self.built]
-        time_s = round(index / src.fps, 6)
+        outputs = [m.step(frame, src.time_s) for m in self.built]
+        time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:
