@@ -730,6 +730,35 @@ def test_cli_skip_repeats(tmp_path, capsys):
     assert "--repeat-level" in capsys.readouterr().err
 
 
+def _png_folder(d, frames):
+    d.mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(d / f"f{i:03d}.png"), f)
+    return d
+
+
+def test_one_decision_on_repeated_frames(tmp_path, capsys):
+    """Issue 24, item 3: the printed note and fields.json's "duplicated" say the same, also when
+    the copies start after the pre-scan's 60 frames (the models find out then and hold frames);
+    "frames_held" has every model's entry, 0 when it held none."""
+    late = _png_folder(tmp_path / "late", noise_frames(70, seed=1) + duplicated(noise_frames(40, seed=2))[0])
+    assert cli.main(["run", str(late), "-m", "mlplc2,lgmd2", "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert set(summary["frames_held"]) == {"mlplc2", "lgmd2"} and summary["frames_held"]["mlplc2"] > 0
+    assert summary["duplicated"] is True and "note: the video repeats its frames" in err
+    plain = _png_folder(tmp_path / "plain", noise_frames(30, seed=3))
+    assert cli.main(["run", str(plain), "-m", "mlplc2,lgmd2", "--out", str(tmp_path / "p")]) == 0
+    summary = json.loads((tmp_path / "p" / "fields.json").read_text())
+    assert summary["frames_held"] == {"mlplc2": 0, "lgmd2": 0} and summary["duplicated"] is False
+    assert "note:" not in capsys.readouterr().err
+    # --every-frame: no model is left to find out, so there is no decision (null) and no note
+    assert cli.main(["run", str(late), "-m", "mlplc2", "--every-frame", "--out", str(tmp_path / "e")]) == 0
+    summary = json.loads((tmp_path / "e" / "fields.json").read_text())
+    assert summary["duplicated"] is None and summary["frames_held"] == {"mlplc2": 0}
+    assert "note:" not in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
 @pytest.mark.parametrize("argv, level", [([], "auto"), (["--skip-repeats"], REPEAT_THRESHOLD),
                                          (["--repeat-level", "4"], 4.0),

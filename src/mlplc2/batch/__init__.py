@@ -16,9 +16,8 @@ tasks whose ``done.json`` exists (with ``plot=True`` it draws their missing
 retried by the next run. Ctrl-C raises :class:`BatchInterrupted` after writing
 ``results.csv`` for the tasks finished.
 
-Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
-cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
-after the other in this process without it.
+Dask is imported only when a cluster is used; ``workers=0`` (or ``scheduler="sync"``)
+runs the tasks one after the other in this process without it.
 
 The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.batch.sweep`.
 """
@@ -56,7 +55,6 @@ RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", 
                   "first_alarm_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
-_DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"
 
 
 
@@ -199,12 +197,8 @@ class BatchResult:
         return len(self.videos) / self.seconds * 60.0 if self.seconds > 0 else math.inf
 
     def to_dataframe(self):
-        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS` (needs pandas:
-        ``pip install 'mlplc2[pandas]'``)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("BatchResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS`."""
+        import pandas as pd
         return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
 
 
@@ -260,11 +254,8 @@ def start_local_cluster(workers: int, **kwargs):
     * get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set), so that the fast front end's
       bands of all workers share the cores.
     """
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise InputValueError(_DASK_MISSING) from None
     import dask
+    from distributed import Client, LocalCluster
 
     kwargs.setdefault("dashboard_address", ":0")
     kwargs.setdefault("silence_logs", logging.CRITICAL)
@@ -423,7 +414,7 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
 
 
 def _check_cluster_options(scheduler, workers, client, parquet: bool) -> tuple[int | None, bool]:
-    """Check the cluster options (and that Dask, pandas and pyarrow are there when needed):
+    """Check the cluster options (and that pyarrow is there when needed):
     ``workers`` checked, and whether the tasks run here one after the other, without Dask."""
     if workers is not None:
         workers = check_int(workers, "workers", minimum=0)
@@ -433,19 +424,13 @@ def _check_cluster_options(scheduler, workers, client, parquet: bool) -> tuple[i
         raise InputValueError("--scheduler and --workers cannot be combined: --workers N starts a local cluster "
                               "(0: runs the tasks here without Dask), --scheduler ADDRESS uses a running one")
     sequential = scheduler == "sync" or (workers == 0 and scheduler is None and client is None)
-    if not sequential and client is None:
-        try:
-            import distributed  # noqa: F401
-        except ImportError:
-            raise InputValueError(_DASK_MISSING) from None
     if scheduler not in (None, "sync"):
         _check_scheduler(scheduler)
     if parquet:
         try:
-            import pandas  # noqa: F401
             import pyarrow  # noqa: F401
         except ImportError:
-            raise InputValueError("parquet=True needs pandas and pyarrow: pip install pandas pyarrow") from None
+            raise InputValueError("results.parquet needs pyarrow: pip install 'mlplc2[parquet]'") from None
     return workers, sequential
 
 

@@ -122,7 +122,7 @@ def _print_run_summary(args, result) -> None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)
     held = max(result.repeated.values(), default=0)
-    if held and not (args.quiet or args.skip_repeats or args.repeat_level is not None):
+    if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
 
