@@ -481,3 +481,19 @@ def test_cli_batch_warns_about_truncated_inputs(videos, tmp_path, capsys):
     assert [r["status"] for r in rows] == ["truncated"] and 0 < int(rows[0]["n_frames"]) < 24
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and err[0].startswith("mlplc2: warning: ") and "cut.avi" in err[0], err
+
+
+def test_results_table_has_the_target_warnings(tmp_path):
+    """results.csv says how many targets warned and when first (issue 24, item 6): the same as the
+    task's targets.csv; empty for a model without targets."""
+    st = stimuli.looming(size=(96, 72), contact_time=1.0, duration=1.2, fps=30.0, background="plain")
+    write_video(tmp_path / "loom.avi", st.frames, 30.0)
+    batch([str(tmp_path / "loom.avi")], tmp_path / "o", models=["mlplc2", "lgmd2"], workers=0, progress=False)
+    with open(tmp_path / "o" / "results.csv", newline="") as f:
+        rows = {r["model"]: r for r in csv.DictReader(f)}
+    with open(tmp_path / "o" / rows["mlplc2"]["out"] / "targets.csv", newline="") as f:
+        warned = [r for r in csv.DictReader(f) if r["warning"] == "1"]
+    assert warned, "the looming square should be warned of"
+    assert int(rows["mlplc2"]["warnings"]) == len({r["target_id"] for r in warned})
+    assert int(rows["mlplc2"]["first_warning_frame"]) == min(int(r["frame"]) for r in warned)
+    assert rows["lgmd2"]["warnings"] == rows["lgmd2"]["first_warning_frame"] == ""

@@ -52,7 +52,7 @@ __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_para
 
 #: Columns of ``results.csv``, in order.
 RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", "fields", "alarms",
-                  "first_alarm_frame", "seconds", "status", "error", "out")
+                  "first_alarm_frame", "warnings", "first_warning_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
 
@@ -91,8 +91,11 @@ def run_task(task: dict) -> dict:
         if task.get("plot") and res.n_frames:
             _plot(task, f" (input truncated after {res.n_frames} frames)" if res.truncated else "")
         alarms = res.alarms[task["model"]]
+        targets = res.target_summaries.get(task["model"])  # None: a model without targets
+        warned = [t["first_warning_frame"] for t in targets or () if t["first_warning_frame"] is not None]
         row.update(n_frames=res.n_frames, fields=len(res.fields.get(task["model"], [])),
                    alarms=alarms["count"], first_alarm_frame=alarms["first"],
+                   warnings=None if targets is None else len(warned), first_warning_frame=min(warned, default=None),
                    status="truncated" if res.truncated else "ok", error=_one_line(res.message) if res.truncated else "")
     except Exception as exc:  # noqa: BLE001 - reported in the table, the batch goes on
         msg = str(exc)
@@ -109,7 +112,8 @@ def _error_row(task: dict, error: str = "") -> dict:
     """The row of a task that failed with the one-line message ``error``."""
     return {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
             "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
-            "alarms": None, "first_alarm_frame": None, "seconds": None, "status": "error", "error": error,
+            "alarms": None, "first_alarm_frame": None, "warnings": None, "first_warning_frame": None,
+            "seconds": None, "status": "error", "error": error,
             "out": task["rel_out"]}
 
 
@@ -154,7 +158,8 @@ def _done_row(task: dict) -> dict | None:
     except (OSError, json.JSONDecodeError):
         return None
     if saved.get("pset") != task["pset"] or saved.get("video") != task["video"] \
-            or saved.get("run_options", {}) != task.get("run_options", {}):
+            or saved.get("run_options", {}) != task.get("run_options", {}) \
+            or "warnings" not in saved:  # done before results.csv had the warning columns: rerun
         return None
     return {k: saved.get(k) for k in RESULT_COLUMNS}
 
@@ -230,7 +235,7 @@ def _write_table(rows: list[dict], out: Path, parquet: bool) -> None:
         import pandas as pd
 
         df = pd.DataFrame(rows, columns=list(RESULT_COLUMNS))
-        for col in ("n_frames", "fields", "alarms", "first_alarm_frame"):
+        for col in ("n_frames", "fields", "alarms", "first_alarm_frame", "warnings", "first_warning_frame"):
             df[col] = df[col].astype("Int64")
         df["seconds"] = df["seconds"].astype("float64")
         with atomic_path(out / "results.parquet") as tmp:
