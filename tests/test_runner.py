@@ -6,7 +6,6 @@ clip ``data`` is the square approach of ``tests/conftest.py``.)"""
 from __future__ import annotations
 
 import json
-import sys
 
 import numpy as np
 import pytest
