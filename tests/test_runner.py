@@ -6,7 +6,6 @@ clip ``data`` is the square approach of ``tests/conftest.py``.)"""
 from __future__ import annotations
 
 import json
-import sys
 
 import numpy as np
 import pytest
@@ -55,13 +54,6 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     pytest.importorskip("pandas")
     a, b = kept.to_dataframe(), lean.to_dataframe()
     assert a.equals(b), (a.dtypes, b.dtypes)
-
-
-def test_to_dataframe_without_pandas(data, monkeypatch):
-    res = run(str(data["images"]), end=3, out=False, quiet=True)
-    monkeypatch.setitem(sys.modules, "pandas", None)
-    with pytest.raises(ImportError, match=r"pip install 'mlplc2\[pandas\]'"):
-        res.to_dataframe()
 
 
 def test_run_api_rejects_ambiguous_models_and_params(data):

@@ -63,6 +63,9 @@ def _cmd_run(args) -> int:
     resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
     if args.end is not None and args.end <= args.start:
         raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
+    if (args.fields or args.all_fields) and not args.video:
+        flag = "--all-fields" if args.all_fields else "--fields"
+        raise InputValueError(f"{flag} draws on annotated.mp4: give --video too")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
         try:
@@ -103,7 +106,8 @@ def _print_run_summary(args, result) -> None:
         if fields:
             alarms = [f for f in fields if f["first_alarm_frame"] is not None]
             lines.append(f"  {name}: {len(fields)} field(s), {len(alarms)} in alarm")
-            for f in sorted(fields, key=lambda f: -f["peak_response"])[:6]:
+            # the six strongest of the fields that responded (a field with peak 0 never did)
+            for f in sorted((f for f in fields if f["peak_response"] > 0), key=lambda f: -f["peak_response"])[:6]:
                 alarm = f", alarm at frame {f['first_alarm_frame']}" if f["first_alarm_frame"] is not None else ""
                 lines.append(f"    #{f['id']} at ({f['x']:.0f}, {f['y']:.0f}), frames {f['born']}-"
                              f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
@@ -122,7 +126,7 @@ def _print_run_summary(args, result) -> None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)
     held = max(result.repeated.values(), default=0)
-    if held and not (args.quiet or args.skip_repeats or args.repeat_level is not None):
+    if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
 

@@ -274,13 +274,14 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
                               f"the models need at least {need}x{need}")
 
 
-def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool]:
+def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
     """The run's models, and whether the first frames looked duplicated (:func:`_prescan_repeats`:
-    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on)."""
+    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on);
+    None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     auto = [m for m in built if m.repeat_threshold == "auto"]
-    duplicated = _prescan_repeats(source, auto, src, options)
+    duplicated = _prescan_repeats(source, auto, src, options) if auto else None
     if duplicated:
         built = [_holding(m, models, src.fps, options) if m in auto else m for m in built]
     return built, duplicated
@@ -368,6 +369,7 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         raise
     result = RunResult(source=str(source), models=[m.name for m in built], fps=src.fps, size=src.size,
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
+                       repeated={m.name: 0 for m in built},
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
     return _loop(src, built, result, out_dir, options)
@@ -482,7 +484,7 @@ class _Frames:
         target_rows = []
         for name, out in zip(names, outputs):
             if out.repeated:
-                result.repeated[name] = result.repeated.get(name, 0) + 1
+                result.repeated[name] += 1
             target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                for t in self.recorder.update(index, name, out))
         if self.targets is not None and target_rows:
@@ -507,6 +509,10 @@ class _Frames:
             result.error = f"annotated.mp4: {video_error.strerror or video_error}"
         result.truncated = self.src.truncated
         result.message = self.src.message
+        # One decision on duplicated frames: the pre-scan's, or a model left to find out held frames.
+        if result.duplicated is False and any(result.repeated[m.name] for m in self.built
+                                              if m.repeat_threshold == "auto"):
+            result.duplicated = True
         # Fields still alive at the end keep died = None.
         with recorder:
             result.fields = {name: recorder.summaries(name) for name in names}

@@ -89,18 +89,19 @@ class RunResult:
     target_summaries: dict[str, list[dict]] = field(default_factory=dict)
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
     repeated: dict[str, int] = field(default_factory=dict)
-    """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
-    duplicated: bool = False
-    """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
-    the copies from the start (:data:`mlplc2.runner.PRESCAN_FRAMES`)."""
+    """Per model (every model of the run, 0 when none), the frames it held as repeats of the
+    previous one (``Output.repeated``)."""
+    duplicated: bool | None = False
+    """The video repeats its frames: its first frames looked duplicated (so the models with
+    ``repeat_threshold="auto"`` held the copies from the start, :data:`mlplc2.runner.PRESCAN_FRAMES`),
+    or such a model found out later and held frames. None when no model was left to find out
+    (every model's ``repeat_threshold`` set: ``--skip-repeats``, ``--every-frame``). The
+    ``note:`` line of ``mlplc2 run`` is printed exactly when it is True."""
 
     def to_dataframe(self):
-        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
+        """``rows`` as a pandas DataFrame; after a
         run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("RunResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        import pandas as pd
         if not self.rows and self.n_frames:
             path = self.files.get("responses.csv")
             if path is None or not Path(path).is_file():
