@@ -241,7 +241,7 @@ def _first_alarm(model, frames):
 def test_alarm_before_contact_on_physical_dark_approach(cls):
     """A 1 m dark square at 5 m/s (contact at frame 60, 320x240): both models alarm at their
     default (published) parameters, half a second or more before contact (measured: LGMD2 at
-    frame 44, LGMD1 at 38; benchmarks/lgmd_operating_point.py)."""
+    frame 44, LGMD1 at 43; benchmarks/lgmd_operating_point.py)."""
     st = _physical("dark")
     contact = st.objects[0].contact_frame
     first = _first_alarm(cls(fps=st.fps), st.frames)
@@ -269,7 +269,7 @@ def test_lgmd2_onset_spikes_without_alarm():
 def test_alarm_timing_independent_of_frame_size(cls):
     """The membrane potential is normalised by N_cells = H W: the same physical approach filmed
     at 160x120 and 320x240 alarms within a few frames of each other (measured: LGMD2 44 / 44,
-    LGMD1 41 / 38)."""
+    LGMD1 46 / 43)."""
     firsts = []
     for size in ((160, 120), (320, 240)):
         st = _physical("dark", size)
