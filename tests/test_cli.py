@@ -862,3 +862,27 @@ def test_evaluate_passes_skip_repeats(tmp_path):
     (tmp_path / "gt.json").write_text(json.dumps(gt))
     assert cli.main(["evaluate", str(tmp_path / "v.avi"), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2",
                      "--skip-repeats", "-q"]) == 0
+
+
+def test_compile_notice_says_once_when_numba_compiles(capsys):
+    """The first run after an install compiles the kernels (tens of seconds on frame 1): the CLI
+    says so in one stderr line; nothing when nothing compiles (the kernels come from the disk
+    cache, or no model has compiled kernels), or with --quiet."""
+    numba = pytest.importorskip("numba")
+    from mlplc2.cli.common import COMPILING, compile_notice
+
+    def fresh():   # a new function: Numba must compile it (no cache)
+        return numba.njit(lambda x: x + 1)
+
+    with compile_notice(["mlplc2"]):
+        assert fresh()(1) == 2 and fresh()(2) == 3
+    assert capsys.readouterr().err.splitlines() == [COMPILING]
+    compiled = fresh()
+    compiled(1)
+    with compile_notice(["mlplc2"]):
+        compiled(2)                       # already compiled: no event
+    with compile_notice(["lgmd1", "flow"]):
+        fresh()(1)                        # no model with compiled kernels: not listened to
+    with compile_notice(["mlplc2"], quiet=True):
+        fresh()(1)
+    assert capsys.readouterr().err == ""

@@ -149,3 +149,31 @@ def test_responses_png_gets_the_targets_timeline(data, tmp_path, monkeypatch):
     run(str(data["avi"]), ["mlplc2"], out=tmp_path / "b", quiet=True, end=30, keep_rows=False)
     assert kept.targets and seen[0] == kept.targets
     assert seen[1] == tmp_path / "b" / "targets.csv"
+
+
+def test_progress_bar_starts_after_the_first_frame(data, monkeypatch):
+    """The first frame can take tens of seconds (Numba compiling the kernels on the first run):
+    the bar is made after it, with that frame counted in (initial=1), so that its rate and time
+    left never extrapolate from it (issue 23: "22.97s/frame, ETA 2:32:44")."""
+    import tqdm
+
+    made = []
+
+    class Bar:
+        def __init__(self, *args, **kwargs):
+            made.append(kwargs)
+            self.n = kwargs.get("initial", 0)
+
+        def update(self, n=1):
+            self.n += n
+
+        def close(self):
+            made.append(self.n)
+
+    monkeypatch.setattr(tqdm, "tqdm", Bar)
+    steps = []
+    real_step = mlplc2.LGMD1.step
+    monkeypatch.setattr(mlplc2.LGMD1, "step", lambda self, f: (steps.append(len(made)), real_step(self, f))[1])
+    res = run(str(data["images"]), ["lgmd1"], out=False, progress=True)
+    assert steps[0] == 0 and all(k == 1 for k in steps[1:])   # no bar while frame 1 runs
+    assert made[0]["initial"] == 1 and made[-1] == res.n_frames == len(steps)

@@ -13,7 +13,7 @@ from .._validation import InputValueError
 from ..io import parse_resize
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_warning_options, hfov_degrees, nonneg_int, pos_float, repeat_threshold_option, say,
+                     add_warning_options, compile_notice, hfov_degrees, nonneg_int, pos_float, repeat_threshold_option, say,
                      target_options, warn)
 
 
@@ -69,11 +69,12 @@ def _cmd_run(args) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
         try:
-            result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
-                         start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
-                         decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
-                         target_params=target_options(args) or None)
+            with compile_notice(models, args.quiet):
+                result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
+                             start=args.start, end=args.end, video=args.video, quiet=args.quiet,
+                             hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
+                             decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
+                             target_params=target_options(args) or None)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
@@ -143,10 +144,11 @@ def _add_demo(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_demo(args) -> int:
-    from ..runner import RunInterrupted, demo
+    from ..runner import DEMO_MODELS, RunInterrupted, demo
 
     try:
-        d = demo(args.out, scene=args.scene, quiet=args.quiet)
+        with compile_notice(list(DEMO_MODELS), args.quiet):
+            d = demo(args.out, scene=args.scene, quiet=args.quiet)
     except RunInterrupted as exc:
         return _report_interrupt(exc)
     lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)} "

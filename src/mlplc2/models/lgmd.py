@@ -277,9 +277,10 @@ class LGMD2(Model):
 class LGMD1Params(ParameterSet):
     """Parameters of the LGMD1 network (Yue & Rind, IEEE TNN 2006).
 
-    Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
-    of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
-    the shared grouping layer; ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
+    Inhibition, grouping, spiking and FFI follow Yue & Rind (2006): their signed layers,
+    the values of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
+    the shared grouping layer, W_I of Sun et al.'s implementation, and C_sig = C_w (the
+    grouping gain divided out); ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
     value and rule with the published model.
 
     Valid values: the table below, numbers as for :class:`LGMD2Params`.
@@ -288,7 +289,8 @@ class LGMD1Params(ParameterSet):
     w_i_kernel: tuple[float, float] = param(
         (0.25, 0.125), "3x3 lateral-inhibition kernel (4-nearest, diagonal; centre 0), one-frame delay.",
         symbol="w_I", valid=Valid.reals(2, "nearest, diagonal", minimum=0))
-    w_i: float = param(0.6, "Weight of the inhibition in S = E - W_I I.", symbol="W_I", valid=Valid.real(minimum=0))
+    w_i: float = param(0.4, "Weight of the inhibition in S = E - W_I I (Sun et al.'s value).", symbol="W_I",
+                       valid=Valid.real(minimum=0))
     c_w: float = param(4.0, "Grouping scale w = max|Ce| / C_w + Delta_C.", symbol="C_w",
                        valid=Valid.real(positive=True))
     delta_c: float = param(0.01, "Small constant of the grouping scale.", symbol="Delta_C",
@@ -297,18 +299,19 @@ class LGMD1Params(ParameterSet):
                         valid=Valid.real(minimum=0))
     t_de: float = param(15.0, "Grouping (decay) threshold (G kept where G C_de >= T_de).", symbol="T_de",
                         valid=Valid.real(minimum=0))
-    c_sig: float = param(1.0, "Sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig))).",
-                         symbol="C_sig", valid=Valid.real(positive=True))
+    c_sig: float = param(4.0, """Sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig))). The
+                         published 1 with the grouping gain C_w = 4 divided out (docs/model.md, LGMD1
+                         "Operating point").""", symbol="C_sig", valid=Valid.real(positive=True))
     t_sp: float = param(0.78, "Spiking threshold on kappa.", symbol="T_sp", valid=Valid.real(minimum=0))
     n_ts: int = param(5, "Collision after this many consecutive spiking frames.", symbol="n_ts", unit="frames",
                       valid=Valid.integer(1))
     t_ffi: float = param(10.0, """LGMD output suppressed when the FFI, the mean |P| of the previous frame,
                          reaches this.""", symbol="T_FFI", unit="grey level", valid=Valid.real(positive=True))
-    signed: bool = param(False, """If True, Yue & Rind's signed layers: E = P, I from the signed P(t-1),
-                         S = E - W_I I (not rectified), membrane sum over |G|, so inhibition from a neighbour
-                         of the opposite polarity adds to the excitation. If False (default, a documented
-                         deviation): magnitudes, E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition
-                         always inhibits.""", valid=Valid.boolean())
+    signed: bool = param(True, """If True (default), Yue & Rind's signed layers: E = P, I from the signed
+                         P(t-1), S = E - W_I I (not rectified), membrane sum over |G|, so inhibition from a
+                         neighbour of the opposite polarity adds to the excitation. If False: magnitudes,
+                         E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition always inhibits.""",
+                         valid=Valid.boolean())
 
     def __post_init__(self) -> None:
         check_fields(self, "LGMD1Params")
@@ -319,7 +322,8 @@ class LGMD1(Model):
     """LGMD1 looming detector with feature enhancement and feed-forward inhibition.
 
     ``Output.response`` is the sigmoid membrane potential kappa (resting value
-    0.5); it is held at rest while the FFI is at or above ``t_ffi``.
+    0.5); it is held at rest while the FFI is at or above ``t_ffi``, and on the first two
+    frames (before I and the FFI have a previous frame).
 
     Examples
     --------
@@ -342,6 +346,7 @@ class LGMD1(Model):
         self._gray_prev: np.ndarray | None = None
         self._p_prev: np.ndarray | None = None
         self._n_spikes = 0
+        self._steps = 0
         self.state: dict = {}
         """Scalars of the last frame (ffi, suppressed, sum_g, kappa), for inspection."""
 
@@ -355,7 +360,11 @@ class LGMD1(Model):
 
         ffi = float(e_prev.mean(dtype=np.float64))
         suppressed = ffi >= p.t_ffi
-        if suppressed:
+        # P exists from the second frame, I and the FFI (from P(t-1)) from the third: until then
+        # the membrane rests (docs/model.md, LGMD1 "Start"), so that motion already under way
+        # when the input starts is not a burst of uninhibited, unsuppressed excitation
+        self._steps += 1
+        if suppressed or self._steps < 3:
             sum_g = 0.0
         else:
             w_i = np.float32(p.w_i)

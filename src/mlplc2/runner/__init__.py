@@ -535,12 +535,17 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
         t0 = time.perf_counter()
         try:
             frames.open(out_dir)
-            bar = tqdm(total=src.total, disable=not (options.progress and not options.quiet), unit="frame",
-                       file=sys.stderr, desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
             t0 = time.perf_counter()
             for item in stop.between(src):
                 frames.step(item)
-                bar.update()
+                if bar is None:
+                    # the bar (and its clock) starts after the first frame, which may compile the
+                    # kernels (tens of seconds, once per install): its rate and ETA never count it
+                    bar = tqdm(total=src.total, initial=1, disable=not (options.progress and not options.quiet),
+                               unit="frame", file=sys.stderr, desc=Path(src.name).name or src.name,
+                               dynamic_ncols=True, leave=False)
+                else:
+                    bar.update()
         except KeyboardInterrupt:
             interrupted = True
         except _VideoFailed as exc:
