@@ -19,7 +19,7 @@ Usage::
         [--skip-real] [--repeat-threshold 16] [--json out.json]
 
 ``--models`` also takes the published variants of :data:`VARIANTS` (``lgmd2-csharp``,
-``lgmd1-signed``, ``lgmd1-sun``).
+``lgmd1-unsigned``, ``lgmd1-csig1``, ``lgmd1-sun``).
 
 Missing data folders are skipped. docs/model.md ("LGMD2 ...", "LGMD1 ...") quotes the
 figures this prints.
@@ -49,10 +49,12 @@ VARIANTS = {
     "lgmd2-theta1": (LGMD2, {"a_on": 1.0}, False),
     # Fu's C# lgmd2OpenSource: theta_1 = 1, and tau_i = 1000 / fps in integer arithmetic (33 ms at 30 fps)
     "lgmd2-csharp": (LGMD2, {"a_on": 1.0}, True),
-    # Yue & Rind's signed layers, otherwise our values (Fu's LGMDSingle)
-    "lgmd1-signed": (LGMD1, {"signed": True}, False),
-    # signed, W_I = 0.4, T_s = 0.86: the values of Sun et al.'s Python LGMD (Yue & Rind 2006)
-    "lgmd1-sun": (LGMD1, {"signed": True, "w_i": 0.4, "t_sp": 0.86}, False),
+    # the LGMD1 defaults before issue 24: magnitudes (not signed), Single's W_I = 0.6, C_sig = 1
+    "lgmd1-unsigned": (LGMD1, {"signed": False, "w_i": 0.6, "c_sig": 1.0}, False),
+    # the published network at the published normalisation, C_sig = 1 (saturates)
+    "lgmd1-csig1": (LGMD1, {"c_sig": 1.0}, False),
+    # C_sig = 1, W_I = 0.4, T_s = 0.86: the values of Sun et al.'s Python LGMD (Yue & Rind 2006)
+    "lgmd1-sun": (LGMD1, {"c_sig": 1.0, "t_sp": 0.86}, False),
 }
 
 

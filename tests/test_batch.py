@@ -226,15 +226,28 @@ def test_inputs(videos, tmp_path):
     assert len({r["out"] for r in res.rows}) == 2
 
 
-def test_dask_is_optional(videos, tmp_path, monkeypatch):
-    monkeypatch.setitem(sys.modules, "distributed", None)   # import distributed -> ImportError
-    with pytest.raises(InputValueError, match=r"pip install 'mlplc2\[dask\]'"):
-        batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=1, progress=False)
-    res = batch(videos["paths"][:1], tmp_path / "o", models=["lgmd2"], workers=0, progress=False)
-    assert res.rows[0]["status"] == "ok"
-    monkeypatch.setitem(sys.modules, "pandas", None)
-    with pytest.raises(ImportError, match=r"BatchResult.to_dataframe needs pandas: pip install 'mlplc2\[pandas\]'"):
-        res.to_dataframe()
+def test_dask_and_pandas_are_core_dependencies():
+    """The README's commands after a plain ``pip install .`` (``mlplc2 benchmark``, ``mlplc2 batch
+    --workers 2``) need Dask and pandas: they are in the base install, and the old extras stay as
+    empty aliases so that ``pip install 'mlplc2[dask]'`` still works (issue 24, item 2)."""
+    tomllib = pytest.importorskip("tomllib")
+    pyproject = Path(__file__).resolve().parents[1] / "pyproject.toml"
+    if not pyproject.exists():
+        pytest.skip("not a source checkout")
+    project = tomllib.loads(pyproject.read_text())["project"]
+    deps = [d.replace(" ", "").split("#")[0] for d in project["dependencies"]]
+    assert any(d.startswith("dask[distributed]>=") for d in deps)
+    assert any(d.startswith("pandas>=") for d in deps)
+    assert project["optional-dependencies"]["dask"] == project["optional-dependencies"]["pandas"] == []
+
+
+def test_cli_messages_name_flags_not_keywords(videos, tmp_path, capsys, monkeypatch):
+    """A message on the command line names its flags, never a Python keyword (``parquet=True``)."""
+    monkeypatch.setitem(sys.modules, "pyarrow", None)   # import pyarrow -> ImportError
+    assert main(["batch", videos["paths"][0], "--out", str(tmp_path / "o"), "-m", "lgmd2", "--workers", "0",
+                 "--parquet", "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "--parquet" in line and "=True" not in line and "pyarrow" in line
 
 
 def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
@@ -468,3 +481,19 @@ def test_cli_batch_warns_about_truncated_inputs(videos, tmp_path, capsys):
     assert [r["status"] for r in rows] == ["truncated"] and 0 < int(rows[0]["n_frames"]) < 24
     err = [ln for ln in capsys.readouterr().err.splitlines() if ln.strip()]
     assert len(err) == 1 and err[0].startswith("mlplc2: warning: ") and "cut.avi" in err[0], err
+
+
+def test_results_table_has_the_target_warnings(tmp_path):
+    """results.csv says how many targets warned and when first (issue 24, item 6): the same as the
+    task's targets.csv; empty for a model without targets."""
+    st = stimuli.looming(size=(96, 72), contact_time=1.0, duration=1.2, fps=30.0, background="plain")
+    write_video(tmp_path / "loom.avi", st.frames, 30.0)
+    batch([str(tmp_path / "loom.avi")], tmp_path / "o", models=["mlplc2", "lgmd2"], workers=0, progress=False)
+    with open(tmp_path / "o" / "results.csv", newline="") as f:
+        rows = {r["model"]: r for r in csv.DictReader(f)}
+    with open(tmp_path / "o" / rows["mlplc2"]["out"] / "targets.csv", newline="") as f:
+        warned = [r for r in csv.DictReader(f) if r["warning"] == "1"]
+    assert warned, "the looming square should be warned of"
+    assert int(rows["mlplc2"]["warnings"]) == len({r["target_id"] for r in warned})
+    assert int(rows["mlplc2"]["first_warning_frame"]) == min(int(r["frame"]) for r in warned)
+    assert rows["lgmd2"]["warnings"] == rows["lgmd2"]["first_warning_frame"] == ""

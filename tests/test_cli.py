@@ -730,6 +730,81 @@ def test_cli_skip_repeats(tmp_path, capsys):
     assert "--repeat-level" in capsys.readouterr().err
 
 
+def test_run_summary_lists_only_fields_that_responded(monkeypatch, capsys):
+    """Issue 24, item 6: the summary's six strongest fields leave out fields whose peak is 0."""
+    import mlplc2.runner as runner
+    from mlplc2.runner import RunResult
+
+    def field(fid, peak):
+        return {"id": fid, "x": 10.0 * fid, "y": 5.0, "born": fid, "died": None, "peak_response": peak,
+                "peak_frame": fid, "first_alarm_frame": None}
+
+    fields = [field(1, 0.0), field(2, 40.0), field(3, 0.0), field(4, 7.0)]
+    res = RunResult(source="clip.avi", models=["mlplc2"], fps=30.0, size=(64, 48), model_size=(64, 48),
+                    n_frames=10, fields={"mlplc2": fields}, alarms={"mlplc2": {"count": 0, "first": None}})
+    monkeypatch.setattr(runner, "run", lambda *a, **k: res)
+    assert cli.main(["run", "clip.avi"]) == 0
+    out = capsys.readouterr().out
+    assert "mlplc2: 4 field(s), 0 in alarm" in out
+    assert re.findall(r"#(\d+) at", out) == ["2", "4"]
+
+
+def test_fields_without_video_is_an_error(data, tmp_path, capsys):
+    """--fields / --all-fields draw on annotated.mp4: without --video they would do nothing, so
+    they are a one-line error and nothing is written."""
+    for flag in ("--fields", "--all-fields"):
+        out = tmp_path / flag.strip("-")
+        assert cli.main(["run", str(data["avi"]), flag, "--out", str(out), "-q"]) == 2
+        err = capsys.readouterr().err
+        assert err.strip() == f"mlplc2: error: {flag} draws on annotated.mp4: give --video too"
+        assert not out.exists()
+
+
+def test_default_output_folders_are_ignored_by_git():
+    """Issue 24, item 6: what the README's commands write in a checkout (mlplc2 demo's and
+    mlplc2 reproduce's default folders, mlplc2 run's <stem>_mlplc2/) is not left untracked."""
+    import shutil
+
+    root = Path(__file__).resolve().parents[1]
+    if shutil.which("git") is None or not (root / ".git").exists():
+        pytest.skip("not a git checkout")
+    parser = cli.build_parser()
+    outs = [parser.parse_args(["demo"]).out, parser.parse_args(["reproduce"]).out, "clip_mlplc2", "bench",
+            "six.mp4", "six_gt.json"]
+    for out in outs:
+        probe = f"{out}/x.csv" if "." not in out else out
+        assert subprocess.run(["git", "check-ignore", "-q", probe], cwd=root).returncode == 0, out
+
+
+def _png_folder(d, frames):
+    d.mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(d / f"f{i:03d}.png"), f)
+    return d
+
+
+def test_one_decision_on_repeated_frames(tmp_path, capsys):
+    """Issue 24, item 3: the printed note and fields.json's "duplicated" say the same, also when
+    the copies start after the pre-scan's 60 frames (the models find out then and hold frames);
+    "frames_held" has every model's entry, 0 when it held none."""
+    late = _png_folder(tmp_path / "late", noise_frames(70, seed=1) + duplicated(noise_frames(40, seed=2))[0])
+    assert cli.main(["run", str(late), "-m", "mlplc2,lgmd2", "--out", str(tmp_path / "o")]) == 0
+    err = capsys.readouterr().err
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert set(summary["frames_held"]) == {"mlplc2", "lgmd2"} and summary["frames_held"]["mlplc2"] > 0
+    assert summary["duplicated"] is True and "note: the video repeats its frames" in err
+    plain = _png_folder(tmp_path / "plain", noise_frames(30, seed=3))
+    assert cli.main(["run", str(plain), "-m", "mlplc2,lgmd2", "--out", str(tmp_path / "p")]) == 0
+    summary = json.loads((tmp_path / "p" / "fields.json").read_text())
+    assert summary["frames_held"] == {"mlplc2": 0, "lgmd2": 0} and summary["duplicated"] is False
+    assert "note:" not in capsys.readouterr().err
+    # --every-frame: no model is left to find out, so there is no decision (null) and no note
+    assert cli.main(["run", str(late), "-m", "mlplc2", "--every-frame", "--out", str(tmp_path / "e")]) == 0
+    summary = json.loads((tmp_path / "e" / "fields.json").read_text())
+    assert summary["duplicated"] is None and summary["frames_held"] == {"mlplc2": 0}
+    assert "note:" not in capsys.readouterr().err
+
+
 @pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
 @pytest.mark.parametrize("argv, level", [([], "auto"), (["--skip-repeats"], REPEAT_THRESHOLD),
                                          (["--repeat-level", "4"], 4.0),
@@ -787,3 +862,27 @@ def test_evaluate_passes_skip_repeats(tmp_path):
     (tmp_path / "gt.json").write_text(json.dumps(gt))
     assert cli.main(["evaluate", str(tmp_path / "v.avi"), "--gt", str(tmp_path / "gt.json"), "-m", "mlplc2",
                      "--skip-repeats", "-q"]) == 0
+
+
+def test_compile_notice_says_once_when_numba_compiles(capsys):
+    """The first run after an install compiles the kernels (tens of seconds on frame 1): the CLI
+    says so in one stderr line; nothing when nothing compiles (the kernels come from the disk
+    cache, or no model has compiled kernels), or with --quiet."""
+    numba = pytest.importorskip("numba")
+    from mlplc2.cli.common import COMPILING, compile_notice
+
+    def fresh():   # a new function: Numba must compile it (no cache)
+        return numba.njit(lambda x: x + 1)
+
+    with compile_notice(["mlplc2"]):
+        assert fresh()(1) == 2 and fresh()(2) == 3
+    assert capsys.readouterr().err.splitlines() == [COMPILING]
+    compiled = fresh()
+    compiled(1)
+    with compile_notice(["mlplc2"]):
+        compiled(2)                       # already compiled: no event
+    with compile_notice(["lgmd1", "flow"]):
+        fresh()(1)                        # no model with compiled kernels: not listened to
+    with compile_notice(["mlplc2"], quiet=True):
+        fresh()(1)
+    assert capsys.readouterr().err == ""

@@ -394,3 +394,44 @@ def test_two_streams_in_two_threads_do_not_deadlock(tmp_path):
     proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240, env=env)
     assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
     assert "done [6, 6] same True" in proc.stdout
+
+
+# --- the on-disk cache of the compiled kernels (issue 23) ---------------------------------------
+_NEW_PROCESS = """
+import mlplc2
+from mlplc2 import stimuli
+from mlplc2.neuropils import _fast
+model = mlplc2.MLPLC2(fps=30.0)
+for frame in stimuli.basic("dark_approach", frames=30).frames:
+    model.step(frame)
+used = [k for k in _fast.KERNELS if k.signatures]
+print("used", len(used), "hits", sum(sum(k.stats.cache_hits.values()) for k in used),
+      "misses", sum(sum(k.stats.cache_misses.values()) for k in used))
+"""
+
+
+def _mlplc2_on_an_approach():
+    model = mlplc2.MLPLC2(fps=30.0)
+    for frame in stimuli.basic("dark_approach", frames=30).frames:
+        model.step(frame)
+
+
+def test_a_new_process_loads_the_kernels_from_the_disk_cache(tmp_path):
+    """The first run compiles the kernels (tens of seconds) and caches them on disk; a later
+    process loads every one it uses from there (Numba's ``stats``: hits, no misses), so only the
+    first run after an install or upgrade stalls on its first frame."""
+    import os
+    import subprocess
+    import sys
+
+    _mlplc2_on_an_approach()   # compiled here, or loaded: either way the cache now holds them
+    script = tmp_path / "new_process.py"
+    script.write_text(_NEW_PROCESS)
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
+                          env=dict(os.environ))
+    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
+    words = proc.stdout.split()
+    used, hits, misses = (int(words[words.index(key) + 1]) for key in ("used", "hits", "misses"))
+    assert used >= 5                      # the front end's and the motion kernels at least
+    assert misses == 0 and hits >= used   # nothing compiled in the new process
+

@@ -12,7 +12,7 @@ import pytest
 from mlplc2._validation import InputValueError
 from mlplc2.neuropils.attention import Field
 from mlplc2.models.base import Output
-from mlplc2.plots import ALARM_RGB, CALM_RGB, PANEL_RGB, annotate_frame
+from mlplc2.plots import ALARM_RGB, CALM_RGB, PANEL_RGB, WARN_RGB, annotate_frame
 
 GREY = 128
 
@@ -118,3 +118,95 @@ def test_header_rows_do_not_overlap_and_field_labels_avoid_them():
     green = np.nonzero(np.all(img == CALM_RGB, axis=2).sum(axis=1) > 30)[0]  # rows of the label box
     dark = np.nonzero((np.all(img == PANEL_RGB, axis=2) | np.all(img == ALARM_RGB, axis=2))[:, :40].any(axis=1))[0]
     assert not set(green) & set(dark)  # the label is not under (or over) the header
+
+
+# -- issue 24 item 4: which target warns, boxes inside the frame, the header, the timeline ------------
+
+def _target(tid=1, x=216.0, y=120.0, width=510.0, height=150.0, ttc_s=0.8, miss=0.3, warning=True):
+    from mlplc2.targets import Target
+
+    return Target(tid, x, y, width, height, ttc_s=ttc_s, miss=miss, warning=warning)
+
+
+def test_header_says_which_target_warns_and_what_is_a_field_alarm():
+    from mlplc2.plots import header_text
+
+    calm = _target(1, ttc_s=2.0, warning=False)
+    soon, later = _target(3, ttc_s=0.8), _target(5, ttc_s=1.4)
+    assert header_text("mlplc2", Output(0, 0.0, targets=(calm, later, soon))) == "mlplc2 WARNING T3 0.80 s +1"
+    f = _field(collision=True, response=1926.0)
+    assert header_text("mlplc2", Output(0, 1926.0, (f,), collision=True, targets=(soon,))) == \
+        "mlplc2 WARNING T3 0.80 s, field ALARM"
+    assert header_text("mlplc2", Output(0, 1926.0, (f,), collision=True, targets=(calm,))) == \
+        "mlplc2 field ALARM, response 1926"
+    assert header_text("lgmd2", Output(0, 0.9, collision=True)) == "lgmd2 ALARM, response 0.9"
+    assert header_text("mlplc2", Output(0, 0.0, targets=(calm,))) == "mlplc2 response 0"
+
+
+def test_target_box_wider_than_the_frame_is_clipped_inside_it():
+    """A warning target 510 px wide on a 432-px frame: its left and right sides are drawn at
+    the frame's edges, its top and bottom across the frame."""
+    frame = np.full((240, 432, 3), GREY, np.uint8)
+    img = annotate_frame(frame, [Output(0, 0.0, targets=(_target(),))], ["mlplc2"])
+    red = np.all(img == WARN_RGB, axis=2)
+    rows = slice(120 - 30, 120 + 30)  # the middle of the box's height, away from every label
+    assert red[rows, :4].any(axis=1).all() and red[rows, -4:].any(axis=1).all()  # left and right sides
+    for y in (120 - 75, 120 + 75):  # top and bottom sides
+        assert red[y - 2:y + 3, 100:330].any(axis=0).all(), y
+
+
+def test_warning_label_keeps_clear_of_the_header():
+    """A warning target filling the frame: its label goes where it hides no header row."""
+    frame = np.full((240, 320, 3), 255, np.uint8)
+    t = _target(x=160, y=120, width=330, height=250)
+    outs = [Output(0, 0.0, targets=(t,)), Output(0, 0.5)]
+    img = annotate_frame(frame, outs, ["mlplc2", "lgmd2"], index=7)
+    header_only = annotate_frame(frame, outs, ["mlplc2", "lgmd2"], primary=None)
+    header = np.any(header_only != frame, axis=2)
+    header[80:] = False
+    assert header.sum() > 500 and (img[header] == header_only[header]).all()
+    assert np.all(img == WARN_RGB, axis=2)[100:].sum() > 300  # the label went below the header
+
+
+def _timeline_rows():
+    rows = [{"frame": k, "model": "mlplc2", "target_id": 1, "ttc_s": 1.0 - 0.1 * k, "miss": 0.2,
+             "warning": int(k >= 6)} for k in range(10)]
+    rows += [{"frame": k, "model": "mlplc2", "target_id": 2, "ttc_s": None, "miss": None, "warning": 0}
+             for k in range(3, 8)]
+    return rows
+
+
+def test_timeline_draws_time_to_contact_and_marks_the_warning_frames():
+    from mlplc2.plots import figure, plot_timeline
+
+    ax = figure(6, 3).subplots()
+    plot_timeline(ax, _timeline_rows(), "mlplc2")
+    line, dots = ax.lines  # target 2 never had a time to contact: no line
+    assert list(line.get_xdata()) == list(range(10))
+    assert np.allclose(line.get_ydata(), [1.0 - 0.1 * k for k in range(10)])
+    assert list(dots.get_xdata()) == [6, 7, 8, 9] and np.allclose(dots.get_ydata(), [0.4, 0.3, 0.2, 0.1])
+    assert [t.get_text() for t in ax.get_legend().get_texts()] == ["T1 warns 6-9"]
+
+
+def test_responses_png_gets_a_timeline_panel_from_targets_csv(tmp_path):
+    import csv
+
+    import matplotlib.image
+
+    from mlplc2.plots import plot_responses, read_targets
+
+    rows = [{"frame": k, "time_s": k / 30, "model": "mlplc2", "field_id": 1, "x": 10.0, "y": 10.0,
+             "response": float(k), "collision": 0} for k in range(10)]
+    path = tmp_path / "targets.csv"
+    with open(path, "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=["frame", "model", "target_id", "x", "y", "width", "height", "ttc_s",
+                                          "miss", "warning", "fields", "azimuth_deg", "elevation_deg"])
+        w.writeheader()
+        for r in _timeline_rows():
+            w.writerow({**r, "ttc_s": "" if r["ttc_s"] is None else r["ttc_s"], "miss": r["miss"] or "",
+                        "x": 1, "y": 1, "width": 2, "height": 2, "fields": "", "azimuth_deg": "", "elevation_deg": ""})
+    assert read_targets(path)[:2] == _timeline_rows()[:2] and read_targets(path)[-1]["ttc_s"] is None
+    one = plot_responses(rows, tmp_path / "one.png")
+    two = plot_responses(rows, tmp_path / "two.png", targets=path)
+    h1, h2 = (matplotlib.image.imread(p).shape[0] for p in (one, two))
+    assert h2 > 1.5 * h1  # a second panel

@@ -6,7 +6,6 @@ clip ``data`` is the square approach of ``tests/conftest.py``.)"""
 from __future__ import annotations
 
 import json
-import sys
 
 import numpy as np
 import pytest
@@ -58,13 +57,6 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     assert a.equals(b), (a.dtypes, b.dtypes)
 
 
-def test_to_dataframe_without_pandas(data, monkeypatch):
-    res = run(str(data["images"]), end=3, out=False, quiet=True)
-    monkeypatch.setitem(sys.modules, "pandas", None)
-    with pytest.raises(ImportError, match=r"pip install 'mlplc2\[pandas\]'"):
-        res.to_dataframe()
-
-
 def test_run_api_rejects_ambiguous_models_and_params(data):
     from mlplc2._validation import InputError
 
@@ -103,3 +95,86 @@ def test_run_api_on_an_array_says_what_to_do():
         run(frames, ["mlplc2"], out=False)
     msg = str(exc.value)
     assert "\n" not in msg and len(msg) < 200 and "ndarray of shape (10, 40, 40)" in msg and "model.run(frames)" in msg
+
+
+def test_full_disk_during_video_keeps_the_other_outputs(data, tmp_path, monkeypatch, capsys):
+    """Issue 24 item 5: the annotated video hits a full disk at frame K. The run stops with one
+    OSError; responses.csv, targets.csv, fields.json and responses.png are there, covering
+    frames 0 .. K-1 and saying the run is not complete; no annotated.mp4 or temporary file."""
+    import errno
+
+    from mlplc2.io import VideoWriter
+
+    k = 20
+    write = VideoWriter.write
+
+    def full_after_k(self, frame):
+        if self.n_frames >= k:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        write(self, frame)
+
+    monkeypatch.setattr(VideoWriter, "write", full_after_k)
+    out = tmp_path / "out"
+    with pytest.raises(OSError, match="No space left on device") as info:
+        run(str(data["avi"]), ["mlplc2", "lgmd2"], out=out, video=True, quiet=True, end=k + 5)
+    assert info.value.errno == errno.ENOSPC and info.value.filename == str(out / "annotated.mp4")
+    assert "\n" not in str(info.value) and f"{k} frames before" in str(info.value)
+    names = {p.name for p in out.iterdir()}
+    assert names == {"responses.csv", "targets.csv", "fields.json", "responses.png"}, names
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["n_frames"] == k and summary["complete"] is False
+    assert summary["error"] == "annotated.mp4: No space left on device"
+    assert summary["models"]["mlplc2"]  # the fields of the frames done
+    for csv_name in ("responses.csv", "targets.csv"):
+        frames = {int(line.split(",")[0]) for line in (out / csv_name).read_text().splitlines()[1:]}
+        assert frames and max(frames) == k - 1, (csv_name, sorted(frames))
+    assert (out / "responses.png").stat().st_size > 10_000
+    # through the CLI: one line on stderr, naming the file; the outputs kept
+    from mlplc2.cli import main
+
+    capsys.readouterr()
+    assert main(["run", str(data["avi"]), "--video", "-q", "--end", "25", "--out", str(tmp_path / "cli")]) != 0
+    err = capsys.readouterr().err
+    assert len(err.strip().splitlines()) == 1 and "annotated.mp4: No space left on device" in err, err
+    assert (tmp_path / "cli" / "fields.json").is_file() and (tmp_path / "cli" / "responses.png").is_file()
+
+
+def test_responses_png_gets_the_targets_timeline(data, tmp_path, monkeypatch):
+    """responses.png is drawn with the targets (issue 24 item 4): their rows, or targets.csv when
+    the run keeps no rows."""
+    import mlplc2.plots
+
+    seen = []
+    monkeypatch.setattr(mlplc2.plots, "plot_responses", lambda rows, path, targets=None, **kw: seen.append(targets))
+    kept = run(str(data["avi"]), ["mlplc2"], out=tmp_path / "a", quiet=True, end=30)
+    run(str(data["avi"]), ["mlplc2"], out=tmp_path / "b", quiet=True, end=30, keep_rows=False)
+    assert kept.targets and seen[0] == kept.targets
+    assert seen[1] == tmp_path / "b" / "targets.csv"
+
+
+def test_progress_bar_starts_after_the_first_frame(data, monkeypatch):
+    """The first frame can take tens of seconds (Numba compiling the kernels on the first run):
+    the bar is made after it, with that frame counted in (initial=1), so that its rate and time
+    left never extrapolate from it (issue 23: "22.97s/frame, ETA 2:32:44")."""
+    import tqdm
+
+    made = []
+
+    class Bar:
+        def __init__(self, *args, **kwargs):
+            made.append(kwargs)
+            self.n = kwargs.get("initial", 0)
+
+        def update(self, n=1):
+            self.n += n
+
+        def close(self):
+            made.append(self.n)
+
+    monkeypatch.setattr(tqdm, "tqdm", Bar)
+    steps = []
+    real_step = mlplc2.LGMD1.step
+    monkeypatch.setattr(mlplc2.LGMD1, "step", lambda self, f: (steps.append(len(made)), real_step(self, f))[1])
+    res = run(str(data["images"]), ["lgmd1"], out=False, progress=True)
+    assert steps[0] == 0 and all(k == 1 for k in steps[1:])   # no bar while frame 1 runs
+    assert made[0]["initial"] == 1 and made[-1] == res.n_frames == len(steps)

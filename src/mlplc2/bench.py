@@ -304,6 +304,10 @@ class _Paced:
         self._dec, self._period, self._t0, self._k = decoder, 1.0 / fps, None, 0
         self.name, self.fps, self.size, self.frame_count = decoder.name, fps, decoder.size, None
 
+    @property
+    def time_s(self):
+        return self._dec.time_s
+
     def skip(self, n: int) -> int:
         return self._dec.skip(n)
 

@@ -122,6 +122,12 @@ def _rotational_flow(x: np.ndarray, y: np.ndarray) -> np.ndarray:
     return a
 
 
+_LK_WINDOW = 11          # px, the Lucas-Kanade window at the reduced size
+_LK_LEVELS = 2           # pyramid levels above the reduced frame: motions up to ~30 px there
+_LK_STOP = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
+_MIN_TEXTURE = 100.0     # mean squared Sobel gradient (grey levels^2) for a grid point to be followed
+
+
 class MotionEstimator:
     """Estimates :class:`CameraMotion` once per frame from the grey images (``apply(gray)``).
 
@@ -137,7 +143,7 @@ class MotionEstimator:
     heading (x, y) in pixels, when the robot knows it.
     """
 
-    def __init__(self, *, hfov_deg: float | None = None, grid: tuple[int, int] = (16, 12), work_width: int = 160,
+    def __init__(self, *, hfov_deg: float | None = None, grid: tuple[int, int] = (12, 9), work_width: int = 160,
                  heading: tuple[float, float] | None = None, min_expansion: float = 0.002):
         self.hfov_deg = 60.0 if hfov_deg is None else check_hfov(hfov_deg)
         self.grid = grid
@@ -158,36 +164,40 @@ class MotionEstimator:
             scale *= 2.0
         return img, scale
 
-    def _track(self, prev: np.ndarray, cur: np.ndarray):
-        h, w = prev.shape
+    def _track(self, prev_img: np.ndarray, cur_img: np.ndarray):
+        """Grid points of the previous frame followed into this one (pyramidal Lucas-Kanade on the
+        images), kept where the forward-backward error is under 0.5 px and the previous
+        frame has texture (a flat patch "tracks" onto itself and says nothing)."""
+        h, w = prev_img.shape
         nx, ny = self.grid
         xs = (np.arange(nx) + 0.5) * w / nx
         ys = (np.arange(ny) + 0.5) * h / ny
         p0 = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 1, 2).astype(np.float32)
-        crit = (cv2.TERM_CRITERIA_EPS | cv2.TERM_CRITERIA_COUNT, 10, 0.03)
-        p1, st, _ = cv2.calcOpticalFlowPyrLK(prev, cur, p0, None, winSize=(15, 15), maxLevel=2, criteria=crit)
-        pb, st2, _ = cv2.calcOpticalFlowPyrLK(cur, prev, p1, None, winSize=(15, 15), maxLevel=2, criteria=crit)
-        ok = (st.ravel() == 1) & (st2.ravel() == 1) & (np.linalg.norm((pb - p0).reshape(-1, 2), axis=1) < 0.5)
-        # textureless cells track "perfectly" onto themselves: require image structure
-        gx = cv2.Sobel(prev, cv2.CV_32F, 1, 0, ksize=3)
-        gy = cv2.Sobel(prev, cv2.CV_32F, 0, 1, ksize=3)
-        mag = cv2.blur(gx * gx + gy * gy, (7, 7))
-        ix = np.clip(p0[:, 0, 0].astype(int), 0, w - 1)
-        iy = np.clip(p0[:, 0, 1].astype(int), 0, h - 1)
-        ok &= mag[iy, ix] > 100.0
+        gx = cv2.Sobel(prev_img, cv2.CV_32F, 1, 0, ksize=3)
+        gy = cv2.Sobel(prev_img, cv2.CV_32F, 0, 1, ksize=3)
+        texture = cv2.blur(gx * gx + gy * gy, (7, 7))[p0[:, 0, 1].astype(int), p0[:, 0, 0].astype(int)]
+        p0 = p0[texture > _MIN_TEXTURE]
+        if len(p0) < 8:
+            return np.empty((0, 2)), np.empty((0, 2))
+        win = (_LK_WINDOW, _LK_WINDOW)
+        p1, st, _ = cv2.calcOpticalFlowPyrLK(prev_img, cur_img, p0, None, winSize=win, maxLevel=_LK_LEVELS,
+                                             criteria=_LK_STOP)
+        pb, st2, _ = cv2.calcOpticalFlowPyrLK(cur_img, prev_img, p1, None, winSize=win, maxLevel=_LK_LEVELS,
+                                              criteria=_LK_STOP)
+        ok = (st.ravel() == 1) & (st2.ravel() == 1) & (np.abs(pb - p0).reshape(-1, 2).max(axis=1) < 0.5)
         return p0.reshape(-1, 2)[ok].astype(np.float64), p1.reshape(-1, 2)[ok].astype(np.float64)
 
     def apply(self, gray: np.ndarray, *, omega=None) -> CameraMotion:
         """The camera's motion from the previous frame to ``gray`` (the first frame: none)."""
-        cur, scale = self._reduce(gray)
-        prev, self._prev = self._prev, cur
+        img, scale = self._reduce(gray)
+        prev, self._prev = self._prev, img
         given = omega is not None
-        if prev is None or prev.shape != cur.shape:
+        if prev is None or prev.shape != img.shape:
             return CameraMotion(omega=tuple(float(v) for v in omega) if given else (0.0, 0.0, 0.0), given=given)
-        h, w = cur.shape
+        h, w = img.shape
         f = focal_length(w, self.hfov_deg)
         cx, cy = (w - 1) / 2.0, (h - 1) / 2.0
-        p0, p1 = self._track(prev, cur)
+        p0, p1 = self._track(prev, img)
         if len(p0) < 8:
             return CameraMotion(omega=tuple(float(v) for v in omega) if given else (0.0, 0.0, 0.0), points=len(p0),
                                 given=given)
@@ -208,53 +218,51 @@ class MotionEstimator:
 def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: float = 0.3):
     """Robust fit of ``d = A(x, y) omega + s_i (p_i - e)`` (rotation + expansion about the FOE e).
 
-    Alternates: omega and the expansion rates given e (linear), e given the rotation (linear in e:
-    the residual flow is parallel to p - e). Tukey weights on the residual, scale from its median.
-    Returns omega, e (normalised; None when no expansion), the share of inliers of the rotation,
-    the median expansion rate (1 / frames) and the share of points that expand about e.
+    Alternates: omega given e (linear: the flow across the radial direction p - e is the rotation's
+    alone), then e given omega (linear in e: what the rotation leaves is parallel to p - e).
+    Tukey weights on the residual, its scale from the median. Returns omega, e (normalised; None
+    when too little expands to tell), the share of inliers, the median expansion rate of the points
+    whose expansion is measured (1 / frames) and the share of those that expand about e.
     """
     a = _rotational_flow(x, y)
-    p = np.stack([x, y], -1)
+    a0, a1 = a[:, 0, :], a[:, 1, :]
     n = len(x)
     wts = np.ones(n)
-    w_est = np.zeros(3) if omega is None else omega
+    w_est = np.zeros(3) if omega is None else np.asarray(omega, float)
     e = np.zeros(2) if heading is None else np.asarray(heading, float)
-    s = np.zeros(n)
     sigma = 0.3 * px
+    dx, dy = d[:, 0], d[:, 1]
     for _ in range(iterations):
-        r = p - e                                           # radial direction of the expansion
+        rx, ry = x - e[0], y - e[1]
+        rr = np.maximum(rx * rx + ry * ry, 1e-12)
         if omega is None:
-            # the flow perpendicular to the radial direction is rotation only (the expansion is radial)
-            nrm = np.stack([-r[:, 1], r[:, 0]], -1)
-            nrm /= np.maximum(np.linalg.norm(nrm, axis=1, keepdims=True), 1e-9)
-            rows = np.einsum("ni,nij->nj", nrm, a)
-            rhs = np.einsum("ni,ni->n", nrm, d)
-            ww = np.sqrt(wts)
-            w_est, *_ = np.linalg.lstsq(rows * ww[:, None], rhs * ww, rcond=None)
-        res = d - np.einsum("nij,j->ni", a, w_est)           # what the rotation leaves: the expansion
-        rr = np.einsum("ni,ni->n", r, r)
-        s = np.einsum("ni,ni->n", res, r) / np.maximum(rr, 1e-9)
+            inv = 1.0 / np.sqrt(rr)
+            nx_, ny_ = -ry * inv, rx * inv                   # across the radial direction
+            rows = nx_[:, None] * a0 + ny_[:, None] * a1
+            rw = rows * wts[:, None]
+            w_est = np.linalg.solve(rw.T @ rows + 1e-12 * np.eye(3), rw.T @ (nx_ * dx + ny_ * dy))
+        resx, resy = dx - a0 @ w_est, dy - a1 @ w_est       # what the rotation leaves: the expansion
+        s = (resx * rx + resy * ry) / rr
         if heading is None:
-            # residual parallel to p - e: res_y (x - ex) - res_x (y - ey) = 0, linear in e
-            rows = np.stack([-res[:, 1], res[:, 0]], -1)
-            rhs = -res[:, 1] * x + res[:, 0] * y
-            ww = np.sqrt(wts) * (s > 0)
-            if ww.sum() >= 3:
-                e_new, *_ = np.linalg.lstsq(rows * ww[:, None], rhs * ww, rcond=None)
-                if np.all(np.isfinite(e_new)) and np.hypot(*e_new) < 3.0:
-                    e = e_new
-        err = np.linalg.norm(res - s[:, None] * (p - e), axis=1)
+            ww = wts * (s > 0)
+            if np.count_nonzero(ww) >= 3:
+                m = np.array([[ww @ (resy * resy), -(ww @ (resy * resx))], [-(ww @ (resx * resy)), ww @ (resx * resx)]])
+                rhs = -resy * x + resx * y
+                b = np.array([-(ww @ (resy * rhs)), ww @ (resx * rhs)])
+                if abs(np.linalg.det(m)) > 1e-18:
+                    e_new = np.linalg.solve(m, b)
+                    if np.all(np.isfinite(e_new)) and np.hypot(*e_new) < 3.0:
+                        e = e_new
+        err = np.hypot(resx - s * (x - e[0]), resy - s * (y - e[1]))
         scale = max(1.4826 * float(np.median(err)), sigma)
         u = err / (4.685 * scale)
         wts = np.where(u < 1.0, (1.0 - u * u) ** 2, 0.0)
-    inliers = err < 3.0 * max(1.4826 * float(np.median(err)), sigma)
+    inliers = err < 3.0 * scale
     radial = s * np.sqrt(rr)                                # the expansion's own flow at each point
     moving = inliers & (np.abs(radial) > 2.0 * sigma)       # points whose expansion is measured
     if moving.sum() < max(3, min_share * n):                # too little expands to tell a heading
         return w_est, None, float(np.mean(inliers)), 0.0, 0.0
-    exp = float(np.median(s[moving]))
-    exp_ok = float(np.mean(s[moving] > 0))
-    return w_est, e, float(np.mean(inliers)), exp, exp_ok
+    return w_est, e, float(np.mean(inliers)), float(np.median(s[moving])), float(np.mean(s[moving] > 0))
 
 
 def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0) -> np.ndarray:

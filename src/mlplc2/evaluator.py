@@ -17,7 +17,7 @@ Truth that says which objects will hit (3-D objects with a ``kind``, labelled cl
 collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
 :func:`mlplc2.evaluation.score.score_warnings`): collision objects warned before contact, lead
 time, false warnings per 1000 frames by cause, time-to-contact errors (RTE, MiD) and coverage,
-fragmentation, and per clip warned / missed / false. The scores themselves are
+fragmentation, and per clip warned / missed / unplaced / false. The scores themselves are
 :mod:`mlplc2.evaluation.score`; this module reads the inputs (:class:`~mlplc2.runner.RunResult`,
 results folders, videos), orders the models and writes the tables.
 
@@ -327,7 +327,7 @@ class Evaluation:
         return json.dumps(self.to_dict(), indent=kw.pop("indent", 1), **kw)
 
     def to_dataframe(self, kind: str = "objects"):
-        """One of the tables as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``),
+        """One of the tables as a pandas DataFrame,
         one row per dict, its keys the columns (as in ``evaluation.json``; docs/evaluation.md):
 
         ``"objects"`` (default)
@@ -346,10 +346,7 @@ class Evaluation:
                   "warning_objects": self.warning_objects, "warning_videos": self.warning_videos}
         if kind not in tables:
             raise InputValueError(f"kind must be one of {', '.join(tables)}, got {kind!r}")
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("Evaluation.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        import pandas as pd
         return pd.DataFrame(tables[kind])
 
     def _shown(self) -> tuple[dict[str, str], list[str]]:
@@ -454,16 +451,19 @@ class Evaluation:
         return "\n".join(lines)
 
     def clip_warning_table(self) -> str:
-        """Markdown: per labelled clip and model, warned / missed / false and the lead time."""
+        """Markdown: per labelled clip and model, warned / missed / false and the lead time; a
+        warning that cannot be placed on the collider (no track) apart, as "unplaced"."""
         clips = [v for v in self.warning_videos if v["clip"]]
         if not clips:
             return ""
         shown, _ = self._shown()
-        lines = ["| model | clip | label | warned | lead (s) | false warnings (frames) |", "|---|---|---|---|---|---|"]
+        lines = ["| model | clip | label | warned | lead (s) | unplaced warning (s before contact) "
+                 "| false warnings (frames) |", "|---|---|---|---|---|---|---|"]
         for v in clips:
             o = v["outcome"]
+            unplaced = _fmt(o["unplaced"]) if not o["unplaced"] else f"yes, {_fmt(o['unplaced_lead_s'], 2)}"
             lines.append(f"| {shown.get(v['model'], v['model'])} | {v['video']} | {o['label']} "
-                         f"| {_fmt(o['warned'])} | {_fmt(o['lead_s'], 2)} | {v['false_frames']} |")
+                         f"| {_fmt(o['warned'])} | {_fmt(o['lead_s'], 2)} | {unplaced} | {v['false_frames']} |")
         return "\n".join(lines)
 
     def notes(self) -> str:

@@ -16,7 +16,8 @@ import numpy as np
 from ._files import atomic_path
 from ._validation import InputValueError
 
-__all__ = ["plot_responses", "annotate_frame", "read_responses", "DRAW_FIELDS"]
+__all__ = ["plot_responses", "annotate_frame", "header_text", "read_responses", "read_targets", "plot_timeline",
+           "DRAW_FIELDS"]
 
 #: RGB colours of the annotated video.
 ALARM_RGB = (230, 30, 30)
@@ -36,6 +37,17 @@ def read_responses(path) -> list[dict]:
                 "response": float(r["response"]), "collision": int(r["collision"]),
             })
     return rows
+
+
+def read_targets(path) -> list[dict]:
+    """Read a ``targets.csv`` written by :func:`mlplc2.run` into row dicts with the keys
+    :func:`plot_responses` uses (``frame``, ``model``, ``target_id``, ``ttc_s``, ``miss``,
+    ``warning``; numbers parsed, empty cells -> None)."""
+    with open(path, newline="", encoding="utf-8") as f:
+        return [{"frame": int(r["frame"]), "model": r["model"], "target_id": int(r["target_id"]),
+                 "ttc_s": float(r["ttc_s"]) if r["ttc_s"] else None,
+                 "miss": float(r["miss"]) if r["miss"] else None, "warning": int(r["warning"])}
+                for r in csv.DictReader(f)]
 
 
 def _series(rows: Sequence[dict]):
@@ -61,8 +73,9 @@ def gap_segments(frames: Sequence[int], values: Sequence[float]) -> tuple[np.nda
 
 
 def plot_responses(rows, path, *, fields: dict | None = None, title: str | None = None, top: int = 12,
-                   fps: float | None = None, dpi: int = 110) -> Path:
-    """Paper-style response plot: one panel per model, response against frame.
+                   fps: float | None = None, targets=None, dpi: int = 110) -> Path:
+    """Paper-style response plot: one panel per model, response against frame; under the panel
+    of a model with targets, their time to contact against frame, warning frames marked.
 
     Parameters
     ----------
@@ -81,6 +94,9 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
         the others are drawn thin and grey.
     fps : float, optional
         Adds a time axis (seconds) on top of the first panel.
+    targets : list of dict or path, optional
+        Rows of ``targets.csv`` (as in :attr:`RunResult.targets`) or the CSV path: each model
+        with rows gets a second panel, the timeline of its targets (:func:`plot_timeline`).
 
     Notes
     -----
@@ -93,13 +109,25 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
 
     if isinstance(rows, (str, Path)):
         rows = read_responses(rows)
+    if isinstance(targets, (str, Path)):
+        targets = read_targets(targets)
     data = _series(rows)
-    n = max(len(data), 1)
+    timelines: dict[str, list[dict]] = {}
+    for r in targets or ():
+        timelines.setdefault(r["model"], []).append(r)
+    panels = [(model, kind) for model in data for kind in ("responses", "targets")
+              if kind == "responses" or model in timelines]
+    n = max(len(panels), 1)
     fig = figure(9.5, 1.0 + 2.6 * n)
     axes = fig.subplots(n, 1, sharex=True, squeeze=False)[:, 0]
     all_frames = [r["frame"] for r in rows] or [0]
     x0, x1 = min(all_frames), max(all_frames)
-    for ax, (model, d) in zip(axes, data.items()):
+    for ax, (model, kind) in zip(axes, panels):
+        ax.set_xlim(x0, max(x1, x0 + 1))
+        if kind == "targets":
+            plot_timeline(ax, timelines[model], model, top=top)
+            continue
+        d = data[model]
         summaries = {s["id"]: s for s in (fields or {}).get(model, [])}
         if d["fields"]:
             ranked = sorted(d["fields"], key=lambda k: -max(d["fields"][k][1]))
@@ -126,7 +154,6 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
         ax.set_title(model, fontsize=10, loc="left")
         ax.set_ylabel("response (a.u.)")
         ax.grid(alpha=0.3)
-        ax.set_xlim(x0, max(x1, x0 + 1))
     axes[-1].set_xlabel("frame")
     if fps:
         sec = axes[0].secondary_xaxis("top", functions=(lambda f: f / fps, lambda t: t * fps))
@@ -135,6 +162,59 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
     if title:
         fig.suptitle(title, fontsize=11)
     return save_png(fig, path, dpi)
+
+
+#: Upper limit (s) of the time-to-contact axis of :func:`plot_timeline`: early estimates of tens
+#: of seconds would squeeze the last second before contact, where warnings happen.
+TTC_AXIS_S = 5.0
+
+
+def plot_timeline(ax, rows: Sequence[dict], model: str, *, top: int = 12) -> None:
+    """One model's targets on ``ax``: time to contact (s) against frame, one line per target
+    (gaps while it has no estimate), its warning frames as filled dots on the line. The
+    ``top`` targets that warn first (then those with the most estimates) get a colour and a
+    legend entry ``T<id> warns <first>-<last>`` (or ``no warning``); the others are thin and grey."""
+    series: dict[int, tuple[list, list, list]] = {}
+    for r in rows:
+        if r["ttc_s"] is not None:
+            fr, ttc, warn = series.setdefault(r["target_id"], ([], [], []))
+            fr.append(r["frame"])
+            ttc.append(r["ttc_s"])
+            warn.append(bool(r["warning"]))
+
+    def first_warning(tid):
+        fr, _, warn = series[tid]
+        return next((f for f, w in zip(fr, warn) if w), math.inf)
+
+    ranked = sorted(series, key=lambda tid: (first_warning(tid), -len(series[tid][0]), tid))
+    shown = sorted(ranked[:top])
+    for tid in ranked[top:]:
+        ax.plot(*gap_segments(*series[tid][:2]), color="0.7", lw=0.7, zorder=1)
+    for c, tid in zip(colours(len(shown)), shown):
+        fr, ttc, warn = series[tid]
+        wf = [f for f, w in zip(fr, warn) if w]
+        label = f"T{tid} warns {wf[0]}-{wf[-1]}" if wf else f"T{tid} no warning"
+        ax.plot(*gap_segments(fr, ttc), color=c, lw=1.3, label=label, zorder=2)
+        if wf:
+            ax.plot(wf, [v for v, w in zip(ttc, warn) if w], ls="none", marker="o", ms=3.5, color=c,
+                    mec="k", mew=0.4, zorder=3)
+    if series:
+        handles, labels = ax.get_legend_handles_labels()
+        if len(ranked) > top:
+            from matplotlib.lines import Line2D
+
+            handles.append(Line2D([], [], color="0.7", lw=0.7))
+            labels.append(f"{len(ranked) - top} more targets")
+        ax.legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+                  title="target (dots: warning)", title_fontsize=7, frameon=False)
+    else:
+        ax.text(0.5, 0.5, "no time to contact estimated", transform=ax.transAxes, ha="center", va="center",
+                fontsize=8, color="0.4")
+    top_s = max((v for _, ttc, _ in series.values() for v in ttc), default=1.0)
+    ax.set_ylim(0.0, min(max(top_s * 1.05, 0.5), TTC_AXIS_S))
+    ax.set_title(f"{model}: targets", fontsize=10, loc="left")
+    ax.set_ylabel("time to contact (s)")
+    ax.grid(alpha=0.3)
 
 
 def figure(width: float, height: float):
@@ -187,8 +267,9 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     """Draw targets, attention fields and responses on a copy of an RGB frame.
 
     The targets of ``outputs[primary]`` (``Output.targets``) are drawn as boxes of their
-    apparent size, labelled ``T<id>`` with the time to contact and the predicted miss once
-    known, red while warning (orange with a time to contact, blue without one).
+    apparent size, clipped to the frame, labelled ``T<id>`` with the time to contact and the
+    predicted miss once known: red, thicker and ``T<id> WARNING`` while warning (orange with a
+    time to contact, blue without one).
 
     The fields of ``outputs[primary]`` are drawn in their real shape, scaled to input
     pixels: a square of half-side ``radius`` (``field_shape="square"``, the default of
@@ -197,9 +278,10 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     centre and a label ``#id response`` (and ``ttc`` once estimated). Fields in alarm are
     red, the others green. ``draw_fields``: "auto" (default) draws no field when the model
     has targets and else only the fields that respond (response > 0) or are in alarm,
-    "responding" those, "all" every field, "none" none. A header at the top left lists every
-    model's response (``ALARM`` on red while its collision flag is set, ``WARNING`` while a
-    target warns), and ``index`` is shown at the bottom left.
+    "responding" those, "all" every field, "none" none. A header at the top left has one row per
+    model (:func:`header_text`: the warning target and its time to contact, ``field ALARM``,
+    or the response; on red while a target warns or the model is in alarm), and ``index`` is
+    shown at the bottom left.
 
     Text size, line widths and margins scale with the frame size (``_Style``), and every
     label sits on a filled box, placed where it hides no other label, so it reads on any
@@ -285,9 +367,22 @@ class _Labels:
         """Place one label (see the class docstring); returns its box ``(x0, y0, x1, y1)``."""
         bw, bh, th = self.size(text)
         boxes = [self._box(x, y, anchor, bw, bh) for x, y, anchor in candidates]
-        box = next((b for b in boxes if not any(_overlap(b, other) for _, _, other, _ in self.items)), boxes[0])
+        box = next((b for b in boxes if not self._hits(b)), None)
+        if box is None:  # every candidate hides a label: the first one, moved down below them
+            box = boxes[0]
+            for _ in range(len(self.items)):
+                hits = self._hits(box)
+                if not hits:
+                    break
+                box = self._box(box[0], max(o[3] for o in hits) + self.style.gap, "top", bw, bh)
+            if self._hits(box):
+                box = boxes[0]
         self.items.append((text, tuple(int(c) for c in bg), box, th))
         return box
+
+    def _hits(self, box) -> list[tuple[int, int, int, int]]:
+        """The boxes of the labels placed so far that ``box`` overlaps."""
+        return [other for _, _, other, _ in self.items if _overlap(box, other)]
 
     def draw(self) -> None:
         cv2, st = self._cv2, self.style
@@ -301,41 +396,60 @@ def _overlap(a, b) -> bool:
     return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
 
 
+def header_text(name: str, out) -> str:
+    """One model's header row: ``mlplc2 WARNING T3 0.80 s`` while a target warns (the most
+    urgent: the shortest time to contact; ``+k`` more warning), ``field ALARM`` while an
+    attention field is in collision alarm (``ALARM`` for a model without fields), and
+    ``response <r>`` (Eq. 15, a.u.) unless a target warns."""
+    warning = sorted((t for t in getattr(out, "targets", ()) if t.warning), key=lambda t: t.urgency())
+    parts = []
+    if warning:
+        t = warning[0]
+        ttc = "" if t.ttc_s is None else f" {t.ttc_s:.2f} s"
+        parts.append(f"WARNING T{t.id}{ttc}" + (f" +{len(warning) - 1}" if len(warning) > 1 else ""))
+    if out.collision:
+        parts.append("field ALARM" if out.fields else "ALARM")
+    if not warning:
+        parts.append(f"response {_fmt(out.response)}")
+    return f"{name} " + ", ".join(parts)
+
+
 def _header_labels(labels: _Labels, outputs, names: Sequence[str], index: int | None) -> None:
-    """Top left, one row per model: ``name response``, on red with ``ALARM`` while it is in
-    alarm; bottom left: the frame number."""
+    """Top left, one row per model (:func:`header_text`), on red while a target warns or the
+    model is in alarm; bottom left: the frame number."""
     st = labels.style
     y = st.margin
     for name, out in zip(names, outputs):
-        alarm = bool(out.collision)
-        warn = bool(getattr(out, "warning", False))
-        text = f"{name} {_fmt(out.response)}" + (" ALARM" if alarm else "") + (" WARNING" if warn else "")
-        y = labels.add(text, ALARM_RGB if alarm or warn else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
+        red = bool(out.collision) or any(t.warning for t in getattr(out, "targets", ()))
+        y = labels.add(header_text(name, out), ALARM_RGB if red else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
     if index is not None:
         labels.add(f"frame {index}", PANEL_RGB, (st.margin, labels.img.shape[0] - st.margin, "bottom"))
 
 
 def _draw_target(img: np.ndarray, labels: _Labels, t, style: _Style, scale_x: float, scale_y: float) -> None:
-    """One target: a box of its apparent size and a label ``T<id> <ttc>s miss <m>``."""
+    """One target: a box of its apparent size, clipped to the frame (all four sides show), and a
+    label ``T<id> <ttc> s miss <m>``; a warning target's box is thicker, edged in white, and
+    its label reads ``T<id> WARNING <ttc> s miss <m>``."""
     import cv2
 
     colour = WARN_RGB if t.warning else TIMED_RGB if t.ttc_s is not None else TARGET_RGB
+    h, w = img.shape[:2]
+    line = style.line + (2 if t.warning else 0)
+    half = (line + (2 if t.warning else 0)) // 2
     cx, cy = t.x * scale_x, t.y * scale_y
     hw, hh = max(t.width * scale_x / 2.0, 1.0), max(t.height * scale_y / 2.0, 1.0)
-    x0, y0, x1, y1 = (int(round(v)) for v in (cx - hw, cy - hh, cx + hw, cy + hh))
-    line = style.line + (1 if t.warning else 0)
+    x0, x1 = (min(max(int(round(v)), half), max(w - 1 - half, half)) for v in (cx - hw, cx + hw))
+    y0, y1 = (min(max(int(round(v)), half), max(h - 1 - half, half)) for v in (cy - hh, cy + hh))
+    if t.warning:  # a white edge: the box stands out on dark and on red backgrounds
+        cv2.rectangle(img, (x0, y0), (x1, y1), (255, 255, 255), line + 2)
     cv2.rectangle(img, (x0, y0), (x1, y1), colour, line)
-    text = f"T{t.id}"
+    text = f"T{t.id}" + (" WARNING" if t.warning else "")
     if t.ttc_s is not None:
-        text += f" {t.ttc_s:.2f}s"
+        text += f" {t.ttc_s:.2f} s"
         if t.miss is not None:
             text += f" miss {t.miss:.1f}"
-    if t.warning:
-        text += " WARN"
-    h, w = img.shape[:2]
-    x0c, y0c = min(max(x0, 0), w - 1), min(max(y0, 0), h - 1)
-    y1c = min(max(y1, 0), h - 1)
-    labels.add(text, colour, (x0c, y0c, "bottom"), (x0c, y1c, "top"), (x0c, y0c, "top"))
+    labels.add(text, colour, (x0, y0 - half, "bottom"), (x0, y1 + half, "top"), (x0 + half, y0 + half, "top"),
+               (x0 + half, y1 - half, "bottom"))
 
 
 def _draw_field(img: np.ndarray, labels: _Labels, f, style: _Style, scale_x: float, scale_y: float,

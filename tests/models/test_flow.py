@@ -15,6 +15,7 @@ import cv2
 import numpy as np
 import pytest
 
+import mlplc2
 import mlplc2.models.flow as flow_module
 from mlplc2.models.flow import FlowParams, FlowTTC, camera_motion, divergence, focus_of_expansion, object_flow
 from mlplc2.params import parameter_table
@@ -234,3 +235,21 @@ def test_parameter_table_in_docs_is_the_generated_one():
     assert text.split(begin)[1].split(end)[0] == parameter_table(FlowParams, markdown=True)
     readme = (DOCS.parent / "README.md").read_text(encoding="utf-8")
     assert "(docs/flow.md)" in readme
+
+
+@pytest.mark.parametrize("name", ["flow", "mlplc2"])
+def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_working_width(name):
+    """``TargetParams.heading`` is in the pixels of the frames given: the principal point of a
+    640 x 480 video given explicitly predicts the same course (miss) as no heading at all (the
+    principal point by default), although the models work on 320 x 240 frames."""
+    from mlplc2 import stimuli
+    from mlplc2.targets import TargetParams
+
+    st = stimuli.approach_scene(kind="collision", size=(640, 480), ttc_s=1.5, seed=4)
+    misses = []
+    for heading in (None, (319.5, 239.5)):
+        model = mlplc2.get_model(name)(fps=st.fps, target_params=TargetParams(heading=heading))
+        misses.append([t.miss for out in (model.step(f) for f in st.frames) for t in out.targets])
+    assert any(m is not None for m in misses[0])
+    assert [m is None for m in misses[0]] == [m is None for m in misses[1]]
+    assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None])

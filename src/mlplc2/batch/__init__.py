@@ -16,9 +16,8 @@ tasks whose ``done.json`` exists (with ``plot=True`` it draws their missing
 retried by the next run. Ctrl-C raises :class:`BatchInterrupted` after writing
 ``results.csv`` for the tasks finished.
 
-Dask is optional (``pip install 'mlplc2[dask]'``): it is imported only when a
-cluster is used; ``workers=0`` (or ``scheduler="sync"``) runs the tasks one
-after the other in this process without it.
+Dask is imported only when a cluster is used; ``workers=0`` (or ``scheduler="sync"``)
+runs the tasks one after the other in this process without it.
 
 The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.batch.sweep`.
 """
@@ -53,10 +52,9 @@ __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_para
 
 #: Columns of ``results.csv``, in order.
 RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", "fields", "alarms",
-                  "first_alarm_frame", "seconds", "status", "error", "out")
+                  "first_alarm_frame", "warnings", "first_warning_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
-_DASK_MISSING = "mlplc2 batch with workers needs Dask: pip install 'mlplc2[dask]' (or use workers=0 to run sequentially)"
 
 
 
@@ -93,8 +91,11 @@ def run_task(task: dict) -> dict:
         if task.get("plot") and res.n_frames:
             _plot(task, f" (input truncated after {res.n_frames} frames)" if res.truncated else "")
         alarms = res.alarms[task["model"]]
+        targets = res.target_summaries.get(task["model"])  # None: a model without targets
+        warned = [t["first_warning_frame"] for t in targets or () if t["first_warning_frame"] is not None]
         row.update(n_frames=res.n_frames, fields=len(res.fields.get(task["model"], [])),
                    alarms=alarms["count"], first_alarm_frame=alarms["first"],
+                   warnings=None if targets is None else len(warned), first_warning_frame=min(warned, default=None),
                    status="truncated" if res.truncated else "ok", error=_one_line(res.message) if res.truncated else "")
     except Exception as exc:  # noqa: BLE001 - reported in the table, the batch goes on
         msg = str(exc)
@@ -111,7 +112,8 @@ def _error_row(task: dict, error: str = "") -> dict:
     """The row of a task that failed with the one-line message ``error``."""
     return {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
             "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
-            "alarms": None, "first_alarm_frame": None, "seconds": None, "status": "error", "error": error,
+            "alarms": None, "first_alarm_frame": None, "warnings": None, "first_warning_frame": None,
+            "seconds": None, "status": "error", "error": error,
             "out": task["rel_out"]}
 
 
@@ -142,8 +144,10 @@ def _plot(task: dict, note: str = "") -> None:
     video = Path(str(summary.get("video") or task["video"])).name
     label = param_label(task["model"], task["overrides"], width=TITLE_WIDTH - len(video) - len(note),
                         tag=task["param_set"])
+    targets = out / "targets.csv"
     plot_responses(out / "responses.csv", out / "responses.png", fields=summary.get("models"),
-                   title=f"{video}: {label}{note}", fps=summary.get("fps"))
+                   title=f"{video}: {label}{note}", fps=summary.get("fps"),
+                   targets=targets if targets.is_file() else None)
 
 
 def _done_row(task: dict) -> dict | None:
@@ -156,7 +160,8 @@ def _done_row(task: dict) -> dict | None:
     except (OSError, json.JSONDecodeError):
         return None
     if saved.get("pset") != task["pset"] or saved.get("video") != task["video"] \
-            or saved.get("run_options", {}) != task.get("run_options", {}):
+            or saved.get("run_options", {}) != task.get("run_options", {}) \
+            or "warnings" not in saved:  # done before results.csv had the warning columns: rerun
         return None
     return {k: saved.get(k) for k in RESULT_COLUMNS}
 
@@ -199,12 +204,8 @@ class BatchResult:
         return len(self.videos) / self.seconds * 60.0 if self.seconds > 0 else math.inf
 
     def to_dataframe(self):
-        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS` (needs pandas:
-        ``pip install 'mlplc2[pandas]'``)."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("BatchResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        """``rows`` as a pandas DataFrame, columns :data:`RESULT_COLUMNS`."""
+        import pandas as pd
         return pd.DataFrame(self.rows, columns=list(RESULT_COLUMNS))
 
 
@@ -236,7 +237,7 @@ def _write_table(rows: list[dict], out: Path, parquet: bool) -> None:
         import pandas as pd
 
         df = pd.DataFrame(rows, columns=list(RESULT_COLUMNS))
-        for col in ("n_frames", "fields", "alarms", "first_alarm_frame"):
+        for col in ("n_frames", "fields", "alarms", "first_alarm_frame", "warnings", "first_warning_frame"):
             df[col] = df[col].astype("Int64")
         df["seconds"] = df["seconds"].astype("float64")
         with atomic_path(out / "results.parquet") as tmp:
@@ -260,11 +261,8 @@ def start_local_cluster(workers: int, **kwargs):
     * get ``NUMBA_NUM_THREADS = CPUs // workers`` (unless set), so that the fast front end's
       bands of all workers share the cores.
     """
-    try:
-        from distributed import Client, LocalCluster
-    except ImportError:
-        raise InputValueError(_DASK_MISSING) from None
     import dask
+    from distributed import Client, LocalCluster
 
     kwargs.setdefault("dashboard_address", ":0")
     kwargs.setdefault("silence_logs", logging.CRITICAL)
@@ -423,7 +421,7 @@ def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None
 
 
 def _check_cluster_options(scheduler, workers, client, parquet: bool) -> tuple[int | None, bool]:
-    """Check the cluster options (and that Dask, pandas and pyarrow are there when needed):
+    """Check the cluster options (and that pyarrow is there when needed):
     ``workers`` checked, and whether the tasks run here one after the other, without Dask."""
     if workers is not None:
         workers = check_int(workers, "workers", minimum=0)
@@ -433,19 +431,13 @@ def _check_cluster_options(scheduler, workers, client, parquet: bool) -> tuple[i
         raise InputValueError("--scheduler and --workers cannot be combined: --workers N starts a local cluster "
                               "(0: runs the tasks here without Dask), --scheduler ADDRESS uses a running one")
     sequential = scheduler == "sync" or (workers == 0 and scheduler is None and client is None)
-    if not sequential and client is None:
-        try:
-            import distributed  # noqa: F401
-        except ImportError:
-            raise InputValueError(_DASK_MISSING) from None
     if scheduler not in (None, "sync"):
         _check_scheduler(scheduler)
     if parquet:
         try:
-            import pandas  # noqa: F401
             import pyarrow  # noqa: F401
         except ImportError:
-            raise InputValueError("parquet=True needs pandas and pyarrow: pip install pandas pyarrow") from None
+            raise InputValueError("results.parquet needs pyarrow: pip install 'mlplc2[parquet]'") from None
     return workers, sequential
 
 

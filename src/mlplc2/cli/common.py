@@ -7,14 +7,18 @@ options with the run options they give.
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import inspect
 import math
 import sys
-from collections.abc import Callable
+import threading
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from .._validation import InputValueError
 from ..io import parse_resize
-from ..models.base import REPEAT_THRESHOLD
+from ..models.base import REGISTRY, REPEAT_THRESHOLD
 
 EXIT_OK = 0
 EXIT_INPUT = 2
@@ -57,6 +61,40 @@ def say(args, *lines: str) -> None:
 
 def warn(message: str) -> None:
     print(f"{PROG}: warning: {message}", file=sys.stderr)
+
+
+#: The line :func:`compile_notice` prints while Numba compiles.
+COMPILING = f"{PROG}: compiling the fast kernels (first run only) ..."
+
+
+@contextmanager
+def compile_notice(models: list[str], quiet: bool = False) -> Iterator[None]:
+    """Print :data:`COMPILING` on stderr, once, when Numba starts compiling a kernel inside.
+
+    The compiled kernels are cached on disk (``mlplc2.neuropils._fast.jit``), so this happens in
+    the first process after an install or upgrade, where the first frame then takes tens of
+    seconds. Numba signals a compilation (its ``numba:compile`` event) only after a cache miss:
+    a run that loads the kernels from the cache prints nothing. Only for models that take a
+    ``backend`` (those with compiled kernels), so that the others do not import Numba."""
+    uses_numba = any("backend" in inspect.signature(REGISTRY[name]).parameters for name in models)
+    if quiet or not uses_numba or importlib.util.find_spec("numba") is None:
+        yield
+        return
+    from numba.core import event
+
+    said = threading.Event()   # kernels compile in the front end's worker threads too
+
+    class Notice(event.Listener):
+        def on_start(self, ev) -> None:
+            if not said.is_set():
+                said.set()
+                print(COMPILING, file=sys.stderr, flush=True)
+
+        def on_end(self, ev) -> None:
+            pass
+
+    with event.install_listener("numba:compile", Notice()):
+        yield
 
 
 def number_type(cast, ok, expected: str):

@@ -14,7 +14,8 @@ from .._validation import InputValueError
 from ..io import parse_resize
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_warning_options, hfov_degrees, nonneg_int, pos_float, pos_int, repeat_threshold_option, say,
+                     add_warning_options, compile_notice, hfov_degrees, nonneg_int, pos_float, pos_int,
+                     repeat_threshold_option, say,
                      target_options, warn)
 
 
@@ -83,15 +84,19 @@ def _run(args, jsonl) -> int:
     resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
     if args.end is not None and args.end <= args.start:
         raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
+    if (args.fields or args.all_fields) and not args.video:
+        flag = "--all-fields" if args.all_fields else "--fields"
+        raise InputValueError(f"{flag} draws on annotated.mp4: give --video too")
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
         try:
-            result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
-                         start=args.start, end=args.end, video=args.video, quiet=args.quiet,
-                         hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
-                         decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
-                         target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
-                         max_frames=args.max_frames, duration_s=args.duration)
+            with compile_notice(models, args.quiet):
+                result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
+                             start=args.start, end=args.end, video=args.video, quiet=args.quiet,
+                             hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
+                             decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
+                             target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
+                             max_frames=args.max_frames, duration_s=args.duration)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)
@@ -126,7 +131,8 @@ def _print_run_summary(args, result) -> None:
         if fields:
             alarms = [f for f in fields if f["first_alarm_frame"] is not None]
             lines.append(f"  {name}: {len(fields)} field(s), {len(alarms)} in alarm")
-            for f in sorted(fields, key=lambda f: -f["peak_response"])[:6]:
+            # the six strongest of the fields that responded (a field with peak 0 never did)
+            for f in sorted((f for f in fields if f["peak_response"] > 0), key=lambda f: -f["peak_response"])[:6]:
                 alarm = f", alarm at frame {f['first_alarm_frame']}" if f["first_alarm_frame"] is not None else ""
                 lines.append(f"    #{f['id']} at ({f['x']:.0f}, {f['y']:.0f}), frames {f['born']}-"
                              f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
@@ -151,7 +157,7 @@ def _print_run_summary(args, result) -> None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)
     held = max(result.repeated.values(), default=0)
-    if held and not (args.quiet or args.skip_repeats or args.repeat_level is not None):
+    if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
 
@@ -168,10 +174,11 @@ def _add_demo(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_demo(args) -> int:
-    from ..runner import RunInterrupted, demo
+    from ..runner import DEMO_MODELS, RunInterrupted, demo
 
     try:
-        d = demo(args.out, scene=args.scene, quiet=args.quiet)
+        with compile_notice(list(DEMO_MODELS), args.quiet):
+            d = demo(args.out, scene=args.scene, quiet=args.quiet)
     except RunInterrupted as exc:
         return _report_interrupt(exc)
     lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)} "

@@ -17,7 +17,7 @@ warning metrics (:func:`score_warnings`, for truth that says which objects will 
     collision objects warned before contact (:func:`mlplc2.evaluation.match.on_object`), lead
     time, false warnings per cause (:func:`mlplc2.evaluation.match.warning_cause`) and their
     episodes, time-to-contact errors (RTE, MiD: :func:`mid_error`) and coverage,
-    fragmentation; per labelled clip warned / missed / false.
+    fragmentation; per labelled clip warned / missed / unplaced / false.
 per model (:func:`summarise`, :func:`summarise_warnings`)
     the means, medians, rates and per-1000-frame counts of the tables.
 """
@@ -292,7 +292,7 @@ def _warning_rules(run: ModelRun, truth: VideoTruth, radius: float) -> _WarningR
     fps = run.fps
     clip = truth.label is not None
     collider = truth.collider
-    if clip and truth.label == "collision" and collider is None:  # no track: any warning may be on it
+    if clip and truth.label == "collision" and collider is None:  # no track: no warning can be placed on it
         collider = ObjectTruth(id="collider", kind="collision", contact_frame=truth.contact_frame)
     blind = collider is not None and not collider.track   # the collider's position is unknown
     colliders = [o for o in truth.objects if o.collides] + ([collider] if collider is not None else [])
@@ -316,8 +316,10 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
     cause (:func:`mlplc2.evaluation.match.warning_cause`), except within ``LATE_S`` after a contact, on
     the object that hit. On a labelled clip, frames from the contact on are not scored, and a
     warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
-    collider ("elsewhere"; a collision clip without the collider's track: every warning is on it). A collision object none of whose frames before contact were
-    processed (an interrupted or partial run) is not scored, only counted (``collision_objects_outside``).
+    collider ("elsewhere"). On a collision clip without the collider's track no warning can be placed
+    on the collider: a warning there is ``unplaced`` (its own outcome, never ``warned`` nor false). A
+    collision object none of whose frames before contact were processed (an interrupted or partial
+    run) is not scored, only counted (``collision_objects_outside``).
     """
     run = run.in_pixels_of(truth)
     rules = _warning_rules(run, truth, radius)
@@ -333,10 +335,14 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
     all_false = set().union(*false_frames.values()) if false_frames else set()
     outcome = None
     if rules.clip:
+        hit = truth.label == "collision"
         warned = any(r["warned"] for r in objects)
-        outcome = {"label": truth.label, "warned": warned if truth.label == "collision" else None,
-                   "missed": (not warned) if truth.label == "collision" else None, "false": bool(all_false),
-                   "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None)}
+        unplaced = any(r["unplaced"] for r in objects)
+        outcome = {"label": truth.label, "warned": warned if hit else None,
+                   "missed": (not warned and not unplaced) if hit else None, "false": bool(all_false),
+                   "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None),
+                   "unplaced": unplaced if hit else None,
+                   "unplaced_lead_s": next((r["unplaced_lead_s"] for r in objects if r["unplaced"]), None)}
     video = {"model": run.label, "video": truth.key, "frames_scored": max(rules.end - rules.first, 0),
              "clip": rules.clip, "collision_objects_outside": outside,
              "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
@@ -357,13 +363,18 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
         return None
     rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
            "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
-           "ttc_at_warning_s": None, "warning_distance_px": None, "targets": None, "ttc_frames": 0,
-           "ttc_estimated": 0, "ttc_errors": []}
+           "ttc_at_warning_s": None, "warning_distance_px": None, "unplaced": False, "unplaced_frame": None,
+           "unplaced_lead_s": None, "targets": None, "ttc_frames": 0, "ttc_estimated": 0, "ttc_errors": []}
     ids = set()
+    blind = rules.blind and o is collider   # its position is unknown: no warning can be placed on it
     for f in range(start, stop):
-        if not rec["warned"] and (rules.early_before is None or f >= rules.early_before):
+        if blind and not rec["unplaced"] and (rules.early_before is None or f >= rules.early_before) \
+                and run.warnings_at(f):
+            rec.update(unplaced=True, unplaced_frame=f,
+                       unplaced_lead_s=None if cf is None else round((cf - f) / fps, 4))
+        if not blind and not rec["warned"] and (rules.early_before is None or f >= rules.early_before):
             for key, x, y in run.warnings_at(f):
-                if x is None or (rules.blind and o is collider) or on_object(x, y, o, f, radius):
+                if x is None or on_object(x, y, o, f, radius):
                     c = o.center_at(f)
                     true = o.ttc_at(f, fps)
                     rec.update(warned=True, warning_frame=f,
@@ -424,7 +435,7 @@ def _false_cause(x: float | None, y: float | None, f: int, truth: VideoTruth, ru
     if rules.early_before is not None and f < rules.early_before:
         return "early"
     if rules.blind:
-        return None                     # a collision clip without a track: on its collider
+        return None                     # a collision clip without a track: unplaced, neither true nor false
     verdict, _ = warning_cause(x, y, f, truth, radius=rules.radius, tail=rules.late)
     if verdict == "true":
         return None
@@ -486,6 +497,7 @@ def summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) ->
     cc = [v for v in clips if v["outcome"]["label"] == "collision"]
     s.update(clips=len(clips), clips_collision=len(cc), clips_warned=sum(bool(v["outcome"]["warned"]) for v in cc),
              clips_missed=sum(bool(v["outcome"]["missed"]) for v in cc),
+             clips_unplaced=sum(bool(v["outcome"]["unplaced"]) for v in cc),
              clips_false=sum(bool(v["outcome"]["false"]) for v in clips),
              clip_lead_median_s=_median(v["outcome"]["lead_s"] for v in cc if v["outcome"]["warned"]))
     return s

@@ -33,6 +33,9 @@ def _natural_key(path: str):
 class Decoder:
     """Base of the per-kind decoders (all run in one thread at a time)."""
 
+    #: The container's timestamp (s) of the frame :meth:`read` returned last, None without one.
+    time_s: float | None = None
+
     fps: float | None = None
     size: tuple[int, int] = (0, 0)
     frame_count: int | None = None
@@ -86,6 +89,8 @@ class _OpenCVDecoder(Decoder):
             if self._camera:
                 self.error = "the camera delivered no frame"
             return None
+        ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
+        self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
         if frame.ndim == 2:
             return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
@@ -136,6 +141,7 @@ class _PyAVDecoder(Decoder):
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
             self.error = _one_line(str(exc))
             return None
+        self.time_s = None if frame.time is None else float(frame.time)
         return frame.to_ndarray(format="rgb24")
 
     def close(self):

@@ -50,6 +50,10 @@ class FrameSource:
         Frames this source is expected to yield given ``start`` and ``end``.
     n_read : int
         Frames yielded so far.
+    time_s : float or None
+        Time (s) of the frame yielded last: the container's timestamp (PyAV ``frame.time``,
+        OpenCV ``CAP_PROP_POS_MSEC``), None where the source has none or ``fps`` was given
+        (frame count / fps then); pass it to ``Model.step(frame, t)``.
     truncated : bool
         True when decoding stopped before the stated end (damaged or cut file);
         :attr:`message` then names the frame where it stopped.
@@ -80,6 +84,9 @@ class FrameSource:
         self.dropped = False
         self.name = decoder.name
         self.fps = check_fps(fps) if fps is not None else (decoder.fps or DEFAULT_FPS)
+        # the container's timestamps, unless the caller set the rate (then frame count / fps)
+        self._timed = fps is None
+        self.time_s: float | None = None
         self.start = int(start)
         self.end = None if end is None else int(end)
         self.keep_original = keep_original
@@ -117,6 +124,7 @@ class FrameSource:
         else:
             self.total = None if self.end is None else self.end - self.start
         self._first = first
+        self._first_time = decoder.time_s
         self._centres = False
         self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
@@ -185,16 +193,17 @@ class FrameSource:
         dec = self._dec
         index = self.start
         try:
-            frame = self._first
+            frame, t = self._first, self._first_time
             self._first = None
             while frame is not None:
-                payload = self._prepare(frame)
+                payload = (self._prepare(frame), t)
                 if not self._put(("frame", index, payload, time.perf_counter(), 0)):
                     return
                 index += 1
                 if self.end is not None and index >= self.end:
                     break
                 frame = dec.read()
+                t = dec.time_s
             self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
             self._put(("error", index, exc, 0.0, 0))
@@ -213,7 +222,8 @@ class FrameSource:
                 if kind == "frame":
                     self.n_read += 1
                     self.n_skipped += self.skipped
-                    yield (index, *payload)
+                    self.time_s = self._timestamp(payload[1])
+                    yield (index, *payload[0])
                 elif kind == "end":
                     self._check_end(index)
                     return
@@ -221,6 +231,18 @@ class FrameSource:
                     raise payload
         finally:
             self.close()
+
+    def _timestamp(self, t: float | None) -> float | None:
+        """The time (s) of the frame yielded next: the container's timestamp (None: the source has
+        none, or ``fps`` was given); one that is missing or does not increase (a damaged container)
+        is the last one plus 1 / fps. Without a timestamp on the first frame, None throughout."""
+        last = self.time_s
+        if last is None:
+            self._timed = self._timed and t is not None and self.n_read == 1
+            return t if self._timed else None
+        if t is None or not t > last:
+            return last + 1.0 / self.fps
+        return t
 
     def _check_end(self, index: int) -> None:
         """Decide whether the stream stopped early (index = first frame not decoded)."""

@@ -20,7 +20,7 @@ import numpy as np
 from .._validation import InputTypeError, InputValueError, as_gray, check_fps, check_int, check_unit_scale
 from ..neuropils.attention import Field
 
-__all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "WORK_WIDTH", "register",
+__all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "CLOCK_TOLERANCE", "WORK_WIDTH", "register",
            "get_model", "available_models", "resolve_names", "looks_duplicated"]
 
 
@@ -49,6 +49,9 @@ class Output:
     targets : tuple of Target
         The approaching objects (:class:`mlplc2.targets.Target`: size, time to contact,
         miss, warning), most urgent first; empty for models without targets (LGMD).
+    time_s : float
+        The frame's time in seconds: the ``t`` given to ``Model.step``, else the frame count
+        over ``fps`` (``docs/model.md``, "Time").
     """
 
     frame: int
@@ -58,6 +61,7 @@ class Output:
     spike: bool = False
     repeated: bool = False
     targets: tuple = ()
+    time_s: float | None = None
 
     @property
     def warning(self) -> bool:
@@ -80,6 +84,11 @@ REPEAT_THRESHOLD = 16.0
 #: each frame 4 times; the paper's raptor clip has runs of up to 5). From the next repeat on
 #: the scene is taken to be still and every frame steps the model again, so it settles.
 MAX_REPEATS = 5
+#: Timestamps within this fraction of a frame interval (1 / fps) of the frame grid of the
+#: first timestamp count as on it (``docs/model.md``, "Time"): rounding and the jitter of
+#: container time bases (1 ms at 30 fps is 3 % of an interval) leave a constant rate one,
+#: with the outputs of frame count / fps; anything further off is taken as given.
+CLOCK_TOLERANCE = 0.05
 
 
 #: Frames the "auto" repeat detection looks back on (``Model.repeat_threshold = "auto"``).
@@ -244,14 +253,51 @@ class Model(abc.ABC):
         self._prev_in: np.ndarray | None = None      # the previous input frame ("auto" repeats)
         self._diffs.clear()
         self._work: tuple[int, int] | None = None     # (W, H) of the working frames, None: as given
+        self._t0: float | None = None      # time (s) of frame 0: the clock's origin
+        self._t_last: float | None = None  # time (s) of the last frame
+        self.clock: float = 0              # this frame's time in frame intervals since frame 0
+        self._clock_done: float = 0        # clock of the last processed (not held) frame
+        self.interval: float = 1           # frame intervals since the last processed frame
+
+    def _advance(self, t) -> tuple[float, float]:
+        """(clock, time_s) of the next frame taken at ``t`` seconds (None: one frame interval after
+        the last). The clock counts frame intervals (1 / fps) since frame 0; timestamps within
+        :data:`CLOCK_TOLERANCE` of the frame grid sit on it (whole numbers: constant rates step
+        as without timestamps). Raises :class:`~mlplc2.InputError` before any state changes."""
+        if t is None:
+            if self._t_last is None:
+                return 0, 0.0
+            return self.clock + 1, self._t0 + (self.clock + 1) / self.fps
+        if isinstance(t, (bool, np.bool_)) or not isinstance(t, (int, float, np.integer, np.floating)):
+            raise InputTypeError(f"frame {self._frame}: t must be a time in seconds (a number), got {t!r}")
+        t = float(t)
+        if not np.isfinite(t):
+            raise InputValueError(f"frame {self._frame}: t must be a finite time in seconds, got {t!r}")
+        if self._t_last is None:
+            return 0, t
+        if not t > self._t_last:
+            raise InputValueError(f"frame {self._frame}: timestamps must increase, got t = {t:g} s after "
+                                  f"{self._t_last:g} s")
+        raw = (t - self._t0) * self.fps
+        whole = round(raw)
+        clock = whole if abs(raw - whole) <= CLOCK_TOLERANCE else raw
+        if clock <= self.clock:     # the last frame's time was moved onto the grid past this one
+            clock = self.clock + (t - self._t_last) * self.fps
+        return clock, t
 
     @property
     def frame_index(self) -> int:
         """Index the next frame will get."""
         return self._frame
 
-    def step(self, frame: np.ndarray) -> Output:
+    def step(self, frame: np.ndarray, t: float | None = None) -> Output:
         """Process one frame: (H, W) grey, (H, W, 1), (H, W, 3) RGB or (H, W, 4) RGBA, 0-255.
+
+        ``t``: the frame's time in seconds (a camera's or container's timestamp); every time
+        constant and the times to contact then use the real interval since the last processed
+        frame (variable rates, dropped frames). None: one frame interval (1 / ``fps``) after
+        the last frame. Timestamps must increase (:class:`~mlplc2.InputError` otherwise); at a
+        constant rate (``t = i / fps``) the outputs are those without ``t`` (``docs/model.md``, "Time").
 
         Colour frames are RGB: OpenCV's ``VideoCapture``/``imread`` give BGR, so convert them
         first (``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``, or pass ``COLOR_BGR2GRAY``'s grey image).
@@ -266,6 +312,7 @@ class Model(abc.ABC):
         ``TypeError``) before any state changes, so the model can go on.
         """
         gray = as_gray(frame, min_size=self.min_size)
+        clock, time_s = self._advance(t)
         if not self._scale_warned:
             self._scale_warned = check_unit_scale(frame, gray)
         if self._shape is None:
@@ -278,6 +325,10 @@ class Model(abc.ABC):
             h, w = gray.shape
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
+        first = self._t_last is None
+        self.clock, self._t_last = clock, time_s
+        if first:
+            self._t0 = time_s
         if self._work is not None:
             gray = cv2.resize(gray, self._work, interpolation=cv2.INTER_AREA)
         threshold = self._repeat_level(gray)
@@ -286,7 +337,7 @@ class Model(abc.ABC):
             if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= threshold:
                 self._repeats += 1
                 if self._repeats <= MAX_REPEATS:
-                    out = self._held_output()
+                    out = self._held_output(time_s)
                     self._frame += 1
                     return out
                 # A longer run is a still scene, not a duplicated frame: step as usual.
@@ -296,12 +347,22 @@ class Model(abc.ABC):
                     self._last_gray = gray.copy()
                 else:
                     np.copyto(last, gray)
-        out = self._step(gray, self._frame)
+        self.interval = 1 if first else clock - self._clock_done
+        self._clock_done = clock
+        out = dataclasses.replace(self._step(gray, self._frame), time_s=time_s)
         if self._work is not None:
             out = _to_frame(out, self._shape[1] / self._work[0], self._shape[0] / self._work[1])
         self._frame += 1
         self._last_out = out
         return out
+
+    def _work_point(self, point: tuple[float, float] | None) -> tuple[float, float] | None:
+        """``point`` (x, y), in the pixels of the frames given, in the working frame's pixels (the
+        inverse of the mapping of the outputs; None stays None)."""
+        if point is None or self._work is None:
+            return point
+        sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
+        return (point[0] + 0.5) * sx - 0.5, (point[1] + 0.5) * sy - 0.5
 
     def _repeat_level(self, gray: np.ndarray) -> float | None:
         """The repeat threshold for this frame: ``repeat_threshold``, or for ``"auto"``
@@ -316,11 +377,11 @@ class Model(abc.ABC):
             self._prev_in = gray.copy()
         return REPEAT_THRESHOLD if looks_duplicated(self._diffs) else None
 
-    def _held_output(self) -> Output:
-        """The last output for a repeated frame: this frame's index, ``repeated`` set, and what
-        the model's :meth:`_hold` makes of the time elapsed since the processed frame."""
-        held = self._hold(self._last_out, self._repeats / self.fps)
-        return dataclasses.replace(held, frame=self._frame, repeated=True)
+    def _held_output(self, time_s: float) -> Output:
+        """The last output for a repeated frame: this frame's index and time, ``repeated`` set, and
+        what the model's :meth:`_hold` makes of the time elapsed since the processed frame."""
+        held = self._hold(self._last_out, (self.clock - self._clock_done) / self.fps)
+        return dataclasses.replace(held, frame=self._frame, repeated=True, time_s=time_s)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
         """The output held ``elapsed`` seconds after ``last`` (models with clocks override it)."""

@@ -489,24 +489,27 @@ class FlowTTC(Model):
         if not self._frames or self._frames[-1][0].shape != cur.shape:
             self._frames.clear()
             self._tracks = []
-            self._frames.append((cur, gray))
+            self._frames.append((cur, gray, self.clock))
             self._levels = levels
             return Output(frame=index, response=0.0)
         if self._dis is None:
             self._dis = cv2.DISOpticalFlow_create(_PRESETS[p.preset])
-        k = min(p.baseline, len(self._frames))
-        flow = self._dis.calc(self._frames[-k][0], cur, None)
+        n = min(p.baseline, len(self._frames))
+        flow = self._dis.calc(self._frames[-n][0], cur, None)
+        k = self.clock - self._frames[-n][2]     # the flow's baseline in frame intervals (the real time)
         cam = camera_motion(flow, k, p.grid, p.camera_tolerance * k, p.second_layer)
         self.flow, self.camera = flow, cam
         self.foe = focus_of_expansion(flow, p.grid, p.min_foe_flow * k)
         self._steps += 1
-        self._follow(levels, cam, index, w, h)
+        self._follow(levels, cam, w, h)
         self._merge()
         self._past_levels = self._past_warped = None
         self._candidates(divergence(flow, gray, cam, k, p.cell, p.min_gradient) / k, cam, gray, levels, index)
-        self._frames.append((cur, gray))
+        self._frames.append((cur, gray, self.clock))
         self._levels = levels
         focal = focal_length(w, self.hfov_deg)
+        if tp.heading is not None:                         # the heading in working pixels
+            tp = tp.replace(heading=self._work_point(tp.heading))
         out = [estimate(t, tp, self.fps, index, (h, w), focal) for t in self._tracks]
         for t, o in zip(self._tracks, out):
             if o.looming:
@@ -521,7 +524,7 @@ class FlowTTC(Model):
     def _half(self, t: Track) -> float:
         return self.params.margin * t.size / 2.0 + 3.0
 
-    def _follow(self, levels, cam, index: int, w: int, h: int) -> None:
+    def _follow(self, levels, cam, w: int, h: int) -> None:
         """Move and grow every target with its own flow (step 4); drop the lost ones."""
         p, tp = self.params, self.target_params
         turning = cam is not None and cam.turning((w - 1) / 2.0, (h - 1) / 2.0, w)
@@ -533,8 +536,8 @@ class FlowTTC(Model):
             move = None if of is None else \
                 (of.dx, of.dy, math.exp(of.kx), math.exp(of.ky), 0.5 * (of.kx + of.ky), of.ky - of.kx)
             # refit: towards the object's layer; the camera's share of the box's motion: a stabilised course
-            if t.follow(move, index, self.fps, (h, w), tp.max_fails, box=None if of is None else of.box,
-                        refit=p.refit, camera=cam if turning else None):
+            if t.follow(move, self.clock, self.fps, (h, w), tp.max_fails, box=None if of is None else of.box,
+                        refit=p.refit, camera=cam if turning else None, interval=self.interval):
                 kept.append(t)
         self._tracks = kept
 
@@ -588,7 +591,7 @@ class FlowTTC(Model):
             t = _FlowTrack(self._next, index, *box)
             if any(o.overlap(t) >= 0.5 for o in self._tracks) or not self._grows(t, levels, cam):
                 continue
-            t.history = deque([Observation(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
+            t.history = deque([Observation(self.clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=tp.window)   # ox = oy = 0
             t.seen = self._steps
             self._next += 1
             self._tracks.append(t)
@@ -598,12 +601,12 @@ class FlowTTC(Model):
         what changed between it and this frame is the objects' own motion."""
         if self._past_warped is None:
             c = self.target_params.change_frames
-            past = self._frames[-c][1]
+            past, then = self._frames[-c][1:]
             self._past_warped = past
             if cam is not None:
                 h, w = past.shape
                 xs, ys = np.meshgrid(np.arange(w, dtype=np.float32), np.arange(h, dtype=np.float32))
-                uc, vc = cam.flow(xs, ys, c)
+                uc, vc = cam.flow(xs, ys, self.clock - then)     # over the real time since
                 if max(float(np.abs(uc).max()), float(np.abs(vc).max())) > 0.05:
                     self._past_warped = cv2.remap(past, (xs - uc).astype(np.float32), (ys - vc).astype(np.float32),
                                                   cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
@@ -618,9 +621,10 @@ class FlowTTC(Model):
             return True
         if self._past_levels is None:
             self._past_levels = pyramid(self._frames[-tp.change_frames][1])
-        of = object_flow(self._past_levels, levels, t.cx, t.cy, self._half(t), cam, frames=tp.change_frames,
+        span = self.clock - self._frames[-tp.change_frames][2]     # frame intervals since that frame
+        of = object_flow(self._past_levels, levels, t.cx, t.cy, self._half(t), cam, frames=span,
                          n=p.patch, window=p.window, layer_iterations=p.layer_iterations,
-                         max_expansion=tp.change_frames * p.max_expansion, min_gradient=p.min_gradient)
+                         max_expansion=span * p.max_expansion, min_gradient=p.min_gradient)
         if of is None:
             return False
         g = 0.5 * (of.kx + of.ky)

@@ -181,10 +181,8 @@ class LGMD2(Model):
         params = self._check_params(params, LGMD2Params, "params", "LGMD2Params")
         super().__init__(fps=fps, params=params, repeat_threshold=repeat_threshold, work_width=work_width)
         p = params
-        self.alpha_on = tuple(lowpass_alpha(t, self.fps) for t in p.tau_on)
-        self.alpha_off = tuple(lowpass_alpha(t, self.fps) for t in p.tau_off)
-        self.alpha_pm = lowpass_alpha(p.tau_pm, self.fps)
-        self.hp_sfa = highpass_coeff(p.tau_sfa, self.fps)
+        self._coeffs: dict = {}
+        self._use_interval(1)
         self._k_on = _ring_kernels(*p.on_kernel)
         self._k_off = _ring_kernels(*p.off_kernel)
         self._reset()
@@ -202,6 +200,19 @@ class LGMD2(Model):
         self.state: dict = {}
         """Scalars of the last frame (pm, w_on, w_off, sum_g, k, k_sfa, spikes), for inspection."""
 
+    def _use_interval(self, interval: float) -> None:
+        """The filter coefficients for a frame ``interval`` frame intervals after the last processed
+        one (the real interval tau_i = 1000 ``interval`` / fps ms; ``docs/model.md``, "Time"), cached."""
+        c = self._coeffs.get(interval)
+        if c is None:
+            if len(self._coeffs) > 64:
+                self._coeffs = {1: self._coeffs[1]}
+            p, rate = self.params, self.fps / interval
+            c = self._coeffs[interval] = (tuple(lowpass_alpha(t, rate) for t in p.tau_on),
+                                          tuple(lowpass_alpha(t, rate) for t in p.tau_off),
+                                          lowpass_alpha(p.tau_pm, rate), highpass_coeff(p.tau_sfa, rate))
+        self.alpha_on, self.alpha_off, self.alpha_pm, self.hp_sfa = c
+
     def _inhibition(self, x, x_prev, delayed_prev, alphas, kernels):
         total = None
         out = []
@@ -214,6 +225,7 @@ class LGMD2(Model):
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
+        self._use_interval(self.interval)
         pr = photoreceptors(gray, self._gray_prev)
         self._gray_prev = gray
         if self._on_prev is None:
@@ -265,9 +277,10 @@ class LGMD2(Model):
 class LGMD1Params(ParameterSet):
     """Parameters of the LGMD1 network (Yue & Rind, IEEE TNN 2006).
 
-    Inhibition, grouping, spiking and FFI follow Yue & Rind (2006) with the values
-    of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
-    the shared grouping layer; ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
+    Inhibition, grouping, spiking and FFI follow Yue & Rind (2006): their signed layers,
+    the values of Fu's open-source re-implementation (``LGMDSingle``) and his LGMD2 code for
+    the shared grouping layer, W_I of Sun et al.'s implementation, and C_sig = C_w (the
+    grouping gain divided out); ``docs/model.md`` (Baselines, "LGMD1 ...") compares every
     value and rule with the published model.
 
     Valid values: the table below, numbers as for :class:`LGMD2Params`.
@@ -276,7 +289,8 @@ class LGMD1Params(ParameterSet):
     w_i_kernel: tuple[float, float] = param(
         (0.25, 0.125), "3x3 lateral-inhibition kernel (4-nearest, diagonal; centre 0), one-frame delay.",
         symbol="w_I", valid=Valid.reals(2, "nearest, diagonal", minimum=0))
-    w_i: float = param(0.6, "Weight of the inhibition in S = E - W_I I.", symbol="W_I", valid=Valid.real(minimum=0))
+    w_i: float = param(0.4, "Weight of the inhibition in S = E - W_I I (Sun et al.'s value).", symbol="W_I",
+                       valid=Valid.real(minimum=0))
     c_w: float = param(4.0, "Grouping scale w = max|Ce| / C_w + Delta_C.", symbol="C_w",
                        valid=Valid.real(positive=True))
     delta_c: float = param(0.01, "Small constant of the grouping scale.", symbol="Delta_C",
@@ -285,18 +299,19 @@ class LGMD1Params(ParameterSet):
                         valid=Valid.real(minimum=0))
     t_de: float = param(15.0, "Grouping (decay) threshold (G kept where G C_de >= T_de).", symbol="T_de",
                         valid=Valid.real(minimum=0))
-    c_sig: float = param(1.0, "Sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig))).",
-                         symbol="C_sig", valid=Valid.real(positive=True))
+    c_sig: float = param(4.0, """Sigmoid coefficient, kappa = 1 / (1 + exp(-sum|G| / (N_cells C_sig))). The
+                         published 1 with the grouping gain C_w = 4 divided out (docs/model.md, LGMD1
+                         "Operating point").""", symbol="C_sig", valid=Valid.real(positive=True))
     t_sp: float = param(0.78, "Spiking threshold on kappa.", symbol="T_sp", valid=Valid.real(minimum=0))
     n_ts: int = param(5, "Collision after this many consecutive spiking frames.", symbol="n_ts", unit="frames",
                       valid=Valid.integer(1))
     t_ffi: float = param(10.0, """LGMD output suppressed when the FFI, the mean |P| of the previous frame,
                          reaches this.""", symbol="T_FFI", unit="grey level", valid=Valid.real(positive=True))
-    signed: bool = param(False, """If True, Yue & Rind's signed layers: E = P, I from the signed P(t-1),
-                         S = E - W_I I (not rectified), membrane sum over |G|, so inhibition from a neighbour
-                         of the opposite polarity adds to the excitation. If False (default, a documented
-                         deviation): magnitudes, E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition
-                         always inhibits.""", valid=Valid.boolean())
+    signed: bool = param(True, """If True (default), Yue & Rind's signed layers: E = P, I from the signed
+                         P(t-1), S = E - W_I I (not rectified), membrane sum over |G|, so inhibition from a
+                         neighbour of the opposite polarity adds to the excitation. If False: magnitudes,
+                         E = |P|, I from |P(t-1)|, S = [E - W_I I]+: inhibition always inhibits.""",
+                         valid=Valid.boolean())
 
     def __post_init__(self) -> None:
         check_fields(self, "LGMD1Params")
@@ -307,7 +322,8 @@ class LGMD1(Model):
     """LGMD1 looming detector with feature enhancement and feed-forward inhibition.
 
     ``Output.response`` is the sigmoid membrane potential kappa (resting value
-    0.5); it is held at rest while the FFI is at or above ``t_ffi``.
+    0.5); it is held at rest while the FFI is at or above ``t_ffi``, and on the first two
+    frames (before I and the FFI have a previous frame).
 
     Examples
     --------
@@ -330,6 +346,7 @@ class LGMD1(Model):
         self._gray_prev: np.ndarray | None = None
         self._p_prev: np.ndarray | None = None
         self._n_spikes = 0
+        self._steps = 0
         self.state: dict = {}
         """Scalars of the last frame (ffi, suppressed, sum_g, kappa), for inspection."""
 
@@ -343,7 +360,11 @@ class LGMD1(Model):
 
         ffi = float(e_prev.mean(dtype=np.float64))
         suppressed = ffi >= p.t_ffi
-        if suppressed:
+        # P exists from the second frame, I and the FFI (from P(t-1)) from the third: until then
+        # the membrane rests (docs/model.md, LGMD1 "Start"), so that motion already under way
+        # when the input starts is not a burst of uninhibited, unsuppressed excitation
+        self._steps += 1
+        if suppressed or self._steps < 3:
             sum_g = 0.0
         else:
             w_i = np.float32(p.w_i)

@@ -66,7 +66,7 @@ class _LPLC2Family(Model):
         """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
         if self._camera is not None:
             self._stabilise(gray)
-        lm = self.frontend.step(gray)
+        lm = self.frontend.step(gray, self.interval)
         self.maps = lm
         return lm
 
@@ -123,12 +123,11 @@ class _LPLC2Family(Model):
         """This frame's fields, and the targets the target layer makes of them."""
         if self._layer is None:
             tp = self.target_params
-            if tp.heading is not None and self._work is not None:   # the heading in working pixels
-                sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
-                tp = tp.replace(heading=((tp.heading[0] + 0.5) * sx - 0.5, (tp.heading[1] + 0.5) * sy - 0.5))
+            if tp.heading is not None:                     # the heading in working pixels
+                tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
-        targets = self._layer.step(gray, self.maps, self._fields, index)
+        targets = self._layer.step(gray, self.maps, self._fields, index, self.clock)
         fields = tuple(f.snapshot() for f in self._fields)
         response = max((f.response for f in fields), default=0.0)
         collision = any(f.collision for f in fields)

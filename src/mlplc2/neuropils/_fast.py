@@ -2,7 +2,10 @@
 
 * :func:`jit`: ``numba.njit`` with the options every kernel of the package uses
   (``fastmath=False``: the float operations of the reference in the reference's order, no fused
-  multiply-add; ``nogil``; NumPy's error model) and an on-disk cache when one can be written.
+  multiply-add; ``nogil``; NumPy's error model) and an on-disk cache when one can be written,
+  so that only the first process after an install or upgrade compiles (docs/cli.md, "First
+  run"); later processes load the machine code. Every kernel made by it is in
+  :data:`KERNELS` (its ``stats.cache_hits`` / ``cache_misses`` say which were loaded or compiled).
   The kernels: :mod:`mlplc2.neuropils._fast_frontend` (Eq. 1-7 and the front end),
   :mod:`mlplc2.neuropils._fast_motion` (Eq. 8-12), :mod:`mlplc2.neuropils._fast_attention`
   (Eq. 14) and :mod:`mlplc2.targets._fast` (the target layer).
@@ -26,24 +29,32 @@ import numpy as np
 
 from .._validation import check_int
 
-__all__ = ["jit", "pool", "BANDS_LOCK", "DONE", "spin_ok", "spin_wait", "set_threads", "copy_chain"]
+__all__ = ["jit", "KERNELS", "pool", "BANDS_LOCK", "DONE", "spin_ok", "spin_wait", "set_threads", "copy_chain"]
+
+
+#: Every dispatcher :func:`jit` made, in definition order (for ``stats`` and the tests).
+KERNELS: list = []
 
 
 def jit(**options):
     """``numba.njit`` with an on-disk cache when one can be written, without one otherwise.
 
-    Numba caches next to the source (``__pycache__``) or, when that is read-only (a
-    system-wide install), in ``NUMBA_CACHE_DIR`` / the user's cache folder. Where no
-    location is writable ``cache=True`` raises at decoration time; compile without it.
+    Numba tries, in order, ``NUMBA_CACHE_DIR`` (when set), the source's ``__pycache__`` and the
+    user's cache folder (``~/.cache/numba``), skipping each one it cannot write: a read-only
+    install (site-packages of a system Python) caches in the user's folder with no setting.
+    Where no location is writable ``cache=True`` raises at decoration time; compile without it
+    (every process then compiles on first use).
     """
     base = dict(fastmath=False, nogil=True, error_model="numpy")
     base.update(options)
 
     def deco(func):
         try:
-            return numba.njit(cache=True, **base)(func)
+            kernel = numba.njit(cache=True, **base)(func)
         except (RuntimeError, OSError):  # pragma: no cover - depends on the file system
-            return numba.njit(cache=False, **base)(func)
+            kernel = numba.njit(cache=False, **base)(func)
+        KERNELS.append(kernel)
+        return kernel
 
     return deco
 

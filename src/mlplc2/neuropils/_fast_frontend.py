@@ -54,7 +54,7 @@ import numpy as np
 from . import _fast
 from ._fast import jit
 from ._fast_motion import motion_rows, pow_mode
-from .frontend import set_coefficients
+from .frontend import set_coefficients, use_interval
 from .lobula_plate import LocalMotion
 from .medulla import local_max
 from ..camera import warp
@@ -216,15 +216,7 @@ class FastFrontEnd:
     def __init__(self, params: Params, fps: float):
         set_coefficients(self, params, fps)
         p = params
-        # float32 coefficients exactly as the reference forms them
-        a = np.array([np.float32(x) for x in self.alphas], np.float32)
-        self._a = a
-        self._b = (np.float32(1) - a).astype(np.float32)
-        # tuples for the kernels: N_c becomes a compile-time constant (unrolled distance loop)
-        self._a_t = tuple(np.float32(v) for v in a)
-        self._b_t = tuple(np.float32(v) for v in self._b)
-        self._ao = np.float32(self.alpha_out)
-        self._bo = np.float32(1) - self._ao
+        self._set_alphas()
         self._beta = np.float32(p.beta)
         self._nc_div = np.float32(len(self.alphas))
         self._w_i = np.float32(p.w_i)
@@ -241,6 +233,17 @@ class FastFrontEnd:
         self._gain = np.float32(p.lm_gain)
         self._slope = np.float32(p.leaky_slope)
         self.reset()
+
+    def _set_alphas(self) -> None:
+        """The kernels' float32 forms of ``alphas`` and ``alpha_out``, exactly as the reference forms them."""
+        a = np.array([np.float32(x) for x in self.alphas], np.float32)
+        self._a = a
+        self._b = (np.float32(1) - a).astype(np.float32)
+        # tuples for the kernels: N_c becomes a compile-time constant (unrolled distance loop)
+        self._a_t = tuple(np.float32(v) for v in a)
+        self._b_t = tuple(np.float32(v) for v in self._b)
+        self._ao = np.float32(self.alpha_out)
+        self._bo = np.float32(1) - self._ao
 
     def reset(self) -> None:
         self._shape = None
@@ -371,7 +374,10 @@ class FastFrontEnd:
                 for f in futs:
                     f.result()
 
-    def step(self, gray: np.ndarray) -> LocalMotion:
+    def step(self, gray: np.ndarray, interval: float = 1) -> LocalMotion:
+        """Eq. 1-12 on ``gray``, ``interval`` frame intervals after the last frame (:func:`use_interval`)."""
+        if use_interval(self, interval):
+            self._set_alphas()
         gray = np.ascontiguousarray(gray, dtype=np.float32)
         h, w = gray.shape
         nb = self._nbands(h, w)

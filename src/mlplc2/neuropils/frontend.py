@@ -23,7 +23,7 @@ from ..camera import warp
 from ..params import Params
 from .retina import photoreceptors
 
-__all__ = ["FrontEnd", "FrontEndState", "set_coefficients"]
+__all__ = ["FrontEnd", "FrontEndState", "set_coefficients", "use_interval"]
 
 
 @dataclass
@@ -49,9 +49,31 @@ def set_coefficients(front_end, params: Params, fps: float) -> None:
     front_end.fps = float(fps)
     front_end.alphas = tuple(lowpass_alpha(tau, front_end.fps) for tau in params.delays_ms())
     front_end.alpha_out = lowpass_alpha(params.tau_nc, front_end.fps)
+    front_end.interval = 1
+    front_end.coefficient_cache = {1: (front_end.alphas, front_end.alpha_out)}
     front_end.k_e = gaussian_kernel_1d(params.r_e, params.sigma_e, normalise=params.normalise_kernels)
     front_end.k_i = gaussian_kernel_1d(params.r_i, params.sigma_i, normalise=params.normalise_kernels)
     front_end.k_c = gaussian_kernel_1d(params.r_c, params.sigma_c, normalise=params.normalise_kernels)
+
+
+def use_interval(front_end, interval: float) -> bool:
+    """The delay coefficients of Eq. 8 and 10 for a frame ``interval`` frame intervals (1 / fps
+    each) after the last: alpha = tau_i / (tau_i + tau) with tau_i = 1000 ``interval`` / fps ms,
+    the real interval (``docs/model.md``, "Time"). Cached per interval: the same interval again
+    costs nothing. True when the coefficients changed."""
+    if interval == front_end.interval:
+        return False
+    cache = front_end.coefficient_cache
+    coeffs = cache.get(interval)
+    if coeffs is None:
+        if len(cache) > 64:      # a variable rate: forget all but the nominal interval's
+            cache = front_end.coefficient_cache = {1: cache[1]}
+        rate = front_end.fps / interval
+        coeffs = cache[interval] = (tuple(lowpass_alpha(tau, rate) for tau in front_end.params.delays_ms()),
+                                    lowpass_alpha(front_end.params.tau_nc, rate))
+    front_end.alphas, front_end.alpha_out = coeffs
+    front_end.interval = interval
+    return True
 
 
 class FrontEnd:
@@ -93,7 +115,9 @@ class FrontEnd:
         st.n_prev = {c: warp(a, homography) for c, a in st.n_prev.items()}
         st.m_prev = {c: {d: warp(a, homography) for d, a in ms.items()} for c, ms in st.m_prev.items()}
 
-    def step(self, gray: np.ndarray) -> LocalMotion:
+    def step(self, gray: np.ndarray, interval: float = 1) -> LocalMotion:
+        """Eq. 1-12 on ``gray``, taken ``interval`` frame intervals (1 / fps) after the last frame."""
+        use_interval(self, interval)
         p, st = self.params, self.state
         l = photoreceptors(gray, st.p_prev)                       # Eq. 1
         st.p_prev = gray

@@ -19,9 +19,11 @@ steps every model on each frame, writing as it goes:
     the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
     space-separated).
 ``responses.png``
-    response against frame, one panel per model (see :mod:`mlplc2.plots`).
+    response against frame, one panel per model, and under a model with targets their time to
+    contact with the warning frames marked (see :mod:`mlplc2.plots`).
 ``annotated.mp4``
-    (``video=True``) the input with the fields drawn (:func:`mlplc2.plots.annotate_frame`).
+    (``video=True``) the input with the targets (or fields) drawn, the warning target named in
+    the header (:func:`mlplc2.plots.annotate_frame`).
 
 The summary files are written under a hidden temporary name and renamed
 when complete, so a file with its final name is never half-written.
@@ -54,6 +56,7 @@ from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
 from ..evaluation.record import Recorder, response_rows
+from .folders import RUN_OUTPUTS, default_out_dir, prepare_out_dir
 from .live import CsvFile, JsonLines, Latency, frame_record
 from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
@@ -62,28 +65,6 @@ __all__ = ["run", "stream", "RunOptions", "RunResult", "RunInterrupted", "Trunca
 
 log = logging.getLogger(__name__)
 
-
-def default_out_dir(source) -> Path:
-    """``<stem>_mlplc2/`` next to the input (camera N: ``./cameraN_mlplc2``; a URL:
-    ``./<last part of its path or host>_mlplc2``; stdin: ``./stdin_mlplc2``)."""
-    if isinstance(source, FrameSource):
-        source = source.name
-    if is_camera(source):
-        return Path.cwd() / f"camera{int(source)}_mlplc2"
-    if (isinstance(source, str) and source == STDIN) or is_url(source):
-        name = "stdin" if source == STDIN else Path(str(source).split("://", 1)[1].split("?")[0]).stem
-        return Path.cwd() / f"{''.join(c if c.isalnum() or c in '-_.' else '_' for c in name) or 'stream'}_mlplc2"
-    p = Path(source)
-    if p.is_dir():
-        p = p.resolve()
-        return p.parent / f"{p.name}_mlplc2"
-    if any(ch in str(source) for ch in "*?[") and not p.exists():
-        parent = p.parent
-        while any(ch in str(parent) for ch in "*?["):
-            parent = parent.parent
-        parent = parent.resolve()
-        return parent.parent / f"{parent.name}_mlplc2"
-    return p.parent / f"{p.stem}_mlplc2"
 
 
 @dataclass(frozen=True)
@@ -126,15 +107,15 @@ class RunOptions:
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
     video : bool
-        Also write ``annotated.mp4``: the input frames with the fields of the
-        first LPLC2-family model drawn, and every model's response in a header
-        (:func:`mlplc2.plots.annotate_frame`).
+        Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
+        first model with targets or fields drawn, and a header row per model: its warning
+        target, its field alarm or its response (:func:`mlplc2.plots.annotate_frame`).
     draw_fields : {'auto', 'none', 'responding', 'all'}
         Which attention fields ``annotated.mp4`` shows besides the targets: "auto" (default)
         none for a model with targets, else those that respond (response > 0) or are in
         alarm; "responding" those (CLI ``--fields``); "all" every field (``--all-fields``).
     plot : bool
-        Write ``responses.png``.
+        Write ``responses.png`` (with the targets' timeline, :func:`mlplc2.plots.plot_timeline`).
     keep_rows : bool
         Keep every row of ``responses.csv``/``targets.csv`` in ``RunResult.rows``/
         ``.targets`` (default). Set False for long or live runs: memory then stays
@@ -299,9 +280,10 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
                               f"the models need at least {need}x{need}")
 
 
-def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool]:
+def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
     """The run's models, and whether the first frames looked duplicated (:func:`_prescan_repeats`:
-    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on)."""
+    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on);
+    None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     widths = {m.work_width for m in built}
@@ -310,7 +292,7 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
         # The models' reduction to their working width (Model.work_width), done in the decoding thread.
         src.reduce_to((work, max(int(round(h * work / w)), max(m.min_size for m in built))))
     auto = [m for m in built if m.repeat_threshold == "auto"]
-    duplicated = _prescan_repeats(source, auto, src, options)
+    duplicated = _prescan_repeats(source, auto, src, options) if auto else None
     if duplicated:
         built = [_holding(m, models, src.fps, options) if m in auto else m for m in built]
     return built, duplicated
@@ -324,21 +306,6 @@ def _holding(m: Model, models: list, fps: float, options: RunOptions) -> Model:
         return m
     return _new_model(m.name, fps, _model_options(options, _names(models)), repeat_threshold=REPEAT_THRESHOLD)
 
-
-def _prepare_out_dir(source, src: FrameSource, out) -> Path:
-    """The output folder, created, without the outputs of an earlier run (:data:`RUN_OUTPUTS`)."""
-    out_dir = Path(out) if out is not None else default_out_dir(source)
-    if src.kind == "images" and out_dir.is_dir() and isinstance(source, (str, Path)) \
-            and Path(source).is_dir() and out_dir.resolve() == Path(source).resolve():
-        raise InputValueError(f"{out_dir}: the output folder is the folder of input frames; "
-                              f"choose another --out")
-    if out_dir.exists() and not out_dir.is_dir():
-        raise InputValueError(f"{out_dir}: is a file, expected a folder for the outputs")
-    out_dir.mkdir(parents=True, exist_ok=True)
-    for p in (out_dir / name for name in RUN_OUTPUTS):  # an earlier run's: never mix two runs
-        if p.is_file() or p.is_symlink():
-            p.unlink()
-    return out_dir
 
 
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, options: RunOptions | None = None,
@@ -431,13 +398,14 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
         src = open_source(source, keep_original=options.video, **options.source_options())
     try:
         built, duplicated = _prepare_models(source, models, src, options)
-        out_dir = None if out is False else _prepare_out_dir(source, src, out)
+        out_dir = None if out is False else prepare_out_dir(source, src, out)
     except BaseException:
         src.close()
         raise
     result = RunResult(source=str(src.name if isinstance(source, FrameSource) else source),
                        models=[m.name for m in built], fps=src.fps, size=src.size,
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
+                       repeated={m.name: 0 for m in built},
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
                                      None))
     return src, built, result
@@ -476,10 +444,10 @@ def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOp
     return looks_duplicated(diffs)
 
 
-#: The files a run writes into its output folder (all of them, whatever the options). :func:`run`
-#: deletes those of an earlier run first, so that the folder never mixes two runs (e.g. an old
-#: ``annotated.mp4`` beside new results).
-RUN_OUTPUTS = ("responses.csv", "targets.csv", "fields.json", "responses.png", "annotated.mp4")
+
+class _VideoFailed(Exception):
+    """Writing ``annotated.mp4`` failed (an OSError such as a full disk): the run stops before the
+    frame, and :func:`_loop` still writes the summaries of the frames done."""
 
 
 class _Frames:
@@ -516,21 +484,24 @@ class _Frames:
         frame's decoding to the end of its writing."""
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
-        outputs = [m.step(frame) for m in self.built]
-        time_s = round(index / src.fps, 6)
+        outputs = [m.step(frame, src.time_s) for m in self.built]
+        time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:
             from ..plots import annotate_frame
 
-            self.vw.write(annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
-                                         index=index, field_shape=self.field_shape,
-                                         draw_fields=self.options.draw_fields))
+            img = annotate_frame(item[2], outputs, names, src.scale_x, src.scale_y, primary=self.primary,
+                                 index=index, field_shape=self.field_shape, draw_fields=self.options.draw_fields)
+            try:
+                self.vw.write(img)
+            except OSError as exc:  # a full disk: this frame goes nowhere, the others' outputs are kept
+                raise _VideoFailed(exc) from exc
         # The frame's share of every output, together (a few dict updates and two writes).
         target_rows = []
         for name, out in zip(names, outputs):
             if out.repeated:
-                result.repeated[name] = result.repeated.get(name, 0) + 1
+                result.repeated[name] += 1
             target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                for t in self.recorder.update(index, name, out))
         if self.targets is not None and target_rows:
@@ -556,14 +527,20 @@ class _Frames:
         if self.lines is not None:
             self.lines.close()
 
-    def summarise(self, interrupted: bool) -> None:
+    def summarise(self, interrupted: bool, video_error: OSError | None = None) -> None:
         """The run's end state and the summaries of its fields and targets into ``result``."""
         result, recorder, names = self.result, self.recorder, self.names
         result.interrupted = interrupted
+        if video_error is not None:
+            result.error = f"annotated.mp4: {video_error.strerror or video_error}"
         result.truncated = self.src.truncated
         result.dropped = self.src.dropped
         result.message = self.src.message or result.message
         result.latency = self.latency.stats()
+        # One decision on duplicated frames: the pre-scan's, or a model left to find out held frames.
+        if result.duplicated is False and any(result.repeated[m.name] for m in self.built
+                                              if m.repeat_threshold == "auto"):
+            result.duplicated = True
         # Fields still alive at the end keep died = None.
         with recorder:
             result.fields = {name: recorder.summaries(name) for name in names}
@@ -578,6 +555,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
 
     frames = _Frames(src, built, result, options)
     interrupted = False
+    video_error: OSError | None = None
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
@@ -585,16 +563,25 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
         t0 = time.perf_counter()
         try:
             frames.open(out_dir)
-            bar = tqdm(total=src.total, disable=not (options.progress and not options.quiet), unit="frame",
-                       file=sys.stderr, desc=Path(src.name).name or src.name, dynamic_ncols=True, leave=False)
             t0 = time.perf_counter()
             for item in stop.between(src):
                 frames.step(item)
-                bar.update()
+                if bar is None:
+                    # the bar (and its clock) starts after the first frame, which may compile the
+                    # kernels (tens of seconds, once per install): its rate and ETA never count it
+                    bar = tqdm(total=src.total, initial=1, disable=not (options.progress and not options.quiet),
+                               unit="frame", file=sys.stderr, desc=Path(src.name).name or src.name,
+                               dynamic_ncols=True, leave=False)
+                else:
+                    bar.update()
                 if options.done(result.n_frames, time.perf_counter() - t0) or (frames.lines and frames.lines.gone):
                     break
         except KeyboardInterrupt:
             interrupted = True
+        except _VideoFailed as exc:
+            video_error = exc.__cause__
+            frames.vw.abort()
+            frames.vw = None
         except BaseException:
             if frames.vw is not None:
                 frames.vw.abort()
@@ -605,7 +592,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 bar.close()
             frames.close_csv()
             src.close()
-        frames.summarise(interrupted)
+        frames.summarise(interrupted, video_error)
         if out_dir is not None:
             try:
                 _finish(result, out_dir, frames.vw, options.plot)
@@ -615,32 +602,38 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 raise
         if result.truncated:
             warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
+        if video_error is not None:
+            raise OSError(video_error.errno, f"{video_error.strerror or video_error}; the other outputs cover the "
+                          f"{result.n_frames} frames before", str(out_dir / "annotated.mp4")) from video_error
         if interrupted:
             raise RunInterrupted(result)
     return result
 
 
 def _finish(result: RunResult, out_dir: Path, vw: VideoWriter | None, plot: bool) -> None:
+    """The summaries, small ones first: ``fields.json``, ``responses.png``, then ``annotated.mp4``
+    (finishing the video may need more room than the disk has left)."""
     path = out_dir / "fields.json"
     write_json(path, result.summary())
     result.files["fields.json"] = path
-    if vw is not None:
-        if vw.n_frames:
-            result.files["annotated.mp4"] = vw.close()
-        else:
-            vw.abort()
     if plot and result.n_frames:
         from ..plots import plot_responses
 
         path = out_dir / "responses.png"
         title = f"{Path(result.source).name}: {', '.join(result.models)}"
-        if result.interrupted or result.truncated:
-            why = "interrupted" if result.interrupted else "input truncated"
+        if result.interrupted or result.truncated or result.error:
+            why = "interrupted" if result.interrupted else result.error or "input truncated"
             title += f" ({why} after {result.n_frames} frames)"
         rows = result.rows or result.files.get("responses.csv")
+        targets = result.targets or result.files.get("targets.csv")
         if rows is not None:
-            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps)
+            plot_responses(rows, path, fields=result.fields, title=title, fps=result.fps, targets=targets)
         result.files["responses.png"] = path
+    if vw is not None:
+        if vw.n_frames:
+            result.files["annotated.mp4"] = vw.close()
+        else:
+            vw.abort()
 
 
 # ---------------------------------------------------------------------------

@@ -56,6 +56,9 @@ class RunResult:
         The input stopped decoding early (see ``message``).
     interrupted : bool
         The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
+    error : str, optional
+        Why an output stopped the run (``annotated.mp4`` on a full disk): the other outputs
+        were written for the frames done, then :func:`run` raised the OSError.
     seconds : float
         Wall time of the frame loop (decoding, models, writing the per-frame outputs),
         in seconds; ``n_frames / seconds`` is the processing rate.
@@ -74,6 +77,7 @@ class RunResult:
     fields: dict[str, list[dict]] = field(default_factory=dict)
     truncated: bool = False
     interrupted: bool = False
+    error: str | None = None
     message: str | None = None
     out: Path | None = None
     files: dict[str, Path] = field(default_factory=dict)
@@ -85,24 +89,25 @@ class RunResult:
     target_summaries: dict[str, list[dict]] = field(default_factory=dict)
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
     repeated: dict[str, int] = field(default_factory=dict)
-    """Per model, the frames it held as repeats of the previous one (``Output.repeated``)."""
+    """Per model (every model of the run, 0 when none), the frames it held as repeats of the
+    previous one (``Output.repeated``)."""
     skipped: int = 0
     """Frames of a live source skipped because the models were behind (the newest frame was taken)."""
     dropped: bool = False
     """A stream or camera stopped with an error (``message`` says which); the results cover the frames before."""
     latency: dict[str, float] = field(default_factory=dict)
     """From a frame's decoding to the end of its outputs (its JSON line): ``median_ms``, ``p99_ms``, ``max_ms``."""
-    duplicated: bool = False
-    """The first frames looked duplicated, so the models with ``repeat_threshold="auto"`` held
-    the copies from the start (:data:`mlplc2.runner.PRESCAN_FRAMES`)."""
+    duplicated: bool | None = False
+    """The video repeats its frames: its first frames looked duplicated (so the models with
+    ``repeat_threshold="auto"`` held the copies from the start, :data:`mlplc2.runner.PRESCAN_FRAMES`),
+    or such a model found out later and held frames. None when no model was left to find out
+    (every model's ``repeat_threshold`` set: ``--skip-repeats``, ``--every-frame``). The
+    ``note:`` line of ``mlplc2 run`` is printed exactly when it is True."""
 
     def to_dataframe(self):
-        """``rows`` as a pandas DataFrame (needs pandas: ``pip install 'mlplc2[pandas]'``); after a
+        """``rows`` as a pandas DataFrame; after a
         run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
-        try:
-            import pandas as pd
-        except ImportError:
-            raise ImportError("RunResult.to_dataframe needs pandas: pip install 'mlplc2[pandas]'") from None
+        import pandas as pd
         if not self.rows and self.n_frames:
             path = self.files.get("responses.csv")
             if path is None or not Path(path).is_file():
@@ -122,9 +127,10 @@ class RunResult:
             "start": self.start,
             "n_frames": self.n_frames,
             "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted or self.dropped),
+            "complete": not (self.truncated or self.interrupted or self.error or self.dropped),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
+            "error": self.error,
             "hfov_deg": self.hfov_deg,
             "models": self.fields,
             "targets": self.target_summaries,

@@ -90,7 +90,8 @@ class Target:
                 -(self.width * self.height), self.id)
 
 class Observation(NamedTuple):
-    """One frame of a track's history (what the fits use): the frame, the accumulated
+    """One frame of a track's history (what the fits use): the frame's time in frame intervals
+    (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
     log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width
     and the accumulated log-anisotropy."""
 
@@ -144,14 +145,15 @@ class Track:
             return 0.0
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
 
-    def follow(self, move: tuple | None, index: int, fps: float, shape: tuple[int, int], max_fails: int, *,
-               box: tuple | None = None, refit: float = 0.0, camera=None) -> bool:
+    def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
+               box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1) -> bool:
         """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
         centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
         the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
         (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
         the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
-        the box (the camera's image motion) adds to ``ox``, ``oy``."""
+        the box (the camera's image motion) adds to ``ox``, ``oy``. ``clock``: the frame's time
+        (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one."""
         if move is None:
             self.fails += 1
             return self.fails < max_fails
@@ -168,12 +170,12 @@ class Track:
             self.h *= min(max(box[3], 1.0) / self.h, 1.0) ** refit
         self.log_s += growth
         self.aniso += skew
-        self.rate = growth * fps
+        self.rate = growth * fps / interval
         if camera is not None:
             du, dv = camera.flow(self.cx - dx, self.cy - dy)
             self.ox += float(du)
             self.oy += float(dv)
-        self.history.append(Observation(index, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
+        self.history.append(Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
                                         self.aniso))
         h, w = shape
         return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
@@ -209,6 +211,7 @@ class TargetLayer:
         self._tracks: list[Track] = []
         self._next = 1
         self._prev: list[np.ndarray] | None = None
+        self._clock: float = 0       # clock of the last frame (frame intervals)
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
@@ -237,14 +240,19 @@ class TargetLayer:
             t.ox, t.oy = t.ox + dx, t.oy + dy
 
     # -- one frame -----------------------------------------------------------------------
-    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int) -> tuple[Target, ...]:
+    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int,
+             clock: float | None = None) -> tuple[Target, ...]:
         """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps;
-        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``)."""
+        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``);
+        ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
+        fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
+        clock = index if clock is None else clock
         levels = pyramid(gray)
         h, w = gray.shape
         if self._prev is not None:
-            self._follow(levels, index, w, h)
+            self._follow(levels, clock, clock - self._clock, w, h)
+        self._clock = clock
         self._merge()
         seeds = []
         for f in fields:
@@ -286,7 +294,7 @@ class TargetLayer:
                 continue
             if not self._grows(levels, t):
                 continue
-            t.history = deque([Observation(index, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
+            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
             self._next += 1
             if f is not None:
                 t.fields.add(f.id)
@@ -364,7 +372,7 @@ class TargetLayer:
                 return box
         return None
 
-    def _follow(self, levels, index: int, w: int, h: int) -> None:
+    def _follow(self, levels, clock: float, interval: float, w: int, h: int) -> None:
         """Move and grow every track with the image alignment; drop the lost ones."""
         p = self.params
         kept = []
@@ -374,7 +382,7 @@ class TargetLayer:
                        iterations=p.iterations, kernel=self.align_kernel)
             move = None if al is None or al.residual > p.max_residual else \
                 (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
-            if t.follow(move, index, self.fps, (h, w), p.max_fails):
+            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval):
                 kept.append(t)
         self._tracks = kept
 
@@ -411,7 +419,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     course (:func:`fit_course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline)."""
     h, w = shape
-    frames = [q.frame for q in t.history]
+    frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if len(frames) >= p.min_frames else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside

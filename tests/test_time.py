@@ -1,0 +1,129 @@
+"""Time from the camera: ``Model.step(frame, t)`` (docs/model.md, "Time")."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from mlplc2 import InputError
+from mlplc2.models.base import REGISTRY
+from mlplc2.stimuli import approach_scene
+
+FPS = 30.0
+
+
+@pytest.fixture(scope="module")
+def frames():
+    st = approach_scene(kind="collision", ttc_s=1.5, size=(160, 120), fps=FPS, background="texture")
+    return list(st.frames)
+
+
+def _outputs(name, frames, times=None, **kw):
+    m = REGISTRY[name](fps=FPS, **kw)
+    return [m.step(f) if times is None else m.step(f, t) for f, t in zip(frames, times or [None] * len(frames))]
+
+
+def _same(a, b):
+    return [(o.frame, o.response, o.collision, o.spike, o.repeated, o.fields, o.targets) for o in a] == \
+           [(o.frame, o.response, o.collision, o.spike, o.repeated, o.fields, o.targets) for o in b]
+
+
+@pytest.mark.parametrize("name,kw", [("mlplc2", {}), ("mlplc2", {"backend": "reference"}), ("lgmd2", {}),
+                                     ("flow", {})])
+def test_constant_rate_timestamps_change_nothing(frames, name, kw):
+    """t = i / fps, from any start, gives exactly the outputs without t (bit for bit)."""
+    n = len(frames) if kw.get("backend") != "reference" else 20
+    plain = _outputs(name, frames[:n], **kw)
+    for t0 in (0.0, 12.345):
+        timed = _outputs(name, frames[:n], [t0 + i / FPS for i in range(n)], **kw)
+        assert _same(plain, timed)
+        assert [o.time_s for o in timed] == [t0 + i / FPS for i in range(n)]
+    assert [o.time_s for o in plain] == [i / FPS for i in range(n)]
+    if name == "mlplc2" and n == len(frames):
+        assert any(t.ttc_s is not None for o in plain for t in o.targets)   # the fits were exercised
+
+
+def test_timestamps_must_increase(frames):
+    m = REGISTRY["mlplc2"](fps=FPS)
+    m.step(frames[0], 1.0)
+    for bad in (1.0, 0.5, float("nan"), "1.5", True):
+        with pytest.raises(InputError, match="frame 1"):
+            m.step(frames[1], bad)
+    out = m.step(frames[1], 1.0 + 1 / FPS)          # the model goes on, nothing changed
+    assert (out.frame, out.time_s) == (1, 1.0 + 1 / FPS)
+
+
+def _first_warning(outs):
+    return next((o for o in outs if o.warning), None)
+
+
+def test_dropped_frames_keep_time_to_contact(frames):
+    """Every 4th frame dropped (timestamps kept): the times to contact stay within 10 % of the complete
+    scene's and the warning comes at most 2 frames later."""
+    full = _outputs("mlplc2", frames, [i / FPS for i in range(len(frames))])
+    kept = [i for i in range(len(frames)) if i % 4 != 3]
+    dropped = _outputs("mlplc2", [frames[i] for i in kept], [i / FPS for i in kept])
+    compared = 0
+    for i, o in zip(kept, dropped):
+        a, b = full[i].most_urgent, o.most_urgent
+        if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None:
+            assert abs(b.ttc_s - a.ttc_s) <= 0.1 * a.ttc_s, (i, a.ttc_s, b.ttc_s)
+            compared += 1
+    assert compared >= 10
+    wf, wd = _first_warning(full), _first_warning(dropped)
+    assert wf is not None and wd is not None
+    assert wd.time_s * FPS <= wf.frame + 2 + 1e-9
+
+
+def test_repeated_frames_step_with_the_real_interval():
+    """A 15 fps scene stored at 30 fps (every frame twice): the held copies do not step, the next new frame
+    steps with the real interval: the front end's maps are those of the 15 fps frames, and a held
+    frame counts the time to contact down by its time."""
+    st = approach_scene(kind="collision", ttc_s=1.5, size=(160, 120), fps=15.0, background="texture")
+    distinct = list(st.frames)[:16]
+    slow = REGISTRY["mlplc2"](fps=15.0)
+    doubled = REGISTRY["mlplc2"](fps=FPS, repeat_threshold=0.0)
+    for k, f in enumerate(distinct):
+        slow.step(f)
+        a = doubled.step(f, 2 * k / FPS)
+        assert not a.repeated
+        np.testing.assert_allclose(doubled.maps.magnitude, slow.maps.magnitude, rtol=1e-5, atol=1e-6)
+        b = doubled.step(f, (2 * k + 1) / FPS)
+        assert b.repeated and b.time_s == (2 * k + 1) / FPS
+        for ta, tb in zip(a.targets, b.targets):
+            if ta.ttc_s is not None and tb.ttc_s is not None:
+                assert tb.ttc_s == pytest.approx(ta.ttc_s - 1 / FPS)
+
+
+def _vfr_video(path, times_ms):
+    """A small video whose frames carry the given timestamps (ms), as a variable-rate camera writes them."""
+    av = pytest.importorskip("av")
+    from fractions import Fraction
+
+    c = av.open(str(path), "w")
+    s = c.add_stream("mpeg4", rate=30)
+    s.width, s.height, s.pix_fmt = 64, 48, "yuv420p"
+    s.time_base = Fraction(1, 1000)
+    for i, t in enumerate(times_ms):
+        f = av.VideoFrame.from_ndarray(np.full((48, 64, 3), 20 * i, np.uint8), format="rgb24")
+        f.pts, f.time_base = t, Fraction(1, 1000)
+        for p in s.encode(f):
+            c.mux(p)
+    for p in s.encode():
+        c.mux(p)
+    c.close()
+
+
+# the container's frame count is its duration times its rate (10 here): a variable-rate file reads as cut short
+@pytest.mark.filterwarnings("ignore::mlplc2.io.formats.TruncatedInputWarning")
+@pytest.mark.parametrize("decoder", ["opencv", "pyav"])
+def test_run_uses_the_container_timestamps(tmp_path, decoder):
+    import mlplc2
+
+    times = [0, 33, 67, 100, 167, 200, 300]              # two frames dropped
+    path = tmp_path / "vfr.mkv"
+    _vfr_video(path, times)
+    res = mlplc2.run(str(path), "lgmd1", out=False, decoder=decoder, quiet=True, plot=False)
+    assert [r["time_s"] for r in res.rows] == [t / 1000 for t in times]
+    res = mlplc2.run(str(path), "lgmd1", out=False, decoder=decoder, quiet=True, plot=False, fps=10.0)
+    assert [r["time_s"] for r in res.rows] == [round(i / 10.0, 6) for i in range(len(times))]
