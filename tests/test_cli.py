@@ -222,10 +222,10 @@ def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     k = 12
     original = mlplc2.MLPLC2.step
 
-    def step(self, frame):
+    def step(self, frame, *args, **kwargs):
         if self.frame_index == k:
             raise KeyboardInterrupt
-        return original(self, frame)
+        return original(self, frame, *args, **kwargs)
 
     monkeypatch.setattr(mlplc2.MLPLC2, "step", step)
     out = tmp_path / "out"

@@ -174,7 +174,7 @@ def test_progress_bar_starts_after_the_first_frame(data, monkeypatch):
     monkeypatch.setattr(tqdm, "tqdm", Bar)
     steps = []
     real_step = mlplc2.LGMD1.step
-    monkeypatch.setattr(mlplc2.LGMD1, "step", lambda self, f: (steps.append(len(made)), real_step(self, f))[1])
+    monkeypatch.setattr(mlplc2.LGMD1, "step", lambda self, f, *a, **k: (steps.append(len(made)), real_step(self, f, *a, **k))[1])
     res = run(str(data["images"]), ["lgmd1"], out=False, progress=True)
     assert steps[0] == 0 and all(k == 1 for k in steps[1:])   # no bar while frame 1 runs
     assert made[0]["initial"] == 1 and made[-1] == res.n_frames == len(steps)

@@ -171,7 +171,7 @@ def _signal_during(monkeypatch, where: str, sig) -> None:
 
     fired: list = []
     if where == "model":
-        monkeypatch.setattr(mlplc2.MLPLC2, "step", hook(mlplc2.MLPLC2.step, lambda m, frame: m.frame_index))
+        monkeypatch.setattr(mlplc2.MLPLC2, "step", hook(mlplc2.MLPLC2.step, lambda m, frame, *a: m.frame_index))
     elif where == "video":
         monkeypatch.setattr(VideoWriter, "write", hook(VideoWriter.write, lambda w, frame: w.n_frames))
     elif where == "summaries":
