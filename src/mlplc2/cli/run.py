@@ -47,6 +47,10 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
+    p.add_argument("--stabilise", action="store_true",
+                   help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
+                        "and compensated before the front end, for a camera that pans, tilts or rolls "
+                        "(docs/model.md, 'Camera motion'); default off: the paper's model")
     p.add_argument("--decoder", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv)")
     p.add_argument("--backend", dest="decoder", choices=("opencv", "pyav"), default=argparse.SUPPRESS,
@@ -96,7 +100,7 @@ def _run(args, jsonl) -> int:
                              hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
                              decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                              target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
-                             max_frames=args.max_frames, duration_s=args.duration)
+                             max_frames=args.max_frames, duration_s=args.duration, stabilise=args.stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)

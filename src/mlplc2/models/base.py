@@ -220,6 +220,9 @@ class Model(abc.ABC):
     #: True for models whose outputs carry targets (``Output.targets``): their warning is the
     #: targets' warning; models without targets warn with their alarm (``Output.collision``).
     has_targets: ClassVar[bool] = False
+    #: True for models built with ``stabilise=`` (gaze stabilisation: the camera's rotation
+    #: compensated before the front end; docs/model.md, "Camera motion").
+    stabilises: ClassVar[bool] = False
 
     def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | str | None = "auto",
                  work_width: int | None = WORK_WIDTH):

@@ -29,6 +29,7 @@ class _LPLC2Family(Model):
     has_fields = True
     localises = True
     has_targets = True
+    stabilises = True
 
     def __init__(self, fps: float = 30.0, params: Params | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, backend: str = "auto",
@@ -148,6 +149,10 @@ class MLPLC2(_LPLC2Family):
     hfov_deg : float, optional, keyword-only
         Horizontal field of view of the camera in degrees: targets then carry their bearing
         (``Target.azimuth_deg``, ``elevation_deg``). Time to contact and miss need none.
+    stabilise : bool, keyword-only
+        Gaze stabilisation (docs/model.md, "Camera motion"): the camera's rotation is estimated
+        every frame and the state is carried into the new frame's pixels before the front end.
+        False (the default): the paper's model.
     target_params : mlplc2.targets.TargetParams, optional, keyword-only
         Settings of the target layer: time to contact, course, warning (``docs/targets.md``).
     backend : {"auto", "numba", "reference"}, keyword-only

@@ -262,8 +262,9 @@ class FastFrontEnd:
         for c in range(2):
             inner = self._n_prev[c, pad:-pad, pad:-pad] if pad else self._n_prev[c]
             inner[...] = warp(np.ascontiguousarray(inner), homography)
-            for d in range(4):
-                self._m[c, d][...] = warp(np.ascontiguousarray(self._m[c, d]), homography)
+            for d in range(4):                              # through _m_rows: what the kernel reads
+                plane = self._m_rows[:, c, d, :]            # (a copy made by pickle no longer shares _m)
+                plane[...] = warp(np.ascontiguousarray(plane), homography)
         if self.params.after_image:
             self._on[...] = warp(self._on, homography)
             self._off[...] = warp(self._off, homography)

@@ -106,6 +106,10 @@ class RunOptions:
         Settings of the targets (time to contact, course, warning: ``horizon_s``,
         ``max_miss``, ...; :class:`mlplc2.targets.TargetParams`) for every model with
         targets; a dict gives the fields to change from the defaults.
+    stabilise : bool
+        Gaze stabilisation for the models that have it (the LPLC2 family): the camera's rotation
+        estimated every frame and compensated before the front end (docs/model.md, "Camera
+        motion"). False (the default): the paper's model.
     video : bool
         Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
         first model with targets or fields drawn, and a header row per model: its warning
@@ -150,6 +154,7 @@ class RunOptions:
     hfov_deg: float | None = None
     repeat_threshold: float | str | None = "model default"
     target_params: Any = None
+    stabilise: bool = False
     video: bool = False
     draw_fields: str = "auto"
     plot: bool = True
@@ -222,6 +227,8 @@ def _new_model(name: str, fps: float, options: RunOptions, **override) -> Model:
     kw = {"hfov_deg": options.hfov_deg} if (options.hfov_deg is not None and cls.has_targets) else {}
     if options.target_params is not None and cls.has_targets:
         kw["target_params"] = options.target_params
+    if options.stabilise and cls.stabilises:
+        kw["stabilise"] = True
     if options.repeat_threshold != "model default":
         kw["repeat_threshold"] = options.repeat_threshold
     kw.update(override)
