@@ -314,7 +314,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
 
 def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
               scheduler: str | None = None, workers: int | None = None, target_params=None,
-              progress: bool = True, force: bool = False) -> BenchmarkResult:
+              stabilise: bool = False, progress: bool = True, force: bool = False) -> BenchmarkResult:
     """Run the benchmark into folder ``out`` (see the module docstring).
 
     Parameters
@@ -333,6 +333,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         As in :func:`mlplc2.batch.batch` (default: a local Dask cluster).
     target_params : TargetParams or dict, optional
         Target and warning settings for the models with targets (``horizon_s``, ``max_miss``, ...).
+    stabilise : bool
+        Gaze stabilisation for the models that have it (:attr:`mlplc2.runner.RunOptions.stabilise`).
     progress : bool
         Progress bars on stderr.
     force : bool
@@ -358,6 +360,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     run_options = {}
     if tp is not None:
         run_options["target_params"] = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
+    if stabilise:
+        run_options["stabilise"] = True
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
     failed, seen = [], set()
@@ -388,6 +392,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              time.perf_counter() - t0,
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
+                                       "stabilise": bool(stabilise),
                                        "real": None if real_dir is None else str(real_dir),
                                        "scheduler": res.scheduler}, failed=failed)
     _write(result, out)

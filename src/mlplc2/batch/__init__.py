@@ -343,12 +343,13 @@ def _completed(jobs: list[tuple[int, dict]], client) -> Iterator[tuple[int, dict
 
 def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
     """The run options that concern ``model``: the targets' settings only for models with
-    targets (so that changing them does not rerun the others)."""
+    targets, gaze stabilisation only for models that have it (so that changing them does not
+    rerun the others)."""
     from ..models.base import get_model
 
-    if "target_params" in options and not get_model(model).has_targets:
-        return {k: v for k, v in options.items() if k != "target_params"}
-    return dict(options)
+    cls = get_model(model)
+    skip = {k for k, needs in (("target_params", cls.has_targets), ("stabilise", cls.stabilises)) if not needs}
+    return {k: v for k, v in options.items() if k not in skip}
 
 
 def batch(inputs, out, *, models: Sequence[str] | str = ("mlplc2",), params=None, sweep=None,

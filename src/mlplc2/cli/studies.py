@@ -139,6 +139,8 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     add_warning_options(p)
+    p.add_argument("--stabilise", action="store_true",
+                   help="gaze stabilisation for the LPLC2 family (as mlplc2 run --stabilise)")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bars and no table")
 
@@ -152,7 +154,7 @@ def _cmd_benchmark(args) -> int:
     try:
         res = benchmark(args.out, quick=args.quick, models=models, real=real, scheduler=args.scheduler,
                         workers=args.workers, target_params=target_options(args) or None,
-                        progress=not args.quiet, force=args.force)
+                        stabilise=args.stabilise, progress=not args.quiet, force=args.force)
     except BatchInterrupted as exc:
         if args.quiet:  # with progress output batch() has already said it
             print(f"{PROG}: {one_line(str(exc))}", file=sys.stderr)
