@@ -435,3 +435,39 @@ def test_a_new_process_loads_the_kernels_from_the_disk_cache(tmp_path):
     assert used >= 5                      # the front end's and the motion kernels at least
     assert misses == 0 and hits >= used   # nothing compiled in the new process
 
+
+
+_LATER_FRAMES = """
+import mlplc2
+from mlplc2 import stimuli
+from mlplc2.neuropils import _fast
+frames = stimuli.basic("dark_approach", frames=40).frames
+model = mlplc2.MLPLC2(fps=30.0)
+model.step(frames[0])
+loaded = {k.__name__: len(k.signatures) for k in _fast.KERNELS}
+targets = 0
+for frame in frames[1:]:
+    targets += len(model.step(frame).targets)
+late = sorted(k.__name__ for k in _fast.KERNELS if len(k.signatures) != loaded[k.__name__])
+print("targets", targets, "late", ",".join(late) or "none")
+"""
+
+
+def test_no_kernel_loads_after_the_first_frame(tmp_path):
+    """Every kernel a model calls is loaded by its first frame (which a run leaves out of its
+    latency): the quadrant sums, the edge scans and the image alignment used to load at the
+    frame that first needed them, tens of milliseconds in the middle of a live run (issue 23:
+    the latency's tail). A new process, so that no other test has loaded them."""
+    import os
+    import subprocess
+    import sys
+
+    _mlplc2_on_an_approach()   # the disk cache holds the kernels: the new process loads them
+    script = tmp_path / "later_frames.py"
+    script.write_text(_LATER_FRAMES)
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
+                          env=dict(os.environ))
+    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
+    words = proc.stdout.split()
+    assert int(words[words.index("targets") + 1]) > 0   # the scene makes targets: their kernels run
+    assert words[words.index("late") + 1] == "none"

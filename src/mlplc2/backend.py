@@ -17,7 +17,7 @@ from dataclasses import dataclass
 
 from ._validation import InputValueError
 
-__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available"]
+__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels"]
 
 #: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
 #: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
@@ -26,6 +26,7 @@ BACKENDS = ("auto", "numba", "reference")
 _log = logging.getLogger("mlplc2")
 _FAST_ERROR: str | None = None
 _WARNED = False
+_WARM = False
 
 
 def fast_available() -> bool:
@@ -65,6 +66,7 @@ def resolve(backend: str = "auto") -> Backend:
             from .neuropils import _fast_attention, _fast_frontend
             from .targets import _fast_align, _fast_extent
 
+            warm_kernels()
             return Backend("numba", _fast_frontend.FastFrontEnd, _fast_attention.quadrant_sums, _fast_extent.edges4,
                            _fast_align.align_patch)
         if backend == "numba":
@@ -76,6 +78,36 @@ def resolve(backend: str = "auto") -> Backend:
     from .neuropils.frontend import FrontEnd
 
     return Backend("reference", FrontEnd, quadrant_sums, None, None)
+
+
+def warm_kernels() -> None:
+    """Load (or compile) the kernels a model calls only after its first frames, once per process.
+
+    The front end's kernels load on a model's first frame, which a run leaves out of its latency;
+    the quadrant sums (Eq. 14: the first field), the image alignment (the first target's growth)
+    and the edge scans (its first extent) would load at the frame that first needs them, tens of
+    milliseconds in the middle of a live run (a compile: seconds). Each is called here once on
+    a small blank frame through its public caller, so with the argument types of a run's calls.
+    """
+    global _WARM
+    if _WARM:
+        return
+    import numpy as np
+
+    from .neuropils import _fast_attention
+    from .neuropils.lobula_plate import LocalMotion
+    from .targets import _fast_align, _fast_extent
+    from .targets.alignment import align, pyramid
+    from .targets.extent import measure_extent
+
+    maps = np.zeros((5, 32, 32), np.float32)
+    lm = LocalMotion(maps[0], maps[1], maps[2], maps[3], maps[4])
+    for shape in ("square", "disc"):
+        _fast_attention.quadrant_sums(lm, 16, 16, 8, shape)
+    measure_extent(lm, 16, 16, kernel=_fast_extent.edges4)
+    levels = pyramid(np.zeros((32, 32), np.float32))
+    align(levels, levels, 16.0, 16.0, 8.0, (4.0, 4.0), kernel=_fast_align.align_patch)
+    _WARM = True
 
 
 def make_frontend(params, fps: float, backend: str = "auto"):
