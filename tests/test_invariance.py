@@ -89,7 +89,7 @@ def _held(path) -> list[int]:
 @pytest.mark.xfail(strict=True, reason="open (issue 22 item 7): the repeat test compares single pixels, so the "
                    "compression noise on a copy decides (mlplc2.run held 41 copies at 320x240 CRF 20, 47 at "
                    "640x480 and lossless); comparing 80 px wide frames held them alike but also held real 1 px "
-                   "motion (docs/model.md, 'Repeated frames')")
+                   "motion (docs/model.md, 'Encoding and size')")
 def test_encoding_and_size_hold_the_same_copies(copies):
     """The same copies are held whatever noise the encoding or the scaling left on them."""
     paths, _ = copies
