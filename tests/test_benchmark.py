@@ -89,7 +89,7 @@ def test_failed_tasks_are_listed_and_warned(quick, tmp_path, monkeypatch, capsys
         res = benchmark(out, quick=True, models=["lgmd1", "lgmd2"], workers=0, progress=False)
     assert len(record) == 1
     msg = str(record[0].message)
-    assert "quick_texture_pan.mp4 (lgmd2, runs/quick_texture_pan/default/lgmd2): failed, not scored" in msg
+    assert "quick_texture_pan.mkv (lgmd2, runs/quick_texture_pan/default/lgmd2): failed, not scored" in msg
     assert "RuntimeError: decoder exploded" in msg
     assert [(f["model"], f["status"]) for f in res.failed] == [("lgmd2", "error")]
     rows = {r["model"]: r for r in res.rows}
