@@ -35,7 +35,8 @@ def test_quick_benchmark_prints_the_table_and_writes_the_report(quick):
     assert quick["rc"] == 0, quick["stderr"][-2000:]
     lines = quick["stdout"].splitlines()
     assert lines[0].startswith("Generated suite: 4 scenes (480 frames); real clips: 0;")
-    rows = [ln for ln in lines if ln.startswith("| ") and not ln.startswith("| model ")]
+    first = lines[:lines.index("", 2)]                 # the model table, before the per-setting one
+    rows = [ln for ln in first if ln.startswith("| ") and not ln.startswith("| model ")]
     assert [r.split("|")[1].strip() for r in rows] == list(MODELS)
     names = ("benchmark.md", "benchmark.json", "benchmark.csv", "evaluation.md", "evaluation.json",
              "lead_time.png", "false_warnings.png")
@@ -54,6 +55,14 @@ def test_quick_benchmark_prints_the_table_and_writes_the_report(quick):
     for r in table:
         warned = sum(o["warned"] for o in ev["warning_objects"] if o["model"] == r["model"])
         assert int(r["warned"]) == warned
+    # per setting: the still cameras (plain, texture) and the moving ones (pan, forward) add up
+    by = {r["setting"]: r for r in report["by_setting"]}
+    assert by["still camera"]["scenes"] == by["moving camera"]["scenes"] == 2
+    for r in table:
+        m = r["model"]
+        assert by["still camera"][m]["warned"] + by["moving camera"][m]["warned"] == int(r["warned"])
+        assert by["texture_pan"][m]["collision_objects"] == 1
+    assert "| moving camera | 2 |" in (out / "benchmark.md").read_text()
     assert "# mlplc2 benchmark" in (out / "benchmark.md").read_text()
 
 
@@ -89,7 +98,7 @@ def test_failed_tasks_are_listed_and_warned(quick, tmp_path, monkeypatch, capsys
         res = benchmark(out, quick=True, models=["lgmd1", "lgmd2"], workers=0, progress=False)
     assert len(record) == 1
     msg = str(record[0].message)
-    assert "quick_texture_pan.mp4 (lgmd2, runs/quick_texture_pan/default/lgmd2): failed, not scored" in msg
+    assert "quick_texture_pan.mkv (lgmd2, runs/quick_texture_pan/default/lgmd2): failed, not scored" in msg
     assert "RuntimeError: decoder exploded" in msg
     assert [(f["model"], f["status"]) for f in res.failed] == [("lgmd2", "error")]
     rows = {r["model"]: r for r in res.rows}

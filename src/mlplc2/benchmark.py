@@ -5,8 +5,10 @@ One command measures how early and how reliably each model warns (``docs/benchma
 1. **Generated suite** (:func:`suite`): fixed seeds of :func:`mlplc2.stimuli.random_scene`,
    3-D scenes with exact ground truth (collisions, pass-bys, receding, translating and
    static distractors; plain and textured backgrounds, a panning and a tilting camera,
-   forward ego-motion over a textured ground), 320x240 at 30 fps, written as near-lossless
-   H.264 with their ground truth (``scenes/``; reused when already there).
+   forward ego-motion over a textured ground) and the settings of real use (:data:`REAL_USE`:
+   a dashcam drive, a drone, a hand-held camera; :mod:`mlplc2.stimuli.world.realuse`),
+   320x240 at 30 fps, written losslessly (FFV1 ``.mkv``, byte-reproducible) with their ground
+   truth (``scenes/``; reused when already there).
 2. **Real clips**, when ``../shared/data/real`` is present: its clips (not the full-resolution
    copies) and the paper's four UAV clips, with the hand labels of its ``ground_truth.json``.
 3. Every model (:data:`MODELS`) runs on every video through :func:`mlplc2.batch.batch`
@@ -14,7 +16,8 @@ One command measures how early and how reliably each model warns (``docs/benchma
 4. :func:`mlplc2.evaluate` scores the runs: the warning metrics (collision objects
    warned before contact, lead time, false warnings by cause, time-to-contact errors,
    fragmentation, real clips warned / missed / false).
-5. ``benchmark.md`` / ``.csv`` / ``.json`` and three plots: lead time per model, TTC estimate
+5. ``benchmark.md`` / ``.csv`` / ``.json`` (with a table per setting, still and moving
+   cameras) and three plots: lead time per model, TTC estimate
    against the true TTC, false warnings by cause.
 
 ``quick=True`` runs a small subset (4 short scenes, no real clips) in well under a minute:
@@ -33,8 +36,8 @@ from typing import Any
 
 from ._validation import InputValueError
 
-__all__ = ["Scene", "suite", "benchmark", "BenchmarkResult", "BenchmarkWarning", "MODELS", "REAL_DIR", "SUITE_GT",
-           "COLUMNS"]
+__all__ = ["Scene", "suite", "benchmark", "by_setting", "BenchmarkResult", "BenchmarkWarning", "MODELS", "REAL_DIR",
+           "SUITE_GT", "COLUMNS", "REAL_USE"]
 
 #: Every model the benchmark compares, in table order (the optical-flow baseline last).
 MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
@@ -42,8 +45,6 @@ MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
 REAL_DIR = Path("..") / "shared" / "data" / "real"
 #: File name of the generated suite's ground truth (in ``scenes/``).
 SUITE_GT = "ground_truth.json"
-#: H.264 quality of the generated videos (CRF; 0 = lossless, 23 = the default of ``mlplc2 run --video``).
-SCENE_CRF = 10
 
 
 @dataclass(frozen=True)
@@ -59,15 +60,23 @@ class Scene:
     noise_std: float = 0.0
     blur_px: float = 0.0
     kinds: tuple[str, ...] | None = None
+    index: int | None = None
 
     def generate(self):
         from .stimuli import random_scene
 
+        if self.camera in REAL_USE:
+            from .stimuli.world.realuse import real_use_scene
+
+            return real_use_scene(self.camera, self.index, self.seed, duration_s=self.duration_s,
+                                  noise_std=self.noise_std, blur_px=self.blur_px)
         return random_scene(self.seed, background=self.background, camera=self.camera,
                             appearance=self.appearance, duration_s=self.duration_s, noise_std=self.noise_std,
                             blur_px=self.blur_px, kinds=self.kinds)
 
 
+#: The settings of real use (:mod:`mlplc2.stimuli.world.realuse`), five scenes each, after the others.
+REAL_USE = ("drive", "drone", "handheld")
 #: The backgrounds and camera motions of the suite, five scenes each.
 _SETTINGS = (("plain", "static"), ("texture", "static"), ("texture", "pan"), ("texture", "tilt"),
              ("ground", "forward"), ("ground", "static"))
@@ -96,6 +105,11 @@ def suite(quick: bool = False) -> list[Scene]:
             seed = 100 + 10 * i + k
             scenes.append(Scene(f"{bg}_{cam}_{k}", seed, bg, cam, _APPEARANCES[k], _DURATIONS[k],
                                 noise_std=2.0 if k % 2 else 0.0, blur_px=0.5 if k % 2 else 0.0, kinds=_KINDS[k]))
+    for i, use in enumerate(REAL_USE):
+        for k in range(5):
+            scenes.append(Scene(f"{use}_{k}", 300 + 10 * i + k, "ground", use, duration_s=_DURATIONS[k],
+                                noise_std=2.0 if k % 2 else 0.0, blur_px=0.5 if k % 2 else 0.0,
+                                index=k))
     return scenes
 
 
@@ -105,7 +119,7 @@ def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[li
     from tqdm import tqdm
 
     from ._files import write_json
-    from .io import write_video
+    from .io import write_lossless_video
 
     folder.mkdir(parents=True, exist_ok=True)
     gt_path = folder / SUITE_GT
@@ -117,14 +131,14 @@ def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[li
             old = {}
     videos, entries = [], {}
     for sc in tqdm(scenes, desc="generating scenes", unit="scene", disable=not progress, leave=False):
-        path = folder / f"{sc.name}.mp4"
+        path = folder / f"{sc.name}.mkv"
         key = path.name
         spec = json.loads(json.dumps(asdict(sc)))      # as stored (tuples become lists)
         if path.is_file() and old.get(key, {}).get("scene") == spec:
             entries[key] = old[key]
         else:
             stim = sc.generate()
-            write_video(path, stim.frames, stim.fps, quality=SCENE_CRF)
+            write_lossless_video(path, stim.frames, stim.fps)
             entries[key] = {"scene": spec, **stim.to_ground_truth()}
         videos.append(path)
     write_json(gt_path, {"about": "mlplc2 benchmark: generated suite (mlplc2.benchmark.suite)",
@@ -184,6 +198,7 @@ class BenchmarkResult:
     files: dict[str, Path] = field(default_factory=dict)
     settings: dict = field(default_factory=dict)
     failed: list[dict] = field(default_factory=list)
+    settings_table: list[dict] = field(default_factory=list)
 
     def to_markdown(self) -> str:
         return _markdown(self)
@@ -202,6 +217,47 @@ def _row(model: str, summary: dict, ms: float | None) -> dict:
                ttc_coverage_pct=pct(w.get("ttc_coverage")), targets_per_object=w.get("fragmentation"),
                ms_per_frame=None if ms is None else round(ms, 2))
     return row
+
+
+def _setting_of(sc: Scene) -> str:
+    """The setting a scene belongs to: ``background_camera``, or the setting of real use."""
+    return sc.camera if sc.camera in REAL_USE else f"{sc.background}_{sc.camera}"
+
+
+def by_setting(ev, scenes: Sequence[Scene], models: Sequence[str]) -> list[dict]:
+    """Per setting of the generated suite, then for the still and the moving cameras together: per
+    model the collision objects warned before contact (of those scored) and the false-warning
+    episodes per 1000 scored frames (from ``ev.warning_objects`` / ``ev.warning_videos``)."""
+    group = {f"{sc.name}.mkv": _setting_of(sc) for sc in scenes}
+    still = {_setting_of(sc): sc.camera == "static" for sc in scenes}
+    names = list(dict.fromkeys(group.values()))
+    rows = []
+    for label, members in [(n, {n}) for n in names] + [
+            ("still camera", {n for n in names if still[n]}), ("moving camera", {n for n in names if not still[n]})]:
+        row = {"setting": label, "scenes": sum(1 for g in group.values() if g in members)}
+        for m in models:
+            objs = [o for o in ev.warning_objects if o["model"] == m and group.get(o["video"]) in members
+                    and o.get("contact_frame") is not None]
+            vids = [v for v in ev.warning_videos if v["model"] == m and group.get(v["video"]) in members]
+            frames = sum(v["frames_scored"] for v in vids)
+            row[m] = {"warned": sum(1 for o in objs if o["warned"]), "collision_objects": len(objs),
+                      "false_episodes_per_1000": round(1000.0 * sum(v["false_episodes"] for v in vids) / frames, 2)
+                      if frames else None}
+        rows.append(row)
+    return rows
+
+
+def _setting_markdown(rows: list[dict], models: Sequence[str]) -> list[str]:
+    """The per-setting table of ``benchmark.md``: warned / collision objects, false episodes per 1000 frames."""
+    if not rows:
+        return []
+    lines = ["", "Per setting (warned / collision objects; false-warning episodes per 1000 frames):", "",
+             "| setting | scenes | " + " | ".join(models) + " |", "|" + "|".join(["---"] * (len(models) + 2)) + "|"]
+    for r in rows:
+        cells = [f"{r[m]['warned']}/{r[m]['collision_objects']}; {_fmt(r[m]['false_episodes_per_1000'])}"
+                 for m in models]
+        lines.append(f"| {r['setting']} | {r['scenes']} | " + " | ".join(cells) + " |")
+    return lines
 
 
 def _fmt(v, digits: int = 2) -> str:
@@ -230,6 +286,7 @@ def _markdown(res: BenchmarkResult) -> str:
             f"| {_fmt(r['targets_per_object'])} | {_fmt(r['clips_warned'])}/{_fmt(r['clips'])} "
             f"| {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} | {_fmt(r['clip_lead_median_s'])} "
             f"| {_fmt(r['ms_per_frame'])} |")
+    lines += _setting_markdown(res.settings_table, [r["model"] for r in res.rows])
     clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
     if clip:
         lines += ["", "Real clips:", "", clip]
@@ -394,7 +451,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                                        "target_params": run_options.get("target_params", {}),
                                        "stabilise": bool(stabilise),
                                        "real": None if real_dir is None else str(real_dir),
-                                       "scheduler": res.scheduler}, failed=failed)
+                                       "scheduler": res.scheduler}, failed=failed,
+                             settings_table=by_setting(ev, scenes, [r["model"] for r in rows]))
     _write(result, out)
     return result
 
@@ -404,7 +462,8 @@ def _write(res: BenchmarkResult, out: Path) -> None:
 
     write_text(out / "benchmark.md", "# mlplc2 benchmark\n\n" + res.to_markdown())
     write_text(out / "benchmark.json", json.dumps({"settings": res.settings, "models": res.rows, "scenes": res.scenes,
-                                                   "clips": res.clips, "failed": res.failed,
+                                                   "by_setting": res.settings_table, "clips": res.clips,
+                                                   "failed": res.failed,
                                                    "seconds": round(res.seconds, 1)}, indent=1) + "\n")
     write_csv(out / "benchmark.csv", res.rows, COLUMNS)
     files = {name: out / name for name in ("benchmark.md", "benchmark.json", "benchmark.csv")}

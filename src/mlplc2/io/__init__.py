@@ -11,7 +11,7 @@
 
 The modules: :mod:`.formats` (suffixes, the frame format, sizes), :mod:`.decoders` (one per
 kind of input; :func:`expand_inputs`), :mod:`.source` (:class:`FrameSource`, :func:`open_source`,
-:func:`read_video`), :mod:`.writer` (:class:`VideoWriter`, :func:`write_video`).
+:func:`read_video`), :mod:`.writer` (:class:`VideoWriter`, :func:`write_video`, :func:`write_lossless_video`: FFV1 .mkv).
 
 Frames are always RGB ``uint8`` arrays of shape ``(H, W, 3)``. Sizes are given
 as ``(W, H)`` (OpenCV convention), shapes as ``(H, W)`` (numpy convention).
@@ -28,8 +28,8 @@ from .decoders import expand_inputs
 from .formats import (DEFAULT_FPS, IMAGE_EXTENSIONS, VIDEO_EXTENSIONS, TruncatedInputWarning, VideoCodecWarning,
                       is_camera, parse_resize)
 from .source import FrameSource, open_source, read_video
-from .writer import VideoWriter, check_video_output, write_video
+from .writer import VideoWriter, check_video_output, write_lossless_video, write_video
 
-__all__ = ["read_video", "open_source", "FrameSource", "write_video", "VideoWriter",
+__all__ = ["read_video", "open_source", "FrameSource", "write_video", "write_lossless_video", "VideoWriter",
            "TruncatedInputWarning", "VideoCodecWarning",
            "parse_resize", "expand_inputs", "IMAGE_EXTENSIONS", "VIDEO_EXTENSIONS", "DEFAULT_FPS"]

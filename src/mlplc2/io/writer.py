@@ -202,6 +202,40 @@ def write_video(path, frames: Iterable[np.ndarray], fps: float, size: tuple[int,
     return writer.path
 
 
+def write_lossless_video(path, frames: Iterable[np.ndarray], fps: float) -> Path:
+    """Write grey ``uint8 (H, W)`` ``frames`` losslessly (FFV1 in Matroska, ``.mkv``, via PyAV) to
+    ``path`` atomically. The muxer and encoder run ``bitexact`` (no random segment id, no
+    version strings), so the same frames give the same bytes. Returns the path written."""
+    import av
+
+    path = Path(path)
+    if path.suffix.lower() != ".mkv":
+        raise InputValueError(f"{path}: a lossless video is written as .mkv (FFV1)")
+    tmp = temporary_path(path)
+    n = 0
+    try:
+        with av.open(str(tmp), "w", format="matroska", options={"fflags": "+bitexact"}) as container:
+            stream = container.add_stream("ffv1", rate=Fraction(check_fps(fps)).limit_denominator(1001))
+            stream.pix_fmt = "gray"
+            stream.codec_context.options = {"flags": "+bitexact"}
+            for frame in frames:
+                if n == 0:
+                    stream.height, stream.width = frame.shape[:2]
+                for packet in stream.encode(av.VideoFrame.from_ndarray(np.ascontiguousarray(frame, np.uint8),
+                                                                       format="gray")):
+                    container.mux(packet)
+                n += 1
+            if n == 0:
+                raise InputValueError(f"{path}: no frames to write")
+            for packet in stream.encode():
+                container.mux(packet)
+    except BaseException:
+        tmp.unlink(missing_ok=True)
+        raise
+    replace(tmp, path)
+    return path
+
+
 def check_video_output(path) -> Path:
     """Return ``path`` as a Path, or raise unless it can name a video :class:`VideoWriter` writes."""
     path = check_output_file(path, what="video")

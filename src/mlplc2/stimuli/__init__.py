@@ -26,7 +26,7 @@ from .dispatch import GENERATORS, NAMES, generate, parameters, write
 from .paper import (BASIC_NAMES, BASIC_WHITE, BRIGHT_LEVEL, DARK_LEVEL, FOUR_PHASE_CENTERS, MAX_SCROLL_PX,
                     SIX_OBJECT_CENTERS, SIX_OBJECT_ONSETS, SceneObject, basic, four_phase, looming, scene,
                     six_objects)
-from .world import ApproachObject, ObjectTrack, approach, approach_scene, random_scene
+from .world import ApproachObject, CameraPath, ObjectTrack, approach, approach_scene, random_scene
 
 __all__ = [
     "ObjectTruth",
@@ -46,6 +46,7 @@ __all__ = [
     "plain_level",
     # 3-D approaches (mlplc2.stimuli.world)
     "ApproachObject",
+    "CameraPath",
     "ObjectTrack",
     "ApproachStimulus",
     "approach",

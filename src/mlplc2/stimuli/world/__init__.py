@@ -4,8 +4,9 @@ The paper's stimuli are squares growing linearly on a scrolling picture
 (:mod:`mlplc2.stimuli.paper`). Here flat objects (discs and squares, dark,
 bright or carrying their own texture) of a physical width move at constant 3-D
 velocity in front of a pinhole camera that may stand still, pan, tilt or move
-forward over a textured ground plane; a constant-speed approach then grows as
-1 / (time to contact). The subpackage, by concept (each module's docstring
+forward over a textured ground plane, or follow a :class:`CameraPath` (forward speed, turns,
+pitch bounce, roll and hand-held shake combined, with the rotation and heading per frame in the
+truth); a constant-speed approach then grows as 1 / (time to contact). The subpackage, by concept (each module's docstring
 holds its equations):
 
 * :mod:`~mlplc2.stimuli.world.scenes`: the public generators, :class:`ApproachObject`,
@@ -21,7 +22,7 @@ This package re-exports the public names of those modules.
 """
 
 from .._common import ApproachStimulus
-from .camera import CAMERA_MOTIONS, DEFAULT_CAMERA_SPEED, MAX_ELEVATION_DEG, MAX_PAN_DEG
+from .camera import CAMERA_MOTIONS, DEFAULT_CAMERA_SPEED, MAX_ELEVATION_DEG, MAX_PAN_DEG, CameraPath
 from .geometry import COLLISION_MISS, DEFAULT_WIDTH_M, FAR_M, PASS_MIN_MISS, ObjectTrack
 from .render import APPROACH_BACKGROUNDS, GROUND_SUBROWS, GROUND_TEXEL_M, GROUND_TEXTURE_PX, OBJECT_TEXTURE_PX
 from .scenes import (APPROACH_APPEARANCES, APPROACH_KINDS, APPROACH_SHAPES, COLLISION_AIM, PASS_MISS_WIDTHS,
@@ -29,6 +30,7 @@ from .scenes import (APPROACH_APPEARANCES, APPROACH_KINDS, APPROACH_SHAPES, COLL
 
 __all__ = [
     "ApproachObject",
+    "CameraPath",
     "ObjectTrack",
     "ApproachStimulus",
     "approach",

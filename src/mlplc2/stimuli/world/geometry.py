@@ -20,6 +20,16 @@
   least :data:`PASS_MIN_MISS`; ``recede``: relative Z velocity > 0;
   ``translate``: relative Z velocity 0, lateral velocity not 0; ``static``: no
   relative motion.
+* A :class:`~mlplc2.stimuli.world.camera.CameraPath` camera (``"path"``): ``start`` and
+  ``velocity`` are along the *vehicle's* axes at the onset (the camera's without its pitch,
+  roll and shake) and ``start`` relative to the vehicle's position then; the velocity is the
+  object's own, constant in the world. ``D(t)`` is then the object's centre relative to the
+  vehicle's position in the vehicle's axes at ``t`` (no longer linear when the path turns):
+  contact is where ``D_z`` first reaches 0 (found on a grid of 1/64 frame, linear between),
+  the miss ``|D_xy| / width`` then, and the kinds are checked with ``dD/dt`` at the onset.
+  The camera's pitch, roll and shake (rotations about its centre, and a shake of its
+  centre by at most a few cm) are left out of contact and miss; the track (the projection)
+  has them. The object stays fronto-parallel to the vehicle's axes at its onset.
 * The extent of the projected outline is exact: the projected corners of a
   square, the dual conic of a disc. The truth (:meth:`ObjectGeometry.truth`) is
   one :class:`mlplc2.evaluation.truth.ObjectTruth` per object with a per-frame
@@ -103,16 +113,19 @@ class ObjectGeometry:
         k0 = obj.onset
         self.frames = np.arange(k0, cam.n)
         tau = (self.frames - k0) / cam.fps
-        ego = cam.speed if cam.motion == "forward" else 0.0
-        self.v_rel = np.array(obj.velocity) - np.array([0.0, 0.0, ego])
-        rel = np.array(obj.start)[None, :] + tau[:, None] * self.v_rel[None, :]   # object frame
-        # camera frame at frame k: R(k)^T R(k0) (rotation about one fixed axis: by -(angle_k - angle_k0))
-        if len(self.frames):
-            M = cam.rotation(cam.angle[k0] - cam.angle[self.frames]) if cam.motion in ("pan", "tilt") else \
-                np.broadcast_to(np.eye(3), (len(self.frames), 3, 3))
+        if cam.motion == "path":
+            rel, M, self.P = self._path_pose(cam, tau)
         else:
-            M = np.zeros((0, 3, 3))
-        self.P = np.einsum("kij,kj->ki", M, rel)           # centre, camera frame
+            ego = cam.speed if cam.motion == "forward" else 0.0
+            self.v_rel = np.array(obj.velocity) - np.array([0.0, 0.0, ego])
+            rel = np.array(obj.start)[None, :] + tau[:, None] * self.v_rel[None, :]   # object frame
+            # camera frame at frame k: R(k)^T R(k0) (rotation about one fixed axis: by -(angle_k - angle_k0))
+            if len(self.frames):
+                M = cam.rotation(cam.angle[k0] - cam.angle[self.frames]) if cam.motion in ("pan", "tilt") else \
+                    np.broadcast_to(np.eye(3), (len(self.frames), 3, 3))
+            else:
+                M = np.zeros((0, 3, 3))
+            self.P = np.einsum("kij,kj->ki", M, rel)           # centre, camera frame
         e1, e2 = M[:, :, 0], M[:, :, 1]                    # object axes, camera frame
         self.H = np.einsum("ij,kjl->kil", cam.K, np.stack([e1, e2, self.P], -1))   # plane (m) -> image
         z = self.P[:, 2]
@@ -148,6 +161,8 @@ class ObjectGeometry:
         self.width = np.where(front, width, np.nan)
         self.height = np.where(front, height, np.nan)
         # contact and miss (motion relative to the camera centre, object frame)
+        if cam.motion == "path":
+            return                                          # contact and miss: _path_pose
         self.contact = None
         self.miss = None
         if self.v_rel[2] < 0:
@@ -155,6 +170,42 @@ class ObjectGeometry:
             self.contact = float(obj.onset + tc * cam.fps)
             at = np.array(obj.start) + tc * self.v_rel
             self.miss = float(math.hypot(at[0], at[1]) / obj.width_m)
+
+    def _path_pose(self, cam: Camera, tau: np.ndarray):
+        """A :class:`~mlplc2.stimuli.world.camera.CameraPath` camera: the object's position relative
+        to the vehicle (its axes), its rotation and centre in the camera frame per frame; sets
+        ``v_rel`` (d/dt of the first at the onset), ``contact`` and ``miss`` (where the first's Z
+        first reaches 0, to 1/64 frame, linear between samples)."""
+        obj, path, fps = self.obj, cam.path, cam.fps
+        t0 = obj.onset / fps
+        c0, v0 = path.vehicle(t0)
+        start, vel = np.array(obj.start), np.array(obj.velocity)
+
+        def world(t):                                        # the object's centre in the world
+            return c0[None, :] + (start[None, :] + (t - t0)[:, None] * vel[None, :]) @ v0.T
+
+        def relative(t):                                     # ... in the vehicle's axes at t
+            c, v = path.vehicle(t)
+            return np.einsum("kji,kj->ki", v, world(t) - c)
+
+        t = t0 + tau
+        rel = relative(t)
+        pos, R = cam.position[self.frames], cam.R[self.frames]
+        P = np.einsum("kji,kj->ki", R, world(t) - pos)
+        M = np.einsum("kji,jl->kil", R, v0)
+        d = relative(np.array([t0, t0 + 1e-4]))
+        self.v_rel = (d[1] - d[0]) / 1e-4
+        self.contact = self.miss = None
+        ts = t0 + np.arange(0.0, cam.n / fps + 60.0, 1.0 / (64 * fps))
+        z = relative(ts)
+        hit = np.flatnonzero((z[:-1, 2] > 0) & (z[1:, 2] <= 0))
+        if self.v_rel[2] < 0 and hit.size:
+            j = hit[0]
+            a = z[j, 2] / (z[j, 2] - z[j + 1, 2])
+            at = z[j] + a * (z[j + 1] - z[j])
+            self.contact = float((ts[j] + a * (ts[j + 1] - ts[j])) * fps)
+            self.miss = float(math.hypot(at[0], at[1]) / obj.width_m)
+        return rel, M, P
 
     def check_kind(self, i: int) -> None:
         """Raise unless the declared kind matches the relative motion."""
@@ -165,6 +216,8 @@ class ObjectGeometry:
         if kind in ("collision", "pass"):
             if not vz < -tol:
                 raise InputValueError(f"{where} does not approach the camera (relative vz = {vz:g} m/s)")
+            if self.miss is None:
+                raise InputValueError(f"{where} never reaches the camera plane")
             if kind == "collision" and not self.miss < COLLISION_MISS:
                 raise InputValueError(f"{where} misses the camera centre by {self.miss:.3g} widths; a collision "
                                       f"needs < {COLLISION_MISS} (use kind 'pass')")

@@ -150,8 +150,12 @@ class Background:
         if kind in ("texture", "ground"):
             # panorama: azimuth x elevation at f px per radian, covering every direction seen
             border = np.concatenate([self.rays[0], self.rays[-1], self.rays[:, 0], self.rays[:, -1]])
-            angles = np.unique(np.concatenate([cam.angle[[0, -1]], cam.angle[::max(1, cam.n // 64)]]))
-            az, el = self._angles(np.einsum("aij,pj->api", cam.rotation(angles), border))
+            if cam.motion == "path":
+                rots = cam.R
+            else:
+                angles = np.unique(np.concatenate([cam.angle[[0, -1]], cam.angle[::max(1, cam.n // 64)]]))
+                rots = cam.rotation(angles)
+            az, el = self._angles(np.einsum("aij,pj->api", rots, border))
             m = _PANORAMA_MARGIN / cam.f
             self.az0, self.el0 = az.min() - m, el.min() - m
             pw = int(math.ceil((az.max() - az.min()) * cam.f)) + 2 * _PANORAMA_MARGIN + 2
@@ -168,12 +172,13 @@ class Background:
         cam = self.cam
         if self.kind == "plain":
             return np.full((cam.h, cam.w), self.level, np.float32)
-        rotating = cam.motion in ("pan", "tilt")
+        rotating = cam.motion in ("pan", "tilt", "path")
         if self.cache is not None and not rotating and not (self.ground and cam.motion == "forward"):
             return self.cache.copy()                       # nothing in the background moves
         if self.sky is None or rotating:
-            if self.maps is None or cam.motion == "tilt":
-                az, el = self._angles(self.rays @ cam.rotation(cam.angle[k]).T)     # world directions
+            if self.maps is None or cam.motion in ("tilt", "path"):
+                rot = cam.R[k] if cam.motion == "path" else cam.rotation(cam.angle[k])
+                az, el = self._angles(self.rays @ rot.T)     # world directions
                 self.maps = (((az - self.az0) * cam.f).astype(np.float32),
                              ((el - self.el0) * cam.f).astype(np.float32), cam.angle[k])
             mx, my, angle = self.maps
@@ -210,12 +215,13 @@ class Ground:
         self.rays = cam.rays(np.arange(cam.w, dtype=np.float64)[None, :], ys).astype(np.float32)
         self.plan = None
 
-    def _setup(self, rot: np.ndarray) -> None:
+    def _setup(self, rot: np.ndarray, height: float | None = None) -> None:
         """Ground points (texels from the camera), mip-map levels and weights of the samples."""
         cam = self.cam
         d = self.rays @ rot.T.astype(np.float32)
         below = d[..., 1] > 1e-6
-        s = np.float32(cam.height / GROUND_TEXEL_M) / np.where(below, d[..., 1], np.nan)   # ray length, texels
+        height = cam.height if height is None else height
+        s = np.float32(height / GROUND_TEXEL_M) / np.where(below, d[..., 1], np.nan)   # ray length, texels
         gx = s * d[..., 0]
         gz = s * d[..., 2]
         # footprint per pixel (from its middle sub-row) along x and per sub-row along y
@@ -251,7 +257,9 @@ class Ground:
 
     def render(self, sky: np.ndarray, k: int) -> np.ndarray:
         cam = self.cam
-        if self.plan is None or cam.motion == "tilt":
+        if cam.motion == "path":     # the whole rotation, and the height the shake leaves
+            self._setup(cam.R[k], cam.height - cam.position[k, 1])
+        elif self.plan is None or cam.motion == "tilt":
             self._setup(cam.rotation(cam.angle[k] if cam.motion == "tilt" else 0.0))
         idx, gx, gz, groups = self.plan
         if cam.motion == "pan":

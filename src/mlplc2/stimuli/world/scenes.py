@@ -43,7 +43,7 @@ import numpy as np
 from ..._validation import InputTypeError, InputValueError, check_fps, check_int, check_real, check_reals
 from ...camera import check_hfov, focal_length
 from .._common import MAX_STIMULUS_BYTES, ApproachStimulus, check_choice, check_size
-from .camera import CAMERA_MOTIONS, DEFAULT_CAMERA_SPEED, Camera
+from .camera import CAMERA_MOTIONS, DEFAULT_CAMERA_SPEED, Camera, CameraPath
 from .geometry import DEFAULT_WIDTH_M, PASS_MIN_MISS, ObjectGeometry, place, side_angle
 from .render import APPROACH_BACKGROUNDS, render, sub_seed
 
@@ -273,8 +273,10 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
         every object is dark, 0 if every one is bright, else 128);
         ``"texture"``: a procedural texture at infinity; ``"ground"``: a
         textured ground plane below the horizon, the far texture above.
-    camera : {"static", "pan", "tilt", "forward"}
-        Camera motion (:mod:`mlplc2.stimuli.world.camera`).
+    camera : {"static", "pan", "tilt", "forward"} or CameraPath
+        Camera motion (:mod:`mlplc2.stimuli.world.camera`); a
+        :class:`~mlplc2.stimuli.world.camera.CameraPath` combines forward motion, turns, pitch
+        bounce, roll and shake (motion ``"path"``; ``camera_speed`` stays 0).
     camera_speed : float
         Pan or tilt rate (deg/s, positive right / up) or forward speed (m/s);
         must be 0 for a static camera.
@@ -312,17 +314,18 @@ def approach(objects, *, size: tuple[int, int] = (320, 240), fps: float = 30.0, 
     focal_length(w, check_hfov(hfov_deg, required=True))                  # checks hfov_deg
     hfov = float(hfov_deg)
     background = check_choice(background, "background", APPROACH_BACKGROUNDS)
-    camera, speed, height = _check_camera(camera, camera_speed, camera_height_m)
+    path = camera if isinstance(camera, CameraPath) else None
+    camera, speed, height = _check_camera("path" if path else camera, camera_speed, camera_height_m, path)
     noise = check_real(noise_std, "noise_std", minimum=0.0)
     blur = check_real(blur_px, "blur_px", minimum=0.0)
     ss = check_int(supersample, "supersample", minimum=1, maximum=16)
     seed = check_int(seed, "seed")
     view = (w, h, hfov, fps, camera, speed, height)                        # Camera(*view, n)
-    n = _frame_count(frames, duration_s, fps, objects, view)
+    n = _frame_count(frames, duration_s, fps, objects, view, path)
     if n * w * h > MAX_STIMULUS_BYTES:
         raise InputValueError(f"{n} frames of {w}x{h} need {n * w * h / 2**30:.1f} GiB; at most "
                               f"{MAX_STIMULUS_BYTES / 2**30:.0f} GiB")
-    cam = Camera(*view, n)
+    cam = Camera(*view, n, path=path)
     cam.check_turn()
     geos = _geometries(objects, cam)
     video, visible = render(geos, cam, background, seed, ss, blur, noise)
@@ -343,8 +346,12 @@ def _object_list(objects) -> list[ApproachObject]:
     return objects
 
 
-def _check_camera(camera, camera_speed, camera_height_m) -> tuple[str, float, float]:
+def _check_camera(camera, camera_speed, camera_height_m, path=None) -> tuple[str, float, float]:
     """The camera's motion, speed and height above the ground, checked."""
+    if path is not None:
+        if camera_speed != 0:
+            raise InputValueError("camera_speed must be 0 with a CameraPath (its speed_mps is the speed)")
+        return "path", path.speed_mps, check_real(camera_height_m, "camera_height_m", positive=True)
     camera = check_choice(camera, "camera", CAMERA_MOTIONS)
     speed = check_real(camera_speed, "camera_speed")
     if camera == "static" and speed != 0:
@@ -353,7 +360,7 @@ def _check_camera(camera, camera_speed, camera_height_m) -> tuple[str, float, fl
     return camera, speed, height
 
 
-def _frame_count(frames, duration_s, fps: float, objects: list[ApproachObject], view: tuple) -> int:
+def _frame_count(frames, duration_s, fps: float, objects: list[ApproachObject], view: tuple, path=None) -> int:
     """The number of frames: ``frames``, or ``duration_s`` at ``fps``, or else until the last
     contact of an approaching object (``ceil(contact_frame) + 1``), or 150 without one."""
     if frames is not None and duration_s is not None:
@@ -365,7 +372,7 @@ def _frame_count(frames, duration_s, fps: float, objects: list[ApproachObject], 
         if n < 1:
             raise InputValueError(f"duration_s {duration_s!r} is shorter than one frame at {fps:g} fps")
         return n
-    probe = Camera(*view, 1)
+    probe = Camera(*view, 1, path=path)
     contacts = [g.contact for g in (ObjectGeometry(o, probe) for o in objects) if g.contact is not None]
     return int(math.ceil(max(contacts))) + 1 if contacts else 150
 
