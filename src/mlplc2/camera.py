@@ -67,8 +67,9 @@ class CameraMotion:
     point of the far scene seen at ``p`` in the previous frame is seen at ``homography(...) @ p`` now
     (the homography ``K R^T K^-1`` of a pure rotation ``R``).
     ``heading``: the focus of expansion (x, y) in pixels (where the camera is going), None when no
-    translation is measured. ``rotation_confidence`` and ``heading_confidence`` are in [0, 1]:
-    the share of the tracked points that agree with the fit (0: nothing measured).
+    translation is measured. ``rotation_confidence``: the share of the grid's points that were
+    followed and agree with the fitted motion (0: nothing measured); ``heading_confidence``: the share
+    of the points whose expansion is measured that expand about the heading.
     ``given``: True when the rotation came from the user (a gyro), not from the images.
     """
 
@@ -207,6 +208,8 @@ class MotionEstimator:
             (self.fixed_heading[0] / scale - cx) / f, (self.fixed_heading[1] / scale - cy) / f)
         fit = _fit_motion(x0, y0, d, None if omega is None else np.asarray(omega, float), heading, 1.0 / f)
         w_est, e, rot_ok, exp, exp_ok = fit
+        rot_ok *= len(p0) / float(self.grid[0] * self.grid[1])   # a share of the whole grid: a few points
+                                                                  # on a flat or overexposed frame are no evidence
         head_px = None
         if e is not None and exp > self.min_expansion:
             head_px = (float((e[0] * f + cx) * scale), float((e[1] * f + cy) * scale))
