@@ -105,8 +105,6 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
     the end), like the paper's Fig. 5. A field's first alarm is marked with a
     triangle. Models without fields (LGMD) are one black line.
     """
-    from matplotlib.lines import Line2D
-
     if isinstance(rows, (str, Path)):
         rows = read_responses(rows)
     if isinstance(targets, (str, Path)):
@@ -142,12 +140,7 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
                 k = s.get("first_alarm_frame") if s else None
                 if k is not None and k in frs:
                     ax.plot([k], [vals[frs.index(k)]], marker="v", color=c, ms=6, zorder=3)
-            handles, labels = ax.get_legend_handles_labels()
-            if len(ranked) > top:
-                handles.append(Line2D([], [], color="0.7", lw=0.7))
-                labels.append(f"{len(ranked) - top} more fields")
-            ax.legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                      title="field (x, y) frames", title_fontsize=7, frameon=False)
+            _side_legend(ax, len(ranked) - top, "fields", "field (x, y) frames")
         else:
             fr, val = d["plain"]
             ax.plot(fr, val, color="k", lw=1.5, label="response")
@@ -168,6 +161,18 @@ def plot_responses(rows, path, *, fields: dict | None = None, title: str | None 
 #: of seconds would squeeze the last second before contact, where warnings happen.
 TTC_AXIS_S = 5.0
 
+
+
+def _side_legend(ax, more: int, what: str, title: str) -> None:
+    """The legend right of ``ax``; ``more`` > 0 lines not drawn in colour are counted in a last entry."""
+    from matplotlib.lines import Line2D
+
+    handles, labels = ax.get_legend_handles_labels()
+    if more > 0:
+        handles.append(Line2D([], [], color="0.7", lw=0.7))
+        labels.append(f"{more} more {what}")
+    ax.legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
+              title=title, title_fontsize=7, frameon=False)
 
 def plot_timeline(ax, rows: Sequence[dict], model: str, *, top: int = 12) -> None:
     """One model's targets on ``ax``: time to contact (s) against frame, one line per target
@@ -199,14 +204,7 @@ def plot_timeline(ax, rows: Sequence[dict], model: str, *, top: int = 12) -> Non
             ax.plot(wf, [v for v, w in zip(ttc, warn) if w], ls="none", marker="o", ms=3.5, color=c,
                     mec="k", mew=0.4, zorder=3)
     if series:
-        handles, labels = ax.get_legend_handles_labels()
-        if len(ranked) > top:
-            from matplotlib.lines import Line2D
-
-            handles.append(Line2D([], [], color="0.7", lw=0.7))
-            labels.append(f"{len(ranked) - top} more targets")
-        ax.legend(handles, labels, fontsize=7, loc="upper left", bbox_to_anchor=(1.01, 1.0),
-                  title="target (dots: warning)", title_fontsize=7, frameon=False)
+        _side_legend(ax, len(ranked) - top, "targets", "target (dots: warning)")
     else:
         ax.text(0.5, 0.5, "no time to contact estimated", transform=ax.transAxes, ha="center", va="center",
                 fontsize=8, color="0.4")
