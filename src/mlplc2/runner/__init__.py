@@ -48,15 +48,15 @@ from typing import Any
 from .._signals import interrupts
 from .._validation import InputTypeError, InputValueError, as_gray
 from .._files import write_json
-from ..io import FrameSource, TruncatedInputWarning, VideoWriter, is_camera, open_source
-from ..io.formats import STDIN, is_url
+from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
+from ..io.formats import STDIN
 from ..models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
                           looks_duplicated, resolve_names)
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
 from ..evaluation.record import Recorder, response_rows
-from .folders import RUN_OUTPUTS, default_out_dir, prepare_out_dir
+from .folders import default_out_dir, prepare_out_dir
 from .live import CsvFile, JsonLines, Latency, frame_record
 from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
