@@ -72,7 +72,8 @@ def _mover(rng, path: CameraPath, kind: str, fps: float, n: int, height: float, 
     t0 = onset / fps
     shape = "square" if width > 1.0 else str(rng.choice(["disc", "square"]))
     if kind == "recede":          # ahead beside the path, faster than the camera
-        start = (float(rng.choice([-1.0, 1.0])) * 3.2, height - width / 2, float(rng.uniform(6.0, 12.0)))
+        y0 = height - width / 2 if height < 3.0 else 0.0          # on the ground, or in the air (in view)
+        start = (float(rng.choice([-1.0, 1.0])) * 3.2, y0, float(rng.uniform(6.0, 12.0)))
         vel = (0.0, 0.0, path.speed_mps + own_speed)
         return ApproachObject(kind="recede", shape=shape, appearance=appearance, width_m=width, start=start,
                               velocity=vel, onset=onset)
