@@ -132,16 +132,16 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(benchmark_module, "benchmark", spy)
     real = tmp_path / "real"
     assert main(["benchmark", "--out", "o", "--quick", "--models", "mlplc2", "-m", "lgmd2", "--real", str(real),
-                 "--scheduler", "tcp://h:8786", "--horizon", "2.5", "--max-miss", "0.5", "--force"]) == 0
+                 "--scheduler", "tcp://h:8786", "--horizon", "2.5", "--max-miss", "0.5", "--stabilise", "--force"]) == 0
     assert capsys.readouterr().out == f"TABLE\nwrote {tmp_path / 'benchmark.md'}\n"
     out, kw = seen[-1]
     assert out == "o" and kw == {"quick": True, "models": ["mlplc2", "lgmd2"], "real": str(real),
                                  "scheduler": "tcp://h:8786", "workers": None,
-                                 "target_params": {"horizon_s": 2.5, "max_miss": 0.5}, "progress": True,
-                                 "force": True}
+                                 "target_params": {"horizon_s": 2.5, "max_miss": 0.5}, "stabilise": True,
+                                 "progress": True, "force": True}
     assert main(["benchmark", "--out", "o", "--no-real", "--workers", "2", "-q"]) == 0
     assert seen[-1][1] == {"quick": False, "models": None, "real": None, "scheduler": None, "workers": 2,
-                           "target_params": None, "progress": False, "force": False}
+                           "target_params": None, "stabilise": False, "progress": False, "force": False}
     assert main(["benchmark", "--out", "o"]) == 0 and seen[-1][1]["real"] == "auto"
 
 
