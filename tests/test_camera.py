@@ -193,3 +193,27 @@ def test_estimated_rotation_follows_the_truth_of_a_camera_path(path):
     scale = np.abs(truth).max()
     assert scale > 1e-3
     assert np.abs(est - truth).max() < 0.15 * scale
+
+
+def test_the_compiled_fit_agrees_with_the_numpy_fit():
+    """mlplc2._fast_camera.fit_rounds gives the NumPy fit's rotation and heading (to 1e-9)."""
+    pytest.importorskip("numba")
+    import mlplc2.camera as camera
+
+    rng = np.random.default_rng(1)
+    x, y = rng.uniform(-0.5, 0.5, 100), rng.uniform(-0.4, 0.4, 100)
+    omega = np.array([0.002, -0.006, 0.001])
+    a = camera._rotational_flow(x, y)
+    depth = rng.uniform(2.0, 20.0, 100)
+    d = a @ omega + np.stack([(x - 0.05), (y + 0.02)], -1) * (0.1 / depth)[:, None]
+    d[:10] += rng.normal(0, 0.02, (10, 2))                     # outliers: objects of their own
+    fast = camera._fit_motion(x, y, d, None, None, 1 / 277.0)
+    camera._FAST[:] = [None]                                    # the NumPy rounds
+    try:
+        slow = camera._fit_motion(x, y, d, None, None, 1 / 277.0)
+    finally:
+        camera._FAST.clear()
+    assert np.allclose(fast[0], slow[0], rtol=1e-9, atol=1e-12)
+    assert np.allclose(fast[1], slow[1], rtol=1e-9, atol=1e-12)
+    assert fast[2:] == pytest.approx(slow[2:], rel=1e-9)
+    assert np.allclose(fast[0], omega, atol=6e-4)               # and both find the rotation (10 %)

@@ -227,9 +227,17 @@ def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: flo
     when too little expands to tell), the share of inliers, the median expansion rate of the points
     whose expansion is measured (1 / frames) and the share of those that expand about e.
     """
+    n = len(x)
+    fast = _fast_rounds()
+    if fast is not None:                                    # the compiled rounds (mlplc2._fast_camera)
+        w0 = np.zeros(3) if omega is None else np.asarray(omega, float)
+        e0 = np.zeros(2) if heading is None else np.asarray(heading, float)
+        w_est, e, scale, err, s, rr = fast(np.ascontiguousarray(x, float), np.ascontiguousarray(y, float),
+                                           np.ascontiguousarray(d[:, 0]), np.ascontiguousarray(d[:, 1]), w0, e0,
+                                           omega is None, heading is None, 0.3 * px, iterations)
+        return _fit_result(w_est, e, scale, err, s, rr, 0.3 * px, min_share)
     a = _rotational_flow(x, y)
     a0, a1 = a[:, 0, :], a[:, 1, :]
-    n = len(x)
     wts = np.ones(n)
     w_est = np.zeros(3) if omega is None else np.asarray(omega, float)
     e = np.zeros(2) if heading is None else np.asarray(heading, float)
@@ -260,12 +268,33 @@ def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: flo
         scale = max(1.4826 * float(np.median(err)), sigma)
         u = err / (4.685 * scale)
         wts = np.where(u < 1.0, (1.0 - u * u) ** 2, 0.0)
+    return _fit_result(w_est, e, scale, err, s, rr, sigma, min_share)
+
+
+def _fit_result(w_est, e, scale, err, s, rr, sigma, min_share):
+    """What the fit's last round tells: omega, e (None when under ``min_share`` of the points
+    show a measurable expansion), the share of inliers, the median expansion rate and the share
+    of expanding points."""
     inliers = err < 3.0 * scale
     radial = s * np.sqrt(rr)                                # the expansion's own flow at each point
     moving = inliers & (np.abs(radial) > 2.0 * sigma)       # points whose expansion is measured
-    if moving.sum() < max(3, min_share * n):                # too little expands to tell a heading
+    if moving.sum() < max(3, min_share * len(err)):         # too little expands to tell a heading
         return w_est, None, float(np.mean(inliers)), 0.0, 0.0
     return w_est, e, float(np.mean(inliers)), float(np.median(s[moving])), float(np.mean(s[moving] > 0))
+
+
+_FAST: list = []
+
+
+def _fast_rounds():
+    """The compiled rounds of the fit (:mod:`mlplc2._fast_camera`), or None without Numba."""
+    if not _FAST:
+        try:
+            from . import _fast_camera
+            _FAST.append(_fast_camera.fit_rounds)
+        except Exception:  # noqa: BLE001 - ImportError, or Numba failing to initialise: NumPy then
+            _FAST.append(None)
+    return _FAST[0]
 
 
 def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0) -> np.ndarray:
