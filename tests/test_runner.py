@@ -178,3 +178,21 @@ def test_progress_bar_starts_after_the_first_frame(data, monkeypatch):
     res = run(str(data["images"]), ["lgmd1"], out=False, progress=True)
     assert steps[0] == 0 and all(k == 1 for k in steps[1:])   # no bar while frame 1 runs
     assert made[0]["initial"] == 1 and made[-1] == res.n_frames == len(steps)
+
+
+def test_stabilise_reaches_the_models_that_have_it(data, monkeypatch):
+    """run(..., stabilise=True) (CLI --stabilise) builds the LPLC2 family with gaze stabilisation
+    and the other models as they are."""
+    import mlplc2.models.base as base
+
+    built = []
+    init = base.Model.__init__
+
+    def spy(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        built.append(self)
+
+    monkeypatch.setattr(base.Model, "__init__", spy)
+    run(str(data["avi"]), ["mlplc2", "lgmd2"], out=False, quiet=True, end=5, stabilise=True)
+    kinds = {type(m).__name__: getattr(m, "stabilise", None) for m in built}
+    assert kinds == {"MLPLC2": True, "LGMD2": None}
