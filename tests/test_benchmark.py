@@ -132,16 +132,18 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     monkeypatch.setattr(benchmark_module, "benchmark", spy)
     real = tmp_path / "real"
     assert main(["benchmark", "--out", "o", "--quick", "--models", "mlplc2", "-m", "lgmd2", "--real", str(real),
-                 "--scheduler", "tcp://h:8786", "--horizon", "2.5", "--max-miss", "0.5", "--stabilise", "--force"]) == 0
+                 "--scheduler", "tcp://h:8786", "--horizon", "2.5", "--max-miss", "0.5", "--stabilise", "--force",
+                 "--settings", "drive, drone", "--holdout", "2"]) == 0
     assert capsys.readouterr().out == f"TABLE\nwrote {tmp_path / 'benchmark.md'}\n"
     out, kw = seen[-1]
     assert out == "o" and kw == {"quick": True, "models": ["mlplc2", "lgmd2"], "real": str(real),
                                  "scheduler": "tcp://h:8786", "workers": None,
                                  "target_params": {"horizon_s": 2.5, "max_miss": 0.5}, "stabilise": True,
-                                 "progress": True, "force": True}
+                                 "progress": True, "force": True, "settings": ["drive", "drone"], "holdout": 2}
     assert main(["benchmark", "--out", "o", "--no-real", "--workers", "2", "-q"]) == 0
     assert seen[-1][1] == {"quick": False, "models": None, "real": None, "scheduler": None, "workers": 2,
-                           "target_params": None, "stabilise": False, "progress": False, "force": False}
+                           "target_params": None, "stabilise": False, "progress": False, "force": False,
+                           "settings": None, "holdout": 0}
     assert main(["benchmark", "--out", "o"]) == 0 and seen[-1][1]["real"] == "auto"
 
 
@@ -151,6 +153,8 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     (["benchmark", "--out", "o", "--horizon", "-1"], "--horizon: expected a number >= 0, got '-1'"),
     (["benchmark", "--out", "o", "--max-miss", "x"], "--max-miss: expected a number >= 0, got 'x'"),
     (["benchmark", "--out", "o", "-m", "nope"], "unknown model 'nope'"),
+    (["benchmark", "--out", "o", "--settings", "drive,highway"], "unknown benchmark setting(s) highway"),
+    (["benchmark", "--out", "o", "--holdout", "-1"], "--holdout"),
     (["run", "v.mp4", "--horizon", "1e40"], "horizon_s"),
     (["batch", "v.mp4", "--out", "o", "--max-miss", "nan"], "--max-miss: expected a number >= 0, got 'nan'"),
 ])

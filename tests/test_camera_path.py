@@ -108,6 +108,16 @@ def test_the_suite_adds_five_scenes_per_setting_of_real_use_and_keeps_the_rest()
                                        "quick_texture_static"]
 
 
+def test_a_holdout_suite_draws_the_same_settings_with_other_seeds():
+    std, held = suite(settings=["drive", "texture_pan"]), suite(settings=["drive", "texture_pan"], holdout=1)
+    assert [s.name for s in std] == [f"texture_pan_{k}" for k in range(5)] + [f"drive_{k}" for k in range(5)]
+    assert [s.name for s in held] == [f"{s.name}_h1" for s in std]
+    assert all(h.seed != s.seed and (h.camera, h.background, h.index) == (s.camera, s.background, s.index)
+               for h, s in zip(held, std))
+    a, b = std[5].generate(), held[5].generate()     # drive_0: another draw of the same kind of road
+    assert a.frames.shape == b.frames.shape and not np.array_equal(a.frames[0], b.frames[0])
+
+
 def test_by_setting_separates_still_and_moving_cameras():
     class Ev:
         warning_objects = [{"model": "m", "video": "plain_static_0.mkv", "contact_frame": 9, "warned": True},

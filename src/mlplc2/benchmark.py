@@ -30,14 +30,14 @@ import json
 import time
 import warnings
 from collections.abc import Sequence
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 from typing import Any
 
 from ._validation import InputValueError
 
 __all__ = ["Scene", "suite", "benchmark", "by_setting", "BenchmarkResult", "BenchmarkWarning", "MODELS", "REAL_DIR",
-           "SUITE_GT", "COLUMNS", "REAL_USE"]
+           "SUITE_GT", "COLUMNS", "REAL_USE", "setting_names"]
 
 #: Every model the benchmark compares, in table order (the optical-flow baseline last).
 MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
@@ -88,10 +88,20 @@ _KINDS = (("collision",), ("collision", "pass"), ("pass", "static", "translate")
           ("collision", "collision", "pass"))
 
 
-def suite(quick: bool = False) -> list[Scene]:
+def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: int = 0) -> list[Scene]:
     """The generated scenes: 30 (every background and camera motion of :data:`_SETTINGS` with
     dark, bright, textured and mixed objects, the objects of :data:`_KINDS`, 5-10 s, sensor
-    noise and optics blur on every other scene), or 4 short ones (``quick``)."""
+    noise and optics blur on every other scene) and 15 of real use (:data:`REAL_USE`), or 4
+    short ones (``quick``).
+
+    ``settings`` keeps only those settings (names as in :func:`setting_names`); ``holdout`` > 0
+    draws every scene with other seeds (``seed + 1000 * holdout``, named ``..._hN``: other textures,
+    speeds, turns and object paths in the same settings), for checking a figure on scenes nothing was tuned on."""
+    if settings is not None:
+        unknown = sorted(set(settings) - set(setting_names()))
+        if unknown:
+            raise InputValueError(f"unknown benchmark setting(s) {', '.join(unknown)}; "
+                                  f"choose from {', '.join(setting_names())}")
     if quick:
         return [Scene("quick_plain_static", 901, "plain", "static", "dark", 4.0, kinds=("collision", "pass")),
                 Scene("quick_texture_pan", 902, "texture", "pan", "bright", 4.0, noise_std=2.0,
@@ -110,7 +120,16 @@ def suite(quick: bool = False) -> list[Scene]:
             scenes.append(Scene(f"{use}_{k}", 300 + 10 * i + k, "ground", use, duration_s=_DURATIONS[k],
                                 noise_std=2.0 if k % 2 else 0.0, blur_px=0.5 if k % 2 else 0.0,
                                 index=k))
+    if settings is not None:
+        scenes = [sc for sc in scenes if _setting_of(sc) in settings]
+    if holdout:
+        scenes = [replace(sc, name=f"{sc.name}_h{holdout}", seed=sc.seed + 1000 * int(holdout)) for sc in scenes]
     return scenes
+
+
+def setting_names() -> list[str]:
+    """The settings of the full suite, in table order (``plain_static`` ... ``handheld``)."""
+    return [f"{bg}_{cam}" for bg, cam in _SETTINGS] + list(REAL_USE)
 
 
 def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[list[Path], Path]:
@@ -371,7 +390,8 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
 
 def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
               scheduler: str | None = None, workers: int | None = None, target_params=None,
-              stabilise: bool = False, progress: bool = True, force: bool = False) -> BenchmarkResult:
+              stabilise: bool = False, settings: Sequence[str] | None = None, holdout: int = 0,
+              progress: bool = True, force: bool = False) -> BenchmarkResult:
     """Run the benchmark into folder ``out`` (see the module docstring).
 
     Parameters
@@ -392,6 +412,10 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         Target and warning settings for the models with targets (``horizon_s``, ``max_miss``, ...).
     stabilise : bool
         Gaze stabilisation for the models that have it (:attr:`mlplc2.runner.RunOptions.stabilise`).
+    settings : list of str, optional
+        Only these settings of the generated suite (:func:`setting_names`; default all).
+    holdout : int
+        0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`).
     progress : bool
         Progress bars on stderr.
     force : bool
@@ -411,7 +435,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     real_dir = None if quick or real is None else (default_real_dir() if real == "auto" else Path(real))
     if real not in ("auto", None) and not quick and not (Path(real) / "ground_truth.json").is_file():
         raise InputValueError(f"{real}: no ground_truth.json there (the labelled real clips)")
-    scenes = suite(quick)
+    scenes = suite(quick, settings=None if quick else settings, holdout=holdout)
     videos, suite_gt = _generate(scenes, out / "scenes", progress)
     clips, real_gt = _real_inputs(real_dir)
     run_options = {}
@@ -449,7 +473,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              time.perf_counter() - t0,
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
-                                       "stabilise": bool(stabilise),
+                                       "stabilise": bool(stabilise), "holdout": int(holdout),
+                                       "settings": None if settings is None else list(settings),
                                        "real": None if real_dir is None else str(real_dir),
                                        "scheduler": res.scheduler}, failed=failed,
                              settings_table=by_setting(ev, scenes, [r["model"] for r in rows]))

@@ -141,6 +141,12 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     add_warning_options(p)
     p.add_argument("--stabilise", action="store_true",
                    help="gaze stabilisation for the LPLC2 family (as mlplc2 run --stabilise)")
+    p.add_argument("--settings", metavar="NAMES",
+                   help="only these settings of the generated suite, comma-separated (e.g. drive,drone; "
+                        "default all: plain_static ... handheld, docs/benchmark.md)")
+    p.add_argument("--holdout", type=nonneg_int, default=0, metavar="N",
+                   help="N > 0: draw every scene with other seeds (other textures, speeds, turns), to check "
+                        "a figure on scenes nothing was tuned on (default 0, the standard suite)")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bars and no table")
 
@@ -154,7 +160,10 @@ def _cmd_benchmark(args) -> int:
     try:
         res = benchmark(args.out, quick=args.quick, models=models, real=real, scheduler=args.scheduler,
                         workers=args.workers, target_params=target_options(args) or None,
-                        stabilise=args.stabilise, progress=not args.quiet, force=args.force)
+                        stabilise=args.stabilise, progress=not args.quiet, force=args.force,
+                        settings=None if args.settings is None else [s.strip() for s in args.settings.split(",")
+                                                                     if s.strip()],
+                        holdout=args.holdout)
     except BatchInterrupted as exc:
         if args.quiet:  # with progress output batch() has already said it
             print(f"{PROG}: {one_line(str(exc))}", file=sys.stderr)
