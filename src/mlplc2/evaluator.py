@@ -451,19 +451,21 @@ class Evaluation:
         return "\n".join(lines)
 
     def clip_warning_table(self) -> str:
-        """Markdown: per labelled clip and model, warned / missed / false and the lead time; a
+        """Markdown: per labelled clip and model, warned / missed / false, the lead time and that of
+        the field alarm on the collider (models with targets); a
         warning that cannot be placed on the collider (no track) apart, as "unplaced"."""
         clips = [v for v in self.warning_videos if v["clip"]]
         if not clips:
             return ""
         shown, _ = self._shown()
-        lines = ["| model | clip | label | warned | lead (s) | unplaced warning (s before contact) "
-                 "| false warnings (frames) |", "|---|---|---|---|---|---|---|"]
+        lines = ["| model | clip | label | warned | lead (s) | field alarm lead (s) | unplaced warning (s before contact) "
+                 "| false warnings (frames) |", "|---|---|---|---|---|---|---|---|"]
         for v in clips:
             o = v["outcome"]
             unplaced = _fmt(o["unplaced"]) if not o["unplaced"] else f"yes, {_fmt(o['unplaced_lead_s'], 2)}"
             lines.append(f"| {shown.get(v['model'], v['model'])} | {v['video']} | {o['label']} "
-                         f"| {_fmt(o['warned'])} | {_fmt(o['lead_s'], 2)} | {unplaced} | {v['false_frames']} |")
+                         f"| {_fmt(o['warned'])} | {_fmt(o['lead_s'], 2)} | {_fmt(o.get('alarm_lead_s'), 2)} "
+                         f"| {unplaced} | {v['false_frames']} |")
         return "\n".join(lines)
 
     def notes(self) -> str:

@@ -342,7 +342,8 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
                    "missed": (not warned and not unplaced) if hit else None, "false": bool(all_false),
                    "lead_s": next((r["lead_s"] for r in objects if r["warned"]), None),
                    "unplaced": unplaced if hit else None,
-                   "unplaced_lead_s": next((r["unplaced_lead_s"] for r in objects if r["unplaced"]), None)}
+                   "unplaced_lead_s": next((r["unplaced_lead_s"] for r in objects if r["unplaced"]), None),
+                   "alarm_lead_s": next((r["alarm_lead_s"] for r in objects if r["alarm_frame"] is not None), None)}
     video = {"model": run.label, "video": truth.key, "frames_scored": max(rules.end - rules.first, 0),
              "clip": rules.clip, "collision_objects_outside": outside,
              "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
@@ -364,7 +365,8 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
     rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
            "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
            "ttc_at_warning_s": None, "warning_distance_px": None, "unplaced": False, "unplaced_frame": None,
-           "unplaced_lead_s": None, "targets": None, "ttc_frames": 0, "ttc_estimated": 0, "ttc_errors": []}
+           "unplaced_lead_s": None, "alarm_frame": None, "alarm_lead_s": None, "targets": None, "ttc_frames": 0,
+           "ttc_estimated": 0, "ttc_errors": []}
     ids = set()
     blind = rules.blind and o is collider   # its position is unknown: no warning can be placed on it
     for f in range(start, stop):
@@ -383,6 +385,11 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                                warning_distance_px=None if x is None or c is None else round(
                                    math.hypot(x - c[0], y - c[1]), 2))
                     break
+        if run.has_targets and run.localises and not blind and rec["alarm_frame"] is None \
+                and (rules.early_before is None or f >= rules.early_before) \
+                and any(on_object(x, y, o, f, radius) for _, x, y in run.alarms_at(f)):
+            # the paper's field alarm on the object (what the targets are built on), for comparison
+            rec.update(alarm_frame=f, alarm_lead_s=None if cf is None else round((cf - f) / fps, 4))
         # fragmentation and time to contact: the targets (fields) on the object while in view
         if o.track and not o.in_track(f) and o is not collider:
             continue
@@ -499,8 +506,15 @@ def summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) ->
              clips_missed=sum(bool(v["outcome"]["missed"]) for v in cc),
              clips_unplaced=sum(bool(v["outcome"]["unplaced"]) for v in cc),
              clips_false=sum(bool(v["outcome"]["false"]) for v in clips),
-             clip_lead_median_s=_median(v["outcome"]["lead_s"] for v in cc if v["outcome"]["warned"]))
+             clip_lead_median_s=_median(v["outcome"]["lead_s"] for v in cc if v["outcome"]["warned"]),
+             clips_later_than_alarm=sum(_later_than_alarm(v["outcome"]) for v in cc))
     return s
+
+
+def _later_than_alarm(outcome: dict) -> bool:
+    """Whether a clip's warning on the collider came later than the field alarm on it, or not at all."""
+    alarm = outcome.get("alarm_lead_s")
+    return alarm is not None and (outcome["lead_s"] is None or outcome["lead_s"] < alarm)
 
 
 def summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:

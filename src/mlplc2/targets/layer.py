@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "alarm_warns", "count_down"]
 
 
 @dataclass(frozen=True)
@@ -122,6 +122,7 @@ class Track:
     history: deque = field(default_factory=deque)   # of Observation
     fails: int = 0
     last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
+    last_alarm: int = -(10 ** 9)       # frame an attention field of it was last in collision alarm
     last_estimate: int = -(10 ** 9)    # frame of its last time to contact
     streak: int = 0
     fields: set = field(default_factory=set)
@@ -256,12 +257,9 @@ class TargetLayer:
         self._merge()
         seeds = []
         for f in fields:
-            owners = [t for t in self._tracks if t.contains(f.x, f.y, 0.25 * t.size + 4.0)]
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))]
             if owners:
-                t = min(owners, key=lambda t: t.size)
-                t.fields.add(f.id)
-                if f.response > 0:
-                    t.last_answer = index
+                self._own(min(owners, key=lambda t: t.size), f, index)
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
@@ -281,25 +279,24 @@ class TargetLayer:
                 break
             if any(t.contains(x, y) for t in self._tracks):
                 continue
+            alarm = self._alarming(f)
             box = self._box(lm, gray, x, y, field_seed=f is not None)
+            if box is None and alarm:
+                box = self._field_box(f, w, h)
             if box is None:
                 continue
             t = Track(self._next, index, *box)
             host = next((o for o in self._tracks if o.overlap(t) >= 0.5), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:
-                    host.fields.add(f.id)
-                    if f.response > 0:
-                        host.last_answer = index
+                    self._own(host, f, index)
                 continue
-            if not self._grows(levels, t):
+            if not alarm and not self._grows(levels, t):
                 continue
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
             self._next += 1
             if f is not None:
-                t.fields.add(f.id)
-                if f.response > 0:
-                    t.last_answer = index
+                self._own(t, f, index)
             self._tracks.append(t)
         self._prev = levels
         self._past.append(levels)
@@ -311,6 +308,38 @@ class TargetLayer:
         self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    @staticmethod
+    def _own(t: Track, f, index: int) -> None:
+        """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
+        looming evidence, its collision alarm (the paper's fatal field) the alarm evidence of
+        the warning rule (:func:`alarm_warns`)."""
+        t.fields.add(f.id)
+        if f.response > 0:
+            t.last_answer = index
+        if getattr(f, "collision", False):
+            t.last_alarm = index
+
+    def _own_margin(self, t: Track, f) -> float:
+        """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
+        a field in alarm (:meth:`_alarming`): the warning of an alarm lies on the target's centre, so
+        a box beside the field must not take it; the field then seeds a target of its own."""
+        return 0.0 if self._alarming(f) else 0.25 * t.size + 4.0
+
+    def _alarming(self, f) -> bool:
+        """Whether field ``f`` is in collision alarm and alarms count as evidence
+        (``alarm_warns``): such a seed needs no growth test (:meth:`_grows`), since the
+        alarm is the sum of the field's LPLC2 responses (Eq. 14-16), which only expansion in all
+        four quadrants raises, and it takes the field's own extent when no box is found."""
+        return f is not None and self.params.alarm_warns and bool(getattr(f, "collision", False))
+
+    @staticmethod
+    def _field_box(f, w: int, h: int) -> tuple[float, float, float, float]:
+        """The box of a field in alarm when neither the change nor the edges give one: its
+        receptive field (centre, side 2 r_AF), clipped to the frame."""
+        x0, x1 = max(f.x - f.radius, 0.0), min(f.x + f.radius, w - 1.0)
+        y0, y1 = max(f.y - f.radius, 0.0), min(f.y + f.radius, h - 1.0)
+        return (x0 + x1) / 2.0, (y0 + y1) / 2.0, max(x1 - x0, 2.0), max(y1 - y0, 2.0)
 
     def _change_seed(self, levels, zones):
         """A candidate where the image changed most over the last ``change_frames`` frames (at
@@ -397,6 +426,7 @@ class TargetLayer:
             else:
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
+                host.last_alarm = max(host.last_alarm, t.last_alarm)
         self._tracks = out
 
 
@@ -411,6 +441,19 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
                                                                  ttc_sigma_s=None, miss_xy=None)
         out.append(t)
     return tuple(sorted(out, key=Target.urgency))
+
+
+def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None) -> bool:
+    """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
+    attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
+    warns, unless its own measurement says otherwise: its box did not grow over its history
+    (receding, static), or it has a time to contact beyond ``horizon_s`` or a course beyond
+    ``max_miss`` (passing). No ``max_ttc_sigma`` and no time to contact needed."""
+    if not p.alarm_warns or t.last_alarm != index:
+        return False
+    if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
+        return False
+    return ttc is None or (ttc <= p.horizon_s and (miss is None or miss <= p.max_miss))
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
@@ -444,6 +487,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     looming = ttc is not None and (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames)
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
                    and sigma <= p.max_ttc_sigma * ttc)
+    # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
+    warning = warning or alarm_warns(t, p, index, ttc, miss)
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
