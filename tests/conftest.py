@@ -66,3 +66,14 @@ def data(tmp_path_factory):
     for i, f in enumerate(_square_frames(40, 160, 120, 100, 50)):
         cv2.imwrite(str(out["images"] / f"img{i}.png"), cv2.cvtColor(f, cv2.COLOR_RGB2BGR))
     return out
+
+
+@pytest.fixture(scope="session")
+def real_dir() -> Path:
+    """The labelled real clips (``../shared/data/real`` of the checkout, else of the current folder)."""
+    from mlplc2.benchmark import default_real_dir
+
+    for cand in (PAPER.parent / "real", default_real_dir()):
+        if cand is not None and (cand / "ground_truth.json").exists():
+            return cand
+    pytest.skip("the real clips (../shared/data/real) are absent")

@@ -394,3 +394,120 @@ def test_course_of_a_constant_velocity_object():
     assert miss == pytest.approx((big_x / width_m, big_y / width_m), abs=1e-9)
     assert fit_course(frames[:1], xs[:1], ys[:1], ws[:1], heading, 10.0) is None
     assert fit_course(frames, xs, ys, [0.0] + ws[1:], heading, 10.0) is None
+
+
+# ---------------------------------------------------------------------------
+# the field alarm as evidence (issue 22, item 4): the warning is at least as good as the alarm
+# ---------------------------------------------------------------------------
+def _track_of(log_scales, xs, width=20.0, last_alarm=None):
+    t = Track(1, 0, xs[-1], 120.0, width, width, log_s=log_scales[-1])
+    t.history = deque(Observation(k, s, x, 120.0, width, 0.0) for k, (s, x) in enumerate(zip(log_scales, xs)))
+    if last_alarm is not None:
+        t.last_alarm = last_alarm
+    return t
+
+
+def _warns(t, index, **kw):
+    return mlplc2.targets.estimate(t, TargetParams(**kw), FPS, index, (240, 320)).warning
+
+
+def test_alarm_warns_before_the_fit_is_sure_and_only_while_the_field_alarms():
+    """A target owning a field in collision alarm warns on that frame although its own fit is too
+    short for a time to contact; not without the alarm, not a frame later, not with the rule off."""
+    frames = [0, 1, 2]
+    t = _track_of(log_sizes_of_approach(frames, 20.0), [159.5] * 3, last_alarm=2)
+    assert mlplc2.targets.estimate(t, TargetParams(), FPS, 2, (240, 320)).ttc_s is None
+    assert _warns(t, 2)
+    assert not _warns(t, 2, alarm_warns=False)
+    assert not _warns(t, 3)                                   # the field no longer alarms
+    t.last_alarm = -(10 ** 9)
+    assert not _warns(t, 2)
+
+
+def test_alarm_warns_without_the_sigma_test():
+    """A noisy but significant approach (contact 0.5 s ahead, dead centre) whose contact time is
+    known to worse than ``max_ttc_sigma``: the ordinary rule holds the warning back, the alarm
+    gives it."""
+    frames = list(range(12))
+    ls = [v + (0.16 if k % 2 else -0.16) for k, v in enumerate(log_sizes_of_approach(frames, 26.0))]
+    t = _track_of(ls, [159.5] * 12, last_alarm=11)
+    plain = mlplc2.targets.estimate(t, TargetParams(alarm_warns=False), FPS, 11, (240, 320))
+    assert plain.ttc_s is not None and plain.ttc_s <= 1.0 and plain.miss <= 1.0
+    assert plain.ttc_sigma_s > 0.3 * plain.ttc_s and not plain.warning   # the precondition
+    assert _warns(t, 11)
+
+
+@pytest.mark.parametrize("case", ["receding", "passing", "far"])
+def test_alarm_vetoed_by_the_targets_own_measurement(case):
+    """A field alarm on a target that shrinks, passes 3 widths beside the camera, or whose contact
+    lies 3 s ahead makes no warning."""
+    frames = list(range(12))
+    if case == "receding":
+        ls, xs = [-v for v in log_sizes_of_approach(frames, 26.0)], [159.5] * 12
+    elif case == "passing":     # the offset grows to 3 widths at contact (frame 26)
+        ls = log_sizes_of_approach(frames, 26.0)
+        xs = [159.5 + 20.0 * 3.0 * f / 26.0 * math.exp(v) for f, v in zip(frames, ls)]
+    else:
+        ls, xs = log_sizes_of_approach(frames, 11.0 + 90.0), [159.5] * 12
+    t = _track_of(ls, xs, last_alarm=11)
+    assert not _warns(t, 11)
+
+
+def _growing_disc(n, r0=8.0, rate=0.04, at=(200, 90), start=0):
+    """Grey frames of a dark disc on a plain background whose radius grows by ``rate`` per frame
+    from frame ``start`` on (shrinks when negative)."""
+    frames = []
+    for k in range(n):
+        img = np.full((240, 320), 160, np.uint8)
+        r = r0 * math.exp(rate * max(k - start, 0))
+        cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 40, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(img.astype(np.float32))
+    return frames
+
+
+def _layer_run(frames, alarm_from, at, **kw):
+    """TargetLayer on ``frames`` with one attention field at ``at`` that alarms from ``alarm_from``
+    on (no local motion: the field is the only evidence besides the image)."""
+    from types import SimpleNamespace
+
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    layer = TargetLayer(TargetParams(**kw), FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    outs = []
+    for k, g in enumerate(frames):
+        f = SimpleNamespace(id=1, x=at[0], y=at[1], radius=40, response=1.0 if k >= alarm_from else 0.0,
+                            collision=k >= alarm_from)
+        outs.append(layer.step(g, lm, [f] if k >= alarm_from else [], k))
+    return outs
+
+
+def test_alarming_field_seeds_a_target_that_warns_at_once():
+    """A field in collision alarm on a disc that begins to grow: a target on the disc warns on the
+    alarm's first frame (without the rule, its target must first gather a time to contact)."""
+    frames = _growing_disc(12, start=6)
+    on = _layer_run(frames, 8, (200, 90))
+    assert any(t.warning and abs(t.x - 200) < 5 and abs(t.y - 90) < 5 for t in on[8])
+    off = _layer_run(frames, 8, (200, 90), alarm_warns=False)
+    assert not any(t.warning for t in off[8])
+
+
+def test_alarming_field_on_a_shrinking_disc_makes_no_warning():
+    frames = _growing_disc(24, r0=20.0, rate=-0.03)
+    outs = _layer_run(frames, 6, (200, 90))
+    assert not any(t.warning for out in outs for t in out)
+
+
+@pytest.mark.parametrize("clip", ["uav/bird_attack_2.avi", "uav/car_attack.avi"])
+def test_real_clip_warning_no_later_than_the_field_alarm(real_dir, clip):
+    """The paper's UAV clips where the target warning came after the field alarm on the colliding
+    object (car_attack: frame 28 against 13) or never (bird_attack_2: alarm at 22)."""
+    path = real_dir.parent / "paper" / clip
+    if not path.exists():
+        pytest.skip(f"{path} is absent")
+    ev = mlplc2.evaluate([str(path)], real_dir / "ground_truth.json", models=["mlplc2"])
+    (obj,) = ev.warning_objects
+    assert obj["alarm_frame"] is not None
+    assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]

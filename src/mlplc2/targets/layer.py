@@ -291,7 +291,7 @@ class TargetLayer:
                 if f is not None:
                     self._own(host, f, index)
                 continue
-            if not alarm and not self._grows(levels, t):
+            if not self._grows(levels, t, alarm=alarm):
                 continue
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
             self._next += 1
@@ -328,7 +328,7 @@ class TargetLayer:
 
     def _alarming(self, f) -> bool:
         """Whether field ``f`` is in collision alarm and alarms count as evidence
-        (``alarm_warns``): such a seed needs no growth test (:meth:`_grows`), since the
+        (``alarm_warns``): such a seed needs only some growth (:meth:`_grows`), since the
         alarm is the sum of the field's LPLC2 responses (Eq. 14-16), which only expansion in all
         four quadrants raises, and it takes the field's own extent when no box is found."""
         return f is not None and self.params.alarm_warns and bool(getattr(f, "collision", False))
@@ -361,11 +361,14 @@ class TargetLayer:
             return None
         return 2 * x + 1, 2 * y + 1
 
-    def _grows(self, levels, t: Track) -> bool:
+    def _grows(self, levels, t: Track, alarm: bool = False) -> bool:
         """Whether the candidate grew, alike in both directions, over the last ``change_frames``
         frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
         background that slides with a turning camera, a receding or a static object does not
-        become a target. Without that frame yet (the first frames), True."""
+        become a target. Without that frame yet (the first frames), True. The seed of a field in
+        collision ``alarm`` (:meth:`_alarming`) only must not be seen not to grow (an alignment
+        that fails says nothing): the alarm is the expansion evidence, and its box may hold
+        background or be cut by the border."""
         p = self.params
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
@@ -373,8 +376,10 @@ class TargetLayer:
         al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
-            return False
+            return alarm
         g = math.log(al.scale)
+        if alarm:
+            return g > 0
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
 
     def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):

@@ -115,8 +115,8 @@ class TargetParams(ParameterSet):
                               collision alarm (the paper's fatal field, ``Params.alarm_threshold``), its box
                               grew, and neither a time to contact beyond the horizon nor a course beyond
                               ``max_miss`` says otherwise; a field in alarm belongs only to a target whose
-                              box holds its centre, else it seeds one without the growth test
-                              (``min_growth``), with the field's extent when no box is found. False = the
+                              box holds its centre, else it seeds one that needs only some growth
+                              (not ``min_growth``), with the field's extent when no box is found. False = the
                               alarm is no evidence.""", valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
