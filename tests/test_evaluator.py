@@ -848,7 +848,7 @@ def test_clip_rules_early_elsewhere_and_after_contact():
     ev = evaluate(runs, _clips())
     v1 = wvid(ev, "c1.mp4")
     assert v1["outcome"] == {"label": "collision", "warned": True, "missed": False, "false": True, "lead_s": 1.5,
-                             "unplaced": False, "unplaced_lead_s": None}
+                             "unplaced": False, "unplaced_lead_s": None, "alarm_lead_s": None}
     assert v1["frames_scored"] == 30
     assert v1["false_frames_by_cause"] == {"early": 2, "elsewhere": 1}
     v2 = wvid(ev, "c2.mp4")
@@ -856,7 +856,7 @@ def test_clip_rules_early_elsewhere_and_after_contact():
     assert v2["false_frames_by_cause"] == {"early": 5}
     assert wvid(ev, "c3.mp4")["outcome"] == {"label": "no_collision", "warned": None, "missed": None,
                                              "false": True, "lead_s": None, "unplaced": None,
-                                             "unplaced_lead_s": None}
+                                             "unplaced_lead_s": None, "alarm_lead_s": None}
     assert wvid(ev, "c4.mp4")["outcome"]["false"] is False
     s = warn_summary(ev)
     assert (s["clips"], s["clips_collision"], s["clips_warned"], s["clips_missed"], s["clips_false"]) == (4, 2, 1, 1, 3)
@@ -864,9 +864,29 @@ def test_clip_rules_early_elsewhere_and_after_contact():
     # clips are not part of the generated-suite metrics
     assert s["collision_objects"] == 0 and s["frames"] == 0 and s["false_frames_per_1000"] is None
     table = ev.clip_warning_table()
-    assert "| mlplc2 | c1.mp4 | collision | yes | 1.50 | no | 3 |" in table
-    assert "| mlplc2 | c2.mp4 | collision | no | - | no | 5 |" in table
-    assert "| mlplc2 | c4.mp4 | no_collision | - | - | - | 0 |" in table
+    assert "| mlplc2 | c1.mp4 | collision | yes | 1.50 | - | no | 3 |" in table
+    assert "| mlplc2 | c2.mp4 | collision | no | - | - | no | 5 |" in table
+    assert "| mlplc2 | c4.mp4 | no_collision | - | - | - | - | 0 |" in table
+
+
+def test_field_alarm_on_the_collider_against_the_warning():
+    """Issue 22: the first field alarm on a clip's collider beside its first warning. c1: the alarm
+    on the collider at 16 (one off it at 15 does not count), the warning at 18: later; c2: the
+    alarm at 17, the warning at 15: not later; a model without targets has no alarm_frame."""
+    on, off = (100, 50), (10, 10)
+    f1 = {f: [(1, *off, True)] for f in (15,)} | {f: [(2, *on, True)] for f in range(16, 30)}
+    f2 = {f: [(2, *on, f >= 17)] for f in range(10, 30)}
+    runs = [result("c1.mp4", 40, fields=f1, targets=[T(f, 1, 100, 50, warn=True) for f in range(18, 30)]),
+            result("c2.mp4", 40, fields=f2, targets=[T(f, 1, 100, 50, warn=True) for f in range(15, 30)]),
+            result("c1.mp4", 40, alarms=range(16, 30), model="lgmd2")]
+    ev = evaluate(runs, _clips())
+    o1, o2 = wobj(ev, oid="collider", video="c1.mp4"), wobj(ev, oid="collider", video="c2.mp4")
+    assert (o1["alarm_frame"], o1["alarm_lead_s"], o1["warning_frame"]) == (16, pytest.approx(1.4), 18)
+    assert (o2["alarm_frame"], o2["warning_frame"]) == (17, 15)
+    assert wvid(ev, "c1.mp4")["outcome"]["alarm_lead_s"] == pytest.approx(1.4)
+    assert warn_summary(ev)["clips_later_than_alarm"] == 1
+    assert wobj(ev, "lgmd2", oid="collider", video="c1.mp4")["alarm_frame"] is None
+    assert "| mlplc2 | c1.mp4 | collision | yes | 1.20 | 1.40 | no | 0 |" in ev.clip_warning_table()
 
 
 def test_global_alarm_on_clips():
@@ -894,7 +914,7 @@ def test_collision_clip_without_a_track():
     ev = evaluate(runs, gt)
     v = wvid(ev, "c.mp4")
     assert v["outcome"] == {"label": "collision", "warned": False, "missed": False, "false": True, "lead_s": None,
-                            "unplaced": True, "unplaced_lead_s": 1.3}
+                            "unplaced": True, "unplaced_lead_s": 1.3, "alarm_lead_s": None}
     assert v["false_frames_by_cause"] == {"early": 1}
     d = wvid(ev, "d.mp4", "lgmd2")["outcome"]
     assert (d["warned"], d["lead_s"], d["unplaced"], d["unplaced_lead_s"]) == (False, None, True, pytest.approx(0.5))
@@ -904,7 +924,7 @@ def test_collision_clip_without_a_track():
     assert (o["warned"], o["warning_frame"], o["unplaced_frame"]) == (False, None, 17)
     s = warn_summary(ev)
     assert (s["clips_warned"], s["clips_missed"], s["clips_unplaced"], s["clip_lead_median_s"]) == (0, 1, 1, None)
-    assert "| mlplc2 | c.mp4 | collision | no | - | yes, 1.30 | 1 |" in ev.clip_warning_table()
+    assert "| mlplc2 | c.mp4 | collision | no | - | - | yes, 1.30 | 1 |" in ev.clip_warning_table()
 
 
 # ---------------------------------------------------------------------------

@@ -13,8 +13,8 @@ else the edges of the outward local motion, :func:`measure_extent`); their growt
 measured in the image by aligning the object's patch between frames (:func:`align`); the time to
 contact from the line through ``1 / S`` (:func:`fit_contact`); the lateral ``miss`` at contact
 from the course (:func:`fit_course`); and the warning rule (:func:`estimate`,
-:class:`TargetParams`). The paper's field alarm (``Field.collision``, the "fatal" field) is a
-separate signal and stays as it is.
+:class:`TargetParams`), in which a field in collision alarm (``Field.collision``, the paper's
+"fatal" field, itself unchanged) is evidence (:func:`alarm_warns`).
 
 Bearings follow the convention of :mod:`mlplc2.camera`.
 
@@ -36,5 +36,5 @@ from .layer import Observation, Target, TargetLayer, Track, alarm_warns, count_d
 from .params import TargetParams
 
 __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignment", "measure_extent", "edge_distance",
-           "align", "change_box", "pyramid", "fit_contact", "fit_course", "estimate", "alarm_warns", "count_down", "bearing", "focal_length",
-           "check_hfov", "Observation", "ContactFit"]
+           "align", "change_box", "pyramid", "fit_contact", "fit_course", "estimate", "alarm_warns", "count_down",
+           "bearing", "focal_length", "check_hfov", "Observation", "ContactFit"]

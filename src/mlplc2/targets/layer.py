@@ -48,7 +48,8 @@ class Target:
         without ``ttc_s``.
     warning : bool
         On a collision course (``miss <= max_miss``) with ``ttc_s <= horizon_s``, contact time
-        known, and looming evidence (see :class:`TargetParams`).
+        known, and looming evidence; or one of its fields in collision alarm and nothing of its
+        own measurement against it (:func:`alarm_warns`; see :class:`TargetParams`).
     fields : tuple of int
         Ids of the attention fields inside the target.
     born : int
