@@ -397,7 +397,7 @@ def test_course_of_a_constant_velocity_object():
 
 
 # ---------------------------------------------------------------------------
-# the field alarm as evidence (issue 22, item 4): the warning is at least as good as the alarm
+# the field alarm as evidence (issue 22, item 4; TargetParams.alarm_warns, off by default)
 # ---------------------------------------------------------------------------
 def _track_of(log_scales, xs, width=20.0, last_alarm=None):
     t = Track(1, 0, xs[-1], 120.0, width, width, log_s=log_scales[-1])
@@ -408,7 +408,7 @@ def _track_of(log_scales, xs, width=20.0, last_alarm=None):
 
 
 def _warns(t, index, **kw):
-    return mlplc2.targets.estimate(t, TargetParams(**kw), FPS, index, (240, 320)).warning
+    return mlplc2.targets.estimate(t, TargetParams(**{"alarm_warns": True, **kw}), FPS, index, (240, 320)).warning
 
 
 def test_alarm_warns_before_the_fit_is_sure_and_only_while_the_field_alarms():
@@ -416,7 +416,7 @@ def test_alarm_warns_before_the_fit_is_sure_and_only_while_the_field_alarms():
     short for a time to contact; not without the alarm, not a frame later, not with the rule off."""
     frames = [0, 1, 2]
     t = _track_of(log_sizes_of_approach(frames, 20.0), [159.5] * 3, last_alarm=2)
-    assert mlplc2.targets.estimate(t, TargetParams(), FPS, 2, (240, 320)).ttc_s is None
+    assert mlplc2.targets.estimate(t, TargetParams(alarm_warns=True), FPS, 2, (240, 320)).ttc_s is None
     assert _warns(t, 2)
     assert not _warns(t, 2, alarm_warns=False)
     assert not _warns(t, 3)                                   # the field no longer alarms
@@ -437,19 +437,24 @@ def test_alarm_warns_without_the_sigma_test():
     assert _warns(t, 11)
 
 
-@pytest.mark.parametrize("case", ["receding", "passing", "far"])
+@pytest.mark.parametrize("case", ["receding", "passing", "far", "ground"])
 def test_alarm_vetoed_by_the_targets_own_measurement(case):
-    """A field alarm on a target that shrinks, passes 3 widths beside the camera, or whose contact
-    lies 3 s ahead makes no warning."""
+    """A field alarm on a target that shrinks, passes 3 widths beside the camera, whose contact
+    lies 3 s ahead, or that grows twice as fast vertically as horizontally (the ground ahead of a
+    moving camera: no time to contact from a history long enough for one) makes no warning."""
     frames = list(range(12))
+    aniso = 0.0
     if case == "receding":
         ls, xs = [-v for v in log_sizes_of_approach(frames, 26.0)], [159.5] * 12
     elif case == "passing":     # the offset grows to 3 widths at contact (frame 26)
         ls = log_sizes_of_approach(frames, 26.0)
         xs = [159.5 + 20.0 * 3.0 * f / 26.0 * math.exp(v) for f, v in zip(frames, ls)]
-    else:
+    elif case == "far":
         ls, xs = log_sizes_of_approach(frames, 11.0 + 90.0), [159.5] * 12
+    else:
+        ls, xs, aniso = log_sizes_of_approach(frames, 26.0), [159.5] * 12, 0.67
     t = _track_of(ls, xs, last_alarm=11)
+    t.history = deque(q._replace(anisotropy=aniso * q.log_scale) for q in t.history)
     assert not _warns(t, 11)
 
 
@@ -473,7 +478,7 @@ def _layer_run(frames, alarm_from, at, **kw):
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
 
-    layer = TargetLayer(TargetParams(**kw), FPS)
+    layer = TargetLayer(TargetParams(**{"alarm_warns": True, **kw}), FPS)
     zero = np.zeros((240, 320), np.float32)
     lm = LocalMotion(zero, zero, zero, zero, zero)
     outs = []
@@ -507,7 +512,8 @@ def test_real_clip_warning_no_later_than_the_field_alarm(real_dir, clip):
     path = real_dir.parent / "paper" / clip
     if not path.exists():
         pytest.skip(f"{path} is absent")
-    ev = mlplc2.evaluate([str(path)], real_dir / "ground_truth.json", models=["mlplc2"])
+    ev = mlplc2.evaluate([str(path)], real_dir / "ground_truth.json", models=["mlplc2"],
+                         run_options={"target_params": {"alarm_warns": True}})
     (obj,) = ev.warning_objects
     assert obj["alarm_frame"] is not None
     assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]

@@ -453,13 +453,17 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
-    (receding, static), or it has a time to contact beyond ``horizon_s`` or a course beyond
-    ``max_miss`` (passing). No ``max_ttc_sigma`` and no time to contact needed."""
+    (receding, static), its fit found no time to contact although its history is long enough
+    (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
+    path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
+    (passing). No ``max_ttc_sigma`` needed, and no time to contact while the fit is too short."""
     if not p.alarm_warns or t.last_alarm != index:
         return False
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
         return False
-    return ttc is None or (ttc <= p.horizon_s and (miss is None or miss <= p.max_miss))
+    if ttc is None:       # before its fit can answer (min_frames) the alarm alone; after, the fit's "no"
+        return len(t.history) < p.min_frames
+    return ttc <= p.horizon_s and (miss is None or miss <= p.max_miss)
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],

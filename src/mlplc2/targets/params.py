@@ -111,13 +111,14 @@ class TargetParams(ParameterSet):
                                  answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
     confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
                                 unit="frames", valid=Valid.integer(0))
-    alarm_warns: bool = param(True, """... or, whatever its fit's precision, one of its attention fields is in
-                              collision alarm (the paper's fatal field, ``Params.alarm_threshold``), its box
-                              grew, and neither a time to contact beyond the horizon nor a course beyond
-                              ``max_miss`` says otherwise; a field in alarm belongs only to a target whose
-                              box holds its centre, else it seeds one that needs only some growth
-                              (not ``min_growth``), with the field's extent when no box is found. False = the
-                              alarm is no evidence.""", valid=Valid.boolean())
+    alarm_warns: bool = param(False, """... or (True; off by default: it raises the false warnings of the
+                              drive scenes) one of its attention fields is in collision alarm (the paper's
+                              fatal field, ``Params.alarm_threshold``), its box grew, and its own fit says
+                              nothing against it (no time to contact from a history of ``min_frames``, one
+                              beyond the horizon, a course beyond ``max_miss``); such a field belongs only
+                              to a target whose box holds its centre, else it seeds one that needs only
+                              some growth, with the field's extent when no box is found.""",
+                              valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 
