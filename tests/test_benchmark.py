@@ -199,7 +199,9 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     assert main(["run", v, "--out", str(tmp_path / "d"), "-q"]) == 0
     assert main(["batch", v, "--out", str(tmp_path / "b"), "--horizon", "3", "--workers", "0", "-q"]) == 0
     assert main(["evaluate", v, "--gt", str(clip["gt"]), "-m", "mlplc2", "--max-miss", "2", "-q"]) == 0
-    assert built == [{"horizon_s": 2.5, "max_miss": 0.5}, None, {"horizon_s": 3.0}, {"max_miss": 2.0}]
+    assert main(["run", v, "--out", str(tmp_path / "a"), "--alarm-warns", "-q"]) == 0
+    assert built == [{"horizon_s": 2.5, "max_miss": 0.5}, None, {"horizon_s": 3.0}, {"max_miss": 2.0},
+                     {"alarm_warns": True}]
     # the batch task records them (a rerun with other values reruns the task)
     done = json.loads(next((tmp_path / "b").rglob("done.json")).read_text())
     assert done["run_options"] == {"target_params": {"horizon_s": 3.0}}

@@ -146,8 +146,9 @@ def repeat_threshold_option(args) -> float | str | None:
 
 
 def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
-    """``--horizon S`` and ``--max-miss W``: the warning settings of the target layer
-    (``TargetParams.horizon_s``, ``.max_miss``), read back by :func:`target_options`."""
+    """``--horizon S``, ``--max-miss W`` and ``--alarm-warns``: the warning settings of the target
+    layer (``TargetParams.horizon_s``, ``.max_miss``, ``.alarm_warns``), read back by
+    :func:`target_options`."""
     from ..targets import TargetParams
 
     d = TargetParams()
@@ -157,6 +158,10 @@ def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
     p.add_argument("--max-miss", type=nonneg_float, metavar="W",
                    help=f"{what}... and its predicted miss at contact at most W object widths "
                         f"(TargetParams.max_miss, default {d.max_miss:g})")
+    p.add_argument("--alarm-warns", action="store_true",
+                   help=f"{what}a target owning a field in collision alarm warns unless its own measurement "
+                        "says otherwise (TargetParams.alarm_warns; off by default: more false warnings "
+                        "on a moving camera; docs/model.md)")
 
 
 def target_options(args) -> dict:
@@ -170,6 +175,8 @@ def target_options(args) -> dict:
         options["horizon_s"] = args.horizon
     if args.max_miss is not None:
         options["max_miss"] = args.max_miss
+    if getattr(args, "alarm_warns", False):
+        options["alarm_warns"] = True
     TargetParams().replace(**options)
     return options
 
@@ -179,7 +186,7 @@ def video_run_options(args) -> dict:
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
     if repeat_threshold_option(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = repeat_threshold_option(args)
-    if target_options(args):  # --horizon / --max-miss: part of each task's options
+    if target_options(args):  # --horizon / --max-miss / --alarm-warns: part of each task's options
         options["target_params"] = target_options(args)
     return options
 
