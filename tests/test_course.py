@@ -67,14 +67,14 @@ def test_border_zero_still_cuts_a_box_past_the_edge():
 
 
 def test_a_warning_begins_only_with_time_to_act_and_then_holds_to_contact():
-    p = TargetParams()
+    p = TargetParams(onset_s=0.3)
     # a track that first shows its approach 0.2 s before contact (the static world close beside
     # the path as it sweeps out of view) never warns ...
     late = _looming(80.0, 12, contact=18)
     out = estimate(late, p, FPS, 12, SHAPE)
     assert out.ttc_s == pytest.approx(0.2, rel=1e-6) and out.miss == pytest.approx(0.0, abs=1e-6)
     assert not out.warning
-    assert estimate(_looming(80.0, 12, contact=18), TargetParams(onset_s=0.0), FPS, 12, SHAPE).warning
+    assert estimate(_looming(80.0, 12, contact=18), TargetParams(), FPS, 12, SHAPE).warning   # off by default
     # ... one seen coming warns from ttc 1 s down to contact, below onset_s included
     seen = []
     _looming(80.0, 27, contact=30, each=lambda t, k: seen.append((k, estimate(t, p, FPS, k, SHAPE))))

@@ -115,11 +115,12 @@ class TargetParams(ParameterSet):
                                  answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
     confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
                                 unit="frames", valid=Valid.integer(0))
-    onset_s: float = param(0.3, """A warning begins only while ``ttc_s`` is at least this; once a target
+    onset_s: float = param(0.0, """A warning begins only while ``ttc_s`` is at least this; once a target
                            has warned, it warns down to contact. The static world close beside the
                            path (the ground, a roadside wall) first shows a short time to contact as it
                            sweeps out of view, while an object on a collision course is seen coming.
-                           0 = off.""", unit="s", valid=Valid.real(minimum=0))
+                           0 = off (the default: 0.3 s lost a collision whose time to contact was
+                           underestimated, ``docs/targets.md``).""", unit="s", valid=Valid.real(minimum=0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 
