@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "alarm_warns", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "course", "alarm_warns", "count_down"]
 
 
 @dataclass(frozen=True)
@@ -93,8 +93,9 @@ class Target:
 class Observation(NamedTuple):
     """One frame of a track's history (what the fits use): the frame's time in frame intervals
     (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
-    log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width
-    and the accumulated log-anisotropy."""
+    log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width,
+    the accumulated log-anisotropy, and whether the box was cut by the image's border
+    (``TargetParams.border``: then its centre and width are not the object's)."""
 
     frame: int
     log_scale: float
@@ -102,6 +103,7 @@ class Observation(NamedTuple):
     y: float
     width: float
     anisotropy: float
+    cut: bool = False
 
 
 @dataclass
@@ -130,9 +132,16 @@ class Track:
     rate: float | None = None
     ox: float = 0.0
     oy: float = 0.0
+    warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
+
+    def cut(self, shape: tuple[int, int], border: float) -> bool:
+        """Whether the box reaches within ``border`` px of the edge of a frame of ``shape`` (h, w)."""
+        h, w = shape
+        return (self.cx - self.w / 2.0 < border or self.cy - self.h / 2.0 < border
+                or self.cx + self.w / 2.0 > w - 1 - border or self.cy + self.h / 2.0 > h - 1 - border)
 
     @property
     def size(self) -> float:
@@ -148,14 +157,16 @@ class Track:
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
 
     def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
-               box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1) -> bool:
+               box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1,
+               border: float | None = None) -> bool:
         """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
         centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
         the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
         (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
         the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
         the box (the camera's image motion) adds to ``ox``, ``oy``. ``clock``: the frame's time
-        (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one."""
+        (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one;
+        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge."""
         if move is None:
             self.fails += 1
             return self.fails < max_fails
@@ -177,9 +188,9 @@ class Track:
             du, dv = camera.flow(self.cx - dx, self.cy - dy)
             self.ox += float(du)
             self.oy += float(dv)
-        self.history.append(Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
-                                        self.aniso))
         h, w = shape
+        self.history.append(Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
+                                        self.aniso, border is not None and self.cut(shape, border)))
         return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
@@ -417,7 +428,7 @@ class TargetLayer:
                        iterations=p.iterations, kernel=self.align_kernel)
             move = None if al is None or al.residual > p.max_residual else \
                 (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
-            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval):
+            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
         self._tracks = kept
 
@@ -434,6 +445,19 @@ class TargetLayer:
                 host.last_answer = max(host.last_answer, t.last_answer)
                 host.last_alarm = max(host.last_alarm, t.last_alarm)
         self._tracks = out
+
+
+def course(t: Track, heading: tuple[float, float], ttc: float, min_frames: int) -> tuple[float, float] | None:
+    """The predicted miss of track ``t`` (:func:`fit_course`), ``ttc`` frames after its newest
+    observation, against ``heading`` (px, this frame's pixels), from the observations whose box
+    was wholly inside the frame (a cut box gives neither the object's centre nor its width); None
+    with fewer than ``min_frames`` of them."""
+    inside = [q for q in t.history if not q.cut]
+    if len(inside) < min_frames:
+        return None
+    ahead = ttc + (t.history[-1].frame - inside[-1].frame)
+    return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
+                      [q.width for q in inside], heading, ahead)
 
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:
@@ -469,7 +493,7 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
-    course (:func:`fit_course`) and the warning rule (``docs/targets.md``, step 7). Shared
+    course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline)."""
     h, w = shape
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
@@ -487,8 +511,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and fit.ttc / fps <= p.max_ttc_s:
         ttc, sigma = fit.ttc / fps, fit.sigma / fps
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
-        miss_xy = fit_course(frames, [q.x for q in t.history], [q.y for q in t.history],
-                             [q.width for q in t.history], heading, fit.ttc)
+        miss_xy = course(t, heading, fit.ttc, p.min_frames)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         t.streak += 1
         t.last_estimate = index
@@ -496,9 +519,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.streak = 0
     looming = ttc is not None and (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames)
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
-                   and sigma <= p.max_ttc_sigma * ttc)
+                   and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
     warning = warning or alarm_warns(t, p, index, ttc, miss)
+    t.warned = t.warned or warning
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)

@@ -94,6 +94,10 @@ class TargetParams(ParameterSet):
                                                 the principal point ((W - 1) / 2, (H - 1) / 2): the camera
                                                 moves along its optical axis, or stands still.""",
                                                 unit="px", valid=Valid.point())
+    border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
+                          neither the object's size nor its centre, so the course is fitted only from the
+                          frames where the box lay wholly inside; with fewer than ``min_frames`` such frames
+                          in the window, no course and no warning.""", unit="px", valid=Valid.real(minimum=0))
     max_anisotropy: float = param(0.35, """Largest difference of the vertical and horizontal growth
                                   (log ky - log kx over the fit's frames) relative to the growth of a
                                   looming target: a fronto-parallel object grows alike in both directions
@@ -119,6 +123,12 @@ class TargetParams(ParameterSet):
                               to a target whose box holds its centre, else it seeds one that needs only
                               some growth, with the field's extent when no box is found.""",
                               valid=Valid.boolean())
+    onset_s: float = param(0.0, """A warning begins only while ``ttc_s`` is at least this; once a target
+                           has warned, it warns down to contact. The static world close beside the
+                           path (the ground, a roadside wall) first shows a short time to contact as it
+                           sweeps out of view, while an object on a collision course is seen coming.
+                           0 = off (the default: 0.3 s lost a collision whose time to contact was
+                           underestimated, ``docs/targets.md``).""", unit="s", valid=Valid.real(minimum=0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

@@ -1,0 +1,108 @@
+"""The course and the warning (issue 22, item 3): exact approaches built frame by frame with
+:meth:`Track.follow`, then :func:`estimate` (a box cut by the image's border, the warning's
+onset), and a forward drive past and into static objects."""
+
+from __future__ import annotations
+
+import math
+
+import pytest
+
+from mlplc2.evaluation.truth import parse
+from mlplc2.models import MLPLC2
+from mlplc2.stimuli import ApproachObject, CameraPath, approach
+from mlplc2.targets import TargetParams, Track, estimate
+
+FPS = 30.0
+SHAPE = (120, 160)                     # (h, w)
+CONTACT = 40                           # frame of contact
+
+
+def _looming(cx: float, frames: int = 12, *, width: float = 20.0, contact: int = CONTACT, each=None) -> Track:
+    """A track of an object approaching at constant speed straight at the camera (its image grows
+    about its own centre, ``1 / S`` linear in time, contact at frame ``contact``), its box centred
+    at ``cx`` px; ``each(track, frame)`` after every frame."""
+    p = TargetParams()
+    t = Track(1, 0, cx, 60.0, width, width)
+    t.last_answer = frames                               # an attention field answered: looming evidence
+    for k in range(1, frames + 1):
+        k_scale = (contact - (k - 1)) / (contact - k)    # Z_{k-1} / Z_k
+        assert t.follow((0.0, 0.0, k_scale, k_scale, math.log(k_scale), 0.0), k, FPS, SHAPE, p.max_fails,
+                        border=p.border)
+        if each is not None:
+            each(t, k)
+    return t
+
+
+def test_an_object_wholly_in_view_on_a_collision_course_warns():
+    t = _looming(80.0)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
+    assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
+
+
+def test_a_box_cut_by_the_border_gives_no_course_and_never_warns():
+    # the same approach seen through a box that reaches past the left border all along: its centre
+    # and width are not the object's, so there is no course (before: a made-up miss of 0 and a warning)
+    t = _looming(6.0)
+    assert all(q.cut for q in t.history)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.ttc_s is not None                          # the growth is still measured ...
+    assert out.miss is None and out.miss_xy is None and not out.warning    # ... but not the course
+
+
+def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
+    # in view for 6 frames, then its growing box reaches the border: the course of the frames in
+    # view (a collision) still holds, and the warning with it
+    t = _looming(14.0)
+    assert [q.cut for q in t.history][-1] and sum(not q.cut for q in t.history) >= TargetParams().min_frames
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
+
+
+def test_border_zero_still_cuts_a_box_past_the_edge():
+    p = TargetParams(border=0.0)
+    t = Track(1, 0, 5.0, 60.0, 20.0, 20.0)
+    assert t.cut(SHAPE, p.border) and not Track(1, 0, 80.0, 60.0, 20.0, 20.0).cut(SHAPE, p.border)
+
+
+def test_a_warning_begins_only_with_time_to_act_and_then_holds_to_contact():
+    p = TargetParams(onset_s=0.3)
+    # a track that first shows its approach 0.2 s before contact (the static world close beside
+    # the path as it sweeps out of view) never warns ...
+    late = _looming(80.0, 12, contact=18)
+    out = estimate(late, p, FPS, 12, SHAPE)
+    assert out.ttc_s == pytest.approx(0.2, rel=1e-6) and out.miss == pytest.approx(0.0, abs=1e-6)
+    assert not out.warning
+    assert estimate(_looming(80.0, 12, contact=18), TargetParams(), FPS, 12, SHAPE).warning   # off by default
+    # ... one seen coming warns from ttc 1 s down to contact, below onset_s included
+    seen = []
+    _looming(80.0, 27, contact=30, each=lambda t, k: seen.append((k, estimate(t, p, FPS, k, SHAPE))))
+    warned = [k for k, o in seen if o.warning]
+    assert warned == list(range(p.min_frames, 28)) and seen[-1][1].ttc_s < p.onset_s
+
+
+def test_a_forward_drive_warns_of_the_static_object_in_its_path_not_of_the_one_beside_it():
+    # a dashcam at 12 m/s over a textured road: a parked car 3 m to the left (passed) and one in
+    # the lane (hit); with gaze stabilisation only the second warns, 0.3 s or more before its contact
+    # (the 35 frames end as the parked car leaves the view, 10 frames before the contact)
+    side = ApproachObject(kind="pass", shape="square", appearance="dark", width_m=1.5, start=(-3.0, -0.2, 14.0),
+                          velocity=(0.0, 0.0, 0.0))
+    ahead = ApproachObject(kind="collision", shape="square", appearance="dark", width_m=1.5, start=(0.0, -0.2, 18.0),
+                           velocity=(0.0, 0.0, 0.0))
+    stim = approach([side, ahead], size=(128, 96), frames=35, background="ground", camera=CameraPath(speed_mps=12.0),
+                    camera_height_m=1.3, supersample=1, seed=1)
+    truth = parse({"videos": {"x": stim.to_ground_truth()}})["x"]
+    passed, hit = sorted(truth.objects, key=lambda o: o.kind != "pass")
+    model = MLPLC2(fps=FPS, stabilise=True, hfov_deg=60.0)
+    warned = []
+    for i, frame in enumerate(stim.frames):
+        warned += [(i, t) for t in model.step(frame).targets if t.warning]
+    assert warned and all(_on(t, hit, i) for i, t in warned)
+    assert min(i for i, _ in warned) < hit.contact_frame - 0.3 * FPS
+    assert not any(_on(t, passed, i) for i, t in warned)
+
+
+def _on(t, obj, frame, margin=4.0):
+    p = obj.point_at(frame)
+    return p is not None and abs(t.x - p.x) <= p.width / 2 + margin and abs(t.y - p.y) <= p.width / 2 + margin
