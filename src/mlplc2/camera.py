@@ -21,8 +21,9 @@ from ._validation import check_real
 STILL_PX = 0.1
 #: Least share of the tracked points that must agree with the rotation for it to be compensated.
 MIN_ROTATION_CONFIDENCE = 0.5
-#: When no heading is measured, a translation alone (sideways, over near ground: parallax) that explains
-#: this much larger a share of the points than the rotation does is taken instead: no rotation.
+#: When no heading is measured, a translation alone whose heading lies out of the joint fit's reach (3 focal
+#: lengths from the principal point: sideways, e.g. over near ground) that explains this much larger a share
+#: of the points than the rotation does is taken instead: no rotation.
 TRANSLATION_MARGIN = 0.15
 
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp"]
@@ -213,7 +214,8 @@ class MotionEstimator:
         w_est, e, rot_ok, exp, exp_ok = fit
         if e is None and omega is None:                 # no heading measured: a rotation, or a sideways
             moved, t = _translation_share(x0, y0, d, 1.0 / f)   # translation over near ground (parallax)?
-            if moved > rot_ok + TRANSLATION_MARGIN:
+            sideways = abs(t[2]) < np.hypot(t[0], t[1]) / 3.0          # a heading beyond the joint fit's reach
+            if sideways and moved > rot_ok + TRANSLATION_MARGIN:
                 w_est, rot_ok = np.zeros(3), moved
         rot_ok *= len(p0) / float(self.grid[0] * self.grid[1])   # a share of the whole grid: a few points
                                                                   # on a flat or overexposed frame are no evidence
