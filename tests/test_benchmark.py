@@ -142,9 +142,10 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
                                  "progress": True, "force": True, "settings": ["drive", "drone"], "holdout": 2}
     assert main(["benchmark", "--out", "o", "--no-real", "--workers", "2", "-q"]) == 0
     assert seen[-1][1] == {"quick": False, "models": None, "real": None, "scheduler": None, "workers": 2,
-                           "target_params": None, "stabilise": False, "progress": False, "force": False,
+                           "target_params": None, "stabilise": None, "progress": False, "force": False,
                            "settings": None, "holdout": 0}
     assert main(["benchmark", "--out", "o"]) == 0 and seen[-1][1]["real"] == "auto"
+    assert main(["benchmark", "--out", "o", "--no-stabilise"]) == 0 and seen[-1][1]["stabilise"] is False
 
 
 @pytest.mark.parametrize("args, expect", [
@@ -204,7 +205,7 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
                      {"alarm_warns": True}]
     # the batch task records them (a rerun with other values reruns the task)
     done = json.loads(next((tmp_path / "b").rglob("done.json")).read_text())
-    assert done["run_options"] == {"target_params": {"horizon_s": 3.0}}
+    assert done["run_options"] == {"stabilise": True, "target_params": {"horizon_s": 3.0}}   # the default, recorded
     # and mlplc2.run makes them the models' TargetParams
     model = runner_module._build_models(["mlplc2"], 30.0, runner_module.RunOptions(target_params=built[0]))[0]
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)

@@ -196,3 +196,34 @@ def test_stabilise_reaches_the_models_that_have_it(data, monkeypatch):
     run(str(data["avi"]), ["mlplc2", "lgmd2"], out=False, quiet=True, end=5, stabilise=True)
     kinds = {type(m).__name__: getattr(m, "stabilise", None) for m in built}
     assert kinds == {"MLPLC2": True, "LGMD2": None}
+
+
+def test_stabilisation_is_on_by_default_for_run_and_stream_and_off_for_reproduce(data, monkeypatch):
+    """The LPLC2 family stabilises its gaze in run (CLI mlplc2 run), stream and batch unless told not to
+    (--no-stabilise); the reproduction of the paper runs the paper's model, as do the model classes."""
+    import mlplc2.models.base as base
+    from mlplc2.cli import main
+    from mlplc2.reproduce import run_model
+
+    built = []
+    init = base.Model.__init__
+
+    def spy(self, *args, **kwargs):
+        init(self, *args, **kwargs)
+        built.append(self)
+
+    monkeypatch.setattr(base.Model, "__init__", spy)
+    run(str(data["avi"]), ["mlplc2", "slplc2"], out=False, quiet=True, end=3)
+    assert [m.stabilise for m in built] == [True, True]
+    built.clear()
+    next(iter(mlplc2.stream(str(data["avi"]), "lplc2", end=3)))
+    assert [m.stabilise for m in built] == [True]
+    for flag, expect in (([], True), (["--no-stabilise"], False), (["--stabilise"], True)):
+        built.clear()
+        assert main(["run", str(data["avi"]), "-m", "mlplc2", "--out", str(data["avi"].parent / "o"), "-q",
+                     "--end", "3", *flag]) == 0
+        assert [m.stabilise for m in built] == [expect], flag
+    built.clear()
+    run_model("mlplc2", [np.zeros((24, 32), np.uint8)] * 3, 30.0)
+    assert [m.stabilise for m in built] == [False]
+    assert mlplc2.MLPLC2(fps=30.0).stabilise is False

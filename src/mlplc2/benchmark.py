@@ -388,9 +388,16 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     return files
 
 
+def _stabilise(stabilise) -> bool:
+    """Whether the run stabilises the gaze: ``stabilise``, or the runner's default when None."""
+    from .runner import RunOptions
+
+    return RunOptions.stabilise if stabilise is None else bool(stabilise)
+
+
 def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
               scheduler: str | None = None, workers: int | None = None, target_params=None,
-              stabilise: bool = False, settings: Sequence[str] | None = None, holdout: int = 0,
+              stabilise: bool | None = None, settings: Sequence[str] | None = None, holdout: int = 0,
               progress: bool = True, force: bool = False) -> BenchmarkResult:
     """Run the benchmark into folder ``out`` (see the module docstring).
 
@@ -410,8 +417,9 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         As in :func:`mlplc2.batch.batch` (default: a local Dask cluster).
     target_params : TargetParams or dict, optional
         Target and warning settings for the models with targets (``horizon_s``, ``max_miss``, ...).
-    stabilise : bool
-        Gaze stabilisation for the models that have it (:attr:`mlplc2.runner.RunOptions.stabilise`).
+    stabilise : bool, optional
+        Gaze stabilisation for the models that have it; None: the runner's default, on
+        (:attr:`mlplc2.runner.RunOptions.stabilise`).
     settings : list of str, optional
         Only these settings of the generated suite (:func:`setting_names`; default all).
     holdout : int
@@ -441,8 +449,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     run_options = {}
     if tp is not None:
         run_options["target_params"] = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
-    if stabilise:
-        run_options["stabilise"] = True
+    if stabilise is not None:
+        run_options["stabilise"] = bool(stabilise)
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
     failed, seen = [], set()
@@ -473,7 +481,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              time.perf_counter() - t0,
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
-                                       "stabilise": bool(stabilise), "holdout": int(holdout),
+                                       "stabilise": _stabilise(stabilise), "holdout": int(holdout),
                                        "settings": None if settings is None else list(settings),
                                        "real": None if real_dir is None else str(real_dir),
                                        "scheduler": res.scheduler}, failed=failed,

@@ -21,6 +21,10 @@ from ._validation import check_real
 STILL_PX = 0.1
 #: Least share of the tracked points that must agree with the rotation for it to be compensated.
 MIN_ROTATION_CONFIDENCE = 0.5
+#: When no heading is measured, a translation alone whose heading lies out of the joint fit's reach (3 focal
+#: lengths from the principal point: sideways, e.g. over near ground) that explains this much larger a share
+#: of the points than the rotation does is taken instead: no rotation.
+TRANSLATION_MARGIN = 0.15
 
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp"]
 
@@ -208,6 +212,11 @@ class MotionEstimator:
             (self.fixed_heading[0] / scale - cx) / f, (self.fixed_heading[1] / scale - cy) / f)
         fit = _fit_motion(x0, y0, d, None if omega is None else np.asarray(omega, float), heading, 1.0 / f)
         w_est, e, rot_ok, exp, exp_ok = fit
+        if e is None and omega is None:                 # no heading measured: a rotation, or a sideways
+            moved, t = _translation_share(x0, y0, d, 1.0 / f)   # translation over near ground (parallax)?
+            sideways = abs(t[2]) < np.hypot(t[0], t[1]) / 3.0          # a heading beyond the joint fit's reach
+            if sideways and moved > rot_ok + TRANSLATION_MARGIN:
+                w_est, rot_ok = np.zeros(3), moved
         rot_ok *= len(p0) / float(self.grid[0] * self.grid[1])   # a share of the whole grid: a few points
                                                                   # on a flat or overexposed frame are no evidence
         head_px = None
@@ -271,15 +280,40 @@ def _fit_motion(x, y, d, omega, heading, px, iterations: int = 6, min_share: flo
     return _fit_result(w_est, e, scale, err, s, rr, sigma, min_share)
 
 
+def _translation_share(x, y, d, px, iterations: int = 3):
+    """The share of the points whose flow ``d`` a translation alone explains (any direction, each
+    point at its own depth, all in front of the camera; no rotation), and the direction ``t``.
+
+    Robust (Tukey-weighted) total least squares of ``c_i . t = 0``, ``c_i = (d_y, -d_x, d_x y - d_y x)``:
+    the flow at each point lies along ``(x t_z - t_x, y t_z - t_y)``.
+    """
+    sigma = 0.3 * px
+    dx, dy = d[:, 0], d[:, 1]
+    c = np.stack([dy, -dx, dx * y - dy * x], -1)
+    wts = np.ones(len(x))
+    for _ in range(iterations):
+        t = np.linalg.eigh((c * wts[:, None]).T @ c)[1][:, 0]
+        rx, ry = x * t[2] - t[0], y * t[2] - t[1]
+        rr = np.maximum(rx * rx + ry * ry, 1e-12)
+        s = (dx * rx + dy * ry) / rr
+        err = np.hypot(dx - s * rx, dy - s * ry)
+        scale = max(1.4826 * float(np.median(err)), sigma)
+        u = err / (4.685 * scale)
+        wts = np.where(u < 1.0, (1.0 - u * u) ** 2, 0.0)
+    ahead = s * np.sign(wts @ s) > -2.0 * sigma / np.sqrt(rr)   # one sign of depth for the whole scene
+    return float(np.mean((err < 3.0 * sigma) & ahead)), t
+
+
 def _fit_result(w_est, e, scale, err, s, rr, sigma, min_share):
     """What the fit's last round tells: omega, e (None when under ``min_share`` of the points
     show a measurable expansion), the share of inliers, the median expansion rate and the share
     of expanding points."""
-    inliers = err < 3.0 * scale
+    inliers = err < 3.0 * sigma
     radial = s * np.sqrt(rr)                                # the expansion's own flow at each point
     moving = inliers & (np.abs(radial) > 2.0 * sigma)       # points whose expansion is measured
     if moving.sum() < max(3, min_share * len(err)):         # too little expands to tell a heading
-        return w_est, None, float(np.mean(inliers)), 0.0, 0.0
+        still = np.hypot(err, radial) < 3.0 * sigma         # then the rotation alone must explain the flow
+        return w_est, None, float(np.mean(still)), 0.0, 0.0
     return w_est, e, float(np.mean(inliers)), float(np.median(s[moving])), float(np.mean(s[moving] > 0))
 
 

@@ -347,8 +347,12 @@ def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
     rerun the others)."""
     from ..models.base import get_model
 
+    from ..runner import RunOptions
+
     cls = get_model(model)
     skip = {k for k, needs in (("target_params", cls.has_targets), ("stabilise", cls.stabilises)) if not needs}
+    if cls.stabilises:    # recorded even when it is the runner's default: a run made before the default
+        options = {"stabilise": RunOptions.stabilise, **options}       # changed is not taken for one made after
     return {k: v for k, v in options.items() if k not in skip}
 
 

@@ -47,10 +47,10 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
                         "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
-    p.add_argument("--stabilise", action="store_true",
+    p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
                    help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
                         "and compensated before the front end, for a camera that pans, tilts or rolls "
-                        "(docs/model.md, 'Camera motion'); default off: the paper's model")
+                        "(docs/model.md, 'Camera motion'); on by default; --no-stabilise: the paper's model")
     p.add_argument("--decoder", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv)")
     p.add_argument("--backend", dest="decoder", choices=("opencv", "pyav"), default=argparse.SUPPRESS,
@@ -94,13 +94,14 @@ def _run(args, jsonl) -> int:
     with warnings.catch_warnings():
         warnings.simplefilter("ignore", TruncatedInputWarning)  # reported below as one line
         try:
+            stabilise = {} if args.stabilise is None else {"stabilise": args.stabilise}   # None: the runner's default
             with compile_notice(models, args.quiet):
                 result = run(args.source, models, out=args.out, fps=args.fps, resize=resize, scale=args.scale,
                              start=args.start, end=args.end, video=args.video, quiet=args.quiet,
                              hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
                              decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                              target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
-                             max_frames=args.max_frames, duration_s=args.duration, stabilise=args.stabilise)
+                             max_frames=args.max_frames, duration_s=args.duration, **stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)

@@ -139,8 +139,9 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     add_warning_options(p)
-    p.add_argument("--stabilise", action="store_true",
-                   help="gaze stabilisation for the LPLC2 family (as mlplc2 run --stabilise)")
+    p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
+                   help="gaze stabilisation for the LPLC2 family (as mlplc2 run; on by default, "
+                        "--no-stabilise: the paper's model)")
     p.add_argument("--settings", metavar="NAMES",
                    help="only these settings of the generated suite, comma-separated (e.g. drive,drone; "
                         "default all: plain_static ... handheld, docs/benchmark.md)")

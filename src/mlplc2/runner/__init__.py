@@ -109,7 +109,8 @@ class RunOptions:
     stabilise : bool
         Gaze stabilisation for the models that have it (the LPLC2 family): the camera's rotation
         estimated every frame and compensated before the front end (docs/model.md, "Camera
-        motion"). False (the default): the paper's model.
+        motion"). True (the default, here only: every run, stream, batch and benchmark takes it
+        from this field); False: the paper's model (as ``mlplc2 reproduce`` and the model classes).
     video : bool
         Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
         first model with targets or fields drawn, and a header row per model: its warning
@@ -154,7 +155,7 @@ class RunOptions:
     hfov_deg: float | None = None
     repeat_threshold: float | str | None = "model default"
     target_params: Any = None
-    stabilise: bool = False
+    stabilise: bool = True
     video: bool = False
     draw_fields: str = "auto"
     plot: bool = True
@@ -227,8 +228,8 @@ def _new_model(name: str, fps: float, options: RunOptions, **override) -> Model:
     kw = {"hfov_deg": options.hfov_deg} if (options.hfov_deg is not None and cls.has_targets) else {}
     if options.target_params is not None and cls.has_targets:
         kw["target_params"] = options.target_params
-    if options.stabilise and cls.stabilises:
-        kw["stabilise"] = True
+    if cls.stabilises:
+        kw["stabilise"] = bool(options.stabilise)
     if options.repeat_threshold != "model default":
         kw["repeat_threshold"] = options.repeat_threshold
     kw.update(override)
