@@ -240,10 +240,12 @@ class TargetLayer:
             t.ox, t.oy = t.ox + dx, t.oy + dy
 
     # -- one frame -----------------------------------------------------------------------
-    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int,
+    def step(self, gray: np.ndarray, lm: LocalMotion | None, fields, index: int,
              clock: float | None = None) -> tuple[Target, ...]:
-        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps;
-        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``);
+        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps
+        (None for a front end without them, the optical-flow baseline: no LM seed, no edge box);
+        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``radius``, ``response``;
+        another front end's candidate regions play their part: evidence under a target, else a seed);
         ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
@@ -264,7 +266,7 @@ class TargetLayer:
                     t.last_answer = index
             else:
                 seeds.append((int(f.x), int(f.y), f))
-        if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+        if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
             from ..neuropils.attention import argmax_outside
 
             # a track claims its box and the blur of the front end around it (the lamina's
@@ -281,7 +283,7 @@ class TargetLayer:
                 break
             if any(t.contains(x, y) for t in self._tracks):
                 continue
-            box = self._box(lm, gray, x, y, field_seed=f is not None)
+            box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
             if box is None:
                 continue
             t = Track(self._next, index, *box)
@@ -348,14 +350,16 @@ class TargetLayer:
         g = math.log(al.scale)
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
 
-    def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
+    def _box(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field_seed: bool, field=None):
         """The box of a candidate at (x, y): the region that changed over the last frames
         (:func:`change_box`, tight for a small object), else the edges of the local motion
-        (:func:`measure_extent`). None when neither finds a box holding the seed within
-        ``max_shift``."""
+        (:func:`measure_extent`; without LM maps, the ``box`` the front end gave its candidate
+        ``field``, if any). None when neither finds a box holding the seed within ``max_shift``."""
         p = self.params
 
         def edges():
+            if lm is None:                       # a front end without LM maps (flow): its own box
+                return getattr(field, "box", None)
             ext = measure_extent(lm, x, y, p, kernel=self.kernel)
             if ext.width is None or ext.height is None:
                 return None
