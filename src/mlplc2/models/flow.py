@@ -24,6 +24,7 @@ response the largest expansion rate (1/s).
 
 from __future__ import annotations
 
+import math
 from collections import deque
 from dataclasses import dataclass, replace
 from typing import ClassVar
@@ -34,17 +35,25 @@ import numpy as np
 from .._validation import Valid, check_fields
 from ..backend import resolve
 from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
-from ..params import ParameterSet, document_parameters, param
+from ..params import ParameterSet, document_parameters, param, param_of
 from ..targets.layer import Target, TargetLayer, count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
 
-__all__ = ["FlowTTC", "FlowParams", "Region", "divergence", "regions"]
+__all__ = ["FlowTTC", "FlowParams", "Region", "ObjectFlow", "object_flow", "divergence", "regions"]
 
 #: Smallest frame side (px) DIS computes a flow for; smaller frames give no targets.
 MIN_FLOW_SIZE = 12
 _PRESETS = {"ultrafast": cv2.DISOPTICAL_FLOW_PRESET_ULTRAFAST, "fast": cv2.DISOPTICAL_FLOW_PRESET_FAST,
             "medium": cv2.DISOPTICAL_FLOW_PRESET_MEDIUM}
+#: Farneback's settings on the resampled patch, except its window (``FlowParams.window``):
+#: pyramid scale, levels, iterations, polynomial neighbourhood and its Gaussian sigma (OpenCV's
+#: recommended values for poly_n = 5).
+FARNEBACK = {"pyr_scale": 0.5, "levels": 3, "iterations": 3, "poly_n": 5, "poly_sigma": 1.1}
+#: Samples added around the patch on each side and left out of the fit: Farneback's flow is
+#: unreliable within a few samples of the patch's border (up to 0.5 sample between two equal
+#: images; below 1e-4 from 6 samples in).
+PAD = 6
 
 
 @document_parameters("Parameters")
@@ -73,6 +82,23 @@ class FlowParams(ParameterSet):
                            valid=Valid.real(minimum=0))
     min_cells: int = param(1, "Fewest connected cells that make a candidate region.", unit="cells",
                            valid=Valid.integer(1))
+    patch: int = param(48, "Side of the resampled patch a target's own flow is computed on (the growth evidence).",
+                       unit="samples", valid=Valid.integer(16, 256))
+    margin: float = param_of(TargetParams, "margin")     # the same definition as the targets'
+    window: int = param(5, """Averaging window of Farneback's flow on the patch (odd): smaller follows the
+                        object's boundary more closely (less of the still background blended into its
+                        flow), larger is smoother.""", unit="samples", valid=Valid.integer(3, 31))
+    layer_iterations: int = param(3, "Rounds of the object / camera layer assignment of the patch's samples.",
+                                  valid=Valid.integer(0, 20))
+    max_expansion: float = param(0.3, """Largest expansion rate of an accepted fit (log-scale per frame; 0.3 =
+                                 35 % per frame, a time to contact of 0.1 s at 30 fps): beyond it the fit
+                                 failed.""", unit="1/frame", valid=Valid.real(minimum=0))
+
+    refit: float = param(0.1, """Each frame a target's box moves this fraction of the way (geometrically
+                         for its size) towards the box of its object's layer in the patch (the 2-98 %
+                         weighted quantiles of its samples' positions): a box that started too large,
+                         too small or on one edge of the object settles on the object. 0 = the box only
+                         follows the flow.""", valid=Valid.real(minimum=0, maximum=1))
 
     def __post_init__(self) -> None:
         check_fields(self, "FlowParams")
@@ -94,6 +120,131 @@ def divergence(flow: np.ndarray, gray: np.ndarray, cell: int, min_gradient: floa
     du = cv2.Sobel(res[..., 0], cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
     dv = cv2.Sobel(res[..., 1], cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
     return cv2.resize(du + dv, (max(w // cell, 1), max(h // cell, 1)), interpolation=cv2.INTER_AREA)
+
+
+@dataclass(frozen=True)
+class ObjectFlow:
+    """What :func:`object_flow` measured in a patch: per-axis expansion rates ``kx``, ``ky``
+    (log-scale per frame), the shift ``dx``, ``dy`` of the patch's centre (px), and the box of
+    the object's layer in the later frame (centre ``x``, ``y`` and size ``width``, ``height``
+    in px; None when it has too few samples)."""
+
+    kx: float
+    ky: float
+    dx: float
+    dy: float
+    box: tuple[float, float, float, float] | None = None
+
+
+def _sample(levels: list[np.ndarray], cx: float, cy: float, half: float, n: int) -> tuple[np.ndarray, float, int]:
+    """The ``n + 2 PAD`` square of samples centred on (cx, cy), spacing ``s = 2 half / n`` px,
+    bilinear from the pyramid level whose pixel is at most 1.5 samples; returns it, ``s`` and
+    the level."""
+    s = 2.0 * half / n
+    level = 0
+    while level + 1 < len(levels) and 2 ** (level + 1) <= 1.5 * s:
+        level += 1
+    k = 2.0 ** level
+    m = n + 2 * PAD
+    x0 = cx - half - PAD * s + 0.5 * s               # centre of sample 0 (px of the frame)
+    y0 = cy - half - PAD * s + 0.5 * s
+    warp = np.array([[s / k, 0.0, (x0 + 0.5) / k - 0.5], [0.0, s / k, (y0 + 0.5) / k - 0.5]], np.float32)
+    out = cv2.warpAffine(levels[level], warp, (m, m), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                         borderMode=cv2.BORDER_REPLICATE)
+    return out, s, level
+
+
+def object_flow(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float, *,
+                n: int = 48, window: int = 5, layer_iterations: int = 3, max_expansion: float = 0.3,
+                min_gradient: float = 3.0) -> ObjectFlow | None:
+    """The expansion and shift of the object in the square of half-side ``half`` px around
+    (cx, cy) from ``prev`` to ``cur`` (two :func:`mlplc2.targets.pyramid` s, the camera's rotation
+    taken out: the background is still): docs/flow.md, step 4. None when the patch has too little
+    structure, lies outside the frame, or the fit exceeds ``max_expansion``.
+    """
+    h, w = cur[0].shape
+    a, s, _ = _sample(prev, cx, cy, half, n)
+    b, _, _ = _sample(cur, cx, cy, half, n)
+    m = n + 2 * PAD
+    # sample coordinates: centred on the patch (samples), and in the frame (px)
+    j = np.arange(m, dtype=np.float64) - (m - 1) / 2.0
+    xs, ys = cx + s * j, cy + s * j
+    inside_x = (xs >= -0.5) & (xs <= w - 0.5)
+    inside_y = (ys >= -0.5) & (ys <= h - 0.5)
+    inner = np.zeros(m, bool)
+    inner[PAD:m - PAD] = True
+    valid = (inside_y & inner)[:, None] & (inside_x & inner)[None, :]
+    if not valid.any():
+        return None
+    if np.array_equal(a, b):                         # nothing changed: no motion (exactly)
+        return ObjectFlow(0.0, 0.0, 0.0, 0.0)
+    flow = cv2.calcOpticalFlowFarneback(a, b, None, winsize=window, flags=0, **FARNEBACK)
+    # the normal flow: the flow's component along the grey level's gradient (of the mean of
+    # the two patches), the one the aperture problem leaves determined at an edge
+    mean = 0.5 * (a + b)
+    gx = cv2.Sobel(mean, cv2.CV_32F, 1, 0, ksize=3).astype(np.float64)
+    gy = cv2.Sobel(mean, cv2.CV_32F, 0, 1, ksize=3).astype(np.float64)
+    g = np.hypot(gx, gy)
+    nx, ny = gx / np.maximum(g, 1e-9), gy / np.maximum(g, 1e-9)
+    # weight: the gradient's magnitude (grey levels per px of the frame) above min_gradient
+    w0 = np.where(valid, np.maximum(g * (0.125 / s) - min_gradient, 0.0), 0.0)
+    if w0.sum() <= 1e-6 * w0.size:
+        return None
+    normal = nx * flow[..., 0] + ny * flow[..., 1]
+    rc = np.abs(normal)                      # how well the still background explains each sample
+    dj = np.broadcast_to(j[None, :], g.shape)
+    di = np.broadcast_to(j[:, None], g.shape)
+    rows = np.stack([nx, nx * dj, ny, ny * di], -1)          # (tx, kx, ty, ky)
+    wt = w0
+    for it in range(layer_iterations + 1):
+        par = _solve(rows, normal, wt)
+        if par is None:
+            return None
+        if it == layer_iterations:
+            break
+        wt = w0 * (np.abs(normal - rows @ par) <= rc)
+    tx, kx, ty, ky = (float(v) for v in par)
+    if not (abs(kx) <= max_expansion and abs(ky) <= max_expansion):
+        return None
+    # the object's layer, earlier frame: the samples the object's motion explains at least
+    # twice as well as the still background (where the two nearly agree a sample could be either)
+    box = None
+    support = w0 * (np.abs(normal - rows @ par) <= 0.5 * rc)
+    ex, ey = _extent(j, support.sum(0)), _extent(j, support.sum(1))
+    if ex is not None and ey is not None:
+        (x0, x1), (y0, y1) = ex, ey
+        # moved to the later frame with the object's motion
+        box = (cx + s * (0.5 * (x0 + x1) * (1.0 + kx) + tx), cy + s * (0.5 * (y0 + y1) * (1.0 + ky) + ty),
+               s * (x1 - x0) * (1.0 + kx), s * (y1 - y0) * (1.0 + ky))
+    return ObjectFlow(float(kx), float(ky), float(tx * s), float(ty * s), box)
+
+
+def _extent(x: np.ndarray, w: np.ndarray, tail: float = 0.02) -> tuple[float, float] | None:
+    """The ``tail`` and ``1 - tail`` weighted quantiles of the sample positions ``x`` (each
+    sample one unit wide), or None without weight."""
+    total = float(w.sum())
+    if total <= 0:
+        return None
+    cum = np.concatenate([[0.0], np.cumsum(w) / total])
+    edges = np.concatenate([x - 0.5, [x[-1] + 0.5]])
+    return float(np.interp(tail, cum, edges)), float(np.interp(1.0 - tail, cum, edges))
+
+
+def _solve(rows: np.ndarray, y: np.ndarray, w: np.ndarray) -> np.ndarray | None:
+    """Weighted least squares ``rows @ p = y`` (rows: (..., k)), or None when ill-conditioned
+    (the smallest eigenvalue of the normal matrix below 1e-6 of the largest: e.g. one straight
+    edge cannot tell expansion from shift)."""
+    r = rows.reshape(-1, rows.shape[-1])
+    ww = w.ravel()
+    keep = ww > 0
+    if keep.sum() < rows.shape[-1]:
+        return None
+    r, ww, yy = r[keep], ww[keep], y.ravel()[keep]
+    a = (r * ww[:, None]).T @ r
+    ev = np.linalg.eigvalsh(a)
+    if not ev[-1] > 0 or ev[0] < 1e-6 * ev[-1]:
+        return None
+    return np.linalg.solve(a, (r * (ww * yy)[:, None]).sum(0))
 
 
 @dataclass(frozen=True)
@@ -194,6 +345,26 @@ class FlowTTC(Model):
         state["_dis"] = None                 # OpenCV objects do not pickle; rebuilt on the next frame
         return state
 
+    def _measure(self, prev: list[np.ndarray], cur: list[np.ndarray], t, half: float, frames: float):
+        """The target layer's growth evidence (``TargetLayer(measure=...)``): the object's own flow
+        (:func:`object_flow`) from ``prev`` to ``cur``, ``frames`` frames apart, as the layer's
+        move (shift, factors on width and height, log-scale and log-anisotropy gained); the box
+        moves ``refit`` of the way to the object's layer (shrinking only), the growth is the fit's."""
+        p = self.params
+        of = object_flow(prev, cur, t.cx, t.cy, half, n=p.patch, window=p.window,
+                         layer_iterations=p.layer_iterations, max_expansion=frames * p.max_expansion,
+                         min_gradient=p.min_gradient)
+        if of is None:
+            return None
+        dx, dy, fx, fy = of.dx, of.dy, math.exp(of.kx), math.exp(of.ky)
+        if of.box is not None and p.refit > 0:       # the box settles on the object's layer
+            bx, by, bw, bh = of.box
+            dx += p.refit * (bx - t.cx - dx)
+            dy += p.refit * (by - t.cy - dy)
+            fx *= min(max(bw, 1.0) / (t.w * fx), 1.0) ** p.refit
+            fy *= min(max(bh, 1.0) / (t.h * fy), 1.0) ** p.refit
+        return dx, dy, fx, fy, 0.5 * (of.kx + of.ky), of.ky - of.kx
+
     def _stabilise(self, gray: np.ndarray, cur: np.ndarray) -> None:
         """Gaze stabilisation, as the LPLC2 family's (docs/model.md, "Camera motion"): when the
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
@@ -223,7 +394,7 @@ class FlowTTC(Model):
             if tp.heading is not None:                     # the heading in working pixels
                 tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, align_kernel=self._align_kernel,
-                                      focal=focal_length(w, self.hfov_deg))
+                                      focal=focal_length(w, self.hfov_deg), measure=self._measure)
         self._stabilise(gray, cur)
         found: list[Region] = []
         if self._frames:

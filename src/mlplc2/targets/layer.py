@@ -196,10 +196,16 @@ class TargetLayer:
         Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
     focal : float, optional
         Focal length in px (from the camera's field of view): targets then carry bearings.
+    measure : callable, optional
+        Another front end's growth evidence in place of the image alignment (the optical-flow
+        baseline's patch flow): ``measure(prev, cur, track, half, frames)`` with two pyramids
+        ``frames`` frames apart (processed frames, or frame intervals) gives the track's move (shift, factors on width and
+        height, log-scale and log-anisotropy gained) or None; None = :func:`align`.
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
-                 align_kernel=None, focal: float | None = None):
+                 align_kernel=None, focal: float | None = None, measure=None):
+        self.measure = measure
         self.params = TargetParams() if params is None else params
         self.fps = float(fps)
         self.kernel = kernel
@@ -343,6 +349,9 @@ class TargetLayer:
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
         half = p.margin * t.size / 2.0 + 3.0
+        if self.measure is not None:             # another front end's growth evidence
+            move = self.measure(self._past[0], levels, t, half, float(len(self._past)))
+            return move is not None and move[4] >= p.min_growth and abs(move[5]) <= p.max_anisotropy * move[4]
         al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
@@ -382,10 +391,13 @@ class TargetLayer:
         kept = []
         for t in self._tracks:
             half = p.margin * t.size / 2.0 + 3.0
-            al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                       iterations=p.iterations, kernel=self.align_kernel)
-            move = None if al is None or al.residual > p.max_residual else \
-                (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+            if self.measure is not None:         # another front end's growth evidence
+                move = self.measure(self._prev, levels, t, half, interval)
+            else:
+                al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                           iterations=p.iterations, kernel=self.align_kernel)
+                move = None if al is None or al.residual > p.max_residual else \
+                    (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval):
                 kept.append(t)
         self._tracks = kept
