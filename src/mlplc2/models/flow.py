@@ -384,6 +384,8 @@ class FlowTTC(Model):
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
         cur = np.rint(gray).astype(np.uint8)    # gray is on 0-255 already (as_gray)
+        gray = cur.astype(np.float32)            # one input for every stage: an RGB frame of equal channels
+                                                 # answers exactly as its grey level (testing.check_channels)
         h, w = cur.shape
         if min(h, w) < MIN_FLOW_SIZE:            # DIS needs 12 px: no flow, no targets
             return Output(frame=index, response=0.0)
