@@ -18,10 +18,10 @@ import pytest
 
 import mlplc2
 import mlplc2.models.flow as flow_module
-from mlplc2.models.flow import FlowParams, FlowTTC, divergence, regions
+from mlplc2.models.flow import FlowParams, FlowTTC, divergence, object_flow, regions
 from mlplc2.params import parameter_table
 from mlplc2.stimuli import ApproachObject, approach
-from mlplc2.targets import TargetParams
+from mlplc2.targets import TargetParams, pyramid
 
 DOCS = Path(__file__).resolve().parents[2] / "docs"
 
@@ -160,6 +160,32 @@ def test_a_pan_does_not_bend_the_course():
 
 
 # -- stage functions -------------------------------------------------------------------------
+@pytest.mark.parametrize("background", ["plain", "texture"])
+@pytest.mark.parametrize("width", [12.0, 20.0])
+def test_object_flow_measures_a_small_disc_s_expansion(background, width):
+    """Two frames of a dark disc 12 or 20 px wide growing 2.2 %: the patch's fit (the layer's
+    growth evidence) finds kx and ky within 15 % of it, on a uniform background (only the edge
+    has flow: the normal flow) and on a textured still one (left out by the layers), and the
+    object's layer gives its box."""
+    obj = ApproachObject.collision(ttc_s=1.5, at=(80.3, 60.6), width_px=width, speed_mps=4.0, appearance="dark",
+                                   size=(160, 120))
+    stim = approach([obj], size=(160, 120), background=background, frames=2, seed=0)
+    (_, x, y, w0, _, _, _), (_, _, _, w1, _, _, _) = stim.objects[0].track[:2]
+    k = math.log(w1 / w0)
+    a, b = (pyramid(f.astype(np.float32)) for f in stim.frames)
+    of = object_flow(a, b, x, y, 1.5 * w0 / 2 + 3.0)
+    assert of is not None
+    assert of.kx == pytest.approx(k, rel=0.15) and of.ky == pytest.approx(k, rel=0.15)
+    assert abs(of.dx) < 0.1 and abs(of.dy) < 0.1
+    assert of.box is not None and of.box[2] == pytest.approx(w1, rel=0.15)
+
+
+def test_object_flow_of_two_equal_patches_is_exactly_still():
+    img = np.random.default_rng(1).uniform(0, 255, (60, 80)).astype(np.float32)
+    of = object_flow(pyramid(img), pyramid(img.copy()), 40.0, 30.0, 10.0)
+    assert (of.kx, of.ky, of.dx, of.dy) == (0.0, 0.0, 0.0, 0.0)
+
+
 def test_divergence_ignores_the_noise_flow_of_a_uniform_background():
     """DIS returns px-sized noise flow on a uniform background with sensor noise; the divergence
     is taken only where the image has structure, so it stays below the candidate threshold."""
@@ -241,7 +267,7 @@ def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_wor
     640 x 480 video given explicitly predicts the same course (miss) as no heading at all (the
     principal point by default), although the models work on 320 x 240 frames."""
     from mlplc2 import stimuli
-    from mlplc2.targets import TargetParams
+    from mlplc2.targets import TargetParams, pyramid
 
     st = stimuli.approach_scene(kind="collision", size=(640, 480), ttc_s=1.5, seed=4)
     misses = []
