@@ -199,8 +199,9 @@ class TargetLayer:
     measure : callable, optional
         Another front end's growth evidence in place of the image alignment (the optical-flow
         baseline's patch flow): ``measure(prev, cur, track, half, frames)`` with two pyramids
-        ``frames`` frames apart (processed frames, or frame intervals) gives the track's move (shift, factors on width and
-        height, log-scale and log-anisotropy gained) or None; None = :func:`align`.
+        ``frames`` frames apart (processed frames, or frame intervals) gives the track's move
+        (shift, factors on width and height, log-scale and log-anisotropy gained) or None;
+        None = :func:`align`.
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
@@ -251,7 +252,8 @@ class TargetLayer:
         """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps
         (None for a front end without them, the optical-flow baseline: no LM seed, no edge box);
         ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``radius``, ``response``;
-        another front end's candidate regions play their part: evidence under a target, else a seed);
+        another front end's candidate regions play their part: evidence under a target when
+        their response is > 0, else a seed);
         ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
