@@ -267,7 +267,7 @@ def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_wor
     640 x 480 video given explicitly predicts the same course (miss) as no heading at all (the
     principal point by default), although the models work on 320 x 240 frames."""
     from mlplc2 import stimuli
-    from mlplc2.targets import TargetParams, pyramid
+    from mlplc2.targets import TargetParams
 
     st = stimuli.approach_scene(kind="collision", size=(640, 480), ttc_s=1.5, seed=4)
     misses = []

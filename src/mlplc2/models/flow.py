@@ -36,7 +36,7 @@ from .._validation import Valid, check_fields
 from ..backend import resolve
 from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
-from ..targets.layer import Target, TargetLayer, count_down
+from ..targets.layer import TargetLayer, count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
 
