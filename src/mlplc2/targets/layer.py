@@ -209,10 +209,17 @@ class TargetLayer:
         Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
     focal : float, optional
         Focal length in px (from the camera's field of view): targets then carry bearings.
+    measure : callable, optional
+        Another front end's growth evidence in place of the image alignment (the optical-flow
+        baseline's patch flow): ``measure(prev, cur, track, half, frames)`` with two pyramids
+        ``frames`` frames apart (processed frames, or frame intervals) gives the track's move
+        (shift, factors on width and height, log-scale and log-anisotropy gained) or None;
+        None = :func:`align`.
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
-                 align_kernel=None, focal: float | None = None):
+                 align_kernel=None, focal: float | None = None, measure=None):
+        self.measure = measure
         self.params = TargetParams() if params is None else params
         self.fps = float(fps)
         self.kernel = kernel
@@ -253,10 +260,13 @@ class TargetLayer:
             t.ox, t.oy = t.ox + dx, t.oy + dy
 
     # -- one frame -----------------------------------------------------------------------
-    def step(self, gray: np.ndarray, lm: LocalMotion, fields, index: int,
+    def step(self, gray: np.ndarray, lm: LocalMotion | None, fields, index: int,
              clock: float | None = None) -> tuple[Target, ...]:
-        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps;
-        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``response``);
+        """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps
+        (None for a front end without them, the optical-flow baseline: no LM seed, no edge box);
+        ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``radius``, ``response``;
+        another front end's candidate regions play their part: evidence under a target when
+        their response is > 0, else a seed);
         ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
@@ -274,7 +284,7 @@ class TargetLayer:
                 self._own(min(owners, key=lambda t: t.size), f, index)
             else:
                 seeds.append((int(f.x), int(f.y), f))
-        if p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+        if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
             from ..neuropils.attention import argmax_outside
 
             # a track claims its box and the blur of the front end around it (the lamina's
@@ -292,7 +302,7 @@ class TargetLayer:
             if any(t.contains(x, y) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
-            box = self._box(lm, gray, x, y, field_seed=f is not None)
+            box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
             if box is None and alarm:
                 box = self._field_box(f, w, h)
             if box is None:
@@ -385,6 +395,9 @@ class TargetLayer:
         if p.min_growth <= 0 or len(self._past) < p.change_frames:
             return True
         half = p.margin * t.size / 2.0 + 3.0
+        if self.measure is not None:             # another front end's growth evidence
+            move = self.measure(self._past[0], levels, t, half, float(len(self._past)))
+            return move is not None and move[4] >= p.min_growth and abs(move[5]) <= p.max_anisotropy * move[4]
         al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
@@ -394,14 +407,16 @@ class TargetLayer:
             return g > 0
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
 
-    def _box(self, lm: LocalMotion, gray: np.ndarray, x: int, y: int, field_seed: bool):
+    def _box(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field_seed: bool, field=None):
         """The box of a candidate at (x, y): the region that changed over the last frames
         (:func:`change_box`, tight for a small object), else the edges of the local motion
-        (:func:`measure_extent`). None when neither finds a box holding the seed within
-        ``max_shift``."""
+        (:func:`measure_extent`; without LM maps, the ``box`` the front end gave its candidate
+        ``field``, if any). None when neither finds a box holding the seed within ``max_shift``."""
         p = self.params
 
         def edges():
+            if lm is None:                       # a front end without LM maps (flow): its own box
+                return getattr(field, "box", None)
             ext = measure_extent(lm, x, y, p, kernel=self.kernel)
             if ext.width is None or ext.height is None:
                 return None
@@ -424,10 +439,13 @@ class TargetLayer:
         kept = []
         for t in self._tracks:
             half = p.margin * t.size / 2.0 + 3.0
-            al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                       iterations=p.iterations, kernel=self.align_kernel)
-            move = None if al is None or al.residual > p.max_residual else \
-                (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+            if self.measure is not None:         # another front end's growth evidence
+                move = self.measure(self._prev, levels, t, half, interval)
+            else:
+                al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                           iterations=p.iterations, kernel=self.align_kernel)
+                move = None if al is None or al.residual > p.max_residual else \
+                    (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
         self._tracks = kept
