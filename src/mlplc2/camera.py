@@ -96,6 +96,12 @@ class CameraMotion:
         """No rotation to compensate: exactly zero (the first frame, no texture, or given so)."""
         return self.omega == (0.0, 0.0, 0.0)
 
+    @property
+    def trusted(self) -> bool:
+        """A rotation to compensate: given (a gyro), or estimated with at least
+        :data:`MIN_ROTATION_CONFIDENCE` of the grid's points agreeing; not :attr:`still`."""
+        return not self.still and (self.given or self.rotation_confidence >= MIN_ROTATION_CONFIDENCE)
+
     def shift_px(self, shape: tuple[int, int], focal: float) -> float:
         """The largest image motion (px) the rotation gives at the frame's centre and corners."""
         h, w = shape
@@ -156,6 +162,12 @@ class MotionEstimator:
         self.fixed_heading = heading
         self.min_expansion = min_expansion
         self.reset()
+
+    def configure(self, hfov_deg: float | None, heading: tuple[float, float] | None) -> None:
+        """The model's field of view (None: 60 degrees) and fixed heading (px of the frames given to
+        :meth:`apply`; None: estimated), set before each frame (a model's may change after it was built)."""
+        self.hfov_deg = 60.0 if hfov_deg is None else check_hfov(hfov_deg)
+        self.fixed_heading = heading
 
     def reset(self) -> None:
         self._prev: np.ndarray | None = None

@@ -51,6 +51,11 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                    help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
                         "and compensated before the front end, for a camera that pans, tilts or rolls "
                         "(docs/model.md, 'Camera motion'); on by default; --no-stabilise: the paper's model")
+    p.add_argument("--gyro", metavar="FILE.csv",
+                   help="the camera's angular velocity: a CSV with columns t (s, the video's clock), wx, wy, wz "
+                        "(rad/s about the camera's x right, y down, z forward axes), interpolated at each frame "
+                        "and used instead of the estimated rotation by the models that stabilise; needs --hfov "
+                        "(docs/robot.md)")
     p.add_argument("--decoder", choices=("opencv", "pyav"), default="opencv",
                    help="video decoder (default: opencv)")
     p.add_argument("--backend", dest="decoder", choices=("opencv", "pyav"), default=argparse.SUPPRESS,
@@ -101,7 +106,7 @@ def _run(args, jsonl) -> int:
                              hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
                              decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                              target_params=target_options(args) or None, jsonl=jsonl, live=args.live,
-                             max_frames=args.max_frames, duration_s=args.duration, **stabilise)
+                             max_frames=args.max_frames, duration_s=args.duration, gyro=args.gyro, **stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
     _print_run_summary(args, result)

@@ -261,6 +261,11 @@ class Model(abc.ABC):
         self.clock: float = 0              # this frame's time in frame intervals since frame 0
         self._clock_done: float = 0        # clock of the last processed (not held) frame
         self.interval: float = 1           # frame intervals since the last processed frame
+        self._turned: np.ndarray | None = np.zeros(3)   # gyro rotation (rad) since the last processed frame
+        self._rate: np.ndarray | None = None            # the gyro's rate (rad/s) at the last frame
+        self.rotation_given: tuple[float, float, float] | None = None
+        """The camera's rotation (rad, its axes) since the last processed frame from the gyro given
+        to :meth:`step` (held frames' included), or None: estimated from the images."""
 
     def _advance(self, t) -> tuple[float, float]:
         """(clock, time_s) of the next frame taken at ``t`` seconds (None: one frame interval after
@@ -293,7 +298,37 @@ class Model(abc.ABC):
         """Index the next frame will get."""
         return self._frame
 
-    def step(self, frame: np.ndarray, t: float | None = None) -> Output:
+    def gyro_refusal(self) -> str | None:
+        """Why this model takes no gyro (None: it takes one); models that stabilise override it."""
+        return f"model {self.name!r} does not compensate the camera's motion: it takes no gyro"
+
+    def _check_gyro(self, gyro) -> np.ndarray | None:
+        """``gyro`` of :meth:`step` as a float64 (wx, wy, wz) in rad/s, or None; raises before any state changes."""
+        if gyro is None:
+            return None
+        why = self.gyro_refusal()
+        if why is not None:
+            raise InputValueError(why)
+        try:
+            g = np.asarray(gyro, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputTypeError(f"frame {self._frame}: gyro must be three numbers (wx, wy, wz) in rad/s, "
+                                 f"got {gyro!r}") from None
+        if g.shape != (3,) or not np.all(np.isfinite(g)):
+            raise InputValueError(f"frame {self._frame}: gyro must be three finite numbers (wx, wy, wz) in rad/s, "
+                                  f"got {gyro!r}")
+        return g
+
+    def _integrate_gyro(self, rate: np.ndarray | None, dt: float | None) -> None:
+        """Add the gyro's turn since the last frame (trapezoid over ``dt`` seconds; None: the first frame)
+        to the rotation since the last processed frame; a frame without a gyro leaves it unknown."""
+        if rate is None:
+            self._turned = None
+        elif dt is not None and self._turned is not None:
+            self._turned = self._turned + (rate if self._rate is None else 0.5 * (rate + self._rate)) * dt
+        self._rate = rate
+
+    def step(self, frame: np.ndarray, t: float | None = None, *, gyro=None) -> Output:
         """Process one frame: (H, W) grey, (H, W, 1), (H, W, 3) RGB or (H, W, 4) RGBA, 0-255.
 
         ``t``: the frame's time in seconds (a camera's or container's timestamp); every time
@@ -301,6 +336,14 @@ class Model(abc.ABC):
         frame (variable rates, dropped frames). None: one frame interval (1 / ``fps``) after
         the last frame. Timestamps must increase (:class:`~mlplc2.InputError` otherwise); at a
         constant rate (``t = i / fps``) the outputs are those without ``t`` (``docs/model.md``, "Time").
+
+        ``gyro``: the camera's angular velocity at this frame, ``(wx, wy, wz)`` in rad/s about its x
+        (right), y (down) and z (forward) axes (a pan to the right is ``+wy``), for the models that
+        stabilise (``stabilise=True``; they need ``hfov_deg``): the rotation since the last processed
+        frame is then the gyro's, integrated over the real intervals (held frames' included), and
+        is not estimated from the images (``docs/model.md``, "Camera motion"). Other models raise
+        :class:`~mlplc2.InputError`. Give it on every frame: a frame without it leaves the rotation
+        to the images until the next processed frame.
 
         Colour frames are RGB: OpenCV's ``VideoCapture``/``imread`` give BGR, so convert them
         first (``cv2.cvtColor(frame, cv2.COLOR_BGR2RGB)``, or pass ``COLOR_BGR2GRAY``'s grey image).
@@ -316,6 +359,7 @@ class Model(abc.ABC):
         """
         gray = as_gray(frame, min_size=self.min_size)
         clock, time_s = self._advance(t)
+        rate = self._check_gyro(gyro)
         if not self._scale_warned:
             self._scale_warned = check_unit_scale(frame, gray)
         if self._shape is None:
@@ -329,6 +373,7 @@ class Model(abc.ABC):
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
         first = self._t_last is None
+        self._integrate_gyro(rate, None if first else time_s - self._t_last)
         self.clock, self._t_last = clock, time_s
         if first:
             self._t0 = time_s
@@ -352,6 +397,8 @@ class Model(abc.ABC):
                     np.copyto(last, gray)
         self.interval = 1 if first else clock - self._clock_done
         self._clock_done = clock
+        self.rotation_given = None if self._turned is None or rate is None else tuple(float(v) for v in self._turned)
+        self._turned = np.zeros(3)
         out = dataclasses.replace(self._step(gray, self._frame), time_s=time_s)
         if self._work is not None:
             out = _to_frame(out, self._shape[1] / self._work[0], self._shape[0] / self._work[1])

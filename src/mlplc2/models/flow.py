@@ -34,7 +34,7 @@ import numpy as np
 
 from .._validation import Valid, check_fields
 from ..backend import resolve
-from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
+from ..camera import STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
 from ..targets.layer import TargetLayer, count_down
 from ..targets.params import TargetParams
@@ -323,6 +323,11 @@ class FlowTTC(Model):
         self._camera = MotionEstimator(hfov_deg=hfov_deg)
         self._reset()
 
+    def gyro_refusal(self) -> str | None:
+        if self.hfov_deg is None:
+            return "a gyro needs the camera's field of view (hfov_deg, --hfov) to turn its rotation into pixels"
+        return None
+
     def _hold(self, last: Output, elapsed: float) -> Output:
         """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
         return replace(last, targets=count_down(last.targets, elapsed))
@@ -368,9 +373,10 @@ class FlowTTC(Model):
     def _stabilise(self, gray: np.ndarray, cur: np.ndarray) -> None:
         """Gaze stabilisation, as the LPLC2 family's (docs/model.md, "Camera motion"): when the
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
-        m = self.camera_motion = self._camera.apply(cur)
+        self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
+        m = self.camera_motion = self._camera.apply(cur, omega=self.rotation_given)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if m.still or m.rotation_confidence < MIN_ROTATION_CONFIDENCE or m.shift_px(gray.shape, focal) < STILL_PX:
+        if not m.trusted or m.shift_px(gray.shape, focal) < STILL_PX:
             return
         hom = m.homography(gray.shape, focal)
         ones = np.ones(cur.shape, np.float32)

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator
+from ..camera import STILL_PX, CameraMotion, MotionEstimator
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -71,11 +71,19 @@ class _LPLC2Family(Model):
         self.maps = lm
         return lm
 
+    def gyro_refusal(self) -> str | None:
+        if not self.stabilise:
+            return f"model {self.name!r} was built with stabilise=False (--no-stabilise): it takes no gyro"
+        if self.hfov_deg is None:
+            return "a gyro needs the camera's field of view (hfov_deg, --hfov) to turn its rotation into pixels"
+        return None
+
     def _stabilise(self, gray: np.ndarray) -> None:
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
-        m = self.camera_motion = self._camera.apply(gray)
+        self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
+        m = self.camera_motion = self._camera.apply(gray, omega=self.rotation_given)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if m.still or m.rotation_confidence < MIN_ROTATION_CONFIDENCE or m.shift_px(gray.shape, focal) < STILL_PX:
+        if not m.trusted or m.shift_px(gray.shape, focal) < STILL_PX:
             return
         hom = m.homography(gray.shape, focal)
         self.frontend.compensate(hom, gray)

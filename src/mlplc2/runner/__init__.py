@@ -49,6 +49,7 @@ from .._signals import interrupts
 from .._validation import InputTypeError, InputValueError, as_gray
 from .._files import write_json
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
+from ..io.gyro import Gyro
 from ..io.formats import STDIN
 from ..models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
                           looks_duplicated, resolve_names)
@@ -111,6 +112,11 @@ class RunOptions:
         estimated every frame and compensated before the front end (docs/model.md, "Camera
         motion"). True (the default, here only: every run, stream, batch and benchmark takes it
         from this field); False: the paper's model (as ``mlplc2 reproduce`` and the model classes).
+    gyro : path, (N, 4) array or Gyro, optional
+        The camera's angular velocity: a CSV with columns ``t, wx, wy, wz`` (s on the video's clock,
+        rad/s in the camera's axes) or its rows (:class:`mlplc2.io.gyro.Gyro`), interpolated at each
+        frame's time and given to the models that stabilise instead of the estimated rotation; needs
+        ``hfov_deg`` (docs/robot.md, "Frame rate, field of view and a gyro").
     video : bool
         Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
         first model with targets or fields drawn, and a header row per model: its warning
@@ -156,6 +162,7 @@ class RunOptions:
     repeat_threshold: float | str | None = "model default"
     target_params: Any = None
     stabilise: bool = True
+    gyro: Any = None
     video: bool = False
     draw_fields: str = "auto"
     plot: bool = True
@@ -186,11 +193,10 @@ def _run_options(options: RunOptions | None, keywords: Mapping[str, Any]) -> Run
     unknown = [k for k in keywords if k not in _OPTION_NAMES]
     if unknown:
         raise TypeError(f"run() got an unexpected keyword argument {unknown[0]!r}")
-    if options is None:
-        return RunOptions(**keywords)
-    if not isinstance(options, RunOptions):
+    if options is not None and not isinstance(options, RunOptions):
         raise InputTypeError(f"options must be a RunOptions, got {type(options).__name__}")
-    return replace(options, **keywords)
+    options = RunOptions(**keywords) if options is None else replace(options, **keywords)
+    return options if options.gyro is None else replace(options, gyro=Gyro.load(options.gyro))
 
 
 def _model_list(models) -> list:
@@ -294,6 +300,12 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+    refusals = [m.gyro_refusal() for m in built]
+    if options.gyro is not None and None not in refusals:   # no model takes it: the first one says why
+        raise InputValueError(f"{options.gyro.name}: {refusals[0]}")
+    if options.gyro is not None:                            # it spans the frames (when their number is known)
+        last = None if not src.total else (src.start + src.total - 1) / src.fps
+        options.gyro.check_covers(src.start / src.fps, last, src.fps)
     widths = {m.work_width for m in built}
     w, h = src.size
     if len(widths) == 1 and None not in widths and not src.resized and w > (work := widths.pop()):
@@ -492,8 +504,9 @@ class _Frames:
         frame's decoding to the end of its writing."""
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
-        outputs = [m.step(frame, src.time_s) for m in self.built]
         time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
+        rate = None if self.options.gyro is None else self.options.gyro.at(time_s, src.fps)
+        outputs = [m.step(frame, src.time_s, gyro=None if m.gyro_refusal() else rate) for m in self.built]
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:

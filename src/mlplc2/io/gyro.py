@@ -1,0 +1,98 @@
+"""A gyro's angular velocity over time (``mlplc2 run --gyro FILE.csv``), read and interpolated
+at each frame's timestamp (docs/robot.md, "Frame rate, field of view and a gyro").
+
+The file: a CSV with a header naming the columns ``t`` (seconds, on the video's clock: the time
+of frame ``i`` is its container timestamp, or ``i / fps``) and ``wx``, ``wy``, ``wz`` (rad/s about
+the camera's x (right), y (down) and z (forward) axes; other columns are ignored), one sample a
+row, ``t`` increasing. Between samples the rate is interpolated linearly; the samples must span
+the run's frames (up to :data:`SLACK` of a frame interval beyond the first and last sample, the
+end sample's rate is held).
+"""
+
+from __future__ import annotations
+
+import csv
+from pathlib import Path
+
+import numpy as np
+
+from .._validation import InputTypeError, InputValueError
+
+__all__ = ["Gyro", "SLACK"]
+
+#: How far (in frame intervals) beyond its first or last sample a gyro's rate is held.
+SLACK = 1.0
+_COLUMNS = ("t", "wx", "wy", "wz")
+
+
+class Gyro:
+    """Angular-velocity samples: ``t`` (N,) seconds, increasing; ``rates`` (N, 3) rad/s, camera axes."""
+
+    def __init__(self, t, rates, name: str = "gyro"):
+        self.t = np.asarray(t, dtype=np.float64)
+        self.rates = np.asarray(rates, dtype=np.float64)
+        self.name = name
+        if len(self.t) < 2:
+            raise InputValueError(f"{name}: needs at least 2 samples (t, wx, wy, wz), got {len(self.t)}")
+        if not (np.all(np.isfinite(self.t)) and np.all(np.isfinite(self.rates))):
+            raise InputValueError(f"{name}: every t, wx, wy, wz must be a finite number")
+        bad = np.flatnonzero(np.diff(self.t) <= 0)
+        if bad.size:
+            raise InputValueError(f"{name}: t must increase, but sample {bad[0] + 1} (t = {self.t[bad[0] + 1]:g} s) "
+                                  f"follows t = {self.t[bad[0]]:g} s")
+
+    @classmethod
+    def load(cls, value) -> "Gyro":
+        """A :class:`Gyro` from a CSV path (module docstring), an (N, 4) array of rows ``t, wx, wy, wz``,
+        or a :class:`Gyro` (returned as is)."""
+        if isinstance(value, Gyro):
+            return value
+        if isinstance(value, (str, Path)):
+            return cls._read_csv(Path(value))
+        try:
+            a = np.asarray(value, dtype=np.float64)
+        except (TypeError, ValueError):
+            raise InputTypeError(f"gyro must be a CSV file or an (N, 4) array of t, wx, wy, wz, "
+                                 f"got {type(value).__name__}") from None
+        if a.ndim != 2 or a.shape[1] != 4:
+            raise InputValueError(f"gyro: an array must have shape (N, 4) (t, wx, wy, wz), got {a.shape}")
+        return cls(a[:, 0], a[:, 1:], "gyro")
+
+    @classmethod
+    def _read_csv(cls, path: Path) -> "Gyro":
+        try:
+            with open(path, newline="", encoding="utf-8") as f:
+                rows = list(csv.reader(f))
+        except (OSError, UnicodeDecodeError) as exc:
+            raise InputValueError(f"{path}: cannot read the gyro file ({getattr(exc, 'strerror', None) or exc})") \
+                from None
+        rows = [r for r in rows if r and any(c.strip() for c in r)]
+        header = [c.strip().lower() for c in rows[0]] if rows else []
+        missing = [c for c in _COLUMNS if c not in header]
+        if missing:
+            raise InputValueError(f"{path}: the gyro file needs a header with columns t, wx, wy, wz "
+                                  f"(missing: {', '.join(missing)})")
+        cols = [header.index(c) for c in _COLUMNS]
+        values = np.empty((len(rows) - 1, 4))
+        for i, row in enumerate(rows[1:]):
+            try:
+                values[i] = [float(row[c]) for c in cols]
+            except (IndexError, ValueError):
+                raise InputValueError(f"{path}: line {i + 2}: expected numbers in columns t, wx, wy, wz, "
+                                      f"got {','.join(row)!r}") from None
+        return cls(values[:, 0], values[:, 1:], str(path))
+
+    def check_covers(self, first_s: float, last_s: float | None, fps: float) -> None:
+        """Raise :class:`~mlplc2.InputError` unless the samples span ``first_s`` to ``last_s`` (None: unknown)."""
+        slack = SLACK / fps
+        if first_s < self.t[0] - slack or (last_s is not None and last_s > self.t[-1] + slack):
+            until = "" if last_s is None else f" to {last_s:g} s"
+            raise InputValueError(f"{self.name}: the gyro covers t = {self.t[0]:g} to {self.t[-1]:g} s but the "
+                                  f"run's frames are at {first_s:g}{until} s (t is on the video's clock: "
+                                  f"frame i at i / fps, or its timestamp)")
+
+    def at(self, t: float, fps: float) -> tuple[float, float, float]:
+        """The rate (rad/s) at ``t`` seconds, interpolated linearly; outside the samples (beyond :data:`SLACK`),
+        :class:`~mlplc2.InputError`."""
+        self.check_covers(t, t, fps)
+        return tuple(float(np.interp(t, self.t, self.rates[:, k])) for k in range(3))

@@ -1,0 +1,177 @@
+"""A gyro instead of the estimated rotation (issue 22 item 1): ``Model.step(frame, t, gyro=...)``,
+``mlplc2.run(..., gyro=)`` and ``mlplc2 run --gyro FILE.csv``.
+
+The scenes are rendered by :func:`mlplc2.stimuli.approach` with a :class:`~mlplc2.stimuli.CameraPath`
+whose true rotation per frame is known (``stimulus.camera["omega"]``): the expected values are the
+rendered camera's, not output of the code under test.
+"""
+
+import math
+
+import cv2
+import numpy as np
+import pytest
+
+import mlplc2
+from mlplc2 import stimuli
+from mlplc2.cli import main
+from mlplc2.io.gyro import Gyro
+
+FPS = 30.0
+RATE = math.radians(12.0)              # rad/s: a pan to the right at 12 deg/s
+
+
+def _pan(objects=(), frames=12, size=(320, 240)):
+    st = stimuli.approach(list(objects), size=size, fps=FPS, frames=frames, background="texture",
+                          camera=stimuli.CameraPath(yaw_rate_dps=math.degrees(RATE)), noise_std=2.0, seed=5)
+    return st, _rates(st)
+
+
+def _rates(st):
+    """The gyro of the rendered camera: its rate (rad/s) at each frame. ``camera["omega"][k]`` is the turn
+    from frame k - 1 to k (none before frame 0); the path turns at a constant rate, at frame 0 too."""
+    omega = np.array(st.camera["omega"])
+    omega[0] = omega[1]
+    return omega * FPS
+
+
+def _motions(frames, rates=None):
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True, hfov_deg=60.0)
+    out = []
+    for k, f in enumerate(frames):
+        model.step(f, gyro=None if rates is None else rates[k])
+        out.append(model.camera_motion)
+    return out[1:]
+
+
+def test_a_given_gyro_rate_agrees_with_the_estimate_on_a_pan():
+    st, rates = _pan()
+    assert rates[:, 1] == pytest.approx(RATE) and not rates[:, [0, 2]].any()   # the path's truth: a pan right is +wy
+    for est, given in zip(_motions(st.frames), _motions(st.frames, rates)):
+        assert given.given and not est.given
+        assert given.omega == pytest.approx((0.0, RATE / FPS, 0.0), abs=1e-12)   # rad/s over the 1/30 s interval
+        assert np.allclose(est.omega, given.omega, atol=0.05 * RATE / FPS)
+        assert given.rotation_confidence > 0.7               # the images agree with the gyro
+
+
+def test_a_wrong_sign_gyro_is_flagged_by_the_images():
+    st, rates = _pan()
+    for m in _motions(st.frames, -rates):
+        assert m.given and m.omega[1] < 0
+        assert m.rotation_confidence < 0.2                   # the images disagree: CameraMotion says so
+
+
+def test_a_model_given_the_true_gyro_warns_the_collision_with_the_right_time_to_contact():
+    """As tests/test_camera.py's stabilised pan, with the gyro in place of the estimate: one target
+    on the object whose time to contact follows the truth within 15 % in the last second, a
+    warning before contact and none on the static world."""
+    obj = stimuli.ApproachObject.collision(ttc_s=2.0, at=(200.0, 110.0), width_px=8.0)
+    st = stimuli.approach([obj], size=(320, 240), fps=FPS, background="texture",
+                          camera=stimuli.CameraPath(yaw_rate_dps=10.0), noise_std=2.0, seed=2)
+    rates = _rates(st)
+    truth = st.objects[0]
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True, hfov_deg=60.0)
+    errors, warned, false = [], False, 0
+    for k, f in enumerate(st.frames):
+        out = model.step(f, gyro=rates[k])
+        assert model.camera_motion.given
+        if k >= truth.contact_frame or not truth.in_track(k):
+            continue
+        p = truth.point_at(k)
+        true_ttc = (truth.contact_frame - k) / FPS
+        for t in out.targets:
+            near = abs(t.x - p.x) < max(20.0, p.width) and abs(t.y - p.y) < max(20.0, p.width)
+            if near and t.ttc_s is not None and true_ttc <= 1.0:
+                errors.append(abs(t.ttc_s - true_ttc) / true_ttc)
+            warned |= near and t.warning
+            false += (not near) and t.warning
+    assert warned and false == 0
+    assert errors and float(np.median(errors)) < 0.15
+
+
+def test_held_frames_accumulate_the_gyro_over_the_held_interval():
+    """A video whose every frame is shown twice (held: no step) with a gyro at each 1/30 s: the
+    processed frame's rotation is the gyro's over both intervals (trapezoid of the rates)."""
+    st, _ = _pan(frames=6, size=(160, 120))
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True, hfov_deg=60.0, repeat_threshold=16.0)
+    given = []
+    for k, f in enumerate(np.repeat(st.frames, 2, axis=0)):
+        rate = (0.0, 0.1 * (k + 1), 0.0)                       # rad/s, growing: a trapezoid is exact
+        out = model.step(f, gyro=rate)
+        if not out.repeated and k:
+            given.append((k, model.rotation_given))
+    assert len(given) == 5
+    for k, rot in given:      # rates 0.1 (k - 1), 0.1 k, 0.1 (k + 1) at frames k - 2, k - 1, k: 0.2 k / 30 rad
+        assert rot == pytest.approx((0.0, 0.2 * k / FPS, 0.0))
+
+
+def test_models_that_cannot_use_a_gyro_say_why():
+    frame = np.zeros((60, 80), np.uint8)
+    for model, why in [(mlplc2.MLPLC2(fps=FPS), "stabilise=False"), (mlplc2.MLPLC2(fps=FPS, stabilise=True), "hfov"),
+                       (mlplc2.get_model("lgmd2")(fps=FPS), "takes no gyro")]:
+        with pytest.raises(mlplc2.InputError, match=why):
+            model.step(frame, gyro=(0.0, 0.1, 0.0))
+        model.step(frame)                                     # the error changed no state
+        assert model.frame_index == 1
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True, hfov_deg=60.0)
+    for bad in [(0.0, 0.1), (0.0, float("nan"), 0.0), "fast"]:
+        with pytest.raises(mlplc2.InputError, match="gyro"):
+            model.step(frame, gyro=bad)
+
+
+def _csv(path, text):
+    path.write_text(text, encoding="utf-8")
+    return path
+
+
+def test_the_gyro_file_is_interpolated_at_each_time(tmp_path):
+    g = Gyro.load(_csv(tmp_path / "g.csv", "t,wz,wy,wx,temp\n0,0,0,1,20\n1,3,2,-1,21\n"))
+    assert g.at(0.25, FPS) == pytest.approx((0.5, 0.5, 0.75))  # columns by name, others ignored
+    assert g.at(1.0 + 0.5 / FPS, FPS) == pytest.approx((-1.0, 2.0, 3.0))   # half a frame past the end: held
+    with pytest.raises(mlplc2.InputError, match="covers t = 0 to 1 s"):
+        g.at(1.2, FPS)
+    assert Gyro.load(np.array([[0, 1, 2, 3], [2, 1, 2, 3]])).at(1.0, FPS) == (1.0, 2.0, 3.0)
+
+
+@pytest.mark.parametrize("text, match", [("t,wx,wy\n0,0,0\n1,0,0\n", "missing: wz"),
+                                         ("t,wx,wy,wz\n0,0,0,0\n0.5,0,x,0\n", "line 3"),
+                                         ("t,wx,wy,wz\n0,0,0,0\n0,1,0,0\n", "t must increase"),
+                                         ("t,wx,wy,wz\n0,0,0,0\n", "at least 2 samples"),
+                                         ("", "missing: t, wx, wy, wz")])
+def test_a_malformed_gyro_file_is_one_clear_error(tmp_path, text, match):
+    with pytest.raises(mlplc2.InputError, match=match):
+        Gyro.load(_csv(tmp_path / "g.csv", text))
+
+
+def _folder(tmp_path, frames):
+    d = tmp_path / "frames"
+    d.mkdir()
+    for k, f in enumerate(frames):
+        cv2.imwrite(str(d / f"{k:03d}.png"), f)
+    return d
+
+
+def test_run_gives_the_gyro_to_the_models_that_stabilise(tmp_path):
+    st, rates = _pan(frames=6, size=(160, 120))
+    src = _folder(tmp_path, st.frames)
+    rows = np.column_stack([np.arange(6) / FPS, rates])
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True)
+    mlplc2.run(src, [model, "lgmd2"], out=False, gyro=rows, hfov_deg=60.0, quiet=True)
+    assert model.camera_motion.given and model.camera_motion.omega[1] == pytest.approx(RATE / FPS)
+    with pytest.raises(mlplc2.InputError, match=r"covers t = 0 to 0.1 s but the run's frames are at 0 to 0.166667"):
+        mlplc2.run(src, "mlplc2", out=False, gyro=rows[:4], hfov_deg=60.0, quiet=True)
+
+
+def test_cli_gyro_errors_are_one_line_and_write_nothing(tmp_path, capsys):
+    st, rates = _pan(frames=4, size=(160, 120))
+    src = _folder(tmp_path, st.frames)
+    good = _csv(tmp_path / "g.csv", "t,wx,wy,wz\n0,0,0.2,0\n1,0,0.2,0\n")
+    for args, match in [(["--gyro", str(good)], "field of view"),
+                        (["--gyro", str(good), "--hfov", "60", "--no-stabilise"], "stabilise=False"),
+                        (["--gyro", str(tmp_path / "none.csv"), "--hfov", "60"], "cannot read the gyro file")]:
+        out = tmp_path / "out"
+        assert main(["run", str(src), "--out", str(out), "-q", *args]) == 2
+        err = capsys.readouterr().err.strip()
+        assert len(err.splitlines()) == 1 and match in err, err
+        assert not out.exists()
+    assert main(["run", str(src), "--out", str(tmp_path / "ok"), "-q", "--gyro", str(good), "--hfov", "60"]) == 0
