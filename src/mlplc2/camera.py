@@ -149,9 +149,10 @@ class MotionEstimator:
     frames without texture fall out as outliers (low confidence, no motion assumed).
 
     ``hfov_deg``: the horizontal field of view (needed to turn pixels into angles; 60 deg when
-    unknown, documented). ``gyro``: when given, :meth:`apply` takes ``omega`` from the caller
-    (rad per frame in the camera's axes) and only the heading is estimated. ``heading``: a fixed
-    heading (x, y) in pixels, when the robot knows it.
+    unknown, documented). ``apply(gray, omega=...)``: the rotation given by the caller (rad since the
+    last frame, the camera's axes: a gyro's, ``Model.step(gyro=)``); only the heading is then estimated,
+    and ``rotation_confidence`` says how much of the images agrees with it. ``heading``: a fixed
+    heading (x, y) in pixels of the frames given, when the robot knows it (``TargetParams.heading``).
     """
 
     def __init__(self, *, hfov_deg: float | None = None, grid: tuple[int, int] = (12, 9), work_width: int = 160,
