@@ -175,3 +175,38 @@ def test_cli_gyro_errors_are_one_line_and_write_nothing(tmp_path, capsys):
         assert len(err.splitlines()) == 1 and match in err, err
         assert not out.exists()
     assert main(["run", str(src), "--out", str(tmp_path / "ok"), "-q", "--gyro", str(good), "--hfov", "60"]) == 0
+
+
+def test_the_flow_baseline_takes_the_gyro_too():
+    st, rates = _pan(frames=4, size=(160, 120))
+    model = mlplc2.get_model("flow")(fps=FPS, hfov_deg=60.0)
+    for k, f in enumerate(st.frames):
+        model.step(f, gyro=rates[k])
+    assert model.camera_motion.given and model.camera_motion.omega[1] == pytest.approx(RATE / FPS)
+    with pytest.raises(mlplc2.InputError, match="field of view"):
+        mlplc2.get_model("flow")(fps=FPS).step(st.frames[0], gyro=rates[0])
+
+
+def test_a_fixed_heading_is_given_in_the_pixels_of_the_frames_given():
+    """``TargetParams.heading`` (the one place for a known heading) reaches the camera-motion
+    estimate in working pixels: frames 480 px wide work at 320, so the principal point (239.5, 179.5)
+    is (159.5, 119.5) there; the estimate then reports it exactly (estimated, it would wander by pixels)."""
+    st = stimuli.approach([], size=(480, 360), fps=FPS, frames=10, background="ground",
+                          camera=stimuli.CameraPath(speed_mps=8.0), noise_std=2.0, seed=5)
+    from mlplc2.targets import TargetParams
+    model = mlplc2.MLPLC2(fps=FPS, stabilise=True, target_params=TargetParams(heading=(239.5, 179.5)))
+    heads = []
+    for f in st.frames:
+        model.step(f)
+        heads.append(model.camera_motion.heading)
+    heads = [h for h in heads if h is not None]
+    assert len(heads) >= 4 and all(h == pytest.approx((159.5, 119.5), abs=1e-6) for h in heads)
+
+
+def test_a_given_rotation_is_compensated_whatever_the_images_say():
+    """A gyro is compensated even where the images cannot tell (no texture: confidence 0); an estimate is not."""
+    from mlplc2.camera import CameraMotion
+
+    assert CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=0.0, given=True).trusted
+    assert not CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=0.0).trusted
+    assert not CameraMotion(rotation_confidence=1.0, given=True).trusted      # no rotation: nothing to do
