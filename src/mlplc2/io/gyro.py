@@ -86,10 +86,10 @@ class Gyro:
         """Raise :class:`~mlplc2.InputError` unless the samples span ``first_s`` to ``last_s`` (None: unknown)."""
         slack = SLACK / fps
         if first_s < self.t[0] - slack or (last_s is not None and last_s > self.t[-1] + slack):
-            until = "" if last_s is None else f" to {last_s:g} s"
-            raise InputValueError(f"{self.name}: the gyro covers t = {self.t[0]:g} to {self.t[-1]:g} s but the "
-                                  f"run's frames are at {first_s:g}{until} s (t is on the video's clock: "
-                                  f"frame i at i / fps, or its timestamp)")
+            frames = (f"a frame is at {first_s:g} s" if last_s == first_s else
+                      f"the run's frames are at {first_s:g}" + ("" if last_s is None else f" to {last_s:g}") + " s")
+            raise InputValueError(f"{self.name}: the gyro covers t = {self.t[0]:g} to {self.t[-1]:g} s but {frames} "
+                                  f"(t is on the video's clock: frame i at i / fps, or its timestamp)")
 
     def at(self, t: float, fps: float) -> tuple[float, float, float]:
         """The rate (rad/s) at ``t`` seconds, interpolated linearly; outside the samples (beyond :data:`SLACK`),
