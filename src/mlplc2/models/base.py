@@ -274,9 +274,11 @@ class Model(abc.ABC):
         many grey levels (0-255) is a repeat (a duplicated frame of a frame-rate conversion,
         compression noise aside): the model does not step and returns its last output
         (``Output.repeated``), at most :data:`MAX_REPEATS` times in a row. ``"auto"`` (the
-        default): :data:`REPEAT_THRESHOLD` while the last :data:`REPEAT_WINDOW` frames look
-        duplicated (:func:`looks_duplicated`), else every frame steps (``mlplc2.run`` looks
-        at the first frames of a video first and holds from the start). None: every frame
+        default): while the last :data:`REPEAT_WINDOW` frames look duplicated, a frame whose
+        :func:`frame_change` from the last processed one is at most the level
+        :func:`repeat_split` finds between their copies and new frames, whatever the encoding's
+        noise; else every frame steps (``mlplc2.run`` looks at the first frames of a video first
+        and primes the model, :meth:`prime_repeats`, to hold from the start). None: every frame
         steps. See docs/model.md, "Repeated frames"."""
         self.work_width = None if work_width is None else check_int(work_width, "work_width", minimum=16)
         """Frames wider than this (px) are reduced to it, keeping their aspect (``cv2.INTER_AREA``),

@@ -288,8 +288,8 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
 
 
 def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
-    """The run's models, and whether the first frames looked duplicated (:func:`_prescan_repeats`:
-    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on);
+    """The run's models, and whether the first frames looked duplicated (:func:`_prescan_changes`:
+    the models with ``repeat_threshold="auto"`` are then primed to hold duplicates from the first frame on);
     None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
