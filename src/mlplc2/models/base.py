@@ -131,27 +131,27 @@ def repeat_split(changes) -> float | None:
     """The level separating copies from new frames when a run of frame-to-frame changes
     (:func:`frame_change`, in order) looks like a video whose frames were duplicated, else None.
 
-    The changes (those under :data:`REPEAT_FLOOR` count as it), in size order, split in two classes
-    at the first gap (neighbours at least :data:`REPEAT_GAP` times and :data:`REPEAT_STEP` grey
-    levels apart) that leaves at
-    least 15 % of them below (copies: a 25 fps video shown at 30 fps repeats one frame in 6) and 15 %
-    above (new frames). The video looks duplicated when there are at least 6 changes, there is such
-    a gap, and a copy follows a new frame at least once per 8 frames (a smooth video, small changes
-    first and large ones later, is not taken for one). The level is the gap's geometric middle: relative to this video's own copies and new frames, so a
-    noisier or larger encoding of the same video splits its frames alike."""
-    d = [max(float(v), REPEAT_FLOOR) for v in changes]
-    n = len(d)
+    The changes (those under :data:`REPEAT_FLOOR` count as it), in size order, split in two
+    classes at the first gap (neighbours at least :data:`REPEAT_GAP` times and
+    :data:`REPEAT_STEP` grey levels apart) that leaves at least 15 % of them below (copies: a
+    25 fps video shown at 30 fps repeats one frame in 6) and 15 % above (new frames). The video
+    looks duplicated when there are at least 6 changes, there is such a gap, and a copy follows
+    a new frame at least once per 8 frames (a smooth video, small changes first and large ones
+    later, is not taken for one). The level is the gap's geometric middle: relative to this
+    video's own copies and new frames, so a noisier or larger encoding of the same video splits
+    its frames alike."""
+    d = np.maximum(np.asarray(changes, dtype=np.float64), REPEAT_FLOOR)
+    n = d.size
     if n < 6:
         return None
-    v = np.log(np.sort(d))
-    lo, hi = int(np.ceil(0.15 * n)), n - int(np.ceil(0.15 * n))    # split i: copies v[:i], new v[i:]
-    e = np.exp(v)
-    wide = [i for i in range(lo, hi + 1) if v[i] - v[i - 1] >= np.log(REPEAT_GAP) and e[i] - e[i - 1] >= REPEAT_STEP]
-    if not wide:
+    e = np.sort(d)
+    m = int(np.ceil(0.15 * n))                  # split i: copies e[:i], new frames e[i:]
+    lo, hi = e[m - 1:n - m], e[m:n - m + 1]
+    wide = np.flatnonzero((hi >= REPEAT_GAP * lo) & (hi - lo >= REPEAT_STEP))
+    if wide.size == 0:
         return None
-    i = wide[0]
-    level = float(np.exp(0.5 * (v[i - 1] + v[i])))
-    starts = sum(1 for a, b in zip(d, d[1:]) if a > level >= b)
+    level = float(np.sqrt(lo[wide[0]] * hi[wide[0]]))
+    starts = np.count_nonzero((d[:-1] > level) & (d[1:] <= level))
     return level if starts >= max(1, n // 8) else None
 
 
