@@ -83,22 +83,49 @@ def first_warning(result, model: str) -> dict | None:
     return min(rows, key=lambda r: r["frame"]) if rows else None
 
 
+class _HeldFrames(mlplc2.LGMD2):
+    """A cheap model that records which frames it held as repeats (``Output.repeated``): the decision
+    is the base class's, the same for every model of the run (``mlplc2.run`` primes them alike)."""
+
+    def __init__(self, *args, **kwargs):
+        super().__init__(*args, **kwargs)
+        self.held: list[int] = []
+
+    def step(self, frame, t=None):
+        out = super().step(frame, t)
+        if out.repeated:
+            self.held.append(out.frame)
+        return out
+
+
 def measure(video: Path, truth, native: tuple[int, int], models: list[str]) -> dict[str, dict]:
-    """Per model: first warning frame, position in the labels' pixels, on the collider or not."""
-    res = mlplc2.run(str(video), models, out=False, quiet=True, progress=False, plot=False)
+    """Per model: first warning frame, position in the labels' pixels, on the collider or not; and the
+    indices of the frames held as repeats."""
+    with av.open(str(video)) as c:
+        fps = float(c.streams.video[0].average_rate or 30)
+    probe = _HeldFrames(fps=fps)
+    res = mlplc2.run(str(video), [*models, probe], out=False, quiet=True, progress=False, plot=False)
     sx, sy = native[0] / res.size[0], native[1] / res.size[1]
     out = {}
     for m in models:
         row = first_warning(res, m)
         if row is None:
-            out[m] = {"frame": None, "held": res.repeated.get(m, 0), "duplicated": res.duplicated}
+            out[m] = {"frame": None, "held": res.repeated.get(m, 0), "duplicated": res.duplicated,
+                      "held_frames": probe.held, "alarm": res.alarms.get(m, {}).get("first")}
             continue
         x, y = (row["x"] + 0.5) * sx - 0.5, (row["y"] + 0.5) * sy - 0.5
         col = truth.collider if truth is not None else None
         on = None if col is None or not col.track else bool(on_object(x, y, col, row["frame"]))
         out[m] = {"frame": row["frame"], "x": round(x), "y": round(y), "on": on,
-                  "held": res.repeated.get(m, 0), "duplicated": res.duplicated}
+                  "held": res.repeated.get(m, 0), "duplicated": res.duplicated, "held_frames": probe.held,
+                  "alarm": res.alarms.get(m, {}).get("first")}
     return out
+
+
+def held_diff(a: list[int], b: list[int]) -> str:
+    """The frames held in one list and not the other (``-k``: only in ``a``, ``+k``: only in ``b``)."""
+    sa, sb = set(a), set(b)
+    return " ".join([f"-{k}" for k in sorted(sa - sb)] + [f"+{k}" for k in sorted(sb - sa)]) or "same frames"
 
 
 def fmt(r: dict) -> str:
@@ -140,7 +167,12 @@ def main(argv=None) -> int:
                     write_copy(video, path, target)
                 rows[copy] = measure(path, truth, native, models)
                 print(f"{video.name:34s} {copy:8s} " + "  ".join(f"{m}: {fmt(rows[copy][m]):24s}" for m in models)
-                      + f" held {rows[copy][models[0]]['held']}", flush=True)
+                      + f" held {rows[copy][models[0]]['held']}, first alarm {rows[copy][models[0]]['alarm']}",
+                      flush=True)
+            ref = next(iter(rows.values()))[models[0]]["held_frames"]
+            for copy, r in rows.items():
+                print(f"{'':34s} held ({copy}): " + (held_diff(ref, r[models[0]]["held_frames"]) if copy != "orig"
+                                                     else " ".join(map(str, ref)) or "none"), flush=True)
             for m in models:
                 frames = [r[m]["frame"] for r in rows.values()]
                 got = [f for f in frames if f is not None]

@@ -21,7 +21,8 @@ from .._validation import InputTypeError, InputValueError, as_gray, check_fps, c
 from ..neuropils.attention import Field
 
 __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "CLOCK_TOLERANCE", "WORK_WIDTH", "register",
-           "get_model", "available_models", "resolve_names", "looks_duplicated"]
+           "get_model", "available_models", "resolve_names", "looks_duplicated", "repeat_split", "frame_change",
+           "REPEAT_WINDOW"]
 
 
 @dataclass(frozen=True)
@@ -93,6 +94,23 @@ CLOCK_TOLERANCE = 0.05
 
 #: Frames the "auto" repeat detection looks back on (``Model.repeat_threshold = "auto"``).
 REPEAT_WINDOW = 30
+#: Side (px, at the working size) of the blocks :func:`frame_change` averages the change over:
+#: compression noise (zero-mean, a few grey levels a pixel) averages out within a block, a real
+#: change (an edge that moved, even by 1 px) does not.
+REPEAT_BLOCK = 8
+#: Changes below this (grey levels, block mean) count as this much in :func:`repeat_split`: the
+#: compression noise of copies (block means of 0-9 on the real clips and their copies, most under
+#: 4) is alike below it, so gaps within the copies' noise do not count.
+REPEAT_FLOOR = 4.0
+#: :func:`repeat_split`: a gap between copies and new frames is a ratio of at least this between
+#: neighbouring changes in size order (new frames of ``tests/helpers.duplicated``'s four-phase
+#: scene: 1.6 times its copies' +-6 grey levels of white noise; the real clips: 4 and more) ...
+REPEAT_GAP = 1.5
+#: ... and a difference of at least this many grey levels.
+REPEAT_STEP = 3.0
+#: Fewest frame-to-frame changes :func:`repeat_split` judges (6 let single early frames of 3 of the 46
+#: scenes of the benchmark's suite be held).
+REPEAT_MIN = 12
 #: Default working width (px) of every model (``Model.work_width``): wider frames are reduced to
 #: it (keeping their aspect) before the models see them, and the outputs are mapped back to the
 #: frame's pixels, so one parameter set (pixel radii, thresholds, the paper's 320x240) gives the
@@ -100,24 +118,50 @@ REPEAT_WINDOW = 30
 WORK_WIDTH = 320
 
 
-def looks_duplicated(diffs) -> bool:
-    """Whether a run of frame-to-frame changes (largest pixel change, grey levels, in order)
-    looks like a video whose frames were duplicated: at least 6 of them; at least 30 % at most
-    :data:`REPEAT_THRESHOLD` (copies, compression noise aside) and at least 15 % above it, the
-    latter at least twice as large (medians); and a copy right after a new frame at least once
-    per 8 frames. A smooth video (a slow approach: small changes first, large ones later, or
-    every change alike) is not taken for one."""
-    d = list(diffs)
-    if len(d) < 6:
-        return False
-    small = sorted(v for v in d if v <= REPEAT_THRESHOLD)
-    big = sorted(v for v in d if v > REPEAT_THRESHOLD)
-    if len(small) < 0.3 * len(d) or len(big) < 0.15 * len(d):
-        return False
-    if big[len(big) // 2] < 2.0 * max(small[len(small) // 2], 2.0):
-        return False
-    starts = sum(1 for a, b in zip(d, d[1:]) if a > REPEAT_THRESHOLD >= b)
-    return starts >= max(1, len(d) // 8)
+def frame_change(a: np.ndarray, b: np.ndarray) -> float:
+    """How much frame ``b`` differs from ``a`` (grey, same size) for the "auto" repeat test: the
+    largest mean absolute difference over blocks of :data:`REPEAT_BLOCK` px (grey levels, 0-255).
+    Unlike the largest single pixel change it hardly depends on the compression noise of a copy;
+    unlike the change of reduced frames it keeps a texture's 1 px shift (docs/model.md, "Repeated
+    frames")."""
+    d = cv2.absdiff(a, b)
+    h, w = d.shape[:2]
+    cells = (max(w // REPEAT_BLOCK, 1), max(h // REPEAT_BLOCK, 1))
+    return float(cv2.resize(d, cells, interpolation=cv2.INTER_AREA).max())
+
+
+def repeat_split(changes) -> float | None:
+    """The level separating copies from new frames when a run of frame-to-frame changes
+    (:func:`frame_change`, in order) looks like a video whose frames were duplicated, else None.
+
+    The changes (those under :data:`REPEAT_FLOOR` count as it), in size order, split in two
+    classes at the first gap (neighbours at least :data:`REPEAT_GAP` times and
+    :data:`REPEAT_STEP` grey levels apart) that leaves at least 15 % of them below (copies: a
+    25 fps video shown at 30 fps repeats one frame in 6) and 15 % above (new frames). The video
+    looks duplicated when there are at least :data:`REPEAT_MIN` changes, there is such a gap,
+    and a copy follows a new frame at least once per 8 frames (a smooth video, small changes
+    first and large ones later, is not taken for one). The level is the gap's geometric middle:
+    relative to this video's own copies and new frames, so a noisier or larger encoding of the
+    same video splits its frames alike."""
+    d = np.maximum(np.asarray(changes, dtype=np.float64), REPEAT_FLOOR)
+    n = d.size
+    if n < REPEAT_MIN:
+        return None
+    e = np.sort(d)
+    m = int(np.ceil(0.15 * n))                  # split i: copies e[:i], new frames e[i:]
+    lo, hi = e[m - 1:n - m], e[m:n - m + 1]
+    wide = np.flatnonzero((hi >= REPEAT_GAP * lo) & (hi - lo >= REPEAT_STEP))
+    if wide.size == 0:
+        return None
+    level = float(np.sqrt(lo[wide[0]] * hi[wide[0]]))
+    starts = np.count_nonzero((d[:-1] > level) & (d[1:] <= level))
+    return level if starts >= max(1, n // 8) else None
+
+
+def looks_duplicated(changes) -> bool:
+    """Whether a run of frame-to-frame changes (:func:`frame_change`, in order) looks like a video
+    whose frames were duplicated (:func:`repeat_split`)."""
+    return repeat_split(changes) is not None
 
 
 def check_repeat_threshold(value) -> float | str | None:
@@ -233,9 +277,11 @@ class Model(abc.ABC):
         many grey levels (0-255) is a repeat (a duplicated frame of a frame-rate conversion,
         compression noise aside): the model does not step and returns its last output
         (``Output.repeated``), at most :data:`MAX_REPEATS` times in a row. ``"auto"`` (the
-        default): :data:`REPEAT_THRESHOLD` while the last :data:`REPEAT_WINDOW` frames look
-        duplicated (:func:`looks_duplicated`), else every frame steps (``mlplc2.run`` looks
-        at the first frames of a video first and holds from the start). None: every frame
+        default): while the last :data:`REPEAT_WINDOW` frames look duplicated, a frame whose
+        :func:`frame_change` from the last processed one is at most the level
+        :func:`repeat_split` finds between their copies and new frames, whatever the encoding's
+        noise; else every frame steps (``mlplc2.run`` looks at the first frames of a video first
+        and primes the model, :meth:`prime_repeats`, to hold from the start). None: every frame
         steps. See docs/model.md, "Repeated frames"."""
         self.work_width = None if work_width is None else check_int(work_width, "work_width", minimum=16)
         """Frames wider than this (px) are reduced to it, keeping their aspect (``cv2.INTER_AREA``),
@@ -255,6 +301,7 @@ class Model(abc.ABC):
         self._repeats = 0
         self._prev_in: np.ndarray | None = None      # the previous input frame ("auto" repeats)
         self._diffs.clear()
+        self._primed = 0                              # changes of prime_repeats still ahead
         self._work: tuple[int, int] | None = None     # (W, H) of the working frames, None: as given
         self._t0: float | None = None      # time (s) of frame 0: the clock's origin
         self._t_last: float | None = None  # time (s) of the last frame
@@ -379,22 +426,20 @@ class Model(abc.ABC):
             self._t0 = time_s
         if self._work is not None:
             gray = cv2.resize(gray, self._work, interpolation=cv2.INTER_AREA)
-        threshold = self._repeat_level(gray)
-        if threshold is not None:
-            last = self._last_gray
-            if last is not None and cv2.norm(gray, last, cv2.NORM_INF) <= threshold:
-                self._repeats += 1
-                if self._repeats <= MAX_REPEATS:
-                    out = self._held_output(time_s)
-                    self._frame += 1
-                    return out
-                # A longer run is a still scene, not a duplicated frame: step as usual.
-            else:
-                self._repeats = 0
-                if last is None:
+        if self._is_repeat(gray):
+            self._repeats += 1
+            if self._repeats <= MAX_REPEATS:
+                out = self._held_output(time_s)
+                self._frame += 1
+                return out
+            # A longer run is a still scene, not a duplicated frame: step as usual.
+        else:
+            self._repeats = 0
+            if self.repeat_threshold is not None:
+                if self._last_gray is None:
                     self._last_gray = gray.copy()
                 else:
-                    np.copyto(last, gray)
+                    np.copyto(self._last_gray, gray)
         self.interval = 1 if first else clock - self._clock_done
         self._clock_done = clock
         self.rotation_given = None if self._turned is None or rate is None else tuple(float(v) for v in self._turned)
@@ -414,18 +459,34 @@ class Model(abc.ABC):
         sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]
         return (point[0] + 0.5) * sx - 0.5, (point[1] + 0.5) * sy - 0.5
 
-    def _repeat_level(self, gray: np.ndarray) -> float | None:
-        """The repeat threshold for this frame: ``repeat_threshold``, or for ``"auto"``
-        :data:`REPEAT_THRESHOLD` while the recent frames look duplicated (None otherwise)."""
+    def prime_repeats(self, changes) -> None:
+        """Give a model left on ``"auto"`` the frame-to-frame changes (:func:`frame_change`, at the
+        working size) of the video's first frames, measured ahead (``mlplc2.run`` does): until it
+        has seen :data:`REPEAT_WINDOW` frames of its own, it judges repeats on these, so a
+        duplicated video is held from its first copy. Call it before the first frame."""
+        self._diffs.clear()
+        self._diffs.extend(float(c) for c in list(changes)[:REPEAT_WINDOW])
+        self._primed = len(self._diffs)
+
+    def _is_repeat(self, gray: np.ndarray) -> bool:
+        """Whether ``gray`` (working size) repeats the last processed frame: its largest pixel change
+        at most ``repeat_threshold``; for ``"auto"`` its :func:`frame_change` at most the level
+        :func:`repeat_split` finds in the last :data:`REPEAT_WINDOW` frame-to-frame changes."""
         if self.repeat_threshold != "auto":
-            return self.repeat_threshold
+            last = self._last_gray
+            return (self.repeat_threshold is not None and last is not None
+                    and cv2.norm(gray, last, cv2.NORM_INF) <= self.repeat_threshold)
         prev = self._prev_in
-        if prev is not None:
-            self._diffs.append(cv2.norm(gray, prev, cv2.NORM_INF))
-            np.copyto(prev, gray)
-        else:
+        if prev is None:
             self._prev_in = gray.copy()
-        return REPEAT_THRESHOLD if looks_duplicated(self._diffs) else None
+            return False
+        if self._primed:
+            self._primed -= 1     # this change is in the window already (prime_repeats)
+        else:
+            self._diffs.append(frame_change(gray, prev))
+        np.copyto(prev, gray)
+        level = repeat_split(self._diffs)
+        return level is not None and frame_change(gray, self._last_gray) <= level
 
     def _held_output(self, time_s: float) -> Output:
         """The last output for a repeated frame: this frame's index and time, ``repeated`` set, and

@@ -51,7 +51,7 @@ from .._files import write_json
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from ..io.gyro import Gyro
 from ..io.formats import STDIN
-from ..models.base import (REPEAT_THRESHOLD, Model, available_models, check_repeat_threshold, get_model,
+from ..models.base import (Model, available_models, check_repeat_threshold, frame_change, get_model,
                           looks_duplicated, resolve_names)
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
@@ -295,8 +295,8 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
 
 
 def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
-    """The run's models, and whether the first frames looked duplicated (:func:`_prescan_repeats`:
-    the models with ``repeat_threshold="auto"`` then hold duplicates from the first frame on);
+    """The run's models, and whether the first frames looked duplicated (:func:`_prescan_changes`:
+    the models with ``repeat_threshold="auto"`` are then primed to hold duplicates from the first frame on);
     None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
@@ -312,20 +312,12 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
         # The models' reduction to their working width (Model.work_width), done in the decoding thread.
         src.reduce_to((work, max(int(round(h * work / w)), max(m.min_size for m in built))))
     auto = [m for m in built if m.repeat_threshold == "auto"]
-    duplicated = _prescan_repeats(source, auto, src, options) if auto else None
+    changes = _prescan_changes(source, auto, src, options) if auto else None
+    duplicated = None if changes is None else looks_duplicated(changes)
     if duplicated:
-        built = [_holding(m, models, src.fps, options) if m in auto else m for m in built]
+        for m in auto:
+            m.prime_repeats(changes)
     return built, duplicated
-
-
-def _holding(m: Model, models: list, fps: float, options: RunOptions) -> Model:
-    """Model ``m`` holding duplicated frames from the start (``REPEAT_THRESHOLD``): a registry
-    model is built so; a caller's instance is set so."""
-    if any(m is o for o in models):
-        m.repeat_threshold = REPEAT_THRESHOLD
-        return m
-    return _new_model(m.name, fps, _model_options(options, _names(models)), repeat_threshold=REPEAT_THRESHOLD)
-
 
 
 def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, options: RunOptions | None = None,
@@ -435,16 +427,18 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
 PRESCAN_FRAMES = 60
 
 
-def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOptions) -> bool:
+def _prescan_changes(source, auto: list[Model], src: FrameSource, options: RunOptions) -> list[float]:
     """For a video or image sequence with models whose ``repeat_threshold`` is ``"auto"`` (``auto``):
-    whether its first :data:`PRESCAN_FRAMES` frames look duplicated (:func:`mlplc2.models.base.looks_duplicated`,
-    measured at the models' working size). If so those models hold duplicates from the first frame
-    on (``REPEAT_THRESHOLD``) instead of finding out after a few frames. A camera and a stream
-    (URL, stdin: read once) are not scanned: their models find out after a few frames."""
+    the frame-to-frame changes of its first :data:`PRESCAN_FRAMES` frames
+    (:func:`mlplc2.models.base.frame_change`, at the models' working size). When they look duplicated
+    (:func:`mlplc2.models.base.looks_duplicated`) those models are primed with them
+    (``Model.prime_repeats``) and hold duplicates from the first copy on instead of finding out
+    after a few frames. A camera and a stream (URL, stdin: read once) are not scanned (no changes):
+    their models find out after a few frames."""
     import cv2
 
     if not auto or src.kind in ("camera", "stream") or isinstance(source, FrameSource):
-        return False
+        return []
     width = min((m.work_width for m in auto if m.work_width is not None), default=None)
     scan = open_source(source, **options.source_options())
     diffs, prev = [], None
@@ -457,11 +451,11 @@ def _prescan_repeats(source, auto: list[Model], src: FrameSource, options: RunOp
                 g = cv2.resize(g, (width, max(int(round(g.shape[0] * width / g.shape[1])), 3)),
                                interpolation=cv2.INTER_AREA)
             if prev is not None:
-                diffs.append(float(cv2.norm(g, prev, cv2.NORM_INF)))
+                diffs.append(frame_change(g, prev))
             prev = g
     finally:
         scan.close()
-    return looks_duplicated(diffs)
+    return diffs
 
 
 
