@@ -500,7 +500,9 @@ class _Frames:
         names, result, src = self.names, self.result, self.src
         time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
         rate = None if self.options.gyro is None else self.options.gyro.at(time_s, src.fps)
-        outputs = [m.step(frame, src.time_s, gyro=None if m.gyro_refusal() else rate) for m in self.built]
+        # the gyro only to the models that take it (a model of the user's may not know the keyword)
+        outputs = [m.step(frame, src.time_s) if rate is None or m.gyro_refusal() else
+                   m.step(frame, src.time_s, gyro=rate) for m in self.built]
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:
