@@ -94,8 +94,9 @@ class Observation(NamedTuple):
     """One frame of a track's history (what the fits use): the frame's time in frame intervals
     (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
     log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width,
-    the accumulated log-anisotropy, and whether the box was cut by the image's border
-    (``TargetParams.border``: then its centre and width are not the object's)."""
+    the accumulated log-anisotropy, whether the box was cut by the image's border
+    (``TargetParams.border``: then its centre and size are not the object's), and its height
+    (None: as its width), the unit of the vertical course (:func:`fit_course`)."""
 
     frame: int
     log_scale: float
@@ -104,6 +105,7 @@ class Observation(NamedTuple):
     width: float
     anisotropy: float
     cut: bool = False
+    height: float | None = None
 
 
 @dataclass
@@ -190,7 +192,7 @@ class Track:
             self.oy += float(dv)
         h, w = shape
         self.history.append(Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
-                                        self.aniso, border is not None and self.cut(shape, border)))
+                                        self.aniso, border is not None and self.cut(shape, border), self.h))
         return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
@@ -315,7 +317,7 @@ class TargetLayer:
                 continue
             if not self._grows(levels, t, alarm=alarm):
                 continue
-            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
+            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)], maxlen=p.window)
             self._next += 1
             if f is not None:
                 self._own(t, f, index)
@@ -475,7 +477,8 @@ def course(t: Track, heading: tuple[float, float], ttc: float, min_frames: int) 
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
-                      [q.width for q in inside], heading, ahead)
+                      [q.width for q in inside], heading, ahead,
+                      heights=[q.width if q.height is None else q.height for q in inside])
 
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:
