@@ -5,6 +5,7 @@ onset), and a forward drive past and into static objects."""
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import pytest
 
@@ -23,7 +24,7 @@ def _looming(cx: float, frames: int = 12, *, width: float = 20.0, contact: int =
     about its own centre, ``1 / S`` linear in time, contact at frame ``contact``), its box centred
     at ``cx`` px; ``each(track, frame)`` after every frame."""
     p = TargetParams()
-    t = Track(1, 0, cx, 60.0, width, width)
+    t = Track(1, 0, cx, 60.0, width, width, history=deque(maxlen=p.window))   # as the layer keeps it
     t.last_answer = frames                               # an attention field answered: looming evidence
     for k in range(1, frames + 1):
         k_scale = (contact - (k - 1)) / (contact - k)    # Z_{k-1} / Z_k
@@ -153,3 +154,14 @@ def test_an_object_beside_the_path_still_misses_in_its_widths():
     # a parked car 1.6 m wide whose centre passes 2.8 m to the left: 1.75 widths, no warning
     out = estimate(_approach_track(-2.8, 0.0, 1.6, 1.5), TargetParams(), FPS, 12, SHAPE)
     assert out.miss_xy == pytest.approx((-1.75, 0.0), abs=1e-6) and not out.warning
+
+
+def test_the_course_seen_before_the_box_reached_the_border_holds_after():
+    # an object near the left edge, coming straight on: its growing box reaches the border after
+    # 6 frames, and the last 12 frames are all cut. The course of the frames in view (dead centre)
+    # still holds and the warning with it (before: no course once the window held no frame in view)
+    t = _looming(14.0, 20)
+    assert len(t.history) == 12 and all(q.cut for q in t.history) and len(t.inside) == 6
+    out = estimate(t, TargetParams(), FPS, 20, SHAPE)
+    assert out.ttc_s == pytest.approx((CONTACT - 20) / FPS, rel=1e-6)
+    assert out.miss == pytest.approx(0.0, abs=1e-6) and out.warning
