@@ -5,6 +5,7 @@ onset), and a forward drive past and into static objects."""
 from __future__ import annotations
 
 import math
+from collections import deque
 
 import pytest
 
@@ -23,7 +24,7 @@ def _looming(cx: float, frames: int = 12, *, width: float = 20.0, contact: int =
     about its own centre, ``1 / S`` linear in time, contact at frame ``contact``), its box centred
     at ``cx`` px; ``each(track, frame)`` after every frame."""
     p = TargetParams()
-    t = Track(1, 0, cx, 60.0, width, width)
+    t = Track(1, 0, cx, 60.0, width, width, history=deque(maxlen=p.window))   # as the layer keeps it
     t.last_answer = frames                               # an attention field answered: looming evidence
     for k in range(1, frames + 1):
         k_scale = (contact - (k - 1)) / (contact - k)    # Z_{k-1} / Z_k
@@ -106,3 +107,61 @@ def test_a_forward_drive_warns_of_the_static_object_in_its_path_not_of_the_one_b
 def _on(t, obj, frame, margin=4.0):
     p = obj.point_at(frame)
     return p is not None and abs(t.x - p.x) <= p.width / 2 + margin and abs(t.y - p.y) <= p.width / 2 + margin
+
+
+# -- the course per axis (issue 22, item 3): horizontal offset in the object's widths, vertical
+# in its heights, so that "passes within its own extent" holds for tall and for flat objects --
+def _approach_track(x_m: float, y_m: float, w_m: float, h_m: float, frames: int = 12) -> Track:
+    """The track of a fronto-parallel object of ``w_m`` x ``h_m`` metres whose centre passes the
+    camera plane at (``x_m``, ``y_m``) (right, down of the camera), closing straight on at constant
+    speed: contact at frame ``CONTACT``, its box exact (f = 100 px, the heading at the principal
+    point), built frame by frame as :meth:`Track.follow` sees it."""
+    f, cx, cy = 100.0, (SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0
+
+    def z(k):                                    # metres: 0 at contact
+        return 0.25 * (CONTACT - k)
+
+    t = Track(1, 0, cx + f * x_m / z(0), cy + f * y_m / z(0), f * w_m / z(0), f * h_m / z(0))
+    t.last_answer = frames
+    p = TargetParams()
+    for k in range(1, frames + 1):
+        s = z(k - 1) / z(k)
+        assert t.follow(((s - 1) * f * x_m / z(k - 1), (s - 1) * f * y_m / z(k - 1), s, s, math.log(s), 0.0), k,
+                        FPS, SHAPE, p.max_fails, border=p.border)
+    return t
+
+
+def test_a_tall_object_whose_extent_covers_the_camera_warns():
+    # a post 0.3 m wide and 1.5 m tall, its centre 0.4 m above the camera: the camera runs into
+    # it (0.27 of its height off centre). In widths (before) it "missed" by 1.3 widths
+    t = _approach_track(0.0, -0.4, 0.3, 1.5)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.miss_xy == pytest.approx((0.0, -0.4 / 1.5), abs=1e-6)
+    assert out.warning
+
+
+def test_a_low_flat_object_below_the_path_does_not_warn():
+    # a slab 2 m wide and 0.25 m high lying 1.2 m below the camera (a kerb, a low object on the
+    # road that the camera passes over): 4.8 of its heights below, though only 0.6 of its widths
+    t = _approach_track(0.0, 1.2, 2.0, 0.25)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
+    assert out.miss_xy == pytest.approx((0.0, 1.2 / 0.25), abs=1e-6)
+    assert not out.warning
+
+
+def test_an_object_beside_the_path_still_misses_in_its_widths():
+    # a parked car 1.6 m wide whose centre passes 2.8 m to the left: 1.75 widths, no warning
+    out = estimate(_approach_track(-2.8, 0.0, 1.6, 1.5), TargetParams(), FPS, 12, SHAPE)
+    assert out.miss_xy == pytest.approx((-1.75, 0.0), abs=1e-6) and not out.warning
+
+
+def test_the_course_seen_before_the_box_reached_the_border_holds_after():
+    # an object near the left edge, coming straight on: its growing box reaches the border after
+    # 6 frames, and the last 12 frames are all cut. The course of the frames in view (dead centre)
+    # still holds and the warning with it (before: no course once the window held no frame in view)
+    t = _looming(14.0, 20)
+    assert len(t.history) == 12 and all(q.cut for q in t.history) and len(t.inside) == 6
+    out = estimate(t, TargetParams(), FPS, 20, SHAPE)
+    assert out.ttc_s == pytest.approx((CONTACT - 20) / FPS, rel=1e-6)
+    assert out.miss == pytest.approx(0.0, abs=1e-6) and out.warning

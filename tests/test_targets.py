@@ -72,6 +72,11 @@ def test_fit_course_gives_the_offset_at_contact(x_m, y_m):
     xs, ys, ws = 159.5 + f * x_m / z, 119.5 + f * y_m / z, f * w_m / z
     miss = fit_course(frames, xs, ys, ws, (159.5, 119.5), ttc=40.0)
     assert miss == pytest.approx((x_m / w_m, y_m / w_m), abs=1e-9)
+    # per axis: 1.5 m tall, so the vertical offset is Y / H (in its heights), the horizontal X / W
+    h_m = 1.5
+    miss = fit_course(frames, xs, ys, ws, (159.5, 119.5), ttc=40.0, heights=f * h_m / z)
+    assert miss == pytest.approx((x_m / w_m, y_m / h_m), abs=1e-9)
+    assert fit_course(frames, xs, ys, ws, (159.5, 119.5), 40.0, heights=0.0 * z) is None
 
 
 def _texture(seed=0):
@@ -315,7 +320,7 @@ def test_track_follow_counts_fails_moves_refits_and_loses():
     assert t.fails == 2 and not t.history
     assert t.follow((2.0, -1.0, 1.1, 1.2, 0.1, 0.05), 3, 30.0, (100, 100), 3)
     assert t.fails == 0 and (t.cx, t.cy) == (52.0, 39.0) and t.w == 10.0 * 1.1 and t.h == 10.0 * 1.2
-    assert t.rate == 0.1 * 30.0 and t.history[-1] == Observation(3, 0.1, 52.0, 39.0, t.w, 0.05)
+    assert t.rate == 0.1 * 30.0 and t.history[-1] == Observation(3, 0.1, 52.0, 39.0, t.w, 0.05, False, t.h)
     assert (t.history[-1].frame, t.history[-1].log_scale, t.history[-1].anisotropy) == (3, 0.1, 0.05)
 
     class Pan:                                       # the camera's image motion: 1 px right

@@ -156,8 +156,9 @@ def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
                    help=f"{what}a target warns only when its time to contact is at most S seconds "
                         f"(TargetParams.horizon_s, default {d.horizon_s:g}; docs/targets.md)")
     p.add_argument("--max-miss", type=nonneg_float, metavar="W",
-                   help=f"{what}... and its predicted miss at contact at most W object widths "
-                        f"(TargetParams.max_miss, default {d.max_miss:g})")
+                   help=f"{what}... and its predicted miss at contact at most W object extents "
+                        f"(widths across, heights up and down; "
+                        f"TargetParams.max_miss, default {d.max_miss:g})")
     p.add_argument("--alarm-warns", action="store_true",
                    help=f"{what}a target owning a field in collision alarm warns unless its own measurement "
                         "says otherwise (TargetParams.alarm_warns; off by default: more false warnings "

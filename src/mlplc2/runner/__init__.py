@@ -15,7 +15,7 @@ steps every model on each frame, writing as it goes:
 ``targets.csv``
     (models with targets) one row per target per frame:
     ``frame,model,target_id,x,y,width,height,ttc_s,miss,warning,fields,azimuth_deg,elevation_deg``
-    (input pixels; time to contact in s, miss in object widths, empty while not estimable;
+    (input pixels; time to contact in s, miss in object extents (widths across, heights up and down), empty while not estimable;
     the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
     space-separated).
 ``responses.png``

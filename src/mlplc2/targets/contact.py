@@ -3,7 +3,7 @@
 :func:`fit_contact`: the least-squares line ``1 / S = a + b t`` through the accumulated scale
 ``S``, contact at ``-a / b`` frames, its standard error by the delta method (:class:`ContactFit`);
 :func:`fit_course`: the lines through the centre's offset from the heading point in object
-widths, evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6).
+widths (horizontally) and heights (vertically), evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6).
 """
 
 from __future__ import annotations
@@ -62,12 +62,16 @@ def fit_contact(frames, log_scale) -> ContactFit | None:
     return ContactFit(ttc, sigma, tstat, rate)
 
 
-def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float) -> tuple[float, float] | None:
-    """Predicted offset at contact from the heading point, in object widths ``(right, down)``:
-    the lines through ``(x - x_h) / w`` and ``(y - y_h) / w`` over ``frames``, evaluated
-    ``ttc`` frames after the newest one (its length is the miss distance)."""
+def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float,
+               heights=None) -> tuple[float, float] | None:
+    """Predicted offset at contact from the heading point, per axis in the object's own extent
+    along it ``(right, down)``: the lines through ``(x - x_h) / w`` and ``(y - y_h) / h`` over
+    ``frames``, evaluated ``ttc`` frames after the newest one (``docs/targets.md``, step 6; its
+    length is the miss distance). ``heights``: the box's heights (None: the widths, the course
+    in widths on both axes)."""
     n = len(frames)
-    if n < 2 or any(float(w) <= 0 for w in widths):
+    heights = widths if heights is None else heights
+    if n < 2 or any(float(w) <= 0 for w in widths) or any(float(v) <= 0 for v in heights):
         return None
     t_end = float(frames[-1])
     t = [float(f) - t_end for f in frames]
@@ -77,10 +81,10 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float)
     if sxx <= 0:
         return None
 
-    def at(pos, origin):
-        z = [(float(q) - origin) / float(w) for q, w in zip(pos, widths)]
+    def at(pos, origin, sizes):
+        z = [(float(q) - origin) / float(w) for q, w in zip(pos, sizes)]
         zm = sum(z) / n
         b = sum([d * (v - zm) for d, v in zip(dt, z)]) / sxx
         return zm + b * (ttc - tm)
 
-    return at(xs, heading[0]), at(ys, heading[1])
+    return at(xs, heading[0], widths), at(ys, heading[1], heights)

@@ -44,8 +44,8 @@ class Target:
     ttc_s : float or None
         Time to contact in seconds; None while the growth is not significant.
     miss : float or None
-        Predicted lateral miss distance at contact, in object widths (0 = dead centre); None
-        without ``ttc_s``.
+        Predicted miss distance at contact, in the object's own extent (the length of
+        ``miss_xy``; 0 = dead centre); None without ``ttc_s``.
     warning : bool
         On a collision course (``miss <= max_miss``) with ``ttc_s <= horizon_s``, contact time
         known, and looming evidence; or one of its fields in collision alarm and nothing of its
@@ -64,8 +64,8 @@ class Target:
         Bearing of the centre in degrees (azimuth positive right, elevation positive up)
         when the model was given the camera's field of view; None otherwise.
     miss_xy : (float, float) or None
-        Where the object's centre passes the camera plane, from the heading point, in object
-        widths (right, down): ``miss`` is its length.
+        Where the object's centre passes the camera plane, from the heading point: right in
+        object widths, down in object heights; ``miss`` is its length.
     """
 
     id: int
@@ -94,8 +94,9 @@ class Observation(NamedTuple):
     """One frame of a track's history (what the fits use): the frame's time in frame intervals
     (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
     log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width,
-    the accumulated log-anisotropy, and whether the box was cut by the image's border
-    (``TargetParams.border``: then its centre and width are not the object's)."""
+    the accumulated log-anisotropy, whether the box was cut by the image's border
+    (``TargetParams.border``: then its centre and size are not the object's), and its height
+    (None: as its width), the unit of the vertical course (:func:`fit_course`)."""
 
     frame: int
     log_scale: float
@@ -104,13 +105,15 @@ class Observation(NamedTuple):
     width: float
     anisotropy: float
     cut: bool = False
+    height: float | None = None
 
 
 @dataclass
 class Track:
     """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
     history the fits use (:class:`Observation` records), and the evidence
-    counters. ``ox``, ``oy``: the camera's turn accumulated at the box since its birth (px; 0
+    counters; ``inside``: the last observations (at most the history's length) whose box was not
+    cut, the course's points (:func:`course`). ``ox``, ``oy``: the camera's turn accumulated at the box since its birth (px; 0
     unless the model measures the camera's motion): the history's positions are the box's less
     it, so that the course (:func:`fit_course`) is the object's own, not the pan's."""
 
@@ -123,6 +126,7 @@ class Track:
     log_s: float = 0.0
     aniso: float = 0.0                               # accumulated log(ky / kx)
     history: deque = field(default_factory=deque)   # of Observation
+    inside: deque = field(default_factory=deque)    # the last observations whose box was not cut
     fails: int = 0
     last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
     last_alarm: int = -(10 ** 9)       # frame an attention field of it was last in collision alarm
@@ -189,8 +193,13 @@ class Track:
             self.ox += float(du)
             self.oy += float(dv)
         h, w = shape
-        self.history.append(Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w,
-                                        self.aniso, border is not None and self.cut(shape, border)))
+        obs = Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w, self.aniso,
+                          border is not None and self.cut(shape, border), self.h)
+        self.history.append(obs)
+        if not obs.cut:                  # the course's points outlive the window while the box is cut
+            self.inside.append(obs)
+            while self.history.maxlen is not None and len(self.inside) > self.history.maxlen:
+                self.inside.popleft()
         return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
@@ -315,7 +324,8 @@ class TargetLayer:
                 continue
             if not self._grows(levels, t, alarm=alarm):
                 continue
-            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0)], maxlen=p.window)
+            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)], maxlen=p.window)
+            t.inside = deque(t.history)
             self._next += 1
             if f is not None:
                 self._own(t, f, index)
@@ -466,16 +476,18 @@ class TargetLayer:
 
 
 def course(t: Track, heading: tuple[float, float], ttc: float, min_frames: int) -> tuple[float, float] | None:
-    """The predicted miss of track ``t`` (:func:`fit_course`), ``ttc`` frames after its newest
-    observation, against ``heading`` (px, this frame's pixels), from the observations whose box
-    was wholly inside the frame (a cut box gives neither the object's centre nor its width); None
-    with fewer than ``min_frames`` of them."""
-    inside = [q for q in t.history if not q.cut]
+    """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
+    heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
+    pixels), from its last observations whose box was wholly inside the frame (``Track.inside``,
+    however old: a cut box gives neither the object's centre nor its size); None with fewer than
+    ``min_frames`` of them."""
+    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     if len(inside) < min_frames:
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
-                      [q.width for q in inside], heading, ahead)
+                      [q.width for q in inside], heading, ahead,
+                      heights=[q.width if q.height is None else q.height for q in inside])
 
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:

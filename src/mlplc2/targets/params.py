@@ -96,8 +96,9 @@ class TargetParams(ParameterSet):
                                                 unit="px", valid=Valid.point())
     border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
                           neither the object's size nor its centre, so the course is fitted only from the
-                          frames where the box lay wholly inside; with fewer than ``min_frames`` such frames
-                          in the window, no course and no warning.""", unit="px", valid=Valid.real(minimum=0))
+                          last ``window`` frames of the track where the box lay wholly inside (however
+                          old: the course of an object seen whole holds while its growing box is cut);
+                          with fewer than ``min_frames`` such frames, no course and no warning.""", unit="px", valid=Valid.real(minimum=0))
     max_anisotropy: float = param(0.35, """Largest difference of the vertical and horizontal growth
                                   (log ky - log kx over the fit's frames) relative to the growth of a
                                   looming target: a fronto-parallel object grows alike in both directions
@@ -107,7 +108,9 @@ class TargetParams(ParameterSet):
     # --- the warning ------------------------------------------------------------------------
     horizon_s: float = param(1.0, "A target warns only when its ``ttc_s`` is at most this ...", unit="s",
                              valid=Valid.real(minimum=0))
-    max_miss: float = param(1.0, "... its predicted miss at contact at most this ...", unit="object widths",
+    max_miss: float = param(1.0, """... its predicted miss at contact at most this (the length of the
+                            offset of its centre from the heading, horizontally in its widths, vertically
+                            in its heights) ...""", unit="object extents",
                             valid=Valid.real(minimum=0))
     max_ttc_sigma: float = param(0.3, "... its contact time known to this fraction (standard error / ttc) ...",
                                  valid=Valid.real(minimum=0))
