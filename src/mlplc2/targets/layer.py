@@ -346,8 +346,10 @@ class TargetLayer:
 
     def _measuring(self, t: Track, index: int) -> bool:
         """Whether track ``t`` measures an approach: it had a time to contact within the last
-        ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``)."""
-        return index - max(t.last_estimate, t.born) <= self.params.stale_frames
+        ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``); always
+        with ``stale_frames`` = 0 (off)."""
+        n = self.params.stale_frames
+        return n == 0 or index - max(t.last_estimate, t.born) <= n
 
     def _holds(self, t: Track, x: float, y: float, index: int, margin: float = 0.0) -> bool:
         """Whether the point (x, y) (a field, a seed, a new box's centre) belongs to track ``t``: it lies
