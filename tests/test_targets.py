@@ -522,3 +522,56 @@ def test_real_clip_warning_no_later_than_the_field_alarm(real_dir, clip):
     (obj,) = ev.warning_objects
     assert obj["alarm_frame"] is not None
     assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]
+
+
+def _wide_region_then_disc(n=60, disc_from=30, at=(90, 120)):
+    """Frames of a wide textured region (200 x 100 px about the frame's centre) that grows for 10
+    frames and then stands still (a box that measures no approach, as the road ahead), and a dark
+    disc inside it, 70 px left of its centre, that approaches (radius x 1.05 per frame) from
+    ``disc_from`` on; with the boxes of the two things."""
+    rng = np.random.default_rng(3)
+    tex = cv2.GaussianBlur(rng.uniform(60, 200, (100, 200)).astype(np.float32), (0, 0), 2.0)
+    frames, big, small = [], [], []
+    for k in range(n):
+        img = np.full((240, 320), 128, np.float32)
+        s = 0.8 * math.exp(0.02 * min(k, 10))
+        w, h = int(round(200 * s)), int(round(100 * s))
+        x0, y0 = 160 - w // 2, 120 - h // 2
+        img[y0:y0 + h, x0:x0 + w] = cv2.resize(tex, (w, h), interpolation=cv2.INTER_LINEAR)
+        r = 6.0 * math.exp(0.05 * max(k - disc_from, 0))
+        cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 20, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(img)
+        big.append((160.0, 120.0, float(w), float(h)))
+        small.append((float(at[0]), float(at[1]), 2 * r + 4, 2 * r + 4))
+    return frames, big, small
+
+
+@pytest.mark.parametrize("stale_frames", [12, 0])
+def test_object_approaching_inside_a_stale_box_gets_its_own_target(stale_frames):
+    """A wide region tracked first (its field seeds it) stops growing: its box holds no time to
+    contact. A smaller object then approaches inside it, off its centre, with a field of its own:
+    that field must seed a target of its own which warns (with ``stale_frames`` = 0, off, the
+    default, the wide box owns the field and the object never gets a target)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    frames, big, small = _wide_region_then_disc()
+    layer = TargetLayer(TargetParams(stale_frames=stale_frames), FPS)
+    outs = []
+    for k, g in enumerate(frames):
+        fields = []
+        if 2 <= k <= 9:
+            fields.append(SimpleNamespace(id=1, x=160.0, y=120.0, radius=40, response=1.0, box=big[k]))
+        if k >= 32:
+            fields.append(SimpleNamespace(id=2, x=90.0, y=120.0, radius=40, response=1.0, box=small[k]))
+        outs.append(layer.step(g, None, fields, k))
+    wide = {t.id for out in outs[:12] for t in out if abs(t.x - 160) < 10}
+    assert wide, "the wide region got no target"
+    on_disc = [t for out in outs[32:] for t in out if t.id not in wide and abs(t.x - 90) < 8 and abs(t.y - 120) < 8]
+    warned = [t for t in on_disc if t.warning]
+    if stale_frames == 12:
+        assert warned, "the approaching object never warned"
+        assert len({t.id for t in on_disc}) == 1
+    else:
+        assert not warned

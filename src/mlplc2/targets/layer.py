@@ -285,10 +285,10 @@ class TargetLayer:
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
         self._clock = clock
-        self._merge()
+        self._merge(index)
         seeds = []
         for f in fields:
-            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))]
+            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, index, self._own_margin(t, f))]
             if owners:
                 self._own(min(owners, key=lambda t: t.size), f, index)
             else:
@@ -298,7 +298,9 @@ class TargetLayer:
 
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
-            zones = [(int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + p.claim)) for t in self._tracks]
+            zones = [(int(round(t.cx)), int(round(t.cy)),
+                      int(t.size / 2.0 + p.claim if self._measuring(t, index) else t.size / 4.0))
+                     for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             cand = argmax_outside(lm.magnitude, zones)
             if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
@@ -308,7 +310,7 @@ class TargetLayer:
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
-            if any(t.contains(x, y) for t in self._tracks):
+            if any(self._holds(t, x, y, index) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
             box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
@@ -317,7 +319,7 @@ class TargetLayer:
             if box is None:
                 continue
             t = Track(self._next, index, *box)
-            host = next((o for o in self._tracks if o.overlap(t) >= 0.5), None)
+            host = next((o for o in self._tracks if self._hosts(o, t, index)), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, index)
@@ -351,6 +353,29 @@ class TargetLayer:
             t.last_answer = index
         if getattr(f, "collision", False):
             t.last_alarm = index
+
+    def _measuring(self, t: Track, index: int) -> bool:
+        """Whether track ``t`` measures an approach: it had a time to contact within the last
+        ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``); always
+        with ``stale_frames`` = 0 (off)."""
+        n = self.params.stale_frames
+        return n == 0 or index - max(t.last_estimate, t.born) <= n
+
+    def _holds(self, t: Track, x: float, y: float, index: int, margin: float = 0.0) -> bool:
+        """Whether the point (x, y) (a field, a seed, a new box's centre) belongs to track ``t``: it lies
+        in its box (plus ``margin``) while the track measures an approach (:meth:`_measuring`), else
+        only within a quarter of the box's width and height of its centre. A stale box (the road
+        ahead, a wall: growth without a time to contact) then does not swallow the fields and seeds
+        of an object that approaches inside it."""
+        if self._measuring(t, index):
+            return t.contains(x, y, margin)
+        return abs(x - t.cx) <= t.w / 4.0 and abs(y - t.cy) <= t.h / 4.0
+
+    def _hosts(self, o: Track, t: Track, index: int) -> bool:
+        """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other,
+        and, when ``o`` measures no approach (:meth:`_measuring`), ``t``'s centre lies near ``o``'s
+        (:meth:`_holds`)."""
+        return o.overlap(t) >= 0.5 and (self._measuring(o, index) or self._holds(o, t.cx, t.cy, index))
 
     def _own_margin(self, t: Track, f) -> float:
         """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
@@ -460,12 +485,15 @@ class TargetLayer:
                 kept.append(t)
         self._tracks = kept
 
-    def _merge(self) -> None:
-        """Two tracks are one object when most of the smaller box lies in the larger: keep the older."""
+    def _merge(self, index: int) -> None:
+        """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
+        keep the older; but an older track that measures no approach merges a newer one only when
+        the newer's centre lies near its own: a wide box over the road and an object that approaches
+        inside it are two."""
         tracks = sorted(self._tracks, key=lambda t: t.id)
         out: list[Track] = []
         for t in tracks:
-            host = next((o for o in out if o.overlap(t) >= 0.5), None)
+            host = next((o for o in out if self._hosts(o, t, index)), None)
             if host is None:
                 out.append(t)
             else:

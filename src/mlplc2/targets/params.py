@@ -132,6 +132,12 @@ class TargetParams(ParameterSet):
                            sweeps out of view, while an object on a collision course is seen coming.
                            0 = off (the default: 0.3 s lost a collision whose time to contact was
                            underestimated, ``docs/targets.md``).""", unit="s", valid=Valid.real(minimum=0))
+    stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
+                              one, or its birth) holds no measurable approach: only the middle of its box
+                              (a quarter of its width and height from the centre) owns fields and seeds,
+                              and a new target may lie inside the rest (:meth:`TargetLayer._holds`).
+                              0 = off (the default: 12 lost the helmet clip's warning, docs/model.md).""",
+                              unit="frames", valid=Valid.integer(0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 
