@@ -34,7 +34,7 @@ import numpy as np
 
 from .._validation import Valid, check_fields
 from ..backend import resolve
-from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
+from ..camera import CameraMotion, MotionEstimator, check_hfov, compensation, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
 from ..targets.layer import TargetLayer, count_down
 from ..targets.params import TargetParams
@@ -370,9 +370,9 @@ class FlowTTC(Model):
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
         m = self.camera_motion = self._camera.apply(cur)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if m.still or m.rotation_confidence < MIN_ROTATION_CONFIDENCE or m.shift_px(gray.shape, focal) < STILL_PX:
+        hom = compensation(m, gray.shape, focal)
+        if hom is None:
             return
-        hom = m.homography(gray.shape, focal)
         ones = np.ones(cur.shape, np.float32)
         kept = [(warp(img, hom, fill=cur), clock, warp(ones if seen is None else seen, hom, fill=0.0))
                 for img, clock, seen in self._frames]

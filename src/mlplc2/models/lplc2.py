@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import MIN_ROTATION_CONFIDENCE, STILL_PX, CameraMotion, MotionEstimator
+from ..camera import CameraMotion, MotionEstimator, compensation
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -75,9 +75,9 @@ class _LPLC2Family(Model):
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
         m = self.camera_motion = self._camera.apply(gray)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if m.still or m.rotation_confidence < MIN_ROTATION_CONFIDENCE or m.shift_px(gray.shape, focal) < STILL_PX:
+        hom = compensation(m, gray.shape, focal)
+        if hom is None:
             return
-        hom = m.homography(gray.shape, focal)
         self.frontend.compensate(hom, gray)
         h, w = gray.shape
         for f in self._fields:
