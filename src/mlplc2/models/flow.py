@@ -36,6 +36,7 @@ from .._validation import Valid, check_fields
 from ..backend import resolve
 from ..camera import CameraMotion, MotionEstimator, check_hfov, compensation, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
+from ..targets.change import change_box
 from ..targets.layer import TargetLayer, count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
@@ -381,6 +382,17 @@ class FlowTTC(Model):
         if self._layer is not None:
             self._layer.compensate(hom, gray)
 
+    def _refine(self, region: Region, past: np.ndarray, cur: np.ndarray) -> Region:
+        """The region's box is the region that changed around it since the flow's earlier frame
+        (:func:`mlplc2.targets.change.change_box`, the layer's own box of a faint candidate) when
+        there is one near it: an object's whole outline, tight on a small object (its cells are
+        whole 8-px cells) and not one edge of a larger one; else its cells (a background that
+        changes everywhere, e.g. the ground of a forward drive, has no compact changed region)."""
+        box = change_box(past, cur, region.x, region.y, int(self.target_params.max_shift))
+        if box is None or max(abs(box[0] - region.x), abs(box[1] - region.y)) > self.target_params.max_shift:
+            return region
+        return replace(region, box=box)
+
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
         cur = np.rint(gray).astype(np.uint8)    # gray is on 0-255 already (as_gray)
@@ -409,7 +421,7 @@ class FlowTTC(Model):
             if seen is not None:                 # what the turn uncovered since: no flow of its own
                 cells = cv2.resize(seen, div.shape[::-1], interpolation=cv2.INTER_AREA) >= 0.999
                 div[cv2.erode(cells.astype(np.uint8), np.ones((5, 5), np.uint8)) == 0] = 0.0
-            found = regions(div, p, self._next_region)
+            found = [self._refine(r, past, cur) for r in regions(div, p, self._next_region)]
             self._next_region += len(found)
         self._frames.append((cur, self.clock, None))
         targets = tuple(replace(t, fields=()) for t in self._layer.step(gray, None, found, index, self.clock))
