@@ -249,3 +249,18 @@ def test_the_compiled_fit_agrees_with_the_numpy_fit():
     assert np.allclose(fast[1], slow[1], rtol=1e-9, atol=1e-12)
     assert fast[2:] == pytest.approx(slow[2:], rel=1e-9)
     assert np.allclose(fast[0], omega, atol=6e-4)               # and both find the rotation (10 %)
+
+
+def test_compensation_is_none_for_a_still_an_unsure_or_a_tiny_rotation():
+    """``camera.compensation``, the one stabilisation test of every model: a still camera, a rotation
+    few points agree with and one that moves no pixel by STILL_PX are not compensated (no resampling);
+    a sure pan is, by its homography."""
+    from mlplc2.camera import MIN_ROTATION_CONFIDENCE, compensation
+
+    shape, focal = (240, 320), focal_length(320, 60.0)
+    pan = CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=0.9)
+    assert compensation(CameraMotion(rotation_confidence=1.0), shape, focal) is None
+    assert compensation(CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=MIN_ROTATION_CONFIDENCE / 2),
+                        shape, focal) is None
+    assert compensation(CameraMotion(omega=(0.0, 1e-5, 0.0), rotation_confidence=0.9), shape, focal) is None
+    assert np.allclose(compensation(pan, shape, focal), pan.homography(shape, focal))

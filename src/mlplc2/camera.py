@@ -26,7 +26,8 @@ MIN_ROTATION_CONFIDENCE = 0.5
 #: of the points than the rotation does is taken instead: no rotation.
 TRANSLATION_MARGIN = 0.15
 
-__all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp"]
+__all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp",
+           "compensation"]
 
 
 def check_hfov(hfov_deg, *, required: bool = False) -> float | None:
@@ -109,6 +110,17 @@ class CameraMotion:
                         [(w - 1) / 2.0, (h - 1) / 2.0, 1.0]]).T
         q = self.homography(shape, focal) @ pts
         return float(np.max(np.hypot(q[0] / q[2] - pts[0], q[1] / q[2] - pts[1])))
+
+
+def compensation(motion: CameraMotion, shape: tuple[int, int], focal: float) -> np.ndarray | None:
+    """The homography that carries a model's state into this frame's pixels (gaze stabilisation,
+    docs/model.md, "Camera motion"), or None when there is nothing to compensate: no rotation, an
+    estimated one with a confidence below :data:`MIN_ROTATION_CONFIDENCE` (a given one, a gyro's, is
+    always trusted: :attr:`CameraMotion.trusted`) or a shift below :data:`STILL_PX` (a still camera
+    is never resampled). The one test of every model that stabilises."""
+    if not motion.trusted or motion.shift_px(shape, focal) < STILL_PX:
+        return None
+    return motion.homography(shape, focal)
 
 
 def rotation_matrix(omega) -> np.ndarray:

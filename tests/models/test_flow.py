@@ -51,12 +51,7 @@ def _ttc_errors(stim, outs, lo=1.0, hi=3.0):
 
 
 # -- time to contact -------------------------------------------------------------------
-@pytest.mark.parametrize("appearance, noise", [
-    ("dark", 0.0),
-    pytest.param("textured", 2.0, marks=pytest.mark.xfail(strict=True, reason=(
-        "issue 22 item 5: with the shared layer the target is born at once (one 8-px cell, the region's "
-        "box twice the object's), its first estimates 25-29 % short; median 15.01 %"))),
-])
+@pytest.mark.parametrize("appearance, noise", [("dark", 0.0), ("textured", 2.0)])
 def test_ttc_within_15_percent_on_a_plain_background(appearance, noise):
     """A constant-speed approach on a plain background, true TTC 3.2 s down to 0.9 s: the
     median relative error over the frames of the 1-3 s bin is below 15 %, in most of them."""
@@ -92,12 +87,7 @@ def test_one_object_is_one_target(background):
 
 
 # -- what does not approach --------------------------------------------------------------
-@pytest.mark.parametrize("kind", [
-    pytest.param("receding", marks=pytest.mark.xfail(strict=True, reason=(
-        "issue 22 item 5: an 8-px target on the edge of a receding 40-px disc gets a TTC of 2-9 s "
-        "(no warning) from frame 41 since min_cells is 1"))),
-    "static",
-])
+@pytest.mark.parametrize("kind", ["receding", "static"])
 def test_receding_and_static_objects_give_no_warning(kind):
     make = ApproachObject.receding if kind == "receding" else ApproachObject.static
     obj = make(at=(160, 120), distance_m=3.0, width_px=40.0, appearance="dark")

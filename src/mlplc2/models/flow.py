@@ -34,8 +34,9 @@ import numpy as np
 
 from .._validation import Valid, check_fields
 from ..backend import resolve
-from ..camera import STILL_PX, CameraMotion, MotionEstimator, check_hfov, focal_length, warp
+from ..camera import CameraMotion, MotionEstimator, check_hfov, compensation, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
+from ..targets.change import change_box
 from ..targets.layer import TargetLayer, count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
@@ -376,9 +377,9 @@ class FlowTTC(Model):
         self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
         m = self.camera_motion = self._camera.apply(cur, omega=self.rotation_given)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if not m.trusted or m.shift_px(gray.shape, focal) < STILL_PX:
+        hom = compensation(m, gray.shape, focal)
+        if hom is None:
             return
-        hom = m.homography(gray.shape, focal)
         ones = np.ones(cur.shape, np.float32)
         kept = [(warp(img, hom, fill=cur), clock, warp(ones if seen is None else seen, hom, fill=0.0))
                 for img, clock, seen in self._frames]
@@ -386,6 +387,17 @@ class FlowTTC(Model):
         self._frames.extend(kept)
         if self._layer is not None:
             self._layer.compensate(hom, gray)
+
+    def _refine(self, region: Region, past: np.ndarray, cur: np.ndarray) -> Region:
+        """The region's box is the region that changed around it since the flow's earlier frame
+        (:func:`mlplc2.targets.change.change_box`, the layer's own box of a faint candidate) when
+        there is one near it: an object's whole outline, tight on a small object (its cells are
+        whole 8-px cells) and not one edge of a larger one; else its cells (a background that
+        changes everywhere, e.g. the ground of a forward drive, has no compact changed region)."""
+        box = change_box(past, cur, region.x, region.y, int(self.target_params.max_shift))
+        if box is None or max(abs(box[0] - region.x), abs(box[1] - region.y)) > self.target_params.max_shift:
+            return region
+        return replace(region, box=box)
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
@@ -415,7 +427,7 @@ class FlowTTC(Model):
             if seen is not None:                 # what the turn uncovered since: no flow of its own
                 cells = cv2.resize(seen, div.shape[::-1], interpolation=cv2.INTER_AREA) >= 0.999
                 div[cv2.erode(cells.astype(np.uint8), np.ones((5, 5), np.uint8)) == 0] = 0.0
-            found = regions(div, p, self._next_region)
+            found = [self._refine(r, past, cur) for r in regions(div, p, self._next_region)]
             self._next_region += len(found)
         self._frames.append((cur, self.clock, None))
         targets = tuple(replace(t, fields=()) for t in self._layer.step(gray, None, found, index, self.clock))

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import STILL_PX, CameraMotion, MotionEstimator
+from ..camera import CameraMotion, MotionEstimator, compensation
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -83,9 +83,9 @@ class _LPLC2Family(Model):
         self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
         m = self.camera_motion = self._camera.apply(gray, omega=self.rotation_given)
         focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        if not m.trusted or m.shift_px(gray.shape, focal) < STILL_PX:
+        hom = compensation(m, gray.shape, focal)
+        if hom is None:
             return
-        hom = m.homography(gray.shape, focal)
         self.frontend.compensate(hom, gray)
         h, w = gray.shape
         for f in self._fields:
