@@ -343,3 +343,50 @@ def test_atomic_files_get_the_usual_mode(tmp_path):
     (tmp_path / "b.txt").write_text("x")
     mode = lambda name: stat.S_IMODE(os.stat(tmp_path / name).st_mode)  # noqa: E731
     assert mode("a.txt") == mode("b.txt")
+
+
+# -- grey frames from the decoder (FrameSource.to_gray, what mlplc2.run asks for) ---------------
+def _smooth_rgb(n=6, w=96, h=64):
+    """Colour frames without saturated channels (so that no decoder clips its RGB): gradients moving
+    by 2 px a frame."""
+    yy, xx = np.mgrid[0:h, 0:w]
+    return [np.stack([40 + (xx * 2 + 4 * i) % 150, 60 + (yy * 2) % 140, 50 + ((xx + yy + 2 * i) % 120)],
+                     axis=2).astype(np.uint8) for i in range(n)]
+
+
+@pytest.mark.parametrize("decoder", ["opencv", "pyav"])
+def test_grey_from_the_decoder_matches_the_grey_of_its_rgb(tmp_path, decoder):
+    """to_gray: (H, W) uint8 frames, the first one included. On a neutral clip, within 1 grey level
+    of the Rec. 601 grey (as the models compute it) of the RGB frames the same decoder gives; on a
+    colour clip, no farther from the grey of the frames written than that (PyAV's come from the
+    luma plane, without the rounding of a colour conversion; OpenCV's from its BGR frame, rounded
+    to whole levels: half a level on average at most)."""
+    from mlplc2._validation import as_gray
+
+    colour = _smooth_rgb()
+    neutral = [np.repeat(as_gray(f).round().astype(np.uint8)[..., None], 3, axis=2) for f in colour]
+    for name, written in (("neutral", neutral), ("colour", colour)):
+        path = write_video(tmp_path / f"{name}.mp4", written, 25.0)
+        rgb = [as_gray(f) for _, f in open_source(path, decoder=decoder)]
+        src = open_source(path, decoder=decoder)
+        src.to_gray()
+        grey = [f for _, f in src]
+        assert len(grey) == len(rgb) == 6 and all(g.shape == (64, 96) and g.dtype == np.uint8 for g in grey)
+        grey = [g.astype(np.float32) for g in grey]
+        truth = [as_gray(f) for f in written]
+        if name == "neutral":
+            assert max(np.abs(g - c).max() for g, c in zip(grey, rgb)) <= 1.0 + 1e-3
+        err = [np.mean([np.abs(a - t).mean() for a, t in zip(x, truth)]) for x in (grey, rgb)]
+        assert err[0] <= err[1] + 0.25, err
+
+
+def test_grey_frames_are_reduced_and_the_original_stays_colour(videos):
+    """to_gray with reduce_to and keep_original: the grey frame at the reduced size, the original RGB."""
+    paths, frames = videos
+    src = open_source(paths["mp4"], keep_original=True)
+    src.to_gray()
+    src.reduce_to((80, 60))
+    (i, small, original), *_ = list(src)
+    assert small.shape == (60, 80) and original.shape == (H, W, 3)
+    expect = cv2.resize(cv2.cvtColor(original, cv2.COLOR_RGB2GRAY), (80, 60), interpolation=cv2.INTER_AREA)
+    assert np.array_equal(small, expect)

@@ -1,5 +1,6 @@
 """Decoders: one per kind of input (a video by OpenCV or PyAV, a sequence of images, a camera),
-each an iterator of RGB frames with its fps, size and frame count; :func:`open_decoder` picks
+each an iterator of RGB frames (or grey ones, straight from the decoded picture: ``gray``) with
+its fps, size and frame count; :func:`open_decoder` picks
 one for a source, :func:`expand_inputs` lists the inputs of a batch.
 """
 
@@ -59,7 +60,38 @@ class Decoder:
         pass
 
 
-class _OpenCVDecoder(Decoder):
+class _GreyDecoder(Decoder):
+    """A decoder that can give grey frames straight from the decoded picture (:attr:`gray`): it
+    decodes a raw frame (:meth:`_next`) and converts it to RGB (:meth:`_rgb`) or grey
+    (:meth:`_grey`) as asked, keeping the raw frame so that :meth:`last` converts the frame read
+    last again (the first frame, read before the mode was chosen)."""
+
+    #: True: :meth:`read` gives (H, W) uint8 grey frames (Rec. 601 luma, 0-255) instead of RGB.
+    gray = False
+    _raw = None
+
+    def read(self):
+        self._raw = self._next()
+        return None if self._raw is None else self.last()
+
+    def last(self) -> np.ndarray:
+        """The frame :meth:`read` returned last, in the current mode (RGB or grey)."""
+        return self._grey(self._raw) if self.gray else self._rgb(self._raw)
+
+    def _next(self):  # pragma: no cover - abstract
+        raise NotImplementedError
+
+
+#: Limited-range ("MPEG", 16-235) luma to full-range grey, ``(Y - 16) * 255 / 219`` rounded and clipped:
+#: the Rec. 601 grey of the RGB frame the same picture converts to (OpenCV and PyAV convert with
+#: Rec. 601's matrix), without computing the colours.
+_LIMITED_TO_FULL = np.clip(np.round((np.arange(256) - 16) * 255.0 / 219.0), 0, 255).astype(np.uint8)
+#: 8-bit pixel formats whose first plane is the luma (Y) plane; the "j" ones are full range.
+_LUMA_FIRST = {"yuv420p", "yuv422p", "yuv444p", "yuv440p", "yuv411p", "yuv410p", "nv12", "nv21", "nv16",
+               "yuvj420p", "yuvj422p", "yuvj444p", "yuvj440p", "yuvj411p", "gray"}
+
+
+class _OpenCVDecoder(_GreyDecoder):
     def __init__(self, target, name: str, camera: bool = False):
         import cv2
 
@@ -83,7 +115,7 @@ class _OpenCVDecoder(Decoder):
     def grab(self) -> bool:
         return self.cap.grab()
 
-    def read(self):
+    def _next(self):
         ok, frame = self.cap.read()
         if not ok or frame is None:
             if self._camera:
@@ -91,15 +123,22 @@ class _OpenCVDecoder(Decoder):
             return None
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
         self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
+        return frame
+
+    def _rgb(self, frame):
         if frame.ndim == 2:
             return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
+
+    def _grey(self, frame):
+        # OpenCV's BGR frame: the same grey as COLOR_RGB2GRAY of the RGB frame, one plane less to write
+        return frame if frame.ndim == 2 else self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2GRAY)
 
     def close(self):
         self.cap.release()
 
 
-class _PyAVDecoder(Decoder):
+class _PyAVDecoder(_GreyDecoder):
     """A video file, a URL (``stream=True``) or a binary file object (stdin) decoded by PyAV."""
 
     #: Seconds PyAV waits to open a URL or for its next packet before the stream counts as dropped.
@@ -132,7 +171,7 @@ class _PyAVDecoder(Decoder):
         self.size = (int(stream.codec_context.width), int(stream.codec_context.height))
         self._frames = self.container.decode(stream)
 
-    def read(self):
+    def _next(self):
         try:
             frame = next(self._frames)
         except StopIteration:
@@ -142,7 +181,25 @@ class _PyAVDecoder(Decoder):
             self.error = _one_line(str(exc))
             return None
         self.time_s = None if frame.time is None else float(frame.time)
+        return frame
+
+    def _rgb(self, frame):
         return frame.to_ndarray(format="rgb24")
+
+    def _grey(self, frame):
+        """The luma plane (no colour conversion: the Y plane of YUV is the grey image), in full range;
+        other pixel formats through RGB."""
+        fmt = frame.format.name
+        if fmt not in _LUMA_FIRST:
+            import cv2
+
+            return cv2.cvtColor(self._rgb(frame), cv2.COLOR_RGB2GRAY)
+        plane = frame.planes[0]
+        luma = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, :plane.width]
+        import cv2
+
+        full = fmt.startswith("yuvj") or fmt == "gray" or int(getattr(frame, "color_range", 0) or 0) == 2
+        return luma.copy() if full else cv2.LUT(luma, _LIMITED_TO_FULL)
 
     def close(self):
         self.container.close()

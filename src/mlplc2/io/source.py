@@ -28,7 +28,8 @@ class FrameSource:
 
     Build it with :func:`open_source`. ``index`` is the frame's 0-based index
     in the source (so the first frame yielded is ``start``); ``frame`` is RGB
-    ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing).
+    ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing; after :meth:`to_gray`
+    grey ``(H, W)``).
     With ``keep_original=True`` the items are ``(index, frame, original)``,
     ``original`` being the frame at the input size.
 
@@ -64,8 +65,8 @@ class FrameSource:
         ``index``; :attr:`skipped`, :attr:`n_skipped`). Not live (a file, HTTP, stdin): every
         frame in order, the thread waits when the queue is full.
     decoded_at : float
-        ``time.perf_counter()`` when the frame last yielded was decoded (and resized): the
-        start of its latency.
+        ``time.perf_counter()`` when the decoder gave the frame last yielded (before its grey
+        conversion and reduction): the start of its latency.
     skipped : int
         Frames skipped just before the frame last yielded (live only); :attr:`n_skipped` all of them.
     dropped : bool
@@ -126,6 +127,7 @@ class FrameSource:
         self._first = first
         self._first_time = decoder.time_s
         self._centres = False
+        self._gray = False
         self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -140,6 +142,20 @@ class FrameSource:
         self.scale_x = self.size[0] / self.out_size[0]
         self.scale_y = self.size[1] / self.out_size[1]
         self._centres = True
+
+    def to_gray(self) -> None:
+        """Yield grey ``(H, W)`` uint8 frames from now on (before iterating; :func:`mlplc2.run` asks
+        for them, its models being grey): made in the decoding thread, before the reduction (one
+        plane to reduce instead of three), by the decoder where it can (PyAV: the luma plane of the
+        decoded picture, no colour conversion; OpenCV: its BGR frame's grey), else from the RGB
+        frame (``cv2.COLOR_RGB2GRAY``: Rec. 601 weights, rounded). With ``keep_original`` the frame
+        is decoded in colour (the original stays RGB) and its grey made from the RGB."""
+        if self._iterated:
+            raise RuntimeError("to_gray must be called before iterating")
+        self._gray = True
+        if not self.keep_original and getattr(self._dec, "gray", None) is False:
+            self._dec.gray = True
+            self._first = self._dec.last()
 
     # -- mapping --------------------------------------------------------------
     @property
@@ -156,12 +172,11 @@ class FrameSource:
 
     # -- decoding thread ------------------------------------------------------
     def _prepare(self, frame: np.ndarray):
-        if self.resized:
-            import cv2
+        import cv2
 
-            small = cv2.resize(frame, self.out_size, interpolation=cv2.INTER_AREA)
-        else:
-            small = frame
+        small = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY) if self._gray and frame.ndim == 3 else frame
+        if self.resized:
+            small = cv2.resize(small, self.out_size, interpolation=cv2.INTER_AREA)
         return (small, frame) if self.keep_original else (small,)
 
     def _put(self, item) -> bool:
@@ -193,17 +208,17 @@ class FrameSource:
         dec = self._dec
         index = self.start
         try:
-            frame, t = self._first, self._first_time
+            frame, t, decoded = self._first, self._first_time, time.perf_counter()
             self._first = None
             while frame is not None:
                 payload = (self._prepare(frame), t)
-                if not self._put(("frame", index, payload, time.perf_counter(), 0)):
+                if not self._put(("frame", index, payload, decoded, 0)):
                     return
                 index += 1
                 if self.end is not None and index >= self.end:
                     break
                 frame = dec.read()
-                t = dec.time_s
+                t, decoded = dec.time_s, time.perf_counter()
             self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
             self._put(("error", index, exc, 0.0, 0))
