@@ -355,29 +355,18 @@ def _smooth_rgb(n=6, w=96, h=64):
 
 
 @pytest.mark.parametrize("decoder", ["opencv", "pyav"])
-def test_grey_from_the_decoder_matches_the_grey_of_its_rgb(tmp_path, decoder):
-    """to_gray: (H, W) uint8 frames, the first one included. On a neutral clip, within 1 grey level
-    of the Rec. 601 grey (as the models compute it) of the RGB frames the same decoder gives; on a
-    colour clip, no farther from the grey of the frames written than that (PyAV's come from the
-    luma plane, without the rounding of a colour conversion; OpenCV's from its BGR frame, rounded
-    to whole levels: half a level on average at most)."""
+def test_grey_from_the_decoder_is_the_grey_of_its_rgb_rounded(tmp_path, decoder):
+    """to_gray: (H, W) uint8 frames, the first one included, within half a grey level of the
+    Rec. 601 grey (as the models compute it) of the RGB frames the same decoder gives."""
     from mlplc2._validation import as_gray
 
-    colour = _smooth_rgb()
-    neutral = [np.repeat(as_gray(f).round().astype(np.uint8)[..., None], 3, axis=2) for f in colour]
-    for name, written in (("neutral", neutral), ("colour", colour)):
-        path = write_video(tmp_path / f"{name}.mp4", written, 25.0)
-        rgb = [as_gray(f) for _, f in open_source(path, decoder=decoder)]
-        src = open_source(path, decoder=decoder)
-        src.to_gray()
-        grey = [f for _, f in src]
-        assert len(grey) == len(rgb) == 6 and all(g.shape == (64, 96) and g.dtype == np.uint8 for g in grey)
-        grey = [g.astype(np.float32) for g in grey]
-        truth = [as_gray(f) for f in written]
-        if name == "neutral":
-            assert max(np.abs(g - c).max() for g, c in zip(grey, rgb)) <= 1.0 + 1e-3
-        err = [np.mean([np.abs(a - t).mean() for a, t in zip(x, truth)]) for x in (grey, rgb)]
-        assert err[0] <= err[1] + 0.25, err
+    path = write_video(tmp_path / "c.mp4", _smooth_rgb(), 25.0)
+    rgb = [as_gray(f) for _, f in open_source(path, decoder=decoder)]
+    src = open_source(path, decoder=decoder)
+    src.to_gray()
+    grey = [f for _, f in src]
+    assert len(grey) == len(rgb) == 6 and all(g.shape == (64, 96) and g.dtype == np.uint8 for g in grey)
+    assert max(np.abs(g - c).max() for g, c in zip(grey, rgb)) <= 0.5 + 1e-3
 
 
 def test_grey_frames_are_reduced_and_the_original_stays_colour(videos):

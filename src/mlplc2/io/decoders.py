@@ -1,5 +1,5 @@
 """Decoders: one per kind of input (a video by OpenCV or PyAV, a sequence of images, a camera),
-each an iterator of RGB frames (or grey ones, straight from the decoded picture: ``gray``) with
+each an iterator of RGB frames (or grey ones: ``gray``) with
 its fps, size and frame count; :func:`open_decoder` picks
 one for a source, :func:`expand_inputs` lists the inputs of a batch.
 """
@@ -61,12 +61,13 @@ class Decoder:
 
 
 class _GreyDecoder(Decoder):
-    """A decoder that can give grey frames straight from the decoded picture (:attr:`gray`): it
+    """A decoder that can give grey frames (:attr:`gray`) without an RGB copy between: it
     decodes a raw frame (:meth:`_next`) and converts it to RGB (:meth:`_rgb`) or grey
     (:meth:`_grey`) as asked, keeping the raw frame so that :meth:`last` converts the frame read
     last again (the first frame, read before the mode was chosen)."""
 
-    #: True: :meth:`read` gives (H, W) uint8 grey frames (Rec. 601 luma, 0-255) instead of RGB.
+    #: True: :meth:`read` gives (H, W) uint8 grey frames (the Rec. 601 grey of the RGB frame,
+    #: rounded to whole levels: ``cv2.COLOR_RGB2GRAY``) instead of RGB.
     gray = False
     _raw = None
 
@@ -80,15 +81,6 @@ class _GreyDecoder(Decoder):
 
     def _next(self):  # pragma: no cover - abstract
         raise NotImplementedError
-
-
-#: Limited-range ("MPEG", 16-235) luma to full-range grey, ``(Y - 16) * 255 / 219`` rounded and clipped:
-#: the Rec. 601 grey of the RGB frame the same picture converts to (OpenCV and PyAV convert with
-#: Rec. 601's matrix), without computing the colours.
-_LIMITED_TO_FULL = np.clip(np.round((np.arange(256) - 16) * 255.0 / 219.0), 0, 255).astype(np.uint8)
-#: 8-bit pixel formats whose first plane is the luma (Y) plane; the "j" ones are full range.
-_LUMA_FIRST = {"yuv420p", "yuv422p", "yuv444p", "yuv440p", "yuv411p", "yuv410p", "nv12", "nv21", "nv16",
-               "yuvj420p", "yuvj422p", "yuvj444p", "yuvj440p", "yuvj411p", "gray"}
 
 
 class _OpenCVDecoder(_GreyDecoder):
@@ -187,19 +179,10 @@ class _PyAVDecoder(_GreyDecoder):
         return frame.to_ndarray(format="rgb24")
 
     def _grey(self, frame):
-        """The luma plane (no colour conversion: the Y plane of YUV is the grey image), in full range;
-        other pixel formats through RGB."""
-        fmt = frame.format.name
-        if fmt not in _LUMA_FIRST:
-            import cv2
-
-            return cv2.cvtColor(self._rgb(frame), cv2.COLOR_RGB2GRAY)
-        plane = frame.planes[0]
-        luma = np.frombuffer(plane, np.uint8).reshape(plane.height, plane.line_size)[:, :plane.width]
+        # through RGB, as OpenCV's decoder: a stream gives the grey of the same file read by OpenCV
         import cv2
 
-        full = fmt.startswith("yuvj") or fmt == "gray" or int(getattr(frame, "color_range", 0) or 0) == 2
-        return luma.copy() if full else cv2.LUT(luma, _LIMITED_TO_FULL)
+        return cv2.cvtColor(self._rgb(frame), cv2.COLOR_RGB2GRAY)
 
     def close(self):
         self.container.close()

@@ -145,11 +145,10 @@ class FrameSource:
 
     def to_gray(self) -> None:
         """Yield grey ``(H, W)`` uint8 frames from now on (before iterating; :func:`mlplc2.run` asks
-        for them, its models being grey): made in the decoding thread, before the reduction (one
-        plane to reduce instead of three), by the decoder where it can (PyAV: the luma plane of the
-        decoded picture, no colour conversion; OpenCV: its BGR frame's grey), else from the RGB
-        frame (``cv2.COLOR_RGB2GRAY``: Rec. 601 weights, rounded). With ``keep_original`` the frame
-        is decoded in colour (the original stays RGB) and its grey made from the RGB."""
+        for them, its models being grey): the Rec. 601 grey of the RGB frame rounded to whole levels
+        (``cv2.COLOR_RGB2GRAY``; OpenCV's decoder makes it from its BGR frame, without an RGB copy),
+        made in the decoding thread before the reduction (one plane to reduce instead of three).
+        The same frame gives the same grey from either decoder (a file, a stream)."""
         if self._iterated:
             raise RuntimeError("to_gray must be called before iterating")
         self._gray = True
