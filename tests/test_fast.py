@@ -505,7 +505,8 @@ def test_bench_latency_row_and_table():
     row = bench.time_latency(64, 48, frames=8)
     assert numba.get_num_threads() == before and row.threads == before
     assert row.frames == 8 and row.latency and set(row.latency) == {"median_ms", "p99_ms", "max_ms"}
-    assert min(row.decode_ms, row.model_ms, row.run_ms, row.decode_cpu_ms, row.model_cpu_ms, row.run_cpu_ms) > 0
+    assert min(row.decode_ms, row.model_ms, row.run_ms) > 0
+    assert min(row.decode_cpu_ms, row.model_cpu_ms, row.run_cpu_ms) >= 0   # the CPU clock ticks in 10 ms
     assert (row.run_fewer_ms is not None) == (before > 1)
     table = bench.format_latency([row])
     assert "| mlplc2 | 64x48 | 8 |" in table and table.count("\n") == 2

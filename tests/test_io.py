@@ -345,37 +345,33 @@ def test_atomic_files_get_the_usual_mode(tmp_path):
     assert mode("a.txt") == mode("b.txt")
 
 
-# -- grey frames from the decoder (FrameSource.to_gray, what mlplc2.run asks for) ---------------
-def _smooth_rgb(n=6, w=96, h=64):
-    """Colour frames without saturated channels (so that no decoder clips its RGB): gradients moving
-    by 2 px a frame."""
-    yy, xx = np.mgrid[0:h, 0:w]
-    return [np.stack([40 + (xx * 2 + 4 * i) % 150, 60 + (yy * 2) % 140, 50 + ((xx + yy + 2 * i) % 120)],
-                     axis=2).astype(np.uint8) for i in range(n)]
-
-
+# -- grey frames made in the decoding thread (FrameSource.to_gray, what mlplc2.run asks for) ------
 @pytest.mark.parametrize("decoder", ["opencv", "pyav"])
-def test_grey_from_the_decoder_is_the_grey_of_its_rgb_rounded(tmp_path, decoder):
-    """to_gray: (H, W) uint8 frames, the first one included, within half a grey level of the
-    Rec. 601 grey (as the models compute it) of the RGB frames the same decoder gives."""
+def test_grey_frames_are_the_models_own_grey_of_the_reduced_rgb(videos, decoder):
+    """to_gray (with reduce_to and keep_original): float32 (H, W) frames equal, bit for bit, to the
+    grey a model computes from the reduced RGB frame (as_gray), so a run's outputs do not change;
+    the original stays RGB."""
     from mlplc2._validation import as_gray
 
-    path = write_video(tmp_path / "c.mp4", _smooth_rgb(), 25.0)
-    rgb = [as_gray(f) for _, f in open_source(path, decoder=decoder)]
-    src = open_source(path, decoder=decoder)
-    src.to_gray()
-    grey = [f for _, f in src]
-    assert len(grey) == len(rgb) == 6 and all(g.shape == (64, 96) and g.dtype == np.uint8 for g in grey)
-    assert max(np.abs(g - c).max() for g, c in zip(grey, rgb)) <= 0.5 + 1e-3
-
-
-def test_grey_frames_are_reduced_and_the_original_stays_colour(videos):
-    """to_gray with reduce_to and keep_original: the grey frame at the reduced size, the original RGB."""
     paths, frames = videos
-    src = open_source(paths["mp4"], keep_original=True)
+    rgb = [f for _, f in open_source(paths["mp4"], decoder=decoder)]
+    src = open_source(paths["mp4"], keep_original=True, decoder=decoder)
     src.to_gray()
     src.reduce_to((80, 60))
-    (i, small, original), *_ = list(src)
-    assert small.shape == (60, 80) and original.shape == (H, W, 3)
-    expect = cv2.resize(cv2.cvtColor(original, cv2.COLOR_RGB2GRAY), (80, 60), interpolation=cv2.INTER_AREA)
-    assert np.array_equal(small, expect)
+    items = list(src)
+    assert len(items) == len(rgb) == T
+    for (_, small, original), colour in zip(items, rgb):
+        assert small.dtype == np.float32 and small.shape == (60, 80) and np.array_equal(original, colour)
+        assert np.array_equal(small, as_gray(cv2.resize(colour, (80, 60), interpolation=cv2.INTER_AREA)))
+
+
+def test_an_almost_black_frame_stays_rgb(tmp_path):
+    """A frame whose grey is at most 1 level is handed over as RGB: as float grey a model would take
+    it for a 0-1 image and warn."""
+    frames = [np.zeros((48, 64, 3), np.uint8), np.full((48, 64, 3), 120, np.uint8)]
+    path = write_video(tmp_path / "dark.avi", frames, 25.0)
+    src = open_source(path)
+    src.to_gray()
+    dark, bright = [f for _, f in src]
+    assert dark.shape == (48, 64, 3) and dark.dtype == np.uint8 and dark.max() <= 1
+    assert bright.shape == (48, 64) and bright.dtype == np.float32

@@ -273,8 +273,8 @@ def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
 
 
 def test_run_gives_the_models_grey_frames_made_while_decoding(data, tmp_path, monkeypatch):
-    """run asks its source for grey frames (FrameSource.to_gray): the models get (H, W) uint8 grey,
-    made in the decoding thread, and find the same looming square as on the colour frames."""
+    """run asks its source for grey frames (FrameSource.to_gray): the models get (H, W) float32 grey,
+    made in the decoding thread, and warn at the frame they warn at on the colour frames."""
     from mlplc2.models.base import Model
 
     seen = []
@@ -287,7 +287,7 @@ def test_run_gives_the_models_grey_frames_made_while_decoding(data, tmp_path, mo
     grey = mlplc2.run(data["mp4"], ["mlplc2"], out=False, quiet=True, repeat_threshold=None)
     monkeypatch.setattr(Model, "step", spy)
     mlplc2.run(data["mp4"], ["mlplc2"], out=False, quiet=True, repeat_threshold=None, end=3)
-    assert seen and set(seen) == {(2, np.dtype(np.uint8))}
+    assert seen and set(seen) == {(2, np.dtype(np.float32))}
     monkeypatch.undo()
     model = mlplc2.get_model("mlplc2")(fps=30.0, repeat_threshold=None, stabilise=True)
     colour = [bool(model.step(f).warning) for _, f in mlplc2.io.open_source(data["mp4"])]

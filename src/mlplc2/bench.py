@@ -320,17 +320,6 @@ class _Paced:
     def skip(self, n: int) -> int:
         return self._dec.skip(n)
 
-    @property
-    def gray(self):
-        return getattr(self._dec, "gray", None)
-
-    @gray.setter
-    def gray(self, value):
-        self._dec.gray = value
-
-    def last(self):
-        return self._dec.last()
-
     def read(self):
         self._t0 = time.perf_counter() if self._t0 is None else self._t0
         wait = self._t0 + self._k * self._period - time.perf_counter()

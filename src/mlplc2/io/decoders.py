@@ -1,6 +1,5 @@
 """Decoders: one per kind of input (a video by OpenCV or PyAV, a sequence of images, a camera),
-each an iterator of RGB frames (or grey ones: ``gray``) with
-its fps, size and frame count; :func:`open_decoder` picks
+each an iterator of RGB frames with its fps, size and frame count; :func:`open_decoder` picks
 one for a source, :func:`expand_inputs` lists the inputs of a batch.
 """
 
@@ -60,30 +59,7 @@ class Decoder:
         pass
 
 
-class _GreyDecoder(Decoder):
-    """A decoder that can give grey frames (:attr:`gray`) without an RGB copy between: it
-    decodes a raw frame (:meth:`_next`) and converts it to RGB (:meth:`_rgb`) or grey
-    (:meth:`_grey`) as asked, keeping the raw frame so that :meth:`last` converts the frame read
-    last again (the first frame, read before the mode was chosen)."""
-
-    #: True: :meth:`read` gives (H, W) uint8 grey frames (the Rec. 601 grey of the RGB frame,
-    #: rounded to whole levels: ``cv2.COLOR_RGB2GRAY``) instead of RGB.
-    gray = False
-    _raw = None
-
-    def read(self):
-        self._raw = self._next()
-        return None if self._raw is None else self.last()
-
-    def last(self) -> np.ndarray:
-        """The frame :meth:`read` returned last, in the current mode (RGB or grey)."""
-        return self._grey(self._raw) if self.gray else self._rgb(self._raw)
-
-    def _next(self):  # pragma: no cover - abstract
-        raise NotImplementedError
-
-
-class _OpenCVDecoder(_GreyDecoder):
+class _OpenCVDecoder(Decoder):
     def __init__(self, target, name: str, camera: bool = False):
         import cv2
 
@@ -107,7 +83,7 @@ class _OpenCVDecoder(_GreyDecoder):
     def grab(self) -> bool:
         return self.cap.grab()
 
-    def _next(self):
+    def read(self):
         ok, frame = self.cap.read()
         if not ok or frame is None:
             if self._camera:
@@ -115,22 +91,15 @@ class _OpenCVDecoder(_GreyDecoder):
             return None
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
         self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
-        return frame
-
-    def _rgb(self, frame):
         if frame.ndim == 2:
             return self._cv2.cvtColor(frame, self._cv2.COLOR_GRAY2RGB)
         return self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2RGB)
-
-    def _grey(self, frame):
-        # OpenCV's BGR frame: the same grey as COLOR_RGB2GRAY of the RGB frame, one plane less to write
-        return frame if frame.ndim == 2 else self._cv2.cvtColor(frame, self._cv2.COLOR_BGR2GRAY)
 
     def close(self):
         self.cap.release()
 
 
-class _PyAVDecoder(_GreyDecoder):
+class _PyAVDecoder(Decoder):
     """A video file, a URL (``stream=True``) or a binary file object (stdin) decoded by PyAV."""
 
     #: Seconds PyAV waits to open a URL or for its next packet before the stream counts as dropped.
@@ -163,7 +132,7 @@ class _PyAVDecoder(_GreyDecoder):
         self.size = (int(stream.codec_context.width), int(stream.codec_context.height))
         self._frames = self.container.decode(stream)
 
-    def _next(self):
+    def read(self):
         try:
             frame = next(self._frames)
         except StopIteration:
@@ -173,16 +142,7 @@ class _PyAVDecoder(_GreyDecoder):
             self.error = _one_line(str(exc))
             return None
         self.time_s = None if frame.time is None else float(frame.time)
-        return frame
-
-    def _rgb(self, frame):
         return frame.to_ndarray(format="rgb24")
-
-    def _grey(self, frame):
-        # through RGB, as OpenCV's decoder: a stream gives the grey of the same file read by OpenCV
-        import cv2
-
-        return cv2.cvtColor(self._rgb(frame), cv2.COLOR_RGB2GRAY)
 
     def close(self):
         self.container.close()

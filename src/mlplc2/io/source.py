@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from .._validation import InputValueError, check_fps
+from .._validation import InputValueError, as_gray, check_fps
 from .decoders import Decoder, open_decoder
 from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
@@ -29,7 +29,7 @@ class FrameSource:
     Build it with :func:`open_source`. ``index`` is the frame's 0-based index
     in the source (so the first frame yielded is ``start``); ``frame`` is RGB
     ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing; after :meth:`to_gray`
-    grey ``(H, W)``).
+    grey float32 ``(H, W)``).
     With ``keep_original=True`` the items are ``(index, frame, original)``,
     ``original`` being the frame at the input size.
 
@@ -144,17 +144,14 @@ class FrameSource:
         self._centres = True
 
     def to_gray(self) -> None:
-        """Yield grey ``(H, W)`` uint8 frames from now on (before iterating; :func:`mlplc2.run` asks
-        for them, its models being grey): the Rec. 601 grey of the RGB frame rounded to whole levels
-        (``cv2.COLOR_RGB2GRAY``; OpenCV's decoder makes it from its BGR frame, without an RGB copy),
-        made in the decoding thread before the reduction (one plane to reduce instead of three).
-        The same frame gives the same grey from either decoder (a file, a stream)."""
+        """Yield grey float32 ``(H, W)`` frames from now on (before iterating; :func:`mlplc2.run`
+        asks for them, its models being grey): :func:`mlplc2._validation.as_gray` of the (reduced)
+        RGB frame, the very grey a model computes from it, made in the decoding thread. A frame
+        whose grey is at most 1 level stays RGB (a model would take a float frame that dark for a
+        0-1 image and warn)."""
         if self._iterated:
             raise RuntimeError("to_gray must be called before iterating")
         self._gray = True
-        if not self.keep_original and getattr(self._dec, "gray", None) is False:
-            self._dec.gray = True
-            self._first = self._dec.last()
 
     # -- mapping --------------------------------------------------------------
     @property
@@ -171,11 +168,15 @@ class FrameSource:
 
     # -- decoding thread ------------------------------------------------------
     def _prepare(self, frame: np.ndarray):
-        import cv2
-
-        small = cv2.cvtColor(frame, cv2.COLOR_RGB2GRAY) if self._gray and frame.ndim == 3 else frame
         if self.resized:
-            small = cv2.resize(small, self.out_size, interpolation=cv2.INTER_AREA)
+            import cv2
+
+            small = cv2.resize(frame, self.out_size, interpolation=cv2.INTER_AREA)
+        else:
+            small = frame
+        if self._gray:
+            grey = as_gray(small)
+            small = grey if grey.max() > 1.0 else small
         return (small, frame) if self.keep_original else (small,)
 
     def _put(self, item) -> bool:
