@@ -343,35 +343,3 @@ def test_atomic_files_get_the_usual_mode(tmp_path):
     (tmp_path / "b.txt").write_text("x")
     mode = lambda name: stat.S_IMODE(os.stat(tmp_path / name).st_mode)  # noqa: E731
     assert mode("a.txt") == mode("b.txt")
-
-
-# -- grey frames made in the decoding thread (FrameSource.to_gray, what mlplc2.run asks for) ------
-@pytest.mark.parametrize("decoder", ["opencv", "pyav"])
-def test_grey_frames_are_the_models_own_grey_of_the_reduced_rgb(videos, decoder):
-    """to_gray (with reduce_to and keep_original): float32 (H, W) frames equal, bit for bit, to the
-    grey a model computes from the reduced RGB frame (as_gray), so a run's outputs do not change;
-    the original stays RGB."""
-    from mlplc2._validation import as_gray
-
-    paths, frames = videos
-    rgb = [f for _, f in open_source(paths["mp4"], decoder=decoder)]
-    src = open_source(paths["mp4"], keep_original=True, decoder=decoder)
-    src.to_gray()
-    src.reduce_to((80, 60))
-    items = list(src)
-    assert len(items) == len(rgb) == T
-    for (_, small, original), colour in zip(items, rgb):
-        assert small.dtype == np.float32 and small.shape == (60, 80) and np.array_equal(original, colour)
-        assert np.array_equal(small, as_gray(cv2.resize(colour, (80, 60), interpolation=cv2.INTER_AREA)))
-
-
-def test_an_almost_black_frame_stays_rgb(tmp_path):
-    """A frame whose grey is at most 1 level is handed over as RGB: as float grey a model would take
-    it for a 0-1 image and warn."""
-    frames = [np.zeros((48, 64, 3), np.uint8), np.full((48, 64, 3), 120, np.uint8)]
-    path = write_video(tmp_path / "dark.avi", frames, 25.0)
-    src = open_source(path)
-    src.to_gray()
-    dark, bright = [f for _, f in src]
-    assert dark.shape == (48, 64, 3) and dark.dtype == np.uint8 and dark.max() <= 1
-    assert bright.shape == (48, 64) and bright.dtype == np.float32

@@ -270,26 +270,3 @@ def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
     assert frames[-1] == 59 and len(frames) + sum(line["skipped"] for line in lines) == 60
     assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
     assert json.loads((tmp_path / "o" / "fields.json").read_text())["frames_skipped"] == 60 - len(frames)
-
-
-def test_run_gives_the_models_grey_frames_made_while_decoding(data, tmp_path, monkeypatch):
-    """run asks its source for grey frames (FrameSource.to_gray): the models get (H, W) float32 grey,
-    made in the decoding thread, and warn at the frame they warn at on the colour frames."""
-    from mlplc2.models.base import Model
-
-    seen = []
-    step = Model.step
-
-    def spy(self, frame, *args, **kwargs):
-        seen.append((frame.ndim, frame.dtype))
-        return step(self, frame, *args, **kwargs)
-
-    grey = mlplc2.run(data["mp4"], ["mlplc2"], out=False, quiet=True, repeat_threshold=None)
-    monkeypatch.setattr(Model, "step", spy)
-    mlplc2.run(data["mp4"], ["mlplc2"], out=False, quiet=True, repeat_threshold=None, end=3)
-    assert seen and set(seen) == {(2, np.dtype(np.float32))}
-    monkeypatch.undo()
-    model = mlplc2.get_model("mlplc2")(fps=30.0, repeat_threshold=None, stabilise=True)
-    colour = [bool(model.step(f).warning) for _, f in mlplc2.io.open_source(data["mp4"])]
-    warned = sorted({r["frame"] for r in grey.targets if r["warning"]})
-    assert True in colour and warned and warned[0] == colour.index(True)

@@ -348,8 +348,8 @@ def _per_frame(work) -> tuple[float, float, int]:
 def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc2") -> LatencyRow:
     """Write the scene of :func:`synthetic_frames` at ``width`` x ``height`` as an H.264 MP4 (30
     fps), then time, one after the other in this process: decoding it as ``run`` decodes it
-    (:func:`mlplc2.io.open_source`, made grey and reduced in its thread to the models' working
-    size, nothing else), ``model`` stepping on the frames in memory (as ``run`` builds it: frames wider than 320
+    (:func:`mlplc2.io.open_source`, reduced in its thread to the models' working size, nothing
+    else), ``model`` stepping on the frames in memory (as ``run`` builds it: frames wider than 320
     px reduced, gaze stabilisation on where the model has it; every frame stepped),
     :func:`mlplc2.run` on the clip writing its JSON lines (``jsonl``) and CSV files (its frame
     loop's ms per frame), the same with the model on one thread fewer (leaving a core to the
@@ -371,7 +371,6 @@ def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc
 
         def decode() -> int:
             src = open_source(clip)
-            src.to_gray()
             if m.work_width is not None and width > m.work_width:  # as run reduces it (Model.work_width)
                 src.reduce_to((m.work_width, max(int(round(height * m.work_width / width)), m.min_size)))
             return sum(1 for _ in src)

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from .._validation import InputValueError, as_gray, check_fps
+from .._validation import InputValueError, check_fps
 from .decoders import Decoder, open_decoder
 from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
@@ -28,8 +28,7 @@ class FrameSource:
 
     Build it with :func:`open_source`. ``index`` is the frame's 0-based index
     in the source (so the first frame yielded is ``start``); ``frame`` is RGB
-    ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing; after :meth:`to_gray`
-    grey float32 ``(H, W)``).
+    ``uint8`` of shape ``(H, W, 3)`` at :attr:`out_size` (after resizing).
     With ``keep_original=True`` the items are ``(index, frame, original)``,
     ``original`` being the frame at the input size.
 
@@ -65,8 +64,8 @@ class FrameSource:
         ``index``; :attr:`skipped`, :attr:`n_skipped`). Not live (a file, HTTP, stdin): every
         frame in order, the thread waits when the queue is full.
     decoded_at : float
-        ``time.perf_counter()`` when the decoder gave the frame last yielded (before its grey
-        conversion and reduction): the start of its latency.
+        ``time.perf_counter()`` when the decoder gave the frame last yielded (before its
+        reduction): the start of its latency.
     skipped : int
         Frames skipped just before the frame last yielded (live only); :attr:`n_skipped` all of them.
     dropped : bool
@@ -127,7 +126,6 @@ class FrameSource:
         self._first = first
         self._first_time = decoder.time_s
         self._centres = False
-        self._gray = False
         self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
@@ -142,16 +140,6 @@ class FrameSource:
         self.scale_x = self.size[0] / self.out_size[0]
         self.scale_y = self.size[1] / self.out_size[1]
         self._centres = True
-
-    def to_gray(self) -> None:
-        """Yield grey float32 ``(H, W)`` frames from now on (before iterating; :func:`mlplc2.run`
-        asks for them, its models being grey): :func:`mlplc2._validation.as_gray` of the (reduced)
-        RGB frame, the very grey a model computes from it, made in the decoding thread. A frame
-        whose grey is at most 1 level stays RGB (a model would take a float frame that dark for a
-        0-1 image and warn)."""
-        if self._iterated:
-            raise RuntimeError("to_gray must be called before iterating")
-        self._gray = True
 
     # -- mapping --------------------------------------------------------------
     @property
@@ -174,9 +162,6 @@ class FrameSource:
             small = cv2.resize(frame, self.out_size, interpolation=cv2.INTER_AREA)
         else:
             small = frame
-        if self._gray:
-            grey = as_gray(small)
-            small = grey if grey.max() > 1.0 else small
         return (small, frame) if self.keep_original else (small,)
 
     def _put(self, item) -> bool:

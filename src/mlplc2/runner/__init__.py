@@ -311,7 +311,6 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     if len(widths) == 1 and None not in widths and not src.resized and w > (work := widths.pop()):
         # The models' reduction to their working width (Model.work_width), done in the decoding thread.
         src.reduce_to((work, max(int(round(h * work / w)), max(m.min_size for m in built))))
-    src.to_gray()  # every model is grey: grey made in the decoding thread, from the luma plane where it can
     auto = [m for m in built if m.repeat_threshold == "auto"]
     duplicated = _prescan_repeats(source, auto, src, options) if auto else None
     if duplicated:
