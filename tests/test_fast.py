@@ -471,3 +471,42 @@ def test_no_kernel_loads_after_the_first_frame(tmp_path):
     words = proc.stdout.split()
     assert int(words[words.index("targets") + 1]) > 0   # the scene makes targets: their kernels run
     assert words[words.index("late") + 1] == "none"
+
+
+def test_threads_block_gives_back_the_thread_counts_also_on_an_error():
+    """backend.threads(n): the block runs with n threads, and the counts found before (Numba's and
+    OpenCV's) are back afterwards, also when the block raises (bench --latency times `run` with one
+    thread fewer and must leave the process as it found it)."""
+    import cv2
+    import numba
+
+    from mlplc2.backend import threads
+
+    before, before_cv = numba.get_num_threads(), cv2.getNumThreads()
+    with threads(1) as n:
+        assert n == 1 and numba.get_num_threads() == 1 and cv2.getNumThreads() == 1
+    assert (numba.get_num_threads(), cv2.getNumThreads()) == (before, before_cv)
+    with pytest.raises(RuntimeError):
+        with threads(1):
+            raise RuntimeError("boom")
+    assert (numba.get_num_threads(), cv2.getNumThreads()) == (before, before_cv)
+    with threads(None) as n:
+        assert n == before
+
+
+def test_bench_latency_row_and_table():
+    """bench --latency (logic only; no timing is checked): every figure is there, the model's
+    threads are given back, and the run with one thread fewer is timed where there are two."""
+    import numba
+
+    from mlplc2 import bench
+
+    before = numba.get_num_threads()
+    row = bench.time_latency(64, 48, frames=8)
+    assert numba.get_num_threads() == before and row.threads == before
+    assert row.frames == 8 and row.latency and set(row.latency) == {"median_ms", "p99_ms", "max_ms"}
+    assert min(row.decode_ms, row.model_ms, row.run_ms) > 0
+    assert min(row.decode_cpu_ms, row.model_cpu_ms, row.run_cpu_ms) >= 0   # the CPU clock ticks in 10 ms
+    assert (row.run_fewer_ms is not None) == (before > 1)
+    table = bench.format_latency([row])
+    assert "| mlplc2 | 64x48 | 8 |" in table and table.count("\n") == 2

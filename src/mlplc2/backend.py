@@ -12,12 +12,13 @@ to ~1e-6, the edge scans bit for bit, the alignments to ~1e-12.
 from __future__ import annotations
 
 import logging
-from collections.abc import Callable
+from collections.abc import Callable, Iterator
+from contextlib import contextmanager
 from dataclasses import dataclass
 
 from ._validation import InputValueError
 
-__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels"]
+__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels", "threads"]
 
 #: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
 #: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
@@ -117,3 +118,27 @@ def make_frontend(params, fps: float, backend: str = "auto"):
     process) when Numba is unavailable; "numba" raises ImportError then.
     """
     return resolve(backend).frontend(params, fps)
+
+
+@contextmanager
+def threads(n: int | None) -> Iterator[int]:
+    """Run the block with ``n`` threads for the compiled front end and OpenCV
+    (:func:`mlplc2.neuropils._fast.set_threads`; None: as they are), and give back the counts
+    found on entry when it ends, also on an error. Yields the count in force. Without Numba,
+    nothing changes and it yields 1."""
+    if not fast_available():
+        yield 1
+        return
+    import cv2
+    import numba
+
+    from .neuropils import _fast
+
+    before, before_cv = numba.get_num_threads(), cv2.getNumThreads()
+    try:
+        if n is not None:
+            _fast.set_threads(n)
+        yield numba.get_num_threads()
+    finally:
+        numba.set_num_threads(before)
+        cv2.setNumThreads(before_cv)

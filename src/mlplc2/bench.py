@@ -283,9 +283,11 @@ def describe(frames: int, rounds: int) -> str:
 # ---------------------------------------------------------------------------
 @dataclass
 class LatencyRow:
-    """Per source size: ms per frame of decoding alone, the model alone and ``run`` end to end,
-    and, played as a live camera at 30 frames/s, the latency from decoding to the JSON line (ms)
-    and the frames skipped."""
+    """Per source size: ms per frame of decoding alone, the model alone, ``run`` end to end (with
+    the model on every thread, and on one thread fewer: ``run_fewer_ms``, None on one core), each
+    by the wall clock and as CPU time of the process (``*_cpu_ms``: every thread's), and, played
+    as a live camera at 30 frames/s, the latency from decoding to the JSON line (ms) and the
+    frames skipped; ``threads``: the model's threads; ``load``: the 1-minute load average after."""
 
     model: str
     size: tuple[int, int]
@@ -295,6 +297,13 @@ class LatencyRow:
     run_ms: float
     latency: dict
     skipped: int = 0
+    decode_cpu_ms: float = 0.0
+    model_cpu_ms: float = 0.0
+    run_cpu_ms: float = 0.0
+    run_fewer_ms: float | None = None
+    run_fewer_cpu_ms: float | None = None
+    threads: int = 1
+    load: float | None = None
 
 
 class _Paced:
@@ -323,47 +332,92 @@ class _Paced:
         self._dec.close()
 
 
+def _cpu_s() -> float:
+    """CPU time of the process so far (s): every thread's, user and system."""
+    t = os.times()
+    return t.user + t.system
+
+
+def _per_frame(work) -> tuple[float, float, int]:
+    """``work()`` (returning its number of frames) timed: wall ms and CPU ms per frame, frames."""
+    w0, c0 = time.perf_counter(), _cpu_s()
+    n = max(int(work()), 1)
+    return 1e3 * (time.perf_counter() - w0) / n, 1e3 * (_cpu_s() - c0) / n, n
+
+
 def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc2") -> LatencyRow:
     """Write the scene of :func:`synthetic_frames` at ``width`` x ``height`` as an H.264 MP4 (30
-    fps), then time, one after the other in this process: decoding it (:func:`mlplc2.io.open_source`,
-    every frame, nothing else), ``model`` stepping on the frames in memory (default settings: frames
-    wider than 320 px reduced; every frame stepped), :func:`mlplc2.run` on the clip writing its
-    JSON lines (``jsonl``) and CSV files (its frame loop's ms per frame), and ``run`` on the clip
-    played as a live camera (frames handed out at 30 frames/s; the newest taken): its latency
-    from a frame's decoding to its JSON line."""
+    fps), then time, one after the other in this process: decoding it as ``run`` decodes it
+    (:func:`mlplc2.io.open_source`, reduced in its thread to the models' working size, nothing
+    else), ``model`` stepping on the frames in memory (as ``run`` builds it: frames wider than 320
+    px reduced, gaze stabilisation on where the model has it; every frame stepped),
+    :func:`mlplc2.run` on the clip writing its JSON lines (``jsonl``) and CSV files (its frame
+    loop's ms per frame), the same with the model on one thread fewer (leaving a core to the
+    decoding thread), and ``run`` on the clip played as a live camera (frames handed out at 30
+    frames/s; the newest taken): its latency from a frame's decoding to its JSON line. Each
+    time also as the process's CPU time per frame (every thread), which a busy machine blurs less."""
+    from .backend import threads
     from .io import FrameSource, open_source, write_video
     from .io.decoders import open_decoder
     from .models.base import get_model
     from .runner import run
 
     video = synthetic_frames(width, height, frames)
+    cls = get_model(model)
+    m = cls(fps=30.0, repeat_threshold=None, **({"stabilise": True} if cls.stabilises else {}))
+    options = dict(jsonl=os.devnull, quiet=True, plot=False, repeat_threshold=None)
     with tempfile.TemporaryDirectory(prefix="mlplc2-latency-") as tmp:
         clip = write_video(Path(tmp) / "clip.mp4", video, 30.0)
-        t0 = time.perf_counter()
-        n = sum(1 for _ in open_source(clip))
-        decode = (time.perf_counter() - t0) / n
-        m = get_model(model)(fps=30.0, repeat_threshold=None)
-        m.step(video[0])  # warm-up: state built, kernels compiled
-        t0 = time.perf_counter()
-        for f in video[1:]:
-            m.step(f)
-        step = (time.perf_counter() - t0) / (len(video) - 1)
-        res = run(clip, [model], out=Path(tmp) / "out", jsonl=os.devnull, quiet=True, plot=False,
-                  repeat_threshold=None)
+
+        def decode() -> int:
+            src = open_source(clip)
+            if m.work_width is not None and width > m.work_width:  # as run reduces it (Model.work_width)
+                src.reduce_to((m.work_width, max(int(round(height * m.work_width / width)), m.min_size)))
+            return sum(1 for _ in src)
+
+        def alone() -> int:
+            for f in video[1:]:
+                m.step(f)
+            return len(video) - 1
+
+        def end_to_end(out: str, n_threads: int | None):
+            def work() -> int:
+                with threads(n_threads):
+                    box.append(run(clip, [model], out=Path(tmp) / out, **options))
+                return box[-1].n_frames
+            box: list = []
+            _, cpu, _ = _per_frame(work)
+            return 1e3 * box[-1].seconds / max(box[-1].n_frames, 1), cpu, box[-1].n_frames
+
+        decode_ms, decode_cpu, _ = _per_frame(decode)
+        m.step(video[0])  # warm-up: state built, kernels loaded
+        model_ms, model_cpu, _ = _per_frame(alone)
+        with threads(None) as n_threads:
+            pass
+        run_ms, run_cpu, n = end_to_end("out", None)
+        fewer_ms = fewer_cpu = None
+        if n_threads > 1:
+            fewer_ms, fewer_cpu, _ = end_to_end("fewer", n_threads - 1)
         camera = FrameSource(_Paced(open_decoder(str(clip), "opencv")[0], 30.0), "camera", live=True)
-        live = run(camera, [model], out=Path(tmp) / "live", jsonl=os.devnull, quiet=True, plot=False,
-                   repeat_threshold=None)
-    return LatencyRow(model, (width, height), res.n_frames, 1e3 * decode, 1e3 * step,
-                      1e3 * res.seconds / max(res.n_frames, 1), live.latency, live.skipped)
+        live = run(camera, [model], out=Path(tmp) / "live", **options)
+    return LatencyRow(model, (width, height), n, decode_ms, model_ms, run_ms, live.latency, live.skipped,
+                      decode_cpu, model_cpu, run_cpu, fewer_ms, fewer_cpu, n_threads, os.getloadavg()[0])
 
 
 def format_latency(rows) -> str:
-    """A Markdown table of :class:`LatencyRow` s."""
-    lines = ["| model | source | frames | decode ms/frame | model ms/frame | run ms/frame | max(decode, model) | "
-             "decode + model | live: latency median ms | p99 ms | max ms | skipped |", "|" + "---|" * 12]
+    """A Markdown table of :class:`LatencyRow` s (ms per frame: wall clock / CPU time)."""
+    def both(wall, cpu):
+        return "-" if wall is None else f"{wall:.2f} / {cpu:.2f}"
+
+    lines = ["| model | source | frames | threads | decode ms/frame | model ms/frame | run ms/frame | "
+             "run, one thread fewer | max(decode, model) / run | live: latency median ms | p99 ms | max ms | "
+             "skipped | load |", "|" + "---|" * 14]
     for r in rows:
         lat = r.latency
-        lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.frames} | {r.decode_ms:.2f} | {r.model_ms:.2f} | "
-                     f"{r.run_ms:.2f} | {max(r.decode_ms, r.model_ms):.2f} | {r.decode_ms + r.model_ms:.2f} | "
-                     f"{lat.get('median_ms', 0):.1f} | {lat.get('p99_ms', 0):.1f} | {lat.get('max_ms', 0):.1f} | {r.skipped} |")
+        lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.frames} | {r.threads} | "
+                     f"{both(r.decode_ms, r.decode_cpu_ms)} | {both(r.model_ms, r.model_cpu_ms)} | "
+                     f"{both(r.run_ms, r.run_cpu_ms)} | {both(r.run_fewer_ms, r.run_fewer_cpu_ms)} | "
+                     f"{100 * max(r.decode_ms, r.model_ms) / r.run_ms:.0f} % | "
+                     f"{lat.get('median_ms', 0):.1f} | {lat.get('p99_ms', 0):.1f} | {lat.get('max_ms', 0):.1f} | "
+                     f"{r.skipped} | {'-' if r.load is None else f'{r.load:.1f}'} |")
     return "\n".join(lines)

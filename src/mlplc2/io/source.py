@@ -64,8 +64,8 @@ class FrameSource:
         ``index``; :attr:`skipped`, :attr:`n_skipped`). Not live (a file, HTTP, stdin): every
         frame in order, the thread waits when the queue is full.
     decoded_at : float
-        ``time.perf_counter()`` when the frame last yielded was decoded (and resized): the
-        start of its latency.
+        ``time.perf_counter()`` when the decoder gave the frame last yielded (before its
+        reduction): the start of its latency.
     skipped : int
         Frames skipped just before the frame last yielded (live only); :attr:`n_skipped` all of them.
     dropped : bool
@@ -193,17 +193,17 @@ class FrameSource:
         dec = self._dec
         index = self.start
         try:
-            frame, t = self._first, self._first_time
+            frame, t, decoded = self._first, self._first_time, time.perf_counter()
             self._first = None
             while frame is not None:
                 payload = (self._prepare(frame), t)
-                if not self._put(("frame", index, payload, time.perf_counter(), 0)):
+                if not self._put(("frame", index, payload, decoded, 0)):
                     return
                 index += 1
                 if self.end is not None and index >= self.end:
                     break
                 frame = dec.read()
-                t = dec.time_s
+                t, decoded = dec.time_s, time.perf_counter()
             self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
             self._put(("error", index, exc, 0.0, 0))
