@@ -80,3 +80,30 @@ def test_every_parameter_is_documented():
 
     with pytest.raises(TypeError, match="Bare.x has no param"):
         parameter_table(Bare)
+
+
+# ---------------------------------------------------------------------------
+# The consumer of docs/robot.md survives every line the schema allows
+# ---------------------------------------------------------------------------
+def test_the_brake_consumer_of_robot_md_takes_a_warning_without_a_time_to_contact():
+    """With ``--alarm-warns`` a target warns on its field's alarm before its fit has a time to
+    contact (``ttc_s`` null), and an LGMD model warns with no target at all: the documented
+    ``brake.py`` must brake on both, not stop with a traceback (the robot would stop reading)."""
+    import json
+    import subprocess
+    import sys
+
+    doc = (DOCS / "robot.md").read_text(encoding="utf-8")
+    code = "# brake.py" + doc.split("```python\n# brake.py")[1].split("```")[0]
+    target = {"model": "mlplc2", "id": 1, "x": 1, "y": 1, "width": 9, "height": 9, "ttc_s": None, "miss": None,
+              "azimuth_deg": None, "elevation_deg": None, "warning": True}
+    timed = dict(target, id=2, ttc_s=0.5, miss=0.1)
+    base = {"schema": 1, "time_s": 0.1, "skipped": 0, "warning": True, "models": {}}
+    lines = [dict(base, frame=1, targets=[target]), dict(base, frame=2, targets=[target, timed]),
+             dict(base, frame=3, targets=[])]
+    proc = subprocess.run([sys.executable, "-c", code], input="".join(json.dumps(r) + "\n" for r in lines),
+                          capture_output=True, text=True, timeout=60)
+    assert proc.returncode == 0, proc.stderr
+    out = proc.stdout.splitlines()
+    assert [line.split(":")[0] for line in out] == ["BRAKE at frame 1", "BRAKE at frame 2", "BRAKE at frame 3"]
+    assert "0.50 s" in out[1]

@@ -45,8 +45,8 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     fields.add_argument("--all-fields", action="store_true",
                         help="with --video: also draw every attention field")
     p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
-                   help="camera's horizontal field of view in degrees: targets.csv / fields.json give "
-                        "bearings in degrees (default: pixels from the image centre); see docs/targets.md")
+                   help="camera's horizontal field of view in degrees: targets get bearings (azimuth_deg, "
+                        "elevation_deg; empty without it); stabilisation assumes 60 without it; see docs/targets.md")
     p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
                    help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
                         "and compensated before the front end, for a camera that pans, tilts or rolls "
