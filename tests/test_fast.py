@@ -510,3 +510,36 @@ def test_bench_latency_row_and_table():
     assert (row.run_fewer_ms is not None) == (before > 1)
     table = bench.format_latency([row])
     assert "| mlplc2 | 64x48 | 8 |" in table and table.count("\n") == 2
+
+
+_STABILISED = """
+import numpy as np
+import mlplc2
+from mlplc2 import _fast_camera
+model = mlplc2.MLPLC2(fps=30.0, stabilise=True)
+built = len(_fast_camera.fit_rounds.signatures)
+texture = np.random.default_rng(0).uniform(0, 255, (120, 220))
+for i in range(6):                     # a camera that pans over a texture: the motion fit runs
+    model.step(texture[:, 2 * i:2 * i + 160].copy())
+print("built", built, "after", len(_fast_camera.fit_rounds.signatures))
+"""
+
+
+def test_gaze_stabilisation_loads_its_kernel_when_the_model_is_built(tmp_path):
+    """The camera-motion fit (``mlplc2._fast_camera``, on by default in ``mlplc2 run``/``demo``)
+    is loaded with the other kernels when the model is built, under the ``compiling`` line: it
+    used to compile at the second frame of a first run (23 s with the progress bar standing at
+    frame 1; a live run's second frame waited as long) and to load from the cache there later."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / "stabilised.py"
+    script.write_text(_STABILISED)
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
+                          env=dict(os.environ))
+    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
+    words = proc.stdout.split()
+    built, after = int(words[words.index("built") + 1]), int(words[words.index("after") + 1])
+    assert after >= 1          # the run used the compiled fit
+    assert built == after      # and nothing was loaded or compiled after the model was built

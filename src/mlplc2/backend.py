@@ -89,6 +89,9 @@ def warm_kernels() -> None:
     and the edge scans (its first extent) would load at the frame that first needs them, tens of
     milliseconds in the middle of a live run (a compile: seconds). Each is called here once on
     a small blank frame through its public caller, so with the argument types of a run's calls.
+    The camera-motion fit of gaze stabilisation (:mod:`mlplc2._fast_camera`, on by default in
+    ``mlplc2 run``) is called directly, with the types :mod:`mlplc2.camera` passes: it used to
+    compile at a first run's second frame, silently (23 s on 2 busy cores).
     """
     global _WARM
     if _WARM:
@@ -108,6 +111,14 @@ def warm_kernels() -> None:
     measure_extent(lm, 16, 16, kernel=_fast_extent.edges4)
     levels = pyramid(np.zeros((32, 32), np.float32))
     align(levels, levels, 16.0, 16.0, 8.0, (4.0, 4.0), kernel=_fast_align.align_patch)
+    try:   # as mlplc2.camera does: without a usable Numba cache or kernel, the fit runs in NumPy
+        from . import _fast_camera
+    except Exception:  # noqa: BLE001
+        _fast_camera = None
+    if _fast_camera is not None:
+        points = np.linspace(-0.5, 0.5, 8)
+        _fast_camera.fit_rounds(points, points[::-1].copy(), np.zeros(8), np.zeros(8), np.zeros(3), np.zeros(2),
+                                True, True, 0.01, 1)
     _WARM = True
 
 
