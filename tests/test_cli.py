@@ -887,3 +887,27 @@ def test_compile_notice_says_once_when_numba_compiles(capsys):
     with compile_notice(["mlplc2"], quiet=True):
         fresh()(1)
     assert capsys.readouterr().err == ""
+
+
+class _Called(Exception):
+    pass
+
+
+@pytest.mark.parametrize("command, target", [("batch", "mlplc2.batch.batch"), ("evaluate", "mlplc2.evaluator.evaluate")])
+@pytest.mark.parametrize("flag, value", [("--no-stabilise", False), ("--stabilise", True), (None, None)])
+def test_batch_and_evaluate_take_the_stabilise_flags_of_run(command, target, flag, value, monkeypatch, tmp_path):
+    """README: run, stream, batch and benchmark stabilise by default and ``--no-stabilise`` turns it
+    off; ``mlplc2 batch`` (and ``evaluate`` on videos) refused the flag (exit 2). It reaches the runs'
+    options; without it the runner's default (``RunOptions.stabilise``) stands."""
+    seen = {}
+
+    def fake(*args, run_options=None, **kwargs):
+        seen.update(run_options or {})
+        raise _Called
+
+    monkeypatch.setattr(target, fake)
+    argv = [command, str(tmp_path / "clip.avi"), *([flag] if flag else [])]
+    argv += ["--out", str(tmp_path / "o")] if command == "batch" else ["--gt", str(tmp_path / "gt.json")]
+    with pytest.raises(_Called):
+        main(argv)
+    assert seen.get("stabilise") is value

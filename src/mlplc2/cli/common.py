@@ -182,9 +182,19 @@ def target_options(args) -> dict:
     return options
 
 
+def add_stabilise_option(p: argparse.ArgumentParser, prefix: str = "") -> None:
+    """``--stabilise`` / ``--no-stabilise`` (None: the runner's default, ``RunOptions.stabilise``)."""
+    p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
+                   help=f"{prefix}gaze stabilisation for the LPLC2 family (as mlplc2 run; on by default, "
+                        "--no-stabilise: the paper's model)")
+
+
 def video_run_options(args) -> dict:
-    """The ``run_options`` of ``mlplc2 evaluate`` and ``batch``: ``--resize``, the repeat and the warning options."""
+    """The ``run_options`` of ``mlplc2 evaluate`` and ``batch``: ``--resize``, the repeat, the warning
+    and the stabilisation options."""
     options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    if getattr(args, "stabilise", None) is not None:
+        options["stabilise"] = args.stabilise
     if repeat_threshold_option(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame
         options["repeat_threshold"] = repeat_threshold_option(args)
     if target_options(args):  # --horizon / --max-miss / --alarm-warns: part of each task's options

@@ -12,7 +12,7 @@ import warnings
 from .._validation import InputValueError
 from ..models.base import resolve_names
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_warning_options, nonneg_int, one_line, pos_float, say, target_options, video_run_options,
+                     add_stabilise_option, add_warning_options, nonneg_int, one_line, pos_float, say, target_options, video_run_options,
                      warn)
 
 
@@ -36,6 +36,7 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
     add_repeat_options(p, "for video inputs: hold the models' output on duplicated frames "
                           "(as in 'mlplc2 run --skip-repeats')")
     add_warning_options(p, "for video inputs: ")
+    add_stabilise_option(p, "for video inputs: ")
     p.add_argument("--details", action="store_true", help="also print the per-video table")
     p.add_argument("--quiet", "-q", action="store_true", help="print nothing but errors")
 
@@ -79,6 +80,7 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
     p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
     add_repeat_options(p, "hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
     add_warning_options(p)
+    add_stabilise_option(p)
     p.add_argument("--plot", action="store_true", help="also write each task's responses.png")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--parquet", action="store_true", help="also write results.parquet (needs pyarrow)")
@@ -139,9 +141,7 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     p.add_argument("--workers", type=nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
     add_warning_options(p)
-    p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
-                   help="gaze stabilisation for the LPLC2 family (as mlplc2 run; on by default, "
-                        "--no-stabilise: the paper's model)")
+    add_stabilise_option(p)
     p.add_argument("--settings", metavar="NAMES",
                    help="only these settings of the generated suite, comma-separated (e.g. drive,drone; "
                         "default all: plain_static ... handheld, docs/benchmark.md)")
