@@ -893,7 +893,8 @@ class _Called(Exception):
     pass
 
 
-@pytest.mark.parametrize("command, target", [("batch", "mlplc2.batch.batch"), ("evaluate", "mlplc2.evaluator.evaluate")])
+@pytest.mark.parametrize("command, target", [("batch", "mlplc2.batch.batch"),
+                                             ("evaluate", "mlplc2.evaluator.evaluate")])
 @pytest.mark.parametrize("flag, value", [("--no-stabilise", False), ("--stabilise", True), (None, None)])
 def test_batch_and_evaluate_take_the_stabilise_flags_of_run(command, target, flag, value, monkeypatch, tmp_path):
     """README: run, stream, batch and benchmark stabilise by default and ``--no-stabilise`` turns it
