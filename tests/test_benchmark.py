@@ -209,3 +209,18 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     # and mlplc2.run makes them the models' TargetParams
     model = runner_module._build_models(["mlplc2"], 30.0, runner_module.RunOptions(target_params=built[0]))[0]
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)
+
+
+@pytest.mark.parametrize("extra", [["--settings", "drive"], ["--settings", "drivee"], ["--holdout", "1"]])
+def test_quick_with_settings_or_holdout_is_a_one_line_error(extra, tmp_path, monkeypatch, capsys):
+    """``--quick`` has its own four scenes: ``--settings`` and ``--holdout`` (which choose among the
+    full suite's) were dropped silently with it, a misspelt setting too, and the run measured
+    something else than asked. Now one error line before anything is generated."""
+    def generate(*args, **kwargs):
+        raise AssertionError("scenes generated")
+
+    monkeypatch.setattr(benchmark_module, "_generate", generate)
+    assert main(["benchmark", "--out", str(tmp_path / "o"), "--quick", *extra]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mlplc2: error: ") and "--quick" in err[0], err
+    assert not (tmp_path / "o").exists()

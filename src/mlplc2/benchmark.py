@@ -421,9 +421,9 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         Gaze stabilisation for the models that have it; None: the runner's default, on
         (:attr:`mlplc2.runner.RunOptions.stabilise`).
     settings : list of str, optional
-        Only these settings of the generated suite (:func:`setting_names`; default all).
+        Only these settings of the generated suite (:func:`setting_names`; default all). Not with ``quick``.
     holdout : int
-        0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`).
+        0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`). Not with ``quick``.
     progress : bool
         Progress bars on stderr.
     force : bool
@@ -435,6 +435,9 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     from .targets import TargetParams
 
     t0 = time.perf_counter()
+    if quick and (settings is not None or holdout):   # they choose among the full suite's scenes
+        raise InputValueError("--settings and --holdout choose among the full suite's scenes: not with --quick "
+                              "(its own four scenes)")
     models = resolve_names(models) if models else [m for m in MODELS if m in available_models()]
     tp = TargetParams.coerce(target_params, "target_params")
     out = Path(out)
@@ -443,7 +446,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     real_dir = None if quick or real is None else (default_real_dir() if real == "auto" else Path(real))
     if real not in ("auto", None) and not quick and not (Path(real) / "ground_truth.json").is_file():
         raise InputValueError(f"{real}: no ground_truth.json there (the labelled real clips)")
-    scenes = suite(quick, settings=None if quick else settings, holdout=holdout)
+    scenes = suite(quick, settings=settings, holdout=holdout)
     videos, suite_gt = _generate(scenes, out / "scenes", progress)
     clips, real_gt = _real_inputs(real_dir)
     run_options = {}
