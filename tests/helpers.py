@@ -62,3 +62,24 @@ def duplicated(frames, every=3, copies=2, noise=6, seed=0):
                 out.append(np.clip(f.astype(np.int16) + jitter, 0, 255).astype(np.uint8))
                 origin.append(i)
     return out, origin
+
+
+def score_collision(outputs, truth, fps: float):
+    """Targets of ``outputs`` (one :class:`mlplc2.Output` per frame) against one collision object's
+    ``truth`` (:class:`mlplc2.stimuli` ground truth): the relative errors of the time to contact of
+    the targets on the object in its last second, whether one of them warned before contact, and
+    the warnings elsewhere (frames x targets)."""
+    errors, warned, false = [], False, 0
+    for out in outputs:
+        k = out.frame
+        if k >= truth.contact_frame or not truth.in_track(k):
+            continue
+        p = truth.point_at(k)
+        true_ttc = (truth.contact_frame - k) / fps
+        for t in out.targets:
+            near = abs(t.x - p.x) < max(20.0, p.width) and abs(t.y - p.y) < max(20.0, p.width)
+            if near and t.ttc_s is not None and true_ttc <= 1.0:
+                errors.append(abs(t.ttc_s - true_ttc) / true_ttc)
+            warned |= near and t.warning
+            false += (not near) and t.warning
+    return errors, warned, false

@@ -15,6 +15,8 @@ from mlplc2 import stimuli
 import mlplc2.camera as camera_module
 from mlplc2.camera import CameraMotion, MotionEstimator, bearing, focal_length
 
+from .helpers import score_collision
+
 FPS = 30.0
 
 
@@ -164,19 +166,7 @@ def test_stabilised_targets_of_a_panning_camera_keep_their_time_to_contact():
                           noise_std=2.0, seed=2)
     truth = st.objects[0]
     model = mlplc2.MLPLC2(fps=FPS, stabilise=True)
-    errors, warned, false = [], False, 0
-    for out in (model.step(f) for f in st.frames):
-        k = out.frame
-        if k >= truth.contact_frame or not truth.in_track(k):
-            continue
-        p = truth.point_at(k)
-        true_ttc = (truth.contact_frame - k) / FPS
-        for t in out.targets:
-            near = abs(t.x - p.x) < max(20.0, p.width) and abs(t.y - p.y) < max(20.0, p.width)
-            if near and t.ttc_s is not None and true_ttc <= 1.0:
-                errors.append(abs(t.ttc_s - true_ttc) / true_ttc)
-            warned |= near and t.warning
-            false += (not near) and t.warning
+    errors, warned, false = score_collision((model.step(f) for f in st.frames), truth, FPS)
     assert warned and false == 0
     assert errors and float(np.median(errors)) < 0.15
 
