@@ -180,39 +180,36 @@ def test_progress_bar_starts_after_the_first_frame(data, monkeypatch):
     assert made[0]["initial"] == 1 and made[-1] == res.n_frames == len(steps)
 
 
-def test_stabilise_reaches_the_models_that_have_it(data, monkeypatch):
-    """run(..., stabilise=True) (CLI --stabilise) builds the LPLC2 family with gaze stabilisation
-    and the other models as they are."""
+@pytest.fixture
+def built(monkeypatch):
+    """Every model built while the test runs, in order."""
     import mlplc2.models.base as base
 
-    built = []
+    made = []
     init = base.Model.__init__
 
     def spy(self, *args, **kwargs):
         init(self, *args, **kwargs)
-        built.append(self)
+        made.append(self)
 
     monkeypatch.setattr(base.Model, "__init__", spy)
+    return made
+
+
+def test_stabilise_reaches_the_models_that_have_it(data, built):
+    """run(..., stabilise=True) (CLI --stabilise) builds the LPLC2 family with gaze stabilisation
+    and the other models as they are."""
     run(str(data["avi"]), ["mlplc2", "lgmd2"], out=False, quiet=True, end=5, stabilise=True)
     kinds = {type(m).__name__: getattr(m, "stabilise", None) for m in built}
     assert kinds == {"MLPLC2": True, "LGMD2": None}
 
 
-def test_stabilisation_is_on_by_default_for_run_and_stream_and_off_for_reproduce(data, monkeypatch):
+def test_stabilisation_is_on_by_default_for_run_and_stream_and_off_for_reproduce(data, built):
     """The LPLC2 family stabilises its gaze in run (CLI mlplc2 run), stream and batch unless told not to
     (--no-stabilise); the reproduction of the paper runs the paper's model, as do the model classes."""
-    import mlplc2.models.base as base
     from mlplc2.cli import main
     from mlplc2.reproduce import run_model
 
-    built = []
-    init = base.Model.__init__
-
-    def spy(self, *args, **kwargs):
-        init(self, *args, **kwargs)
-        built.append(self)
-
-    monkeypatch.setattr(base.Model, "__init__", spy)
     run(str(data["avi"]), ["mlplc2", "slplc2"], out=False, quiet=True, end=3)
     assert [m.stabilise for m in built] == [True, True]
     built.clear()

@@ -185,6 +185,16 @@ class MotionEstimator:
     def reset(self) -> None:
         self._prev: np.ndarray | None = None
 
+    def turn(self, image: np.ndarray, shape: tuple[int, int], *, hfov_deg: float | None,
+             heading: tuple[float, float] | None = None, omega=None) -> tuple[CameraMotion, np.ndarray | None]:
+        """One frame of gaze stabilisation, the same for every model that stabilises: the camera's
+        motion to ``image`` (:meth:`apply`, with the model's current field of view and fixed heading,
+        and the rotation ``omega`` when a gyro gives it) and the homography that carries a state of
+        ``shape`` into this frame's pixels (:func:`compensation`; None: nothing to carry)."""
+        self.configure(hfov_deg, heading)
+        motion = self.apply(image, omega=omega)
+        return motion, compensation(motion, shape, focal_length(shape[1], self.hfov_deg))
+
     def _reduce(self, gray: np.ndarray) -> tuple[np.ndarray, float]:
         h, w = gray.shape
         img = gray if gray.dtype == np.uint8 else np.clip(gray, 0, 255).astype(np.uint8)

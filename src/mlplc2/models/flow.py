@@ -34,7 +34,7 @@ import numpy as np
 
 from .._validation import Valid, check_fields
 from ..backend import resolve
-from ..camera import CameraMotion, MotionEstimator, check_hfov, compensation, focal_length, warp
+from ..camera import CameraMotion, MotionEstimator, check_hfov, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
 from ..targets.change import change_box
 from ..targets.layer import TargetLayer, count_down
@@ -374,10 +374,9 @@ class FlowTTC(Model):
     def _stabilise(self, gray: np.ndarray, cur: np.ndarray) -> None:
         """Gaze stabilisation, as the LPLC2 family's (docs/model.md, "Camera motion"): when the
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
-        self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
-        m = self.camera_motion = self._camera.apply(cur, omega=self.rotation_given)
-        focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        hom = compensation(m, gray.shape, focal)
+        self.camera_motion, hom = self._camera.turn(cur, gray.shape, hfov_deg=self.hfov_deg,
+                                                    heading=self._work_point(self.target_params.heading),
+                                                    omega=self.rotation_given)
         if hom is None:
             return
         ones = np.ones(cur.shape, np.float32)

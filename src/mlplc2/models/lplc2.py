@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import CameraMotion, MotionEstimator, compensation
+from ..camera import CameraMotion, MotionEstimator
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -80,10 +80,9 @@ class _LPLC2Family(Model):
 
     def _stabilise(self, gray: np.ndarray) -> None:
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
-        self._camera.configure(self.hfov_deg, self._work_point(self.target_params.heading))
-        m = self.camera_motion = self._camera.apply(gray, omega=self.rotation_given)
-        focal = focal_length(gray.shape[1], self._camera.hfov_deg)
-        hom = compensation(m, gray.shape, focal)
+        self.camera_motion, hom = self._camera.turn(gray, gray.shape, hfov_deg=self.hfov_deg,
+                                                    heading=self._work_point(self.target_params.heading),
+                                                    omega=self.rotation_given)
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
