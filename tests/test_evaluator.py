@@ -690,6 +690,22 @@ def test_collision_object_outside_the_processed_frames_is_not_scored():
     assert (s["collision_objects"], s["warned"], s["collision_objects_outside"]) == (1, 1, 1)
 
 
+def test_collision_object_out_of_view_before_contact_is_not_scored():
+    """A turning camera that looked away: an object in view up to 1.5 s before its contact and
+    again only in its last frame (it passes the camera's edge) cannot be warned of: not a miss, only
+    counted (``collision_objects_unseen``). One in view through half of its last second is scored."""
+    contact = 40
+    ttc = lambda f: (contact - f) / WARN_FPS                                  # noqa: E731
+    gone = obj(1, "collision", [*range(0, 25), contact - 1], 50, 50, growing, contact=float(contact), ttc=ttc)
+    half = obj(2, "collision", range(0, 35), 150, 50, growing, contact=float(contact), ttc=ttc)
+    gt = {"videos": {"a.mp4": video_truth([gone, half], frames=45)}}
+    ev = evaluate(result("a.mp4", 45), gt)
+    assert [o["object"] for o in ev.warning_objects] == [2]
+    assert wvid(ev, "a.mp4")["collision_objects_unseen"] == 1
+    s = warn_summary(ev)
+    assert (s["collision_objects"], s["warned"], s["collision_objects_unseen"]) == (1, 0, 1)
+
+
 def test_3d_truth_without_approach_intervals_gets_the_object_metrics_too():
     """The paper's object metrics score a 3-D collision or pass-by given only by its track over
     its tracked frames (no TypeError for a missing ``approach``)."""

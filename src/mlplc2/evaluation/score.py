@@ -34,7 +34,7 @@ from .record import TargetRow
 from .truth import ObjectTruth, VideoTruth
 
 __all__ = ["ModelRun", "score_run", "score_warnings", "warning_truth", "summarise", "summarise_warnings",
-           "TTC_BINS", "MIN_TTC_WIDTH", "EARLY_S", "LATE_S", "MID_INTERVAL_S", "mid_error"]
+           "TTC_BINS", "MIN_TTC_WIDTH", "EARLY_S", "LATE_S", "SEEN_S", "MID_INTERVAL_S", "mid_error"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
@@ -44,6 +44,10 @@ MIN_TTC_WIDTH = 16.0
 EARLY_S = 0.5
 #: A warning on a collision object up to this long (s) after its contact is neither true nor false.
 LATE_S = 0.5
+#: A 3-D collision object is scored only when it is in view (a track row) in at least half of the
+#: frames of its last ``SEEN_S`` seconds before contact: a camera that turned away from it (a pan, a
+#: tilt) cannot warn of it, whatever the model (docs/evaluation.md, "Warning metrics").
+SEEN_S = 1.0
 #: MiD (the TSTTC benchmark's motion-in-depth error) compares the depth ratio over this interval (s):
 #: TSTTC's frame interval (10 fps).
 MID_INTERVAL_S = 0.1
@@ -319,13 +323,17 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
     collider ("elsewhere"). On a collision clip without the collider's track no warning can be placed
     on the collider: a warning there is ``unplaced`` (its own outcome, never ``warned`` nor false). A
     collision object none of whose frames before contact were processed (an interrupted or partial
-    run) is not scored, only counted (``collision_objects_outside``).
+    run) is not scored, only counted (``collision_objects_outside``); nor is a 3-D one out of view
+    in most of its last :data:`SEEN_S` before contact (``collision_objects_unseen``, :func:`unseen`).
     """
     run = run.in_pixels_of(truth)
     rules = _warning_rules(run, truth, radius)
     objects = []
     outside = 0
+    hidden = [o for o in rules.colliders if o is not rules.collider and unseen(o, rules.fps)]
     for o in rules.colliders:
+        if o in hidden:
+            continue
         rec = _score_collider(run, truth, o, rules)
         if rec is None:
             outside += 1
@@ -345,11 +353,25 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
                    "unplaced_lead_s": next((r["unplaced_lead_s"] for r in objects if r["unplaced"]), None),
                    "alarm_lead_s": next((r["alarm_lead_s"] for r in objects if r["alarm_frame"] is not None), None)}
     video = {"model": run.label, "video": truth.key, "frames_scored": max(rules.end - rules.first, 0),
-             "clip": rules.clip, "collision_objects_outside": outside,
+             "clip": rules.clip, "collision_objects_outside": outside, "collision_objects_unseen": len(hidden),
              "false_frames": len(all_false), "false_episodes": sum(episodes_by.values()),
              "false_frames_by_cause": {c: len(v) for c, v in sorted(false_frames.items())},
              "false_episodes_by_cause": dict(sorted(episodes_by.items())), "outcome": outcome}
     return video, objects
+
+
+def unseen(o: ObjectTruth, fps: float) -> bool:
+    """Whether the 3-D collision object ``o`` is out of view (no track row) in more than half of the
+    frames of its last :data:`SEEN_S` before contact: it left the view long before it hit (a camera
+    that turned away from it), so no warning can be asked of it. False without a track or a contact."""
+    cf = o.contact_frame
+    if not o.track or cf is None:
+        return False
+    window = range(max(int(math.ceil(cf - SEEN_S * fps)), 0), int(math.ceil(cf)))       # true TTC <= SEEN_S
+    if not window:
+        return False
+    seen = {p.frame for p in o.track}
+    return sum(f in seen for f in window) < 0.5 * len(window)
 
 
 def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _WarningRules) -> dict | None:
@@ -476,6 +498,7 @@ def summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) ->
     s: dict[str, Any] = {
         "collision_objects": len(sobjs), "warned": len(warned),
         "collision_objects_outside": sum(v["collision_objects_outside"] for v in synth),
+        "collision_objects_unseen": sum(v.get("collision_objects_unseen", 0) for v in synth),
         "warned_rate": round(len(warned) / len(sobjs), 4) if sobjs else None,
         "lead_median_s": _median(o["lead_s"] for o in warned),
         "lead_p10_s": _quantile([o["lead_s"] for o in warned], 0.1),
