@@ -706,6 +706,18 @@ def test_collision_object_out_of_view_before_contact_is_not_scored():
     assert (s["collision_objects"], s["warned"], s["collision_objects_unseen"]) == (1, 0, 1)
 
 
+@pytest.mark.parametrize("camera, speed, scored", [("pan", 10.0, False), ("static", 0.0, True)])
+def test_a_rendered_pan_that_turns_away_from_its_collision_does_not_score_it(camera, speed, scored):
+    """A collision aimed at the camera from the left of the view: a camera panning right at 10 deg/s
+    has lost it 1.2 s before contact (its truth says so), the same camera standing still has not."""
+    o = stimuli.ApproachObject.collision(ttc_s=3.0, at=(15.0, 30.0), width_px=4.0, size=(80, 60), speed_mps=3.0)
+    st = stimuli.approach([o], size=(80, 60), fps=WARN_FPS, camera=camera, camera_speed=speed,
+                          background="texture", supersample=1)
+    ev = evaluate(result("a.mp4", len(st.frames), size=(80, 60)), {"videos": {"a.mp4": st.to_ground_truth()}})
+    assert len(ev.warning_objects) == int(scored)
+    assert wvid(ev, "a.mp4")["collision_objects_unseen"] == int(not scored)
+
+
 def test_3d_truth_without_approach_intervals_gets_the_object_metrics_too():
     """The paper's object metrics score a 3-D collision or pass-by given only by its track over
     its tracked frames (no TypeError for a missing ``approach``)."""
