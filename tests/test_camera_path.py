@@ -125,12 +125,14 @@ def test_by_setting_separates_still_and_moving_cameras():
                            {"model": "m", "video": "drive_1.mkv", "contact_frame": 9, "warned": True}]
         warning_videos = [{"model": "m", "video": "plain_static_0.mkv", "frames_scored": 500, "false_episodes": 1},
                           {"model": "m", "video": "drive_0.mkv", "frames_scored": 1000, "false_episodes": 0},
-                          {"model": "m", "video": "drive_1.mkv", "frames_scored": 1000, "false_episodes": 3}]
+                          {"model": "m", "video": "drive_1.mkv", "frames_scored": 1000, "false_episodes": 3,
+                           "collision_objects_unseen": 1}]
 
     scenes = [s for s in suite() if s.name in ("plain_static_0", "drive_0", "drive_1")]
     rows = {r["setting"]: r for r in by_setting(Ev(), scenes, ["m"])}
-    assert rows["drive"]["m"] == {"warned": 1, "collision_objects": 2, "false_episodes_per_1000": 1.5}
-    assert rows["still camera"]["m"] == {"warned": 1, "collision_objects": 1, "false_episodes_per_1000": 2.0}
+    assert rows["drive"]["m"] == {"warned": 1, "collision_objects": 2, "unseen": 1, "false_episodes_per_1000": 1.5}
+    assert rows["still camera"]["m"] == {"warned": 1, "collision_objects": 1, "unseen": 0,
+                                         "false_episodes_per_1000": 2.0}
     assert rows["moving camera"]["scenes"] == 2
 
 

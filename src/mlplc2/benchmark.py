@@ -245,8 +245,8 @@ def _setting_of(sc: Scene) -> str:
 
 def by_setting(ev, scenes: Sequence[Scene], models: Sequence[str]) -> list[dict]:
     """Per setting of the generated suite, then for the still and the moving cameras together: per
-    model the collision objects warned before contact (of those scored) and the false-warning
-    episodes per 1000 scored frames (from ``ev.warning_objects`` / ``ev.warning_videos``)."""
+    model the collision objects warned before contact (of those scored), those not scored because
+    the camera had turned away from them (``unseen``), and the false-warning episodes per 1000 scored frames (from ``ev.warning_objects`` / ``ev.warning_videos``)."""
     group = {f"{sc.name}.mkv": _setting_of(sc) for sc in scenes}
     still = {_setting_of(sc): sc.camera == "static" for sc in scenes}
     names = list(dict.fromkeys(group.values()))
@@ -260,6 +260,7 @@ def by_setting(ev, scenes: Sequence[Scene], models: Sequence[str]) -> list[dict]
             vids = [v for v in ev.warning_videos if v["model"] == m and group.get(v["video"]) in members]
             frames = sum(v["frames_scored"] for v in vids)
             row[m] = {"warned": sum(1 for o in objs if o["warned"]), "collision_objects": len(objs),
+                      "unseen": sum(v.get("collision_objects_unseen", 0) for v in vids),
                       "false_episodes_per_1000": round(1000.0 * sum(v["false_episodes"] for v in vids) / frames, 2)
                       if frames else None}
         rows.append(row)
@@ -270,11 +271,13 @@ def _setting_markdown(rows: list[dict], models: Sequence[str]) -> list[str]:
     """The per-setting table of ``benchmark.md``: warned / collision objects, false episodes per 1000 frames."""
     if not rows:
         return []
-    lines = ["", "Per setting (warned / collision objects; false-warning episodes per 1000 frames):", "",
+    lines = ["", "Per setting (warned / collision objects, + those out of view before contact, not scored; "
+             "false-warning episodes per 1000 frames):", "",
              "| setting | scenes | " + " | ".join(models) + " |", "|" + "|".join(["---"] * (len(models) + 2)) + "|"]
     for r in rows:
-        cells = [f"{r[m]['warned']}/{r[m]['collision_objects']}; {_fmt(r[m]['false_episodes_per_1000'])}"
-                 for m in models]
+        cells = [f"{r[m]['warned']}/{r[m]['collision_objects']}"
+                 + (f" (+{r[m]['unseen']} unseen)" if r[m].get("unseen") else "")
+                 + f"; {_fmt(r[m]['false_episodes_per_1000'])}" for m in models]
         lines.append(f"| {r['setting']} | {r['scenes']} | " + " | ".join(cells) + " |")
     return lines
 
