@@ -252,7 +252,8 @@ class FrameSource:
         error = getattr(self._dec, "error", None)
         if self.kind in ("stream", "camera") and error is not None:
             self.dropped = True
-            self.message = (f"{self.name}: the stream stopped after {self.n_read} frames ({error}); "
+            # frames of the source, the ones a live source skipped included
+            self.message = (f"{self.name}: the stream stopped after {index - self.start} frames ({error}); "
                             "results cover the frames before it")
         elif failed_image is not None:
             self.truncated, self.truncated_at = True, index
