@@ -46,14 +46,23 @@ def rtsp_clip(data, tmp_path_factory):
     for kind, name in (("format", "rtp"), ("format", "rtsp"), ("format", "matroska"), ("codec", "mjpeg")):
         _need(kind, name)
     path = tmp_path_factory.mktemp("rtsp") / "clip.mkv"
-    with av.open(str(data["avi"])) as src, av.open(str(path), "w") as out:
-        stream = out.add_stream("mjpeg", rate=30, options={"huffman": "default", "force_duplicated_matrix": "1"})
-        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuvj420p"
-        stream.codec_context.thread_count = 1  # slice threads would add restart markers
-        for frame in src.decode(video=0):
-            out.mux(stream.encode(av.VideoFrame.from_ndarray(frame.to_ndarray(format="rgb24"), format="rgb24")))
-        out.mux(stream.encode(None))
+    with av.open(str(data["avi"])) as src:
+        _write_mjpeg(path, (frame.to_ndarray(format="rgb24") for frame in src.decode(video=0)), 30)
     return path, _rtp_packets(path)
+
+
+def _write_mjpeg(path, frames, fps) -> None:
+    """RGB frames to an MJPEG file whose JPEGs RTP can carry."""
+    with av.open(str(path), "w") as out:
+        stream = None
+        for rgb in frames:
+            if stream is None:
+                stream = out.add_stream("mjpeg", rate=fps,
+                                        options={"huffman": "default", "force_duplicated_matrix": "1"})
+                stream.width, stream.height, stream.pix_fmt = rgb.shape[1], rgb.shape[0], "yuvj420p"
+                stream.codec_context.thread_count = 1  # slice threads would add restart markers
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(rgb, format="rgb24")))
+        out.mux(stream.encode(None))
 
 
 def _rtp_packets(path) -> list[tuple[int, bytes]]:
@@ -100,11 +109,11 @@ def _udp_pair():
 
 class _RTSPServer:
     """One RTSP session on 127.0.0.1: the RTP and RTCP packets interleaved on the RTSP connection
-    after PLAY (``$``, channel, length, packet), ``period`` s apart, the first ``upto`` of them;
+    after PLAY (``$``, channel, length, packet), the first ``upto`` of them;
     then it closes the connection, or with ``stall=True`` keeps it open and sends nothing."""
 
-    def __init__(self, packets, *, upto=None, period=0.0, stall=False):
-        self.packets, self.upto, self.period, self.stall = packets, upto, period, stall
+    def __init__(self, packets, *, upto=None, stall=False):
+        self.packets, self.upto, self.stall = packets, upto, stall
         self.sock = socket.create_server(("127.0.0.1", 0))
         self.url = f"rtsp://127.0.0.1:{self.sock.getsockname()[1]}/clip"
         self.methods: list[str] = []
@@ -121,7 +130,12 @@ class _RTSPServer:
                 pass
             if self.stall:
                 self.done.wait(30)
-            conn.shutdown(socket.SHUT_RDWR)
+            # Half-close, then read what the client still sends (RTCP reports) until it closes:
+            # closing with unread data would reset the connection and lose the frames in flight.
+            conn.shutdown(socket.SHUT_WR)
+            conn.settimeout(30)
+            while f.read(65536):
+                pass
 
     def _answer(self, conn, f) -> bool:
         """Answer one request (skipping the client's interleaved RTCP); True when done."""
@@ -149,12 +163,13 @@ class _RTSPServer:
         conn.sendall((f"RTSP/1.0 200 OK\r\nCSeq: {headers.get('cseq', '0')}\r\n{extra}"
                       f"Content-Length: {len(body)}\r\n\r\n{body}").encode())
         if method == "PLAY":
-            for channel, packet in self.packets[:self.upto]:
-                conn.sendall(struct.pack(">cBH", b"$", channel, len(packet)) + packet)
-                if self.period:
-                    time.sleep(self.period)
+            self._play(conn)
             return True
         return method == "TEARDOWN"
+
+    def _play(self, conn):
+        for channel, packet in self.packets[:self.upto]:
+            conn.sendall(struct.pack(">cBH", b"$", channel, len(packet)) + packet)
 
     def close(self):
         self.done.set()
