@@ -229,6 +229,18 @@ def test_a_live_rtsp_stream_faster_than_its_consumer_skips_to_the_newest_frame(s
     assert np.allclose([line["time_s"] for line in lines], [round(f / 30, 3) for f in frames], atol=1e-6)
 
 
+def test_a_live_rtsp_stream_opened_early_starts_at_its_newest_frame(serve):
+    """While the caller builds its models the stream runs on (here: the whole clip arrives); the
+    first frame given is then the newest, not one buffered meanwhile, the others counted."""
+    src = mlplc2.io.open_source(serve().url)
+    time.sleep(1.0)                       # the models being built
+    with src:
+        items = [(index, src.skipped) for index, _ in src]
+    first, skipped = items[0]
+    assert first > 30 and skipped == first
+    assert items[-1][0] == 59 and src.n_skipped + len(items) == 60
+
+
 @pytest.mark.parametrize("stall", [False, True], ids=["closed", "stalled"])
 def test_an_rtsp_stream_that_stops_ends_the_run_keeping_what_was_written(rtsp_clip, serve, tmp_path, capsys,
                                                                          monkeypatch, stall):
