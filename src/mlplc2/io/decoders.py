@@ -16,7 +16,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
-from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_url
+from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url
 
 log = logging.getLogger(__name__)
 
@@ -114,6 +114,9 @@ class _PyAVDecoder(Decoder):
         self._av = av
         #: Why decoding of a stream stopped early (an FFmpeg error), None at a clean end.
         self.error: str | None = None
+        # A real-time stream (RTSP, ...: a camera) has no end of its own: its end is the stream
+        # stopping (FFmpeg reports a closed connection or an RTCP BYE as the end of the input).
+        self._realtime = stream and is_live(path)
         options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
         try:
             self.container = av.open(path, mode="r", options=options, timeout=self.TIMEOUT_S if stream else None)
@@ -136,6 +139,8 @@ class _PyAVDecoder(Decoder):
         try:
             frame = next(self._frames)
         except StopIteration:
+            if self._realtime:
+                self.error = "the server ended it"
             return None
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)

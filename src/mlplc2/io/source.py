@@ -61,7 +61,9 @@ class FrameSource:
         Frames arrive in real time (a camera, an RTSP stream): the decoding thread never
         waits for the consumer; it keeps only the newest decoded frame, so a consumer that
         falls behind gets the newest frame and the ones in between are skipped (the gap in
-        ``index``; :attr:`skipped`, :attr:`n_skipped`). Not live (a file, HTTP, stdin): every
+        ``index``; :attr:`skipped`, :attr:`n_skipped`); from its opening on, so that the first
+        frame given is the newest too, not one buffered while the caller built its models (without
+        ``end``). Not live (a file, HTTP, stdin): every
         frame in order, the thread waits when the queue is full.
     decoded_at : float
         ``time.perf_counter()`` when the decoder gave the frame last yielded (before its
@@ -125,11 +127,21 @@ class FrameSource:
             self.total = None if self.end is None else self.end - self.start
         self._first = first
         self._first_time = decoder.time_s
+        self._first_decoded: float | None = None
         self._centres = False
         self._queue: queue.Queue = queue.Queue(maxsize=1 if self.live else queue_size)
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._iterated = False
+        # Live: the source runs on while the caller builds its models; until iteration begins a
+        # thread reads on and keeps only the newest frame (the others count as skipped), so that
+        # the first frames given are not the ones buffered meanwhile (seconds old).
+        self._drained = 0
+        self._drained_to_end = False
+        self._drainer: threading.Thread | None = None
+        if self.live and self.end is None:
+            self._drainer = threading.Thread(target=self._drain, name="mlplc2-drain", daemon=True)
+            self._drainer.start()
 
     def reduce_to(self, size: tuple[int, int]) -> None:
         """Yield frames at ``size`` ``(W, H)`` from now on, reduced in the decoding thread (before
@@ -155,6 +167,21 @@ class FrameSource:
         return x * self.scale_x, y * self.scale_y
 
     # -- decoding thread ------------------------------------------------------
+    def _drain(self) -> None:
+        """Live, before iteration: read on, keeping the newest frame as the first to give."""
+        while not (self._stop.is_set() or self._iterated):
+            frame = self._dec.read()
+            if frame is None:
+                self._drained_to_end = True
+                return
+            self._first, self._first_time, self._first_decoded = frame, self._dec.time_s, time.perf_counter()
+            self._drained += 1
+
+    def _stop_draining(self) -> None:
+        if self._drainer is not None:
+            self._drainer.join()
+            self._drainer = None
+
     def _prepare(self, frame: np.ndarray):
         if self.resized:
             import cv2
@@ -191,18 +218,18 @@ class FrameSource:
 
     def _work(self) -> None:
         dec = self._dec
-        index = self.start
+        index = self.start + self._drained
         try:
-            frame, t, decoded = self._first, self._first_time, time.perf_counter()
-            self._first = None
+            frame, t, decoded = self._first, self._first_time, self._first_decoded or time.perf_counter()
+            self._first, skipped = None, self._drained
             while frame is not None:
                 payload = (self._prepare(frame), t)
-                if not self._put(("frame", index, payload, decoded, 0)):
+                if not self._put(("frame", index, payload, decoded, skipped)):
                     return
-                index += 1
+                index, skipped = index + 1, 0
                 if self.end is not None and index >= self.end:
                     break
-                frame = dec.read()
+                frame = None if self._drained_to_end else dec.read()
                 t, decoded = dec.time_s, time.perf_counter()
             self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
@@ -214,6 +241,7 @@ class FrameSource:
         if self._iterated:
             raise RuntimeError("a FrameSource can be iterated only once")
         self._iterated = True
+        self._stop_draining()
         self._thread = threading.Thread(target=self._work, name="mlplc2-decode", daemon=True)
         self._thread.start()
         try:
@@ -252,7 +280,8 @@ class FrameSource:
         error = getattr(self._dec, "error", None)
         if self.kind in ("stream", "camera") and error is not None:
             self.dropped = True
-            self.message = (f"{self.name}: the stream stopped after {self.n_read} frames ({error}); "
+            # frames of the source, the ones a live source skipped included
+            self.message = (f"{self.name}: the stream stopped after {index - self.start} frames ({error}); "
                             "results cover the frames before it")
         elif failed_image is not None:
             self.truncated, self.truncated_at = True, index
@@ -265,6 +294,7 @@ class FrameSource:
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""
         self._stop.set()
+        self._stop_draining()
         if self._thread is not None and self._thread is not threading.current_thread():
             while self._thread.is_alive():
                 try:
