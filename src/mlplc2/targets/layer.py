@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "course", "alarm_warns", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down"]
 
 
 @dataclass(frozen=True)
@@ -204,6 +204,44 @@ class Track:
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
 
+class Carried:
+    """A pyramid of a past frame seen in a later frame's pixels (gaze stabilisation), resampled lazily.
+
+    ``levels``: the pyramid as it was seen; ``homography``: its frame -> the current frame (level-0
+    pixels; the turns since, composed); ``fill``: the current frame's pyramid, whose values are
+    taken where the past frame saw nothing. ``carried[k]`` warps level ``k`` on first reading
+    (:func:`mlplc2.camera.warp`, bilinear, once: the turns of several frames are one resampling),
+    so a level the tracker never reads is never resampled. Indexing and ``len`` as the list it stands for.
+    """
+
+    def __init__(self, levels, homography: np.ndarray, fill):
+        self.levels, self.homography, self.fill = levels, homography, fill
+        self._done: dict[int, np.ndarray] = {}
+
+    @classmethod
+    def of(cls, levels, homography: np.ndarray, fill) -> "Carried":
+        """``levels`` (a list, or a :class:`Carried` itself) carried on by one more turn."""
+        if isinstance(levels, Carried):
+            return cls(levels.levels, homography @ levels.homography, fill)
+        return cls(levels, homography, fill)
+
+    def __len__(self) -> int:
+        return len(self.levels)
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        k = range(len(self.levels))[k]
+        if k not in self._done:
+            img = self.levels[k]
+            if k < len(self.fill) and self.fill[k].shape == img.shape:
+                s = img.shape[1] / self.levels[0].shape[1]      # pixel centres: x_k = (x + 0.5) s - 0.5
+                o = 0.5 * s - 0.5
+                sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
+                sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
+                img = warp(img, sm @ self.homography @ sm_inv, fill=self.fill[k])
+            self._done[k] = img
+        return self._done[k]
+
+
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
 
@@ -242,22 +280,23 @@ class TargetLayer:
         self._prev: list[np.ndarray] | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
+        self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
+
+    def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
+        """This frame's pyramid, made once for :meth:`compensate` and :meth:`step`."""
+        if self._now is None or self._now[0] is not gray:
+            self._now = (gray, pyramid(gray))
+        return self._now[1]
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
         """Gaze stabilisation (as the front end's): the images kept of the last frames and every
         target's box carried into this frame's pixels (``homography``: previous frame -> this one;
         ``gray``: this frame, which fills what the turn uncovers). The turn adds to each track's
-        ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own."""
-        now = pyramid(gray)
-        w0 = gray.shape[1]
-
-        def level_h(k: int, shape) -> np.ndarray:
-            s = shape[1] / w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
-            sm = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5], [0.0, 0.0, 1.0]])
-            return sm @ homography @ np.linalg.inv(sm)
-
-        past = [[warp(img, level_h(k, img.shape), fill=now[k]) if k < len(now) and now[k].shape == img.shape
-                 else img for k, img in enumerate(levels)] for levels in self._past]
+        ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own.
+        The kept images are carried lazily (:class:`Carried`): the turns since each was seen are
+        composed, and a pyramid level is resampled once, when it is read."""
+        now = self._pyramid(gray)
+        past = [Carried.of(levels, homography, now) for levels in self._past]
         self._past.clear()
         self._past.extend(past)
         if self._prev is not None:
@@ -280,7 +319,7 @@ class TargetLayer:
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
         clock = index if clock is None else clock
-        levels = pyramid(gray)
+        levels = self._pyramid(gray)
         h, w = gray.shape
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
