@@ -379,5 +379,5 @@ def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float 
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(fill))
     out = cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=np.nan)
-    seen = np.isfinite(out)
-    return np.where(seen, out, fill).astype(image.dtype, copy=False)
+    np.copyto(out, fill, where=np.isnan(out))           # in place: no third image
+    return out
