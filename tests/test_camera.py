@@ -255,24 +255,3 @@ def test_compensation_is_none_for_a_still_an_unsure_or_a_tiny_rotation():
     assert compensation(CameraMotion(omega=(0.0, 1e-5, 0.0), rotation_confidence=0.9), shape, focal) is None
     assert np.allclose(compensation(pan, shape, focal), pan.homography(shape, focal))
 
-
-def test_kept_frames_are_carried_through_several_turns_in_one_resampling():
-    """The target layer's kept pyramids (TargetLayer.compensate -> Carried): two turns of half a
-    pixel each carry the oldest frame onto the current one as a single shift of one pixel, which
-    bilinear resampling reproduces exactly (two half-pixel resamplings in turn would blur it), and
-    what the oldest frame never saw is the current frame's (no change where nothing was seen)."""
-    from mlplc2.targets import TargetLayer
-    from mlplc2.targets.alignment import pyramid
-
-    rng = np.random.default_rng(3)
-    scene = rng.uniform(0, 255, (64, 66)).astype(np.float32)
-    frames = [np.ascontiguousarray(scene[:, 2 - k:66 - k]) for k in range(3)]   # the scene moves right 1 px a frame
-    layer = TargetLayer(fps=FPS)
-    layer._past.append(pyramid(frames[0]))
-    half = np.array([[1.0, 0.0, 0.5], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])   # previous -> this: +0.5 px
-    layer.compensate(half, frames[1])
-    layer.compensate(half, frames[2])
-    oldest = layer._past[0][0]
-    # (OpenCV's bilinear warp counts the last row and column as half outside: filled too)
-    assert np.array_equal(oldest[:-1, 1:-1], frames[0][:-1, :-2])  # one whole-pixel shift: no blur
-    assert np.array_equal(oldest[:, 0], frames[2][:, 0])           # never seen: the current frame

@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "carry", "estimate", "course", "alarm_warns", "count_down"]
 
 
 @dataclass(frozen=True)
@@ -204,42 +204,22 @@ class Track:
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
 
-class Carried:
-    """A pyramid of a past frame seen in a later frame's pixels (gaze stabilisation), resampled lazily.
-
-    ``levels``: the pyramid as it was seen; ``homography``: its frame -> the current frame (level-0
-    pixels; the turns since, composed); ``fill``: the current frame's pyramid, whose values are
-    taken where the past frame saw nothing. ``carried[k]`` warps level ``k`` on first reading
-    (:func:`mlplc2.camera.warp`, bilinear, once: the turns of several frames are one resampling),
-    so a level the tracker never reads is never resampled. Indexing and ``len`` as the list it stands for.
-    """
-
-    def __init__(self, levels, homography: np.ndarray, fill):
-        self.levels, self.homography, self.fill = levels, homography, fill
-        self._done: dict[int, np.ndarray] = {}
-
-    @classmethod
-    def of(cls, levels, homography: np.ndarray, fill) -> "Carried":
-        """``levels`` (a list, or a :class:`Carried` itself) carried on by one more turn."""
-        if isinstance(levels, Carried):
-            return cls(levels.levels, homography @ levels.homography, fill)
-        return cls(levels, homography, fill)
-
-    def __len__(self) -> int:
-        return len(self.levels)
-
-    def __getitem__(self, k: int) -> np.ndarray:
-        k = range(len(self.levels))[k]
-        if k not in self._done:
-            img = self.levels[k]
-            if k < len(self.fill) and self.fill[k].shape == img.shape:
-                s = img.shape[1] / self.levels[0].shape[1]      # pixel centres: x_k = (x + 0.5) s - 0.5
-                o = 0.5 * s - 0.5
-                sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
-                sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
-                img = warp(img, sm @ self.homography @ sm_inv, fill=self.fill[k])
-            self._done[k] = img
-        return self._done[k]
+def carry(levels, homography: np.ndarray, now) -> list[np.ndarray]:
+    """A pyramid of the previous frame seen in this frame's pixels (gaze stabilisation): each level
+    warped (:func:`mlplc2.camera.warp`, bilinear) by ``homography`` (previous -> this frame, level-0
+    pixels) scaled to the level, with ``now``'s level (this frame's pyramid) where the previous
+    frame saw nothing; a level without its like in ``now`` is kept as it is."""
+    w0 = levels[0].shape[1]
+    out = []
+    for k, img in enumerate(levels):
+        if k < len(now) and now[k].shape == img.shape:
+            s = img.shape[1] / w0                       # pixel centres: x_k = (x + 0.5) s - 0.5
+            o = 0.5 * s - 0.5
+            sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
+            sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
+            img = warp(img, sm @ homography @ sm_inv, fill=now[k])
+        out.append(img)
+    return out
 
 
 class TargetLayer:
@@ -293,10 +273,10 @@ class TargetLayer:
         target's box carried into this frame's pixels (``homography``: previous frame -> this one;
         ``gray``: this frame, which fills what the turn uncovers). The turn adds to each track's
         ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own.
-        The kept images are carried lazily (:class:`Carried`): the turns since each was seen are
-        composed, and a pyramid level is resampled once, when it is read."""
+        Every kept pyramid is carried every turn (:func:`carry`): composing the turns and
+        resampling a level once, when read, raised the false warnings (docs/model.md, "Camera motion")."""
         now = self._pyramid(gray)
-        past = [Carried.of(levels, homography, now) for levels in self._past]
+        past = [carry(levels, homography, now) for levels in self._past]
         self._past.clear()
         self._past.extend(past)
         if self._prev is not None:
