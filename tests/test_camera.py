@@ -254,3 +254,32 @@ def test_compensation_is_none_for_a_still_an_unsure_or_a_tiny_rotation():
                         shape, focal) is None
     assert compensation(CameraMotion(omega=(0.0, 1e-5, 0.0), rotation_confidence=0.9), shape, focal) is None
     assert np.allclose(compensation(pan, shape, focal), pan.homography(shape, focal))
+
+
+
+def test_kept_pyramids_are_carried_as_if_warped_every_turn():
+    """The target layer's kept pyramids take a turn lazily (targets.layer.Carried), to the values of
+    warping each level at each turn in order, with the grey levels of that turn's frame where the
+    earlier frame saw nothing (composing the turns into one resampling changed the warnings)."""
+    from mlplc2.camera import warp
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.alignment import pyramid
+
+    rng = np.random.default_rng(3)
+    frames = [rng.uniform(0, 255, (64, 80)).astype(np.float32) for _ in range(3)]
+    turns = [np.array([[1.0, 0.0, 0.5], [0.0, 1.0, -0.3], [0.0, 0.0, 1.0]]),
+             np.array([[1.0, 0.01, 0.7], [-0.01, 1.0, 0.2], [1e-5, 0.0, 1.0]])]
+    layer = TargetLayer(fps=FPS)
+    layer.step(frames[0], None, [], 0)
+    for hom, frame in zip(turns, frames[1:]):
+        layer.compensate(hom, frame)
+    expected = frames[0]
+    for hom, frame in zip(turns, frames[1:]):
+        expected = warp(expected, hom, fill=frame)
+    s = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])   # level 1: x_1 = (x + 0.5) / 2 - 0.5
+    oldest = layer._past[0]
+    assert np.array_equal(oldest[0], expected)
+    level1 = pyramid(frames[0])[1]
+    for hom, frame in zip(turns, frames[1:]):
+        level1 = warp(level1, s @ hom @ np.linalg.inv(s), fill=pyramid(frame)[1])
+    assert np.allclose(oldest[1], level1, atol=1e-3)

@@ -247,8 +247,10 @@ class MotionEstimator:
             (self.fixed_heading[0] / scale - cx) / f, (self.fixed_heading[1] / scale - cy) / f)
         fit = _fit_motion(x0, y0, d, None if omega is None else np.asarray(omega, float), heading, 1.0 / f)
         w_est, e, rot_ok, exp, exp_ok = fit
-        if e is None and omega is None:                 # no heading measured: a rotation, or a sideways
-            moved, t = _translation_share(x0, y0, d, 1.0 / f)   # translation over near ground (parallax)?
+        # no heading measured: a rotation, or a sideways translation over near ground (parallax)? A share
+        # (at most 1) can exceed the rotation's by TRANSLATION_MARGIN only when that is below 1 - the margin.
+        if e is None and omega is None and rot_ok + TRANSLATION_MARGIN < 1.0:
+            moved, t = _translation_share(x0, y0, d, 1.0 / f)
             sideways = abs(t[2]) < np.hypot(t[0], t[1]) / 3.0          # a heading beyond the joint fit's reach
             if sideways and moved > rot_ok + TRANSLATION_MARGIN:
                 w_est, rot_ok = np.zeros(3), moved
@@ -379,5 +381,5 @@ def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float 
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(fill))
     out = cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
                               borderValue=np.nan)
-    seen = np.isfinite(out)
-    return np.where(seen, out, fill).astype(image.dtype, copy=False)
+    np.copyto(out, fill, where=np.isnan(out))           # in place: no third image
+    return out

@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "estimate", "course", "alarm_warns", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down"]
 
 
 @dataclass(frozen=True)
@@ -204,6 +204,42 @@ class Track:
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
 
+class Carried:
+    """A pyramid of a past frame carried through the camera's turns since (gaze stabilisation),
+    each level resampled only when it is read: on reading, the turns not yet applied to that
+    level are applied in turn (:meth:`turn` records them), each exactly as an eager carry would
+    (bilinear, :func:`mlplc2.camera.warp`, with the grey levels of the frame of that turn where the
+    earlier frame saw nothing), so the values are those of warping every level every turn, while a
+    level never read is never resampled. Indexing and ``len`` as the list it stands for."""
+
+    def __init__(self, levels):
+        self.levels = list(levels)
+        self._w0 = self.levels[0].shape[1]
+        self._turns: list = []                   # (homography previous -> that frame, that frame's pyramid)
+        self._done = [0] * len(self.levels)      # turns applied to each level
+
+    def turn(self, homography: np.ndarray, now) -> None:
+        """One more turn (``homography``: previous frame -> this one, level-0 pixels; ``now``: this
+        frame's pyramid, which fills what the turn uncovers)."""
+        self._turns.append((homography, now))
+
+    def __len__(self) -> int:
+        return len(self.levels)
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        k = range(len(self.levels))[k]
+        img = self.levels[k]
+        for homography, now in self._turns[self._done[k]:]:
+            if k < len(now) and now[k].shape == img.shape:
+                s = img.shape[1] / self._w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
+                o = 0.5 * s - 0.5
+                sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
+                sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
+                img = warp(img, sm @ homography @ sm_inv, fill=now[k])
+        self.levels[k], self._done[k] = img, len(self._turns)
+        return img
+
+
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
 
@@ -239,29 +275,28 @@ class TargetLayer:
     def reset(self) -> None:
         self._tracks: list[Track] = []
         self._next = 1
-        self._prev: list[np.ndarray] | None = None
+        self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
         self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
+        self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
+
+    def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
+        """This frame's pyramid, made once for :meth:`compensate` and :meth:`step`."""
+        if self._now is None or self._now[0] is not gray:
+            self._now = (gray, pyramid(gray))
+        return self._now[1]
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
         """Gaze stabilisation (as the front end's): the images kept of the last frames and every
         target's box carried into this frame's pixels (``homography``: previous frame -> this one;
         ``gray``: this frame, which fills what the turn uncovers). The turn adds to each track's
-        ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own."""
-        now = pyramid(gray)
-        w0 = gray.shape[1]
-
-        def level_h(k: int, shape) -> np.ndarray:
-            s = shape[1] / w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
-            sm = np.array([[s, 0.0, 0.5 * s - 0.5], [0.0, s, 0.5 * s - 0.5], [0.0, 0.0, 1.0]])
-            return sm @ homography @ np.linalg.inv(sm)
-
-        past = [[warp(img, level_h(k, img.shape), fill=now[k]) if k < len(now) and now[k].shape == img.shape
-                 else img for k, img in enumerate(levels)] for levels in self._past]
-        self._past.clear()
-        self._past.extend(past)
-        if self._prev is not None:
-            self._prev = self._past[-1]
+        ``ox``, ``oy``, so that its course (:func:`fit_course`) stays the object's own.
+        The kept pyramids take the turn lazily (:class:`Carried`: a level is resampled when read,
+        to the values of resampling it every turn; composing the turns into one resampling raised
+        the false warnings, docs/model.md, "Camera motion")."""
+        now = self._pyramid(gray)
+        for levels in self._past:
+            levels.turn(homography, now)
         for t in self._tracks:
             x, y, z = homography @ np.array([t.cx, t.cy, 1.0])
             dx, dy = x / z - t.cx, y / z - t.cy
@@ -280,7 +315,7 @@ class TargetLayer:
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
         clock = index if clock is None else clock
-        levels = pyramid(gray)
+        levels = self._pyramid(gray)
         h, w = gray.shape
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
@@ -332,8 +367,8 @@ class TargetLayer:
             if f is not None:
                 self._own(t, f, index)
             self._tracks.append(t)
-        self._prev = levels
-        self._past.append(levels)
+        self._prev = Carried(levels)
+        self._past.append(self._prev)
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
