@@ -82,9 +82,20 @@ class TargetParams(ParameterSet):
     max_fails: int = param(3, "Consecutive failed alignments after which a target is dropped.",
                            unit="frames", valid=Valid.integer(1))
     # --- time to contact and course -------------------------------------------------------
-    window: int = param(12, "Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course.",
+    nominal_fps: float = param(30.0, """The layer's frame counts (``window``, ``min_frames``, ``change_frames``,
+                               ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``idle_frames``) are
+                               spans of time at this rate: n frames = n / ``nominal_fps`` s, whatever the
+                               camera's rate, a repeated frame no new observation and a dropped one time gone
+                               (:meth:`TargetParams.span`). The fits keep at least ``min_frames`` observations and
+                               need at least 3 (``MIN_POINTS``): a 7.5 fps camera fits 3-5 points over
+                               0.27-0.53 s where a 30 fps one fits 5-12 over 0.13-0.37 s (docs/model.md, "Time").""",
+                               unit="frames/s", valid=Valid.real(minimum=1))
+    window: int = param(12, """Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course: the
+                        observations of the last ``window - 1`` frame intervals (``nominal_fps``), at least
+                        ``min_frames`` of them.""",
                         unit="frames", valid=Valid.integer(3, 1000, also=">= min_frames"))
-    min_frames: int = param(5, "Fewest frames a fit needs.", unit="frames",
+    min_frames: int = param(5, """Fewest frames a fit needs: observations over ``min_frames - 1`` frame
+                            intervals (``nominal_fps``), at least 3.""", unit="frames",
                             valid=Valid.integer(3, 1000, also="<= window"))
     min_tstat: float = param(3.0, "The growth (the fit's slope) must be this many standard errors from 0.",
                              valid=Valid.real(minimum=0))
@@ -140,6 +151,10 @@ class TargetParams(ParameterSet):
                               unit="frames", valid=Valid.integer(0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
+
+    def span(self, frames: float, fps: float) -> float:
+        """``frames`` frames at ``nominal_fps`` as a span of the model's clock (frame intervals at ``fps``)."""
+        return frames * fps / self.nominal_fps
 
     def __post_init__(self) -> None:
         check_fields(self, "TargetParams")
