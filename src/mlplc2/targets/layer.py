@@ -339,7 +339,7 @@ class TargetLayer:
                 box = self._field_box(f, w, h)
             if box is None:
                 continue
-            t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.min_frames)
+            t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
             host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:

@@ -86,13 +86,14 @@ class TargetParams(ParameterSet):
                                ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``idle_frames``) are
                                spans of time at this rate: n frames = n / ``nominal_fps`` s, whatever the
                                camera's rate, a repeated frame no new observation and a dropped one time gone
-                               (:meth:`TargetParams.span`). The fits keep at least ``min_frames`` observations and
-                               need at least 3 (``MIN_POINTS``): a 7.5 fps camera fits 3-5 points over
-                               0.27-0.53 s where a 30 fps one fits 5-12 over 0.13-0.37 s (docs/model.md, "Time").""",
+                               (:meth:`TargetParams.span`). A fit needs at least 3 observations (``MIN_POINTS``) and
+                               its window keeps at least ``window`` of them: a 7.5 fps camera gets its first
+                               time to contact from 3 frames over 0.27 s and then fits up to 12 over 1.5 s,
+                               a 30 fps one 5-12 over 0.13-0.37 s, a 60 fps one 9-23 (docs/model.md, "Time").""",
                                unit="frames/s", valid=Valid.real(minimum=1))
     window: int = param(12, """Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course: the
                         observations of the last ``window - 1`` frame intervals (``nominal_fps``), at least
-                        ``min_frames`` of them.""",
+                        ``window`` of them.""",
                         unit="frames", valid=Valid.integer(3, 1000, also=">= min_frames"))
     min_frames: int = param(5, """Fewest frames a fit needs: observations over ``min_frames - 1`` frame
                             intervals (``nominal_fps``), at least 3.""", unit="frames",
