@@ -377,7 +377,8 @@ class TargetLayer:
     def _reference(self):
         """(pyramid, clock units before the last frame) of the frame ``change_frames`` (``nominal_fps``)
         before this one, the oldest kept (:meth:`_keep_past`); None while no frame is that old."""
-        if not self._past or self._clock - self._past_t[0] < self.params.span(self.params.change_frames, self.fps) - _EPS:
+        span = self.params.span(self.params.change_frames, self.fps)
+        if not self._past or self._clock - self._past_t[0] < span - _EPS:
             return None
         return self._past[0], self._clock - self._past_t[0]
 
