@@ -18,8 +18,8 @@ def frames():
     return list(st.frames)
 
 
-def _outputs(name, frames, times=None, **kw):
-    m = REGISTRY[name](fps=FPS, **kw)
+def _outputs(name, frames, times=None, fps_=FPS, **kw):
+    m = REGISTRY[name](fps=fps_, **kw)
     return [m.step(f) if times is None else m.step(f, t) for f, t in zip(frames, times or [None] * len(frames))]
 
 
@@ -73,6 +73,29 @@ def test_dropped_frames_keep_time_to_contact(frames):
     wf, wd = _first_warning(full), _first_warning(dropped)
     assert wf is not None and wd is not None
     assert wd.time_s * FPS <= wf.frame + 2 + 1e-9
+
+
+def test_a_slow_camera_warns_when_a_fast_one_does(frames):
+    """The approach at 7.5 fps, as its own rate or shown at 30 fps with every frame 4 times (the helmet
+    clip): the layer's windows span the same time (TargetParams.nominal_fps), so the first warning comes
+    within one of its frames of the 30 fps one's, and the times to contact agree within 10 % (while more
+    than two of its frames are left). (Counting
+    observations, the 7.5 fps fit waited for 5 of them: 0.53 s, two frames later.)"""
+    fast = _outputs("mlplc2", frames)
+    slow = _outputs("mlplc2", frames[::4], [4 * k / FPS for k in range(len(frames[::4]))], fps_=7.5)
+    held = _outputs("mlplc2", [frames[4 * (i // 4)] for i in range(len(frames))],
+                    [i / FPS for i in range(len(frames))], repeat_threshold=0.0)
+    assert sum(o.repeated for o in held) == len(frames) - len(slow)
+    wf = _first_warning(fast)
+    assert wf is not None
+    for outs in (slow, held):
+        w = _first_warning(outs)
+        assert w is not None and abs(w.time_s - wf.time_s) <= 4 / FPS + 1e-9, (w and w.time_s, wf.time_s)
+        for o in outs:
+            a, b = fast[round(o.time_s * FPS)].most_urgent, o.most_urgent
+            if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None \
+                    and a.ttc_s > 8 / FPS and not o.repeated:
+                assert abs(b.ttc_s - a.ttc_s) <= 0.1 * a.ttc_s + 1e-9, (o.time_s, a.ttc_s, b.ttc_s)
 
 
 def test_repeated_frames_step_with_the_real_interval():

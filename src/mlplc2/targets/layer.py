@@ -26,7 +26,14 @@ from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
+           "MIN_POINTS", "fits"]
+
+#: Fewest observations of a fit (:func:`fit_contact` needs 3): the floor of ``TargetParams.min_frames``
+#: for a camera slower than ``TargetParams.nominal_fps``.
+MIN_POINTS = 3
+#: Slack of the comparisons of clock spans (frame intervals; timestamps off the grid by rounding).
+_EPS = 1e-6
 
 
 @dataclass(frozen=True)
@@ -128,10 +135,15 @@ class Track:
     history: deque = field(default_factory=deque)   # of Observation
     inside: deque = field(default_factory=deque)    # the last observations whose box was not cut
     fails: int = 0
-    last_answer: int = -(10 ** 9)      # frame an attention field of it last answered
-    last_alarm: int = -(10 ** 9)       # frame an attention field of it was last in collision alarm
-    last_estimate: int = -(10 ** 9)    # frame of its last time to contact
+    last_answer: float = -(10 ** 9)    # clock of the frame an attention field of it last answered
+    last_alarm: float = -(10 ** 9)     # clock of the frame a field of it was last in collision alarm
+    last_estimate: float = -(10 ** 9)  # clock of its last time to contact
     streak: int = 0
+    streak_since: float = 0.0          # clock of the first estimate of the streak
+    birth: float = 0.0                 # clock of its creation (``born``: its frame index)
+    span: float = math.inf             # the window (``TargetParams.window``) in clock units
+    keep: int = 0                      # ... which keeps at least this many observations
+    fit_span: float = 0.0              # the span a fit needs (``min_frames``) in clock units (:func:`estimate`)
     fields: set = field(default_factory=set)
     rate: float | None = None
     ox: float = 0.0
@@ -159,6 +171,12 @@ class Track:
         if ix <= 0 or iy <= 0:
             return 0.0
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+
+    def _trim(self, obs: deque) -> None:
+        """Drop the observations older than the window (``span`` clock units before the newest),
+        keeping at least ``keep``: the window counts time, not frames (``TargetParams.nominal_fps``)."""
+        while len(obs) > max(self.keep, MIN_POINTS) and obs[-1].frame - obs[0].frame > self.span + _EPS:
+            obs.popleft()
 
     def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
                box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1,
@@ -196,10 +214,10 @@ class Track:
         obs = Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w, self.aniso,
                           border is not None and self.cut(shape, border), self.h)
         self.history.append(obs)
+        self._trim(self.history)
         if not obs.cut:                  # the course's points outlive the window while the box is cut
             self.inside.append(obs)
-            while self.history.maxlen is not None and len(self.inside) > self.history.maxlen:
-                self.inside.popleft()
+            self._trim(self.inside)
         return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
@@ -277,7 +295,8 @@ class TargetLayer:
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
-        self._past: deque = deque(maxlen=max(self.params.change_frames, 1))   # pyramids of the last frames
+        self._past: deque = deque()        # pyramids of the last frames (:meth:`_keep_past`)
+        self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
 
     def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
@@ -320,12 +339,14 @@ class TargetLayer:
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
         self._clock = clock
-        self._merge(index)
+        self._keep_past(clock)
+        now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
+        self._merge(now)
         seeds = []
         for f in fields:
-            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, index, self._own_margin(t, f))]
+            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))]
             if owners:
-                self._own(min(owners, key=lambda t: t.size), f, index)
+                self._own(min(owners, key=lambda t: t.size), f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
@@ -334,7 +355,7 @@ class TargetLayer:
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             zones = [(int(round(t.cx)), int(round(t.cy)),
-                      int(t.size / 2.0 + p.claim if self._measuring(t, index) else t.size / 4.0))
+                      int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             cand = argmax_outside(lm.magnitude, zones)
@@ -345,7 +366,7 @@ class TargetLayer:
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
-            if any(self._holds(t, x, y, index) for t in self._tracks):
+            if any(self._holds(t, x, y, now) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
             box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
@@ -353,33 +374,51 @@ class TargetLayer:
                 box = self._field_box(f, w, h)
             if box is None:
                 continue
-            t = Track(self._next, index, *box)
-            host = next((o for o in self._tracks if self._hosts(o, t, index)), None)
+            t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
+            host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
             if host is not None:          # a part of an object already tracked
                 if f is not None:
-                    self._own(host, f, index)
+                    self._own(host, f, now)
                 continue
             if not self._grows(levels, t, alarm=alarm):
                 continue
-            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)], maxlen=p.window)
+            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             self._next += 1
             if f is not None:
-                self._own(t, f, index)
+                self._own(t, f, now)
             self._tracks.append(t)
         self._prev = Carried(levels)
         self._past.append(self._prev)
+        self._past_t.append(clock)
         alive = {f.id for f in fields}
         out = []
         for t in self._tracks:
             t.fields &= alive
-            out.append(estimate(t, p, self.fps, index, (h, w), self.focal))
-        self._tracks = [t for t in self._tracks if index - max(t.last_answer, t.last_estimate, t.born) <= p.idle_frames]
+            out.append(estimate(t, p, self.fps, now, (h, w), self.focal))
+        idle = p.span(p.idle_frames, self.fps) + _EPS
+        self._tracks = [t for t in self._tracks if now - max(t.last_answer, t.last_estimate, t.birth) <= idle]
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 
+    def _keep_past(self, clock: float) -> None:
+        """Forget the kept frames older than needed: the newest frame at least ``change_frames``
+        (``nominal_fps``) before ``clock`` stays the oldest (:meth:`_reference`)."""
+        span = self.params.span(self.params.change_frames, self.fps) - _EPS
+        while len(self._past_t) > 1 and clock - self._past_t[1] >= span:
+            self._past.popleft()
+            self._past_t.popleft()
+
+    def _reference(self):
+        """(pyramid, clock units before the last frame) of the frame ``change_frames`` (``nominal_fps``)
+        before this one, the oldest kept (:meth:`_keep_past`); None while no frame is that old."""
+        span = self.params.span(self.params.change_frames, self.fps)
+        if not self._past or self._clock - self._past_t[0] < span - _EPS:
+            return None
+        return self._past[0], self._clock - self._past_t[0]
+
     @staticmethod
-    def _own(t: Track, f, index: int) -> None:
+    def _own(t: Track, f, index: float) -> None:
         """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
         looming evidence, its collision alarm (the paper's fatal field) the alarm evidence of
         the warning rule (:func:`alarm_warns`)."""
@@ -394,7 +433,7 @@ class TargetLayer:
         ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``); always
         with ``stale_frames`` = 0 (off)."""
         n = self.params.stale_frames
-        return n == 0 or index - max(t.last_estimate, t.born) <= n
+        return n == 0 or index - max(t.last_estimate, t.birth) <= self.params.span(n, self.fps) + _EPS
 
     def _holds(self, t: Track, x: float, y: float, index: int, margin: float = 0.0) -> bool:
         """Whether the point (x, y) (a field, a seed, a new box's centre) belongs to track ``t``: it lies
@@ -441,9 +480,10 @@ class TargetLayer:
         frame, too little for the local motion, while the grey levels along its edge change
         steadily; a moving background changes everywhere and seeds nothing here."""
         p = self.params
-        if p.seed_change <= 0 or len(self._past) < p.change_frames or len(levels) < 2:
+        ref = self._reference()
+        if p.seed_change <= 0 or ref is None or len(levels) < 2:
             return None
-        d = cv2.blur(cv2.absdiff(levels[1], self._past[0][1]), (3, 3))
+        d = cv2.blur(cv2.absdiff(levels[1], ref[0][1]), (3, 3))
         for zx, zy, zr in zones:                 # at half resolution
             x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
             y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
@@ -462,13 +502,14 @@ class TargetLayer:
         that fails says nothing): the alarm is the expansion evidence, and its box may hold
         background or be cut by the border."""
         p = self.params
-        if p.min_growth <= 0 or len(self._past) < p.change_frames:
+        ref = self._reference()
+        if p.min_growth <= 0 or ref is None:
             return True
         half = p.margin * t.size / 2.0 + 3.0
         if self.measure is not None:             # another front end's growth evidence
-            move = self.measure(self._past[0], levels, t, half, float(len(self._past)))
+            move = self.measure(ref[0], levels, t, half, float(ref[1]))
             return move is not None and move[4] >= p.min_growth and abs(move[5]) <= p.max_anisotropy * move[4]
-        al = align(self._past[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+        al = align(ref[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return alarm
@@ -538,19 +579,26 @@ class TargetLayer:
         self._tracks = out
 
 
-def course(t: Track, heading: tuple[float, float], ttc: float, min_frames: int) -> tuple[float, float] | None:
+def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
     heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
     pixels), from its last observations whose box was wholly inside the frame (``Track.inside``,
-    however old: a cut box gives neither the object's centre nor its size); None with fewer than
-    ``min_frames`` of them."""
+    however old: a cut box gives neither the object's centre nor its size); None when they are too
+    few for a fit over ``span`` clock units (:func:`fits`)."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
-    if len(inside) < min_frames:
+    if not fits(inside, span):
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
                       [q.width for q in inside], heading, ahead,
                       heights=[q.width if q.height is None else q.height for q in inside])
+
+
+def fits(obs, span: float) -> bool:
+    """Whether observations ``obs`` (oldest first) are enough for a fit: at least :data:`MIN_POINTS`
+    of them over at least ``span`` clock units (``TargetParams.min_frames`` - 1 frame intervals at
+    ``nominal_fps``: :meth:`TargetParams.span`)."""
+    return len(obs) >= MIN_POINTS and obs[-1].frame - obs[0].frame >= span - _EPS
 
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:
@@ -579,19 +627,31 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
         return False
     if ttc is None:       # before its fit can answer (min_frames) the alarm alone; after, the fit's "no"
-        return len(t.history) < p.min_frames
+        return not fits(t.history, t.fit_span)
     return ttc <= p.horizon_s and (miss is None or miss <= p.max_miss)
+
+
+def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
+    """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
+    or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
+    ``nominal_fps``: :meth:`TargetParams.span`)."""
+    if now - t.last_answer <= p.span(p.evidence_frames, fps) + _EPS:
+        return True
+    return p.confirm_frames == 0 or (t.streak > 0 and now - t.streak_since >= p.span(p.confirm_frames - 1, fps) - _EPS)
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
-    by every model with targets (the LPLC2 family and the optical-flow baseline)."""
+    by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
+    frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
+    the stamp of the track's evidence."""
     h, w = shape
+    t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
-    fit = fit_contact(frames, [q.log_scale for q in t.history]) if len(frames) >= p.min_frames else None
+    fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
     # along the motion: none of them is an object approaching, none gets a time to contact
@@ -604,13 +664,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and fit.ttc / fps <= p.max_ttc_s:
         ttc, sigma = fit.ttc / fps, fit.sigma / fps
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
-        miss_xy = course(t, heading, fit.ttc, p.min_frames)
+        miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
+        t.streak_since = index if t.streak == 0 else t.streak_since
         t.streak += 1
         t.last_estimate = index
     else:
         t.streak = 0
-    looming = ttc is not None and (index - t.last_answer <= p.evidence_frames or t.streak >= p.confirm_frames)
+    looming = ttc is not None and _evident(t, p, fps, index)
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it

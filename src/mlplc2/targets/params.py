@@ -82,9 +82,21 @@ class TargetParams(ParameterSet):
     max_fails: int = param(3, "Consecutive failed alignments after which a target is dropped.",
                            unit="frames", valid=Valid.integer(1))
     # --- time to contact and course -------------------------------------------------------
-    window: int = param(12, "Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course.",
+    nominal_fps: float = param(30.0, """The layer's frame counts (``window``, ``min_frames``, ``change_frames``,
+                               ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``idle_frames``) are
+                               spans of time at this rate: n frames = n / ``nominal_fps`` s, whatever the
+                               camera's rate, a repeated frame no new observation and a dropped one time gone
+                               (:meth:`TargetParams.span`). A fit needs at least 3 observations (``MIN_POINTS``) and
+                               its window keeps at least ``window`` of them: a 7.5 fps camera gets its first
+                               time to contact from 3 frames over 0.27 s and then fits up to 12 over 1.5 s,
+                               a 30 fps one 5-12 over 0.13-0.37 s, a 60 fps one 9-23 (docs/model.md, "Time").""",
+                               unit="frames/s", valid=Valid.real(minimum=1))
+    window: int = param(12, """Frames of the ``1 / S`` line fit (:func:`fit_contact`) and of the course: the
+                        observations of the last ``window - 1`` frame intervals (``nominal_fps``), at least
+                        ``window`` of them.""",
                         unit="frames", valid=Valid.integer(3, 1000, also=">= min_frames"))
-    min_frames: int = param(5, "Fewest frames a fit needs.", unit="frames",
+    min_frames: int = param(5, """Fewest frames a fit needs: observations over ``min_frames - 1`` frame
+                            intervals (``nominal_fps``), at least 3.""", unit="frames",
                             valid=Valid.integer(3, 1000, also="<= window"))
     min_tstat: float = param(3.0, "The growth (the fit's slope) must be this many standard errors from 0.",
                              valid=Valid.real(minimum=0))
@@ -140,6 +152,10 @@ class TargetParams(ParameterSet):
                               unit="frames", valid=Valid.integer(0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
+
+    def span(self, frames: float, fps: float) -> float:
+        """``frames`` frames at ``nominal_fps`` as a span of the model's clock (frame intervals at ``fps``)."""
+        return frames * fps / self.nominal_fps
 
     def __post_init__(self) -> None:
         check_fields(self, "TargetParams")
