@@ -25,6 +25,7 @@ from .change import change_box
 from .contact import fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
+from .slant import slant
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
            "MIN_POINTS", "fits"]
@@ -395,7 +396,11 @@ class TargetLayer:
         out = []
         for t in self._tracks:
             t.fields &= alive
-            out.append(estimate(t, p, self.fps, now, (h, w), self.focal))
+            warned = t.warned
+            o = estimate(t, p, self.fps, now, (h, w), self.focal)
+            if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
+                o, t.warned = replace(o, warning=False), warned
+            out.append(o)
         idle = p.span(p.idle_frames, self.fps) + _EPS
         self._tracks = [t for t in self._tracks if now - max(t.last_answer, t.last_estimate, t.birth) <= idle]
         keep = {t.id for t in self._tracks}
@@ -517,6 +522,24 @@ class TargetLayer:
         if alarm:
             return g > 0
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
+
+    def _slanted(self, t: Track, levels) -> bool:
+        """Whether the box of ``t`` is not shown to be one fronto-parallel object: its :func:`slant`
+        between the oldest frame kept and this one lies beyond ``max_slant`` across or down (the
+        ground ahead, a wall beside the path, which the static world's expansion about the heading
+        makes look like an object on a collision course), or cannot be measured (the fit fails or
+        the box does not grow on both axes: a box over most of the view as it sweeps out of it).
+        ``docs/targets.md``, step 7."""
+        p = self.params
+        if p.max_slant <= 0 or len(self._past) < 2:     # self._past[-1] is this frame
+            return False
+        q = next((o for o in t.history if abs(o.frame - self._past_t[0]) <= _EPS), None)
+        if q is None:                            # the track is younger than the oldest frame kept
+            return False
+        old = (q.x + t.ox, q.y + t.oy, q.width, q.width if q.height is None else q.height)
+        s = slant(self._past[0], levels, old, (t.cx, t.cy, t.w, t.h), n=p.patch, margin=p.margin,
+                  iterations=p.iterations)
+        return s is None or max(abs(s[0]), abs(s[1])) > p.max_slant
 
     def _box(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field_seed: bool, field=None):
         """The box of a candidate at (x, y): the region that changed over the last frames

@@ -138,6 +138,15 @@ class TargetParams(ParameterSet):
                               to a target whose box holds its centre, else it seeds one that needs only
                               some growth, with the field's extent when no box is found.""",
                               valid=Valid.boolean())
+    max_slant: float = param(0.0, """... and (> 0; off by default: it lost 3 of the 9 real clips' warnings) its box is shown to be one fronto-parallel object, not a surface
+                             slanted in depth (a warning frame's veto, :func:`~mlplc2.targets.slant.slant`
+                             over the last ``change_frames`` frames): the horizontal scale rate changes
+                             from the box's centre to its foot, and the vertical one to its side, by at
+                             most this fraction, and the fit succeeds. A fronto-parallel object scales
+                             alike everywhere (0); the ground ahead of a moving camera, in a box reaching
+                             up to the horizon, by 1 (a wall beside the path likewise across). 0 = off;
+                             0.5 halves the drive scenes' false warnings (``docs/targets.md``).""",
+                             valid=Valid.real(minimum=0))
     onset_s: float = param(0.0, """A warning begins only while ``ttc_s`` is at least this; once a target
                            has warned, it warns down to contact. The static world close beside the
                            path (the ground, a roadside wall) first shows a short time to contact as it
