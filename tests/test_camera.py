@@ -258,7 +258,7 @@ def test_compensation_is_none_for_a_still_an_unsure_or_a_tiny_rotation():
 
 
 def test_kept_pyramids_are_carried_as_if_warped_every_turn():
-    """The target layer's kept pyramids take a turn lazily (targets.layer.Carried), to the values of
+    """The target layer's kept pyramids take a turn lazily (targets.track.Carried), to the values of
     warping each level at each turn in order, with the grey levels of that turn's frame where the
     earlier frame saw nothing (composing the turns into one resampling changed the warnings)."""
     from mlplc2.camera import warp

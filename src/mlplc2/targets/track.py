@@ -1,0 +1,245 @@
+"""What the target layer keeps of each object and frame: a :class:`Track` (its history of
+:class:`Observation` records, the points the fits use), the :class:`Target` it reports each
+frame, and the pyramids of past frames carried through the camera's turns (:class:`Carried`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections import deque
+from dataclasses import dataclass, field
+from typing import NamedTuple
+
+import numpy as np
+
+from ..camera import warp
+
+__all__ = ["Target", "Observation", "Track", "Carried", "MIN_POINTS", "EPS"]
+
+#: Fewest observations of a fit (:func:`fit_contact` needs 3): the floor of ``TargetParams.min_frames``
+#: for a camera slower than ``TargetParams.nominal_fps``.
+MIN_POINTS = 3
+#: Slack of the comparisons of clock spans (frame intervals; timestamps off the grid by rounding).
+EPS = 1e-6
+
+
+@dataclass(frozen=True)
+class Target:
+    """One approaching object in one frame (what models return in ``Output.targets``).
+
+    Attributes
+    ----------
+    id : int
+        Stable id (1, 2, ...), kept while the object is tracked.
+    x, y : float
+        Centre of the object's box (its expansion centre), in the pixels of the model's frames.
+    width, height : float
+        Apparent size (px).
+    ttc_s : float or None
+        Time to contact in seconds; None while the growth is not significant.
+    miss : float or None
+        Predicted miss distance at contact, in the object's own extent (the length of
+        ``miss_xy``; 0 = dead centre); None without ``ttc_s``.
+    warning : bool
+        On a collision course (``miss <= max_miss``) with ``ttc_s <= horizon_s``, contact time
+        known, and looming evidence; or one of its fields in collision alarm and nothing of its
+        own measurement against it (:func:`alarm_warns`; see :class:`TargetParams`).
+    fields : tuple of int
+        Ids of the attention fields inside the target.
+    born : int
+        Frame of the target's creation.
+    looming : bool
+        Looming evidence this frame (an answering field recently, or sustained growth).
+    expansion : float or None
+        Measured growth rate d(log size)/dt in 1/s (None before two frames).
+    ttc_sigma_s : float or None
+        Standard error of ``ttc_s`` (s).
+    azimuth_deg, elevation_deg : float or None
+        Bearing of the centre in degrees (azimuth positive right, elevation positive up)
+        when the model was given the camera's field of view; None otherwise.
+    miss_xy : (float, float) or None
+        Where the object's centre passes the camera plane, from the heading point: right in
+        object widths, down in object heights; ``miss`` is its length.
+    """
+
+    id: int
+    x: float
+    y: float
+    width: float
+    height: float
+    ttc_s: float | None = None
+    miss: float | None = None
+    warning: bool = False
+    fields: tuple[int, ...] = ()
+    born: int = 0
+    looming: bool = False
+    expansion: float | None = None
+    ttc_sigma_s: float | None = None
+    azimuth_deg: float | None = None
+    elevation_deg: float | None = None
+    miss_xy: tuple[float, float] | None = None
+
+    def urgency(self) -> tuple:
+        """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""
+        return (not self.warning, math.inf if self.ttc_s is None else self.ttc_s,
+                -(self.width * self.height), self.id)
+
+class Observation(NamedTuple):
+    """One frame of a track's history (what the fits use): the frame's time in frame intervals
+    (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
+    log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width,
+    the accumulated log-anisotropy, whether the box was cut by the image's border
+    (``TargetParams.border``: then its centre and size are not the object's), and its height
+    (None: as its width), the unit of the vertical course (:func:`fit_course`)."""
+
+    frame: int
+    log_scale: float
+    x: float
+    y: float
+    width: float
+    anisotropy: float
+    cut: bool = False
+    height: float | None = None
+
+
+@dataclass
+class Track:
+    """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
+    history the fits use (:class:`Observation` records), and the evidence
+    counters; ``inside``: the last observations (at most the history's length) whose box was not
+    cut, the course's points (:func:`course`). ``ox``, ``oy``: the camera's turn accumulated at the box since its birth (px; 0
+    unless the model measures the camera's motion): the history's positions are the box's less
+    it, so that the course (:func:`fit_course`) is the object's own, not the pan's."""
+
+    id: int
+    born: int
+    cx: float
+    cy: float
+    w: float
+    h: float
+    log_s: float = 0.0
+    aniso: float = 0.0                               # accumulated log(ky / kx)
+    history: deque = field(default_factory=deque)   # of Observation
+    inside: deque = field(default_factory=deque)    # the last observations whose box was not cut
+    fails: int = 0
+    last_answer: float = -(10 ** 9)    # clock of the frame an attention field of it last answered
+    last_alarm: float = -(10 ** 9)     # clock of the frame a field of it was last in collision alarm
+    last_estimate: float = -(10 ** 9)  # clock of its last time to contact
+    streak: int = 0
+    streak_since: float = 0.0          # clock of the first estimate of the streak
+    birth: float = 0.0                 # clock of its creation (``born``: its frame index)
+    span: float = math.inf             # the window (``TargetParams.window``) in clock units
+    keep: int = 0                      # ... which keeps at least this many observations
+    fit_span: float = 0.0              # the span a fit needs (``min_frames``) in clock units (:func:`estimate`)
+    fields: set = field(default_factory=set)
+    rate: float | None = None
+    ox: float = 0.0
+    oy: float = 0.0
+    warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
+
+    def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
+        return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
+
+    def cut(self, shape: tuple[int, int], border: float) -> bool:
+        """Whether the box reaches within ``border`` px of the edge of a frame of ``shape`` (h, w)."""
+        h, w = shape
+        return (self.cx - self.w / 2.0 < border or self.cy - self.h / 2.0 < border
+                or self.cx + self.w / 2.0 > w - 1 - border or self.cy + self.h / 2.0 > h - 1 - border)
+
+    @property
+    def size(self) -> float:
+        return max(self.w, self.h)
+
+    def overlap(self, other: Track) -> float:
+        """Area of the intersection of the two boxes over the area of the smaller."""
+        a, b = self, other
+        ix = min(a.cx + a.w / 2, b.cx + b.w / 2) - max(a.cx - a.w / 2, b.cx - b.w / 2)
+        iy = min(a.cy + a.h / 2, b.cy + b.h / 2) - max(a.cy - a.h / 2, b.cy - b.h / 2)
+        if ix <= 0 or iy <= 0:
+            return 0.0
+        return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+
+    def _trim(self, obs: deque) -> None:
+        """Drop the observations older than the window (``span`` clock units before the newest),
+        keeping at least ``keep``: the window counts time, not frames (``TargetParams.nominal_fps``)."""
+        while len(obs) > max(self.keep, MIN_POINTS) and obs[-1].frame - obs[0].frame > self.span + EPS:
+            obs.popleft()
+
+    def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
+               box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1,
+               border: float | None = None) -> bool:
+        """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
+        centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
+        the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
+        (px), factors on width and height, log-scale and log-anisotropy gained. With ``box``
+        the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
+        the box (the camera's image motion) adds to ``ox``, ``oy``. ``clock``: the frame's time
+        (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one;
+        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge."""
+        if move is None:
+            self.fails += 1
+            return self.fails < max_fails
+        dx, dy, fx, fy, growth, skew = move
+        self.fails = 0
+        self.cx += dx
+        self.cy += dy
+        self.w *= fx
+        self.h *= fy
+        if box is not None and refit > 0:
+            self.cx += refit * (box[0] - self.cx)
+            self.cy += refit * (box[1] - self.cy)
+            self.w *= min(max(box[2], 1.0) / self.w, 1.0) ** refit
+            self.h *= min(max(box[3], 1.0) / self.h, 1.0) ** refit
+        self.log_s += growth
+        self.aniso += skew
+        self.rate = growth * fps / interval
+        if camera is not None:
+            du, dv = camera.flow(self.cx - dx, self.cy - dy)
+            self.ox += float(du)
+            self.oy += float(dv)
+        h, w = shape
+        obs = Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w, self.aniso,
+                          border is not None and self.cut(shape, border), self.h)
+        self.history.append(obs)
+        self._trim(self.history)
+        if not obs.cut:                  # the course's points outlive the window while the box is cut
+            self.inside.append(obs)
+            self._trim(self.inside)
+        return not (self.size < 2.0 or self.size > 4.0 * max(w, h)
+                    or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
+
+
+class Carried:
+    """A pyramid of a past frame carried through the camera's turns since (gaze stabilisation),
+    each level resampled only when it is read: on reading, the turns not yet applied to that
+    level are applied in turn (:meth:`turn` records them), each exactly as an eager carry would
+    (bilinear, :func:`mlplc2.camera.warp`, with the grey levels of the frame of that turn where the
+    earlier frame saw nothing), so the values are those of warping every level every turn, while a
+    level never read is never resampled. Indexing and ``len`` as the list it stands for."""
+
+    def __init__(self, levels):
+        self.levels = list(levels)
+        self._w0 = self.levels[0].shape[1]
+        self._turns: list = []                   # (homography previous -> that frame, that frame's pyramid)
+        self._done = [0] * len(self.levels)      # turns applied to each level
+
+    def turn(self, homography: np.ndarray, now) -> None:
+        """One more turn (``homography``: previous frame -> this one, level-0 pixels; ``now``: this
+        frame's pyramid, which fills what the turn uncovers)."""
+        self._turns.append((homography, now))
+
+    def __len__(self) -> int:
+        return len(self.levels)
+
+    def __getitem__(self, k: int) -> np.ndarray:
+        k = range(len(self.levels))[k]
+        img = self.levels[k]
+        for homography, now in self._turns[self._done[k]:]:
+            if k < len(now) and now[k].shape == img.shape:
+                s = img.shape[1] / self._w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
+                o = 0.5 * s - 0.5
+                sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
+                sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
+                img = warp(img, sm @ homography @ sm_inv, fill=now[k])
+        self.levels[k], self._done[k] = img, len(self._turns)
+        return img
