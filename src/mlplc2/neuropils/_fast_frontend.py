@@ -53,11 +53,11 @@ import numpy as np
 
 from . import _fast
 from ._fast import jit
-from ._fast_carry import carry_rows
 from ._fast_motion import motion_rows, pow_mode
 from .frontend import set_coefficients, use_interval
 from .lobula_plate import LocalMotion
 from .medulla import local_max
+from ..camera import warp
 from ..params import Params
 
 __all__ = ["FastFrontEnd", "PLANES", "MIN_BAND_PIXELS", "plane_count", "plane_traffic"]
@@ -252,37 +252,22 @@ class FastFrontEnd:
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
-        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels.
-
-        One fused pass (:func:`mlplc2.neuropils._fast_carry.carry_rows`, the same values as
-        :func:`mlplc2.camera.warp` on each plane): each pixel's source coordinate computed once,
-        every plane interpolated there, over the front end's bands in parallel, written into the
-        spare buffers (P(t+1)'s, N(t)'s and a second M-hat), which then swap with the state."""
+        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels, in place."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
-        gray = np.ascontiguousarray(gray, dtype=np.float32)
-        hinv = np.ascontiguousarray(np.linalg.inv(np.asarray(homography, np.float64)))
-        if self._m_alt is None:
-            self._m_alt = np.zeros_like(self._m_rows)
-        after = bool(self.params.after_image)
-        on_src, off_src = (self._on.copy(), self._off.copy()) if after else (self._on, self._off)
-        args = (hinv, gray, self._p[0], self._p[1], self._n_prev, self._n, self._pad, self._m_rows,
-                self._m_alt, on_src, self._on, off_src, self._off, after)
-        bands = self._bands
-        if len(bands) == 1:
-            carry_rows(*args, 0, self._shape[0])
-        else:   # the front end's bands, in parallel (rows are independent: no barrier)
-            with _fast.BANDS_LOCK:
-                futs = [_fast.pool(len(bands) - 1).submit(carry_rows, *args, bd["y0"], bd["y1"]) for bd in bands[1:]]
-                try:
-                    carry_rows(*args, bands[0]["y0"], bands[0]["y1"])
-                finally:
-                    for f in futs:
-                        f.result()
-        self._p.reverse()
-        self._n, self._n_prev = self._n_prev, self._n
-        self._m_rows, self._m_alt = self._m_alt, self._m_rows
-        self._m = self._m_rows.transpose(1, 2, 0, 3)
+        gray = np.asarray(gray, dtype=np.float32)
+        prev = self._p[0]
+        prev[...] = warp(prev, homography, fill=gray)
+        pad = self._pad
+        for c in range(2):
+            inner = self._n_prev[c, pad:-pad, pad:-pad] if pad else self._n_prev[c]
+            inner[...] = warp(np.ascontiguousarray(inner), homography)
+            for d in range(4):                              # through _m_rows: what the kernel reads
+                plane = self._m_rows[:, c, d, :]            # (a copy made by pickle no longer shares _m)
+                plane[...] = warp(np.ascontiguousarray(plane), homography)
+        if self.params.after_image:
+            self._on[...] = warp(self._on, homography)
+            self._off[...] = warp(self._off, homography)
 
     # -- buffers ----------------------------------------------------------------
     def _allocate(self, h: int, w: int, nbands: int) -> None:
@@ -296,7 +281,6 @@ class FastFrontEnd:
         self._n_prev = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._m_rows = np.zeros((h, 2, 4, w), np.float32)  # what the kernel uses
         self._m = self._m_rows.transpose(1, 2, 0, 3)  # (2, 4, H, W) view: channel, direction
-        self._m_alt = None  # the second M-hat of compensate (allocated on the first turn)
         self._plan(nbands)
 
     def _plan(self, nbands: int) -> None:
