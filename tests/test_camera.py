@@ -283,3 +283,15 @@ def test_kept_pyramids_are_carried_as_if_warped_every_turn():
     for hom, frame in zip(turns, frames[1:]):
         level1 = warp(level1, s @ hom @ np.linalg.inv(s), fill=pyramid(frame)[1])
     assert np.allclose(oldest[1], level1, atol=1e-3)
+
+
+def test_the_estimators_grid_follows_the_frame_size():
+    """The grid's points are made once per frame size (camera._grid_points): a clip whose size
+    changes is tracked on the new size's grid, as a fresh estimator would."""
+    small = _frames("pan", -15.0, size=(160, 120), frames=3)
+    large = _frames("pan", -15.0, size=(200, 150), frames=3)
+    est = MotionEstimator(hfov_deg=60.0)
+    seen = [est.apply(f) for f in small] + [est.apply(f) for f in large]
+    fresh = MotionEstimator(hfov_deg=60.0)
+    alone = [fresh.apply(f) for f in large]
+    assert seen[4:] == alone[1:] and seen[4].points > 8

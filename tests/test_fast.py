@@ -344,6 +344,36 @@ def test_bench_runs_and_formats():
         bench.parse_sizes("320by240")
 
 
+def test_bench_times_the_pipeline_as_run_builds_it(monkeypatch):
+    """The second table times the model stabilised, as `mlplc2 run` builds it (the main table
+    times the paper's model), on a turning and a still scene, with the flow baseline beside it."""
+    from mlplc2 import bench
+    from mlplc2.models.lplc2 import MLPLC2
+
+    seen = []
+    step = MLPLC2.step
+
+    def spy(self, frame, *a, **k):
+        seen.append(self.stabilise)
+        return step(self, frame, *a, **k)
+
+    monkeypatch.setattr(MLPLC2, "step", spy)
+    assert bench.time_model("mlplc2", bench.synthetic_frames(48, 40, 3), "numba", 1, as_run=True)[0] > 0
+    assert seen and all(seen)
+    seen.clear()
+    bench.time_model("mlplc2", bench.synthetic_frames(48, 40, 3), "numba", 1)
+    assert seen and not any(seen)
+    still, turning = bench.synthetic_frames(48, 40, 3, scroll=0.0), bench.synthetic_frames(48, 40, 3)
+    assert np.array_equal(still[0, 0], still[2, 0]) and not np.array_equal(turning[0, 0], turning[2, 0])  # row 0: no square
+    (row,) = bench.run_bench([(48, 40)], ["mlplc2"], frames=2, ref_frames=2, warmup=1)
+    assert row.run_ms > 0 and row.still_ms > 0 and row.flow_ms > 0
+    assert row.run_vs_reference == pytest.approx(row.ref_ms / row.run_ms)
+    assert row.run_vs_flow == pytest.approx(row.flow_ms / row.run_ms)
+    assert "| mlplc2 | 48x40 | " in bench.format_pipeline([row])
+    (bare,) = bench.run_bench([(48, 40)], ["mlplc2"], frames=2, ref_frames=2, warmup=1, pipeline=False)
+    assert bare.run_ms is None and bench.format_pipeline([bare]).count("\n") == 1
+
+
 def test_bench_cli(capsys):
     from mlplc2.cli import main
 

@@ -45,7 +45,7 @@ from ._validation import InputValueError
 from .params import Params
 
 __all__ = ["BenchRow", "parse_sizes", "synthetic_frames", "bandwidth_probe", "time_model",
-           "run_bench", "format_table", "describe", "DEFAULT_SIZES", "LATENCY_SIZES", "LatencyRow",
+           "run_bench", "format_table", "format_pipeline", "describe", "DEFAULT_SIZES", "LATENCY_SIZES", "LatencyRow",
            "time_latency", "format_latency"]
 
 DEFAULT_SIZES = "100x100,320x240,640x480,1280x720"
@@ -67,6 +67,22 @@ class BenchRow:
     probe_ms: float
     planes: int
     peak_mb: float
+    #: the pipeline as ``mlplc2 run`` builds it (gaze stabilisation on): ms/frame on the turning
+    #: (scrolling) scene and on the same scene from a still camera; the flow baseline as ``run``
+    #: builds it on the turning scene (None: not measured, ``pipeline=False``)
+    run_ms: float | None = None
+    still_ms: float | None = None
+    flow_ms: float | None = None
+
+    @property
+    def run_vs_reference(self) -> float | None:
+        """How many times faster the stabilised pipeline runs than the plain NumPy reference model."""
+        return None if self.ref_ms is None or not self.run_ms else self.ref_ms / self.run_ms
+
+    @property
+    def run_vs_flow(self) -> float | None:
+        """How many times faster the stabilised pipeline runs than the flow baseline."""
+        return None if self.flow_ms is None or not self.run_ms else self.flow_ms / self.run_ms
 
     @property
     def fps(self) -> float:
@@ -104,11 +120,12 @@ def parse_sizes(text: str) -> list[tuple[int, int]]:
     return sizes
 
 
-def synthetic_frames(width: int, height: int, n: int, seed: int = 0) -> np.ndarray:
+def synthetic_frames(width: int, height: int, n: int, seed: int = 0, scroll: float = 1.0) -> np.ndarray:
     """(n, H, W) uint8: scrolling background + five dark looming squares, like the four-phase scene.
 
     The background is one procedural texture made for 320x240, resized to the frame, scrolling
-    by 1 px per frame; the squares grow by 2 px per frame as in the paper's scenes (up to 79 px,
+    by ``scroll`` px per frame (1: a slow pan, which gaze stabilisation compensates; 0: a still
+    camera); the squares grow by 2 px per frame as in the paper's scenes (up to 79 px,
     at most 40 % of the frame's smaller side), one starting every n/10 frames. The attention
     fields have a fixed size in pixels (R_AF = 40), so this keeps about one field per square at
     every frame size (up to five).
@@ -123,7 +140,7 @@ def synthetic_frames(width: int, height: int, n: int, seed: int = 0) -> np.ndarr
         approach = max(min(40, n - onset), 1)
         objs.append(SceneObject(center=(fx * width, fy * height), onset=onset, approach=approach,
                                 hold=n, recede=0, max_side=min(79.0, 0.4 * min(width, height))))
-    return scene(objs, size=(width, height), frames=n, background=texture, scroll=1.0).frames
+    return scene(objs, size=(width, height), frames=n, background=texture, scroll=float(scroll)).frames
 
 
 def bandwidth_probe(width: int, height: int, planes: int, repeats: int = 15) -> float:
@@ -148,11 +165,21 @@ def bandwidth_probe(width: int, height: int, planes: int, repeats: int = 15) -> 
     return 1e3 * best
 
 
-def time_model(name: str, frames: np.ndarray, backend: str, warmup: int, fps: float = 30.0):
-    """(median ms per step, max fields) of model ``name`` over ``frames[warmup:]``."""
-    from .models.base import get_model
+def time_model(name: str, frames: np.ndarray, backend: str | None, warmup: int, fps: float = 30.0,
+               as_run: bool = False):
+    """(median ms per step, max fields) of model ``name`` over ``frames[warmup:]``.
 
-    model = get_model(name)(fps=fps, backend=backend, work_width=None, repeat_threshold=None)  # every frame, full size
+    ``backend``: the front end's (None: the model's default; ``flow`` has none). ``as_run``: gaze
+    stabilisation as ``mlplc2 run`` sets it (:class:`mlplc2.runner.RunOptions`, on by default)
+    where the model has it; otherwise the paper's model, unstabilised."""
+    from .models.base import get_model
+    from .runner import RunOptions
+
+    cls = get_model(name)
+    kw = {} if backend is None else {"backend": backend}
+    if as_run and cls.stabilises:
+        kw["stabilise"] = bool(RunOptions().stabilise)
+    model = cls(fps=fps, work_width=None, repeat_threshold=None, **kw)  # every frame, full size
     for f in frames[:warmup]:
         model.step(f)
     times = []
@@ -199,8 +226,12 @@ def peak_memory_mb(name: str, frames: np.ndarray, backend: str = "auto", n: int 
 
 def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames: int = 100,
               ref_frames: int = 12, warmup: int = 10, reference: bool = True, rounds: int = 1,
-              progress=None):
+              progress=None, pipeline: bool = True):
     """Run the benchmark; returns a list of :class:`BenchRow`.
+
+    ``pipeline``: also time each model as ``mlplc2 run`` builds it (gaze stabilisation on) on the
+    turning scene and on a still one, and the flow baseline on the turning scene
+    (:func:`format_pipeline`).
 
     Each figure is a median over the frames of one round; with ``rounds`` > 1 the whole
     measurement is repeated and the smallest median kept, which filters out other processes
@@ -217,6 +248,7 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
     rows = []
     for w, h in sizes:
         video = synthetic_frames(w, h, warmup + max(frames, ref_frames))
+        still = synthetic_frames(w, h, warmup + frames, scroll=0.0) if pipeline else None
         fast_video = video[:warmup + frames]
         ref_video = video[:warmup + ref_frames]
         best: dict = {}
@@ -237,11 +269,17 @@ def run_bench(sizes=None, models=("mlplc2",), threads: int | None = None, frames
                 best[(name, "fields")] = fields
                 if reference:
                     keep((name, "ref"), time_model(name, ref_video, "reference", warmup)[0])
+                if pipeline:
+                    keep((name, "run"), time_model(name, fast_video, "numba", warmup, as_run=True)[0])
+                    keep((name, "still"), time_model(name, still, "numba", warmup, as_run=True)[0])
+            if pipeline:
+                keep("flow", time_model("flow", fast_video, None, warmup, as_run=True)[0])
         for name in models:
             peak = peak_memory_mb(name, video)
             rows.append(BenchRow(name, (w, h), n_threads, frames, best[(name, "fields")], best[(name, "ms")],
                                  best.get((name, "ref")), best["fe"], best.get("ref_fe"), best["probe"],
-                                 planes, peak))
+                                 planes, peak, best.get((name, "run")), best.get((name, "still")),
+                                 best.get("flow")))
     return rows
 
 
@@ -263,6 +301,22 @@ def format_table(rows) -> str:
     return "\n".join(lines)
 
 
+def format_pipeline(rows) -> str:
+    """A Markdown table of the pipeline as ``mlplc2 run`` builds it (rows measured with ``pipeline``)."""
+    def opt(v, fmt):
+        return "-" if v is None else format(v, fmt)
+
+    lines = ["| model | size | threads | run pipeline ms/frame, turning | still | reference ms (NumPy, paper's "
+             "model) | x reference | flow ms, turning | x flow |", "|" + "---|" * 9]
+    for r in rows:
+        if r.run_ms is None:
+            continue
+        lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.threads} | {r.run_ms:.2f} | "
+                     f"{opt(r.still_ms, '.2f')} | {opt(r.ref_ms, '.1f')} | {opt(r.run_vs_reference, '.1f')}x | "
+                     f"{opt(r.flow_ms, '.2f')} | {opt(r.run_vs_flow, '.1f')}x |")
+    return "\n".join(lines)
+
+
 def describe(frames: int, rounds: int) -> str:
     """What the columns of :func:`format_table` measure (printed under the table)."""
     import os
@@ -275,7 +329,11 @@ def describe(frames: int, rounds: int) -> str:
             f"smallest of {rounds} round(s)): front end, attention fields and target estimates. "
             f"front end: Eq. 1-12 alone. probe: fastest copy of the N float32 planes one stream touches "
             f"({traffic} plane reads+writes per frame in the kernels), same threads; 'x probe' = "
-            f"ms/frame / probe. Load average after the run: {load}.")
+            f"ms/frame / probe. Second table: the pipeline as `mlplc2 run` builds it (gaze stabilisation "
+            f"on: camera motion, front end, fields, targets) on the same scrolling (turning) scene and on it "
+            f"from a still camera; x reference = reference ms (the paper's model on the plain NumPy front "
+            f"end, turning scene) / run ms, turning; x flow = the flow baseline's ms (as run builds it, "
+            f"turning scene) / run ms, turning. Load average after the run: {load}.")
 
 
 # ---------------------------------------------------------------------------

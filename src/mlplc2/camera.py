@@ -204,18 +204,29 @@ class MotionEstimator:
             scale *= 2.0
         return img, scale
 
+    def _grid_points(self, shape: tuple[int, int]):
+        """The grid's points ((N, 1, 2) float32 x, y) and their integer rows and columns for a frame
+        of ``shape``: made once per shape and grid (the same every frame)."""
+        key = (tuple(shape), tuple(self.grid))
+        if getattr(self, "_points_key", None) != key:
+            h, w = shape
+            nx, ny = self.grid
+            xs = (np.arange(nx) + 0.5) * w / nx
+            ys = (np.arange(ny) + 0.5) * h / ny
+            p0 = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 1, 2).astype(np.float32)
+            p0.setflags(write=False)
+            self._points = (p0, p0[:, 0, 1].astype(int), p0[:, 0, 0].astype(int))
+            self._points_key = key
+        return self._points
+
     def _track(self, prev_img: np.ndarray, cur_img: np.ndarray):
         """Grid points of the previous frame followed into this one (pyramidal Lucas-Kanade on the
         images), kept where the forward-backward error is under 0.5 px and the previous
         frame has texture (a flat patch "tracks" onto itself and says nothing)."""
-        h, w = prev_img.shape
-        nx, ny = self.grid
-        xs = (np.arange(nx) + 0.5) * w / nx
-        ys = (np.arange(ny) + 0.5) * h / ny
-        p0 = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 1, 2).astype(np.float32)
+        p0, rows, cols = self._grid_points(prev_img.shape)
         gx = cv2.Sobel(prev_img, cv2.CV_32F, 1, 0, ksize=3)
         gy = cv2.Sobel(prev_img, cv2.CV_32F, 0, 1, ksize=3)
-        texture = cv2.blur(gx * gx + gy * gy, (7, 7))[p0[:, 0, 1].astype(int), p0[:, 0, 0].astype(int)]
+        texture = cv2.blur(gx * gx + gy * gy, (7, 7))[rows, cols]
         p0 = p0[texture > _MIN_TEXTURE]
         if len(p0) < 8:
             return np.empty((0, 2)), np.empty((0, 2))

@@ -60,11 +60,14 @@ def _add_bench(p: argparse.ArgumentParser) -> None:
     p.add_argument("--rounds", type=pos_int, default=1, metavar="R",
                    help="repeat every measurement R times and keep the smallest median (default 1)")
     p.add_argument("--no-reference", action="store_true", help="skip the reference front end")
+    p.add_argument("--no-pipeline", action="store_true",
+                   help="skip the second table: the pipeline as `mlplc2 run` builds it (gaze stabilisation on) "
+                        "on a turning and a still scene, against the reference and the flow baseline")
     p.add_argument("--quiet", "-q", action="store_true", help="only the table")
 
 
 def _cmd_bench(args) -> int:
-    from ..bench import DEFAULT_SIZES, describe, format_table, parse_sizes, run_bench
+    from ..bench import DEFAULT_SIZES, describe, format_pipeline, format_table, parse_sizes, run_bench
 
     names = resolve_names(args.models or ["mlplc2"], what="--models")
     family = [m for m in ("mlplc2", "slplc2", "lplc2") if m in available_models()]
@@ -85,8 +88,11 @@ def _cmd_bench(args) -> int:
             print(msg, file=sys.stderr, flush=True)
 
     rows = run_bench(sizes, names, threads=args.threads, frames=args.frames, ref_frames=args.ref_frames,
-                     reference=not args.no_reference, rounds=args.rounds, progress=progress)
+                     reference=not args.no_reference, rounds=args.rounds, progress=progress,
+                     pipeline=not args.no_pipeline)
     print(format_table(rows))
+    if not args.no_pipeline:
+        print("\n" + format_pipeline(rows))
     if not args.quiet:
         print("\n" + describe(args.frames, args.rounds))
     return EXIT_OK
