@@ -49,7 +49,7 @@ from .._common import check_size
 from .camera import Camera
 
 __all__ = ["ObjectGeometry", "ObjectTrack", "place", "side_angle", "COLLISION_MISS", "PASS_MIN_MISS", "FAR_M",
-           "DEFAULT_WIDTH_M"]
+           "DEFAULT_WIDTH_M", "MAX_TURN_DEG", "turned"]
 
 #: A collision's centre reaches the camera plane closer than this to the camera centre (widths).
 COLLISION_MISS = 0.5
@@ -60,6 +60,8 @@ PASS_MIN_MISS = 1.0
 FAR_M = 1000.0
 #: Default physical width of an object (m).
 DEFAULT_WIDTH_M = 0.5
+#: Largest turn (deg) of a turning camera between an object's onset and its anchor (:func:`turned`).
+MAX_TURN_DEG = 60.0
 
 
 _SIDES = {"right": 0.0, "below": 90.0, "left": 180.0, "above": 270.0}
@@ -250,3 +252,26 @@ class ObjectGeometry:
 
 def _opt(value: float) -> float | None:
     return None if not np.isfinite(value) else float(value)
+
+
+def turned(obj, cam: Camera, anchor: float, limit_deg: float = MAX_TURN_DEG):
+    """``obj`` (an :class:`~mlplc2.stimuli.world.ApproachObject` whose ``start`` and ``velocity`` are
+    given along the axes of the camera at frame ``anchor`` instead of at its onset) as an object of
+    ``cam``'s turning (``"pan"`` or ``"tilt"``) scene: the same path in the world, seen at the
+    anchor where a still camera would see it. Its onset is put off until the camera has at most
+    ``limit_deg`` left to turn before the anchor (the object is then far out of view; a start behind
+    the camera is impossible), ``start`` moved along its path to that frame; ``start`` and
+    ``velocity`` are rotated by ``R(onset)^T R(anchor)``. Any other camera: ``obj`` unchanged."""
+    from dataclasses import replace
+
+    if cam.motion not in ("pan", "tilt") or cam.speed == 0:
+        return obj
+    rate = math.radians(cam.speed) / cam.fps                     # rad per frame
+    turn = lambda k: rate * (anchor - k)                          # noqa: E731  (angle left to turn)
+    onset = obj.onset
+    if abs(turn(onset)) > math.radians(limit_deg):
+        onset = int(math.ceil(anchor - math.radians(limit_deg) / abs(rate)))
+    start = np.array(obj.start) + (onset - obj.onset) / cam.fps * np.array(obj.velocity)
+    M = cam.rotation(turn(onset))
+    return replace(obj, start=tuple(float(v) for v in M @ start),
+                   velocity=tuple(float(v) for v in M @ np.array(obj.velocity)), onset=onset)
