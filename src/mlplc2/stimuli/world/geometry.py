@@ -267,11 +267,10 @@ def turned(obj, cam: Camera, anchor: float, limit_deg: float = MAX_TURN_DEG):
     if cam.motion not in ("pan", "tilt") or cam.speed == 0:
         return obj
     rate = math.radians(cam.speed) / cam.fps                     # rad per frame
-    turn = lambda k: rate * (anchor - k)                          # noqa: E731  (angle left to turn)
     onset = obj.onset
-    if abs(turn(onset)) > math.radians(limit_deg):
+    if abs(rate * (anchor - onset)) > math.radians(limit_deg):
         onset = int(math.ceil(anchor - math.radians(limit_deg) / abs(rate)))
     start = np.array(obj.start) + (onset - obj.onset) / cam.fps * np.array(obj.velocity)
-    M = cam.rotation(turn(onset))
+    M = cam.rotation(rate * (anchor - onset))                   # R(onset)^T R(anchor): the turn left
     return replace(obj, start=tuple(float(v) for v in M @ start),
                    velocity=tuple(float(v) for v in M @ np.array(obj.velocity)), onset=onset)

@@ -540,6 +540,11 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     speed of 2-8 m/s, 3-12 px wide at their onset; positions in the middle
     60 % of the image; collisions aim within :data:`COLLISION_AIM` widths of
     the camera centre in a random direction, passes towards a random side.
+    With a turning camera (pan, tilt) the drawn position of a collision or
+    pass holds at its anchor (its contact; for a pass halfway between its onset
+    and when a still camera would lose it) in the camera's view then, not at its
+    onset (:func:`~mlplc2.stimuli.world.geometry.turned`), so the camera does not
+    turn away from it; the draws are the same.
 
     Parameters
     ----------
@@ -613,7 +618,7 @@ def _random_object(rng, i: int, kind: str | None, cam: Camera, shape, appearance
 def _random_approaching(rng, kind: str, cam: Camera, common: dict) -> ApproachObject:
     """A collision or pass of :func:`random_scene`: contact between 40 % of the time left after its
     onset and 5 frames before the end, closing at 2-8 m/s, 3-12 px wide at its onset. A turning
-    camera (pan, tilt) sees it at ``at`` and that width at its anchor (:func:`_anchor`) instead."""
+    camera (pan, tilt) sees it at ``at`` at its anchor (:func:`_anchor`) instead of its onset."""
     onset, n, fps = common["onset"], cam.n, cam.fps
     first = onset + 0.4 * (n - onset)
     contact = float(rng.uniform(first, n - 5))
