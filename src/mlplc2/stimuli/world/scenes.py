@@ -544,7 +544,8 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     pass holds at its anchor (its contact; for a pass halfway between its onset
     and when a still camera would lose it) in the camera's view then, not at its
     onset (:func:`~mlplc2.stimuli.world.geometry.turned`), so the camera does not
-    turn away from it; the draws are the same.
+    turn away from it; one still out of view at its onset starts later on the same
+    path. The draws are the same.
 
     Parameters
     ----------
