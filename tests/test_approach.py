@@ -14,7 +14,10 @@ import pytest
 
 from mlplc2 import stimuli as S
 from mlplc2._validation import InputError
+from mlplc2.evaluation.score import unseen
 from mlplc2.stimuli.world import COLLISION_MISS
+from mlplc2.stimuli.world.camera import Camera
+from mlplc2.stimuli.world.geometry import ObjectGeometry
 
 A = S.ApproachObject
 SIZE = (81, 61)                 # odd: the principal point (40, 30) is a pixel centre
@@ -367,3 +370,68 @@ def test_an_object_never_in_view_warns():
     with pytest.warns(UserWarning, match=r"objects\[0\].*never in view"):
         stim = S.approach([hidden], size=SIZE, frames=2)
     assert stim.objects[0].track == ()
+
+
+# --------------------------------------------------------------------------- turning cameras
+
+def _suite_objects(monkeypatch, settings, holdout):
+    """The objects and camera of the benchmark's scenes of ``settings`` (truth geometry only: the
+    renderer is replaced, so nothing is drawn)."""
+    from mlplc2.benchmark import suite
+    from mlplc2.stimuli.world import scenes
+
+    calls = []
+    monkeypatch.setattr(scenes, "approach", lambda objs, **kw: calls.append((objs, kw)))
+    for sc in suite(settings=settings, holdout=holdout):
+        sc.generate()
+        objs, kw = calls.pop()
+        yield sc.name, objs, Camera(*kw["size"], kw["hfov_deg"], kw["fps"], kw["camera"], kw["camera_speed"],
+                                    1.0, kw["frames"])
+
+
+@pytest.mark.parametrize("holdout", [0, 1])
+def test_turning_camera_keeps_its_collisions_in_view(monkeypatch, holdout):
+    """Issue 22: a panning or tilting camera's collisions were out of view in their last second (the
+    camera had turned away), so nobody could warn of them. Every collision of the benchmark's
+    texture_pan and texture_tilt scenes (standard and holdout seeds) now has its centre in the
+    image in more than half of the frames of its last second (the evaluation's ``unseen`` rule
+    says 0); collisions are in view in most of the frames from their onset, and every pass crosses
+    the view for a good part of its approach."""
+    checked = {"collision": 0, "pass": 0}
+    for name, objs, cam in _suite_objects(monkeypatch, ["texture_pan", "texture_tilt"], holdout):
+        for i, o in enumerate(objs):
+            if o.kind not in checked:
+                continue
+            g = ObjectGeometry(o, cam)
+            inside = g.drawn & (g.x >= 0) & (g.x <= cam.w - 1) & (g.y >= 0) & (g.y <= cam.h - 1)
+            truth = g.truth(i + 1, inside, cam.fps)
+            checked[o.kind] += 1
+            seen = inside[g.frames < g.contact].mean()             # of the frames from its onset
+            if o.kind == "collision":
+                assert not unseen(truth, cam.fps), f"{name} object {i + 1}: out of view before contact"
+            assert seen >= (0.6 if o.kind == "collision" else 0.4), f"{name} object {i + 1}: in view {seen:.0%}"
+    assert checked["collision"] >= 8 and checked["pass"] >= 5
+
+
+def test_turning_camera_scene_is_reproducible_and_still_camera_places_at_onset(monkeypatch):
+    """The same seed gives the same panning scene. A still camera's collisions and passes are still
+    placed at their onset (in the middle 60 % of the image then), and its distractors are the same
+    objects as under a pan with the same seed (the turning camera's placement draws nothing)."""
+    kw = dict(size=(64, 48), duration_s=2.0, background="plain", supersample=1)
+    a, b = S.random_scene(3, camera="pan", **kw), S.random_scene(3, camera="pan", **kw)
+    assert np.array_equal(a.frames, b.frames) and a.to_ground_truth() == b.to_ground_truth()
+    from mlplc2.stimuli.world import scenes
+
+    calls = []
+    monkeypatch.setattr(scenes, "approach", lambda objs, **kw: calls.append((objs, kw)))
+    kinds = ["collision", "pass", "static", "translate", "recede"]
+    for seed in range(5):
+        for camera in ("static", "pan"):
+            S.random_scene(seed, camera=camera, kinds=kinds)          # the objects go to ``calls``
+        (still, _), (pan, _) = calls
+        calls.clear()
+        cam = Camera(320, 240, 60.0, 30.0, "static", 0.0, 1.0, 150)
+        for o in still[:2]:
+            g = ObjectGeometry(o, cam)
+            assert 0.2 * 319 - 1e-6 <= g.x[0] <= 0.8 * 319 + 1e-6 and 0.2 * 239 - 1e-6 <= g.y[0] <= 0.8 * 239 + 1e-6
+        assert still[2:] == pan[2:] and still[:2] != pan[:2]

@@ -49,7 +49,8 @@ from .._common import check_size
 from .camera import Camera
 
 __all__ = ["ObjectGeometry", "ObjectTrack", "place", "side_angle", "COLLISION_MISS", "PASS_MIN_MISS", "FAR_M",
-           "DEFAULT_WIDTH_M"]
+           "DEFAULT_WIDTH_M", "MAX_TURN_DEG",
+           "ENTRY_LEAD_S", "turned"]
 
 #: A collision's centre reaches the camera plane closer than this to the camera centre (widths).
 COLLISION_MISS = 0.5
@@ -60,6 +61,10 @@ PASS_MIN_MISS = 1.0
 FAR_M = 1000.0
 #: Default physical width of an object (m).
 DEFAULT_WIDTH_M = 0.5
+#: Largest turn (deg) of a turning camera between an object's onset and its anchor (:func:`turned`).
+MAX_TURN_DEG = 60.0
+#: A turning camera's object starts this long (s) before it first comes into view (:func:`turned`).
+ENTRY_LEAD_S = 0.5
 
 
 _SIDES = {"right": 0.0, "below": 90.0, "left": 180.0, "above": 270.0}
@@ -250,3 +255,37 @@ class ObjectGeometry:
 
 def _opt(value: float) -> float | None:
     return None if not np.isfinite(value) else float(value)
+
+
+def turned(obj, cam: Camera, anchor: float, limit_deg: float = MAX_TURN_DEG, lead_s: float = ENTRY_LEAD_S):
+    """``obj`` (an :class:`~mlplc2.stimuli.world.ApproachObject` whose ``start`` and ``velocity`` are
+    given along the axes of the camera at frame ``anchor`` instead of at its onset) as an object of
+    ``cam``'s turning (``"pan"`` or ``"tilt"``) scene: the same path in the world, seen at the
+    anchor where a still camera would see it. ``start`` and ``velocity`` are rotated by
+    ``R(onset)^T R(anchor)``. The onset is put off, on the same path, to ``lead_s`` before the
+    object first comes into view (its bounding box in the image), and to at most ``limit_deg`` of
+    turn before the anchor (so it never starts behind the camera): its plane, fronto-parallel to the
+    camera at its onset, then faces the camera nearly as it does when it comes into view. Any
+    other camera: ``obj`` unchanged."""
+    if cam.motion not in ("pan", "tilt") or cam.speed == 0:
+        return obj
+    rate = math.radians(cam.speed) / cam.fps                     # rad per frame
+    onset = obj.onset
+    if abs(rate * (anchor - onset)) > math.radians(limit_deg):
+        onset = int(math.ceil(anchor - math.radians(limit_deg) / abs(rate)))
+    g = ObjectGeometry(_rotated(obj, cam, anchor, onset), cam)
+    x0, x1, y0, y1 = g.box.T
+    seen = g.drawn & (~g.whole | ((x1 >= -0.5) & (x0 <= cam.w - 0.5) & (y1 >= -0.5) & (y0 <= cam.h - 0.5)))
+    if seen.any():
+        onset = max(onset, int(g.frames[np.argmax(seen)]) - int(round(lead_s * cam.fps)))
+    return _rotated(obj, cam, anchor, onset)
+
+
+def _rotated(obj, cam: Camera, anchor: float, onset: int):
+    """:func:`turned`'s object with its onset at ``onset`` (>= ``obj.onset``), on the same path."""
+    from dataclasses import replace
+
+    start = np.array(obj.start) + (onset - obj.onset) / cam.fps * np.array(obj.velocity)
+    M = cam.rotation(math.radians(cam.speed) / cam.fps * (anchor - onset))   # R(onset)^T R(anchor)
+    return replace(obj, start=tuple(float(v) for v in M @ start),
+                   velocity=tuple(float(v) for v in M @ np.array(obj.velocity)), onset=onset)

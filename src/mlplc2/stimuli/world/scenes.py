@@ -44,7 +44,7 @@ from ..._validation import InputTypeError, InputValueError, check_fps, check_int
 from ...camera import check_hfov, focal_length
 from .._common import MAX_STIMULUS_BYTES, ApproachStimulus, check_choice, check_size
 from .camera import CAMERA_MOTIONS, DEFAULT_CAMERA_SPEED, Camera, CameraPath
-from .geometry import DEFAULT_WIDTH_M, PASS_MIN_MISS, ObjectGeometry, place, side_angle
+from .geometry import DEFAULT_WIDTH_M, PASS_MIN_MISS, ObjectGeometry, place, side_angle, turned
 from .render import APPROACH_BACKGROUNDS, render, sub_seed
 
 __all__ = ["ApproachObject", "approach", "approach_scene", "random_scene", "APPROACH_KINDS", "APPROACH_SHAPES",
@@ -540,6 +540,12 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     speed of 2-8 m/s, 3-12 px wide at their onset; positions in the middle
     60 % of the image; collisions aim within :data:`COLLISION_AIM` widths of
     the camera centre in a random direction, passes towards a random side.
+    With a turning camera (pan, tilt) the drawn position of a collision or
+    pass holds at its anchor (its contact; for a pass halfway between its onset
+    and when a still camera would lose it) in the camera's view then, not at its
+    onset (:func:`~mlplc2.stimuli.world.geometry.turned`), so the camera does not
+    turn away from it; one still out of view at its onset starts later on the same
+    path. The draws are the same.
 
     Parameters
     ----------
@@ -572,9 +578,10 @@ def random_scene(seed: int, *, background: str = "texture", camera: str = "stati
     n = int(round(dur * fps))
     rng = np.random.default_rng(sub_seed(seed, 6))
     count, kinds = _random_count(rng, n_objects, kinds)
-    f = focal_length(w, check_hfov(hfov_deg, required=True))
-    objs = [_random_object(rng, i, None if kinds is None else kinds[i], n, fps, f, shape, appearance,
-                           (w, h), hfov_deg, ego) for i in range(count)]
+    check_hfov(hfov_deg, required=True)
+    cam = Camera(w, h, float(hfov_deg), fps, camera, cam_speed, 1.0, n)
+    objs = [_random_object(rng, i, None if kinds is None else kinds[i], cam, shape, appearance, ego)
+            for i in range(count)]
     return approach(objs, size=(w, h), fps=fps, hfov_deg=hfov_deg, frames=n, background=background,
                     camera=camera, camera_speed=cam_speed, camera_height_m=camera_height_m,
                     noise_std=noise_std, blur_px=blur_px, supersample=supersample, seed=seed,
@@ -592,11 +599,10 @@ def _random_count(rng, n_objects, kinds) -> tuple[int, list[str] | None]:
     return count, kinds
 
 
-def _random_object(rng, i: int, kind: str | None, n: int, fps: float, f: float, shape, appearance,
-                   size: tuple[int, int], hfov_deg, ego: float) -> ApproachObject:
-    """Object ``i`` of :func:`random_scene`: its kind (drawn even when ``kind`` is given, so the other
-    draws stay the same), position, shape, appearance and onset, then its motion."""
-    w, h = size
+def _random_object(rng, i: int, kind: str | None, cam: Camera, shape, appearance, ego: float) -> ApproachObject:
+    """Object ``i`` of :func:`random_scene` seen by ``cam``: its kind (drawn even when ``kind`` is given,
+    so the other draws stay the same), position, shape, appearance and onset, then its motion."""
+    w, h, n, fps, f, hfov_deg = cam.w, cam.h, cam.n, cam.fps, cam.f, cam.hfov
     drawn = str(rng.choice(["collision", "pass"])) if i == 0 else \
         str(rng.choice(APPROACH_KINDS, p=[0.25, 0.25, 0.15, 0.2, 0.15]))
     kind = drawn if kind is None else kind
@@ -606,21 +612,37 @@ def _random_object(rng, i: int, kind: str | None, n: int, fps: float, f: float, 
         appearance=str(rng.choice(APPROACH_APPEARANCES)) if appearance is None else appearance,
         onset=int(rng.integers(0, max(1, n // 3))), size=(w, h), hfov_deg=hfov_deg, ego_speed_mps=ego)
     if kind in ("collision", "pass"):
-        return _random_approaching(rng, kind, n, fps, common)
+        return _random_approaching(rng, kind, cam, common)
     return _random_distractor(rng, kind, fps, f, common)
 
 
-def _random_approaching(rng, kind: str, n: int, fps: float, common: dict) -> ApproachObject:
+def _random_approaching(rng, kind: str, cam: Camera, common: dict) -> ApproachObject:
     """A collision or pass of :func:`random_scene`: contact between 40 % of the time left after its
-    onset and 5 frames before the end, closing at 2-8 m/s, 3-12 px wide at its onset."""
-    onset = common["onset"]
+    onset and 5 frames before the end, closing at 2-8 m/s, 3-12 px wide at its onset. A turning
+    camera (pan, tilt) sees it at ``at`` at its anchor (:func:`_anchor`) instead of its onset."""
+    onset, n, fps = common["onset"], cam.n, cam.fps
     first = onset + 0.4 * (n - onset)
     contact = float(rng.uniform(first, n - 5))
     extra = dict(ttc_s=(contact - onset) / fps, speed_mps=float(rng.uniform(2.0, 8.0)),
                  width_px=float(rng.uniform(3.0, 12.0)), side=float(rng.uniform(0.0, 360.0)))
     if kind == "collision":
-        return ApproachObject.collision(miss_widths=float(rng.uniform(0.0, COLLISION_AIM)), **extra, **common)
-    return ApproachObject.pass_by(miss_widths=float(rng.uniform(*PASS_MISS_WIDTHS)), **extra, **common)
+        obj = ApproachObject.collision(miss_widths=float(rng.uniform(0.0, COLLISION_AIM)), **extra, **common)
+    else:
+        obj = ApproachObject.pass_by(miss_widths=float(rng.uniform(*PASS_MISS_WIDTHS)), **extra, **common)
+    return turned(obj, cam, _anchor(obj, cam, contact))
+
+
+def _anchor(obj: ApproachObject, cam: Camera, contact: float) -> float:
+    """The frame at which a turning camera sees a collision or pass of :func:`random_scene` (given
+    along the axes of the camera then) where a still camera would: a collision's contact, so it is in
+    view when it hits; a pass's frame halfway between its onset and the last frame in which a still
+    camera sees its centre, so it crosses the view as a still camera's pass does."""
+    if obj.kind == "collision" or cam.motion not in ("pan", "tilt"):
+        return contact
+    g = ObjectGeometry(obj, Camera(cam.w, cam.h, cam.hfov, cam.fps, "static", 0.0, 1.0, cam.n))
+    inside = g.drawn & (g.x >= 0) & (g.x <= cam.w - 1) & (g.y >= 0) & (g.y <= cam.h - 1)
+    last = g.frames[inside][-1] if inside.any() else obj.onset
+    return 0.5 * (obj.onset + float(last))
 
 
 def _random_distractor(rng, kind: str, fps: float, f: float, common: dict) -> ApproachObject:
