@@ -23,7 +23,7 @@ import pytest
 import mlplc2
 from mlplc2 import cli, stimuli
 from mlplc2.cli import SUBCOMMANDS, Subcommand, main
-from mlplc2.io import write_video
+from mlplc2.io import open_source, write_video
 from mlplc2.models import REGISTRY
 from mlplc2.models.base import REPEAT_THRESHOLD
 from mlplc2.runner import COLUMNS, RunInterrupted, run
@@ -804,6 +804,29 @@ def test_one_decision_on_repeated_frames(tmp_path, capsys):
     summary = json.loads((tmp_path / "e" / "fields.json").read_text())
     assert summary["duplicated"] is None and summary["frames_held"] == {"mlplc2": 0}
     assert "note:" not in capsys.readouterr().err
+
+
+def test_a_file_read_live_is_prescanned_frame_by_frame(tmp_path, capsys, monkeypatch):
+    """A clip whose frames were duplicated says so also with --live: the pre-scan of its first
+    frames reads every one of them (a live reader hands over a sample, whose duplicates depend
+    on the machine's speed: the loom clip of the README once said "repeats its frames", on
+    0 of 1 frames held)."""
+    import mlplc2.runner
+
+    frames, _ = duplicated(noise_frames(20, w=320, h=240, seed=4))
+    clip = _png_folder(tmp_path / "dup", frames)
+    opened = []
+
+    def recording(*args, **keywords):   # which sources the run opens, live or frame by frame
+        opened.append(keywords.get("live"))
+        return open_source(*args, **keywords)
+
+    monkeypatch.setattr(mlplc2.runner, "open_source", recording)
+    assert cli.main(["run", str(clip), "--live", "-q", "--out", str(tmp_path / "o")]) == 0
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["duplicated"] is True
+    assert sorted(opened) == [False, True]   # the pre-scan frame by frame, the run live
+    capsys.readouterr()
 
 
 @pytest.mark.parametrize("command", ["run", "evaluate", "batch"])

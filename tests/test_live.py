@@ -46,6 +46,31 @@ def _lines(path):
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
+def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tmp_path):
+    """FFmpeg cannot seek back in a pipe to the frames of an MP4 whose index (moov atom) comes
+    after them (most cameras' and phones' files, nc07.mp4 of the real clips): one error line
+    that says so and what to do, exit 2, nothing written."""
+    import av
+
+    clip = tmp_path / "late_index.mp4"
+    with av.open(str(clip), "w") as out:      # PyAV's MP4 muxer writes the index last by default
+        stream = out.add_stream("mpeg4", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
+        rng = np.random.default_rng(0)    # noise: a file (150 kB) larger than FFmpeg's read buffer
+        for _ in range(30):
+            frame = av.VideoFrame.from_ndarray(rng.integers(0, 256, (120, 160, 3), dtype=np.uint8), format="rgb24")
+            out.mux(stream.encode(frame))
+        out.mux(stream.encode(None))
+    data = clip.read_bytes()
+    assert data.find(b"moov") > data.find(b"mdat")
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-o", str(tmp_path / "s")],
+                          input=data, capture_output=True, timeout=120)   # a pipe (a file could seek)
+    proc.stderr = proc.stderr.decode()
+    assert proc.returncode == 2
+    assert proc.stderr.count("\n") == 1 and "index (moov atom) is at its end" in proc.stderr
+    assert "give its path" in proc.stderr and not (tmp_path / "s").exists()
+
+
 def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, capsys):
     clip = data["avi"]
     root, base = http_dir

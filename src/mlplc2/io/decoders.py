@@ -117,6 +117,8 @@ class _PyAVDecoder(Decoder):
         # A real-time stream (RTSP, ...: a camera) has no end of its own: its end is the stream
         # stopping (FFmpeg reports a closed connection or an RTCP BYE as the end of the input).
         self._realtime = stream and is_live(path)
+        self._pipe = hasattr(path, "read")   # a file object (stdin): FFmpeg cannot seek back in it
+        self._decoded = 0
         options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
         try:
             self.container = av.open(path, mode="r", options=options, timeout=self.TIMEOUT_S if stream else None)
@@ -145,7 +147,11 @@ class _PyAVDecoder(Decoder):
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
             self.error = _one_line(str(exc))
+            if self._pipe and not self._decoded and "mp4" in self.container.format.name:
+                self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
+                              "pipe: give its path instead")
             return None
+        self._decoded += 1
         self.time_s = None if frame.time is None else float(frame.time)
         return frame.to_ndarray(format="rgb24")
 

@@ -110,7 +110,8 @@ class FrameSource:
                 raise InputValueError(f"end ({self.end}) must be larger than start ({self.start})")
             if self.start:
                 raise InputValueError(f"{self.name}: no frame at or after start frame {self.start}")
-            raise InputValueError(f"{self.name}: video has no frames (empty or undecodable)")
+            why = getattr(decoder, "error", None)
+            raise InputValueError(f"{self.name}: video has no frames (empty or undecodable)" + (f": {why}" if why else ""))
         h, w = first.shape[:2]
         self.size = (int(w), int(h))
         try:

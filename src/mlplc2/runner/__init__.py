@@ -440,7 +440,9 @@ def _prescan_changes(source, auto: list[Model], src: FrameSource, options: RunOp
     if not auto or src.kind in ("camera", "stream") or isinstance(source, FrameSource):
         return []
     width = min((m.work_width for m in auto if m.work_width is not None), default=None)
-    scan = open_source(source, **options.source_options())
+    # Every one of the first frames, also for a file read --live (a live reader would hand over a
+    # sample that depends on the machine's speed, and the decision with it).
+    scan = open_source(source, **{**options.source_options(), "live": False})
     diffs, prev = [], None
     try:
         for k, item in enumerate(scan):
