@@ -65,6 +65,7 @@ class TargetLayer:
 
     def reset(self) -> None:
         self._tracks: list[Track] = []
+        self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
@@ -157,7 +158,8 @@ class TargetLayer:
                 continue
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
-            self._next += 1
+            if not self._refind(t, now):
+                self._next += 1
             if f is not None:
                 self._own(t, f, now)
             self._tracks.append(t)
@@ -173,8 +175,7 @@ class TargetLayer:
             if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
                 o, t.warned = replace(o, warning=False), warned
             out.append(o)
-        idle = p.span(p.idle_frames, self.fps) + _EPS
-        self._tracks = [t for t in self._tracks if now - max(t.last_answer, t.last_estimate, t.birth) <= idle]
+        self._drop_idle(now)
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 
@@ -354,7 +355,40 @@ class TargetLayer:
                     (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
+            else:
+                self._lose(t, clock)
         self._tracks = kept
+
+    def _drop_idle(self, now: float) -> None:
+        """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""
+        idle = self.params.span(self.params.idle_frames, self.fps) + _EPS
+        for t in self._tracks:
+            if now - max(t.last_answer, t.last_estimate, t.birth) > idle:
+                self._lose(t, now)
+        self._tracks = [t for t in self._tracks if now - max(t.last_answer, t.last_estimate, t.birth) <= idle]
+
+    def _lose(self, t: Track, now: float) -> None:
+        """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
+        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
+        self._lost = [(c, o) for c, o in self._lost if now - c <= span and o.id != t.id]
+        if self.params.refind_frames > 0:
+            self._lost.append((now, t))
+
+    def _refind(self, t: Track, now: float) -> bool:
+        """Whether new track ``t`` is a track lost lately (``refind_frames``; :meth:`_lose`): its
+        centre lies in the lost one's last box and its size is within a factor of 2 of that box's.
+        It then takes over the lost track's id, frame of birth and last time to contact
+        (``Track.held``, ``hold_frames``), not its history (the new box is measured afresh: its
+        size against the old box's would be a jump in the log-scale fit); the newest such wins."""
+        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
+        live = {o.id for o in self._tracks}
+        for c, o in reversed(self._lost):
+            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy) \
+                    and max(t.size / o.size, o.size / t.size) <= 2.0:
+                self._lost.remove((c, o))
+                t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
+                return True
+        return False
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
@@ -368,6 +402,7 @@ class TargetLayer:
             if host is None:
                 out.append(t)
             else:
+                self._lose(t, index)
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
                 host.last_alarm = max(host.last_alarm, t.last_alarm)
@@ -426,6 +461,16 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     return ttc <= p.horizon_s and (miss is None or miss <= p.max_miss)
 
 
+def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
+    """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
+    down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
+    (as :func:`count_down` for a held frame); else four None. Reported, never a warning."""
+    if t.held is None or p.hold_frames == 0 or now - t.held[0] > p.span(p.hold_frames, fps) + _EPS:
+        return None, None, None, None
+    left = t.held[1] - (now - t.held[0]) / fps
+    return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
+
+
 def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
     """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
     or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
@@ -464,6 +509,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.streak_since = index if t.streak == 0 else t.streak_since
         t.streak += 1
         t.last_estimate = index
+        t.held = (index, ttc, sigma, miss, miss_xy)
     else:
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index)
@@ -472,6 +518,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
     warning = warning or alarm_warns(t, p, index, ttc, miss)
     t.warned = t.warned or warning
+    if ttc is None:
+        ttc, sigma, miss, miss_xy = held(t, p, fps, index)
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)

@@ -159,6 +159,16 @@ class TargetParams(ParameterSet):
                               and a new target may lie inside the rest (:meth:`TargetLayer._holds`).
                               0 = off (the default: 12 lost the helmet clip's warning, docs/model.md).""",
                               unit="frames", valid=Valid.integer(0))
+    hold_frames: int = param(15, """A target whose fit gives no time to contact this frame (the growth not
+                             significant, not isotropic, a gap in its measurement) reports its last one
+                             counted down for up to this many frames after it (not a warning: a warning
+                             needs this frame's fit). 0 = off (``docs/targets.md``, step 8).""",
+                             unit="frames", valid=Valid.integer(0))
+    refind_frames: int = param(15, """A new target whose centre lies in the last box of a target lost (dropped
+                               or merged) at most this many frames before, and of a size within a factor
+                               of 2 of it, takes over its id and its last time to contact (``hold_frames``):
+                               one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
+                               unit="frames", valid=Valid.integer(0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

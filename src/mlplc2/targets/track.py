@@ -136,6 +136,7 @@ class Track:
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
+    held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
