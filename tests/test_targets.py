@@ -575,3 +575,55 @@ def test_object_approaching_inside_a_stale_box_gets_its_own_target(stale_frames)
         assert len({t.id for t in on_disc}) == 1
     else:
         assert not warned
+
+
+def _disc_with_gap(n=46, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
+    """Grey frames of a dark disc approaching at constant speed (radius r0 * contact / (contact - k),
+    contact at frame ``contact``) on a plain background, hidden during the frames of ``gap`` (an
+    occlusion: the image alignment fails there)."""
+    frames = []
+    for k in range(n):
+        img = np.full((240, 320), 150, np.uint8)
+        if not gap[0] <= k < gap[1]:
+            r = r0 * contact / (contact - k)
+            cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(img.astype(np.float32))
+    return frames
+
+
+def _run_with_field(frames, at=(200, 110), **kw):
+    """TargetLayer on ``frames`` with one answering attention field at ``at`` every frame."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    layer = TargetLayer(TargetParams(**kw), FPS)
+    field = SimpleNamespace(id=1, x=at[0], y=at[1], radius=40, response=1.0, collision=False)
+    return [layer.step(g, None, [field], k) for k, g in enumerate(frames)]
+
+
+@pytest.mark.parametrize("hold_frames, refind_frames", [(15, 15), (0, 0)])
+def test_brief_occlusion_keeps_one_id_and_its_time_to_contact(hold_frames, refind_frames):
+    """A disc approaching at constant speed is hidden for 3 frames (30-32): its track is lost
+    (``max_fails``) and a new one found where it was. With ``refind_frames`` the new one keeps the
+    old id, and with ``hold_frames`` the last time to contact counted down covers the new track's
+    first frames (its own fit needs ``min_frames``); both off, a second id without a time to contact."""
+    outs = _run_with_field(_disc_with_gap(), hold_frames=hold_frames, refind_frames=refind_frames)
+    on = {k: [t for t in outs[k] if abs(t.x - 200) < 6 and abs(t.y - 110) < 6] for k in range(20, 46)}
+    ids = {t.id for ts in on.values() for t in ts}
+    after = [t.ttc_s for k in range(33, 40) for t in on[k]]
+    if hold_frames:
+        assert len(ids) == 1
+        assert after and all(v is not None and abs(v - (70 - k) / FPS) <= 0.1 * (70 - k) / FPS
+                             for k in range(33, 40) for v in [t.ttc_s for t in on[k]])
+    else:
+        assert len(ids) == 2 and None in after
+
+
+def test_time_to_contact_counts_down_through_a_failed_alignment():
+    """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
+    is the fit's contact less the frames since its newest point (else it stands still)."""
+    outs = _run_with_field(_disc_with_gap(n=32))
+    for k in (30, 31):
+        t = next(t for t in outs[k] if abs(t.x - 200) < 6)
+        assert t.ttc_s == pytest.approx((70 - k) / FPS, abs=0.02)

@@ -500,9 +500,12 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         growth = t.history[-1].log_scale - t.history[0].log_scale
         skew = t.history[-1].anisotropy - t.history[0].anisotropy
         isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
+    # the fit's contact is counted from its newest observation: a frame whose measurement failed
+    # (``max_fails``) added none, and the contact is that much nearer
+    ago = index - t.history[-1].frame
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
-            and fit.ttc / fps <= p.max_ttc_s:
-        ttc, sigma = fit.ttc / fps, fit.sigma / fps
+            and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
+        ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
