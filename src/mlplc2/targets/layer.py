@@ -28,7 +28,7 @@ from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down", "held",
            "MIN_POINTS", "fits"]
 
 class TargetLayer:

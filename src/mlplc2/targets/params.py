@@ -83,7 +83,8 @@ class TargetParams(ParameterSet):
                            unit="frames", valid=Valid.integer(1))
     # --- time to contact and course -------------------------------------------------------
     nominal_fps: float = param(30.0, """The layer's frame counts (``window``, ``min_frames``, ``change_frames``,
-                               ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``idle_frames``) are
+                               ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``hold_frames``, ``refind_frames``,
+                               ``idle_frames``) are
                                spans of time at this rate: n frames = n / ``nominal_fps`` s, whatever the
                                camera's rate, a repeated frame no new observation and a dropped one time gone
                                (:meth:`TargetParams.span`). A fit needs at least 3 observations (``MIN_POINTS``) and

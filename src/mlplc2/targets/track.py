@@ -36,7 +36,8 @@ class Target:
     width, height : float
         Apparent size (px).
     ttc_s : float or None
-        Time to contact in seconds; None while the growth is not significant.
+        Time to contact in seconds; None while the growth is not significant, unless the target
+        had one within ``hold_frames`` (its last one, counted down; not a warning).
     miss : float or None
         Predicted miss distance at contact, in the object's own extent (the length of
         ``miss_xy``; 0 = dead centre); None without ``ttc_s``.
