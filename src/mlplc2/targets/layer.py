@@ -28,8 +28,8 @@ from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down", "held",
-           "MIN_POINTS", "fits"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
+           "held", "MIN_POINTS", "fits"]
 
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
@@ -362,10 +362,13 @@ class TargetLayer:
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""
         idle = self.params.span(self.params.idle_frames, self.fps) + _EPS
+        kept = []
         for t in self._tracks:
-            if now - max(t.last_answer, t.last_estimate, t.birth) > idle:
+            if now - max(t.last_answer, t.last_estimate, t.birth) <= idle:
+                kept.append(t)
+            else:
                 self._lose(t, now)
-        self._tracks = [t for t in self._tracks if now - max(t.last_answer, t.last_estimate, t.birth) <= idle]
+        self._tracks = kept
 
     def _lose(self, t: Track, now: float) -> None:
         """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
@@ -502,7 +505,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
     # the fit's contact is counted from its newest observation: a frame whose measurement failed
     # (``max_fails``) added none, and the contact is that much nearer
-    ago = index - t.history[-1].frame
+    ago = index - t.history[-1].frame if t.history else 0.0
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
