@@ -379,15 +379,17 @@ class TargetLayer:
 
     def _refind(self, t: Track, now: float) -> bool:
         """Whether new track ``t`` is a track lost lately (``refind_frames``; :meth:`_lose`): its
-        centre lies in the lost one's last box and its size is within a factor of 2 of that box's.
+        centre lies in the lost one's last box plus a quarter of its size (as a field it would own,
+        :meth:`_own_margin`) and its size is within a factor of 3 of that box's (a factor of 2 and
+        the box alone: 0.07 more targets per collision object, docs/model.md).
         It then takes over the lost track's id, frame of birth and last time to contact
         (``Track.held``, ``hold_frames``), not its history (the new box is measured afresh: its
         size against the old box's would be a jump in the log-scale fit); the newest such wins."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy) \
-                    and max(t.size / o.size, o.size / t.size) <= 2.0:
+            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
+                    and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
                 return True

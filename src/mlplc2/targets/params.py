@@ -165,9 +165,9 @@ class TargetParams(ParameterSet):
                              counted down for up to this many frames after it (not a warning: a warning
                              needs this frame's fit). 0 = off (``docs/targets.md``, step 8).""",
                              unit="frames", valid=Valid.integer(0))
-    refind_frames: int = param(15, """A new target whose centre lies in the last box of a target lost (dropped
-                               or merged) at most this many frames before, and of a size within a factor
-                               of 2 of it, takes over its id and its last time to contact (``hold_frames``):
+    refind_frames: int = param(15, """A new target whose centre lies in the last box (plus a quarter of its
+                               size) of a target lost (dropped or merged) at most this many frames before,
+                               and of a size within a factor of 3 of it, takes over its id and its last time to contact (``hold_frames``):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
