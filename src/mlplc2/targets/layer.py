@@ -142,18 +142,18 @@ class TargetLayer:
             if any(self._holds(t, x, y, now) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
-            box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
-            if box is None and alarm:
-                box = self._field_box(f, w, h)
-            if box is None:
-                continue
-            t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-            host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
+            t = host = None
+            for box in self._boxes(lm, gray, x, y, f, alarm):
+                t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
+                host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
+                if host is not None or self._grows(levels, t, alarm=alarm):
+                    break
+                t = None
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, now)
                 continue
-            if not self._grows(levels, t, alarm=alarm):
+            if t is None:
                 continue
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
@@ -290,6 +290,7 @@ class TargetLayer:
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return alarm
+        t.motion = (al.dx / ref[1], al.dy / ref[1], math.log(al.scale) / ref[1])
         g = math.log(al.scale)
         if alarm:
             return g > 0
@@ -313,11 +314,16 @@ class TargetLayer:
                   iterations=p.iterations)
         return s is None or max(abs(s[0]), abs(s[1])) > p.max_slant
 
-    def _box(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field_seed: bool, field=None):
-        """The box of a candidate at (x, y): the region that changed over the last frames
-        (:func:`change_box`, tight for a small object), else the edges of the local motion
+    def _boxes(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field=None, alarm: bool = False):
+        """The boxes of a candidate at (x, y), in the order they are tried (the first that is a part of
+        a track or grows, :meth:`_grows`, is taken): the region that changed over the last frames
+        (:func:`change_box`, tight for a small object) and the edges of the local motion
         (:func:`measure_extent`; without LM maps, the ``box`` the front end gave its candidate
-        ``field``, if any). None when neither finds a box holding the seed within ``max_shift``."""
+        ``field``, if any), the edges first for a ``field`` seed; each only when it holds the seed
+        within ``max_shift``. When neither does, the seed of a field in ``alarm`` takes the field's
+        own extent (:meth:`_field_box`). Both are tried because the first may hold only a part of a
+        fast object: between distant frames (a slow camera) the change is the union of where the
+        object was and where it is, cut at ``max_shift``, and such a part does not align."""
         p = self.params
 
         def edges():
@@ -333,11 +339,14 @@ class TargetLayer:
                 return None
             return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
 
-        for find in ((edges, change) if field_seed else (change, edges)):
+        found = False
+        for find in ((edges, change) if field is not None else (change, edges)):
             box = find()
             if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
-                return box
-        return None
+                found = True
+                yield box
+        if not found and alarm:
+            yield self._field_box(field, gray.shape[1], gray.shape[0])
 
     def _follow(self, levels, clock: float, interval: float, w: int, h: int) -> None:
         """Move and grow every track with the image alignment; drop the lost ones."""
@@ -348,13 +357,32 @@ class TargetLayer:
             if self.measure is not None:         # another front end's growth evidence
                 move = self.measure(self._prev, levels, t, half, interval)
             else:
-                al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                           iterations=p.iterations, kernel=self.align_kernel)
-                move = None if al is None or al.residual > p.max_residual else \
-                    (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+                al = self._align_track(levels, t, half, interval)
+                move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
         self._tracks = kept
+
+    def _align_track(self, levels, t: Track, half: float, interval: float):
+        """The alignment of track ``t`` from the last frame to this one (:func:`align`), None when it
+        fails or leaves more than ``max_residual``. It starts from no motion; when that fails and
+        the frames lie more than one nominal frame apart (a camera slower than ``nominal_fps``,
+        or a dropped frame), again from the track's own last motion carried over the interval
+        (``Track.motion``, constant velocity): a fast object then moves and grows beyond what the
+        iteration finds from rest (the 7.5 fps helmet clip: ~10 px and x1.3 between frames)."""
+        p = self.params
+        box = (t.w / 2.0, t.h / 2.0)
+        al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
+                   kernel=self.align_kernel)
+        if (al is None or al.residual > p.max_residual) and t.motion is not None \
+                and interval > p.span(1, self.fps) + _EPS:
+            dx, dy, g = (v * interval for v in t.motion)
+            al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
+                       kernel=self.align_kernel, guess=(math.exp(g), dx, dy))
+        if al is None or al.residual > p.max_residual:
+            return None
+        t.motion = (al.dx / interval, al.dy / interval, math.log(al.scale) / interval)
+        return al
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):

@@ -136,6 +136,7 @@ class Track:
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
+    motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
