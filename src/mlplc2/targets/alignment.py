@@ -95,6 +95,8 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     samples outside the frame get no weight. None when the patch has too little texture or the
     iteration does not settle.
 
+    ``guess``: (scale, dx, dy) where the iteration starts (a track's own motion carried over a long
+    interval, ``TargetLayer._align_track``), else no motion; it always runs the NumPy version.
     ``kernel``: the compiled version (:func:`mlplc2.targets._fast_align.align_patch`, the same
     alignment to ~1e-12; :mod:`mlplc2.backend` chooses it) for float32 pyramids, or None.
     """
