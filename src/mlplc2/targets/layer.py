@@ -409,21 +409,42 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
     return tuple(sorted(out, key=Target.urgency))
 
 
-def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None) -> bool:
+def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
+                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None) -> bool:
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing). No ``max_ttc_sigma`` needed, and no time to contact while the fit is too short."""
+    (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    by the border) the alarm warns only for a box wholly inside the frame that lies on the path
+    now (:func:`on_path`, against ``heading``, px, in a frame of ``shape``, (h, w)): the field alarm cannot tell an object that
+    will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
     if not p.alarm_warns or t.last_alarm != index:
         return False
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
         return False
-    if ttc is None:       # before its fit can answer (min_frames) the alarm alone; after, the fit's "no"
-        return not fits(t.history, t.fit_span)
-    return ttc <= p.horizon_s and (miss is None or miss <= p.max_miss)
+    if ttc is None and fits(t.history, t.fit_span):   # the fit's "no"
+        return False
+    if ttc is not None and ttc > p.horizon_s:
+        return False
+    if miss is not None:
+        return miss <= p.max_miss
+    return heading is not None and shape is not None and on_path(t, p, heading, shape)
+
+
+def on_path(t: Track, p: TargetParams, heading: tuple[float, float], shape: tuple[int, int]) -> bool:
+    """Whether track ``t``'s box, wholly inside a frame of ``shape`` (h, w; not :meth:`Track.cut` by
+    ``border``), lies on the camera's path now: its centre's offset from ``heading`` (px), horizontally
+    in its widths and vertically in its heights (the units of the course's miss), is at most
+    ``max_miss``. An object on a collision course keeps its bearing while its extent grows, so its
+    offset in its own extents shrinks to 0 at contact: this is the miss of an object that comes
+    straight on from where it is. The static world beside the path and a passing object keep or
+    grow theirs; a box cut by the border tells neither the object's centre nor its size."""
+    if t.cut(shape, p.border):
+        return False
+    return math.hypot((t.cx - heading[0]) / max(t.w, 1.0), (t.cy - heading[1]) / max(t.h, 1.0)) <= p.max_miss
 
 
 def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
@@ -446,6 +467,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
+    heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
@@ -458,7 +480,6 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s:
         ttc, sigma = fit.ttc / fps, fit.sigma / fps
-        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         t.streak_since = index if t.streak == 0 else t.streak_since
@@ -470,7 +491,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss)
+    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape)
     t.warned = t.warned or warning
     az = el = None
     if focal is not None:
