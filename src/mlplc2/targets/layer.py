@@ -418,9 +418,10 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
     (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
-    by the border) the alarm warns only for a box wholly inside the frame that lies on the path
-    now (:func:`on_path`, against ``heading``, px, in a frame of ``shape``, (h, w)): the field alarm cannot tell an object that
-    will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
+    by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
+    lies on the path now (:func:`on_path`) or keeps its bearing while it grows
+    (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
+    that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
     if not p.alarm_warns or t.last_alarm != index:
         return False
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
@@ -431,20 +432,39 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
         return False
     if miss is not None:
         return miss <= p.max_miss
-    return heading is not None and shape is not None and on_path(t, p, heading, shape)
-
-
-def on_path(t: Track, p: TargetParams, heading: tuple[float, float], shape: tuple[int, int]) -> bool:
-    """Whether track ``t``'s box, wholly inside a frame of ``shape`` (h, w; not :meth:`Track.cut` by
-    ``border``), lies on the camera's path now: its centre's offset from ``heading`` (px), horizontally
-    in its widths and vertically in its heights (the units of the course's miss), is at most
-    ``max_miss``. An object on a collision course keeps its bearing while its extent grows, so its
-    offset in its own extents shrinks to 0 at contact: this is the miss of an object that comes
-    straight on from where it is. The static world beside the path and a passing object keep or
-    grow theirs; a box cut by the border tells neither the object's centre nor its size."""
-    if t.cut(shape, p.border):
+    if heading is None or shape is None or t.cut(shape, p.border):
         return False
+    return on_path(t, p, heading) or keeps_bearing(t, heading)
+
+
+def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
+    """Whether track ``t``'s box lies on the camera's path now: its centre's offset from ``heading``
+    (px), horizontally in its widths and vertically in its heights (the units of the course's miss),
+    is at most ``max_miss``: the miss of an object that comes straight on from where it is."""
     return math.hypot((t.cx - heading[0]) / max(t.w, 1.0), (t.cy - heading[1]) / max(t.h, 1.0)) <= p.max_miss
+
+
+#: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
+#: world's (0: an object on a collision course, 1: the static world, halfway between), and the
+#: least drift of the static world (px) that a box's jitter cannot fake
+DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
+
+
+def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
+    """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
+    does, over its history (two observations at least): the static world (and an object that
+    will pass) expands about the heading (the focus of expansion of a camera that does not turn),
+    so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
+    while the centre of an object on a collision course stays put. True when the static world's
+    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
+    centres are the observations' (less the camera's turn, :class:`Observation`)."""
+    if len(t.history) < 2:
+        return False
+    q0, q1 = t.history[0], t.history[-1]
+    r0 = math.hypot(q0.x - heading[0], q0.y - heading[1])
+    r1 = math.hypot(q1.x - heading[0], q1.y - heading[1])
+    static = r0 * math.expm1(q1.log_scale - q0.log_scale)
+    return static >= MIN_DRIFT_PX and r1 - r0 <= DRIFT_FRACTION * static
 
 
 def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
