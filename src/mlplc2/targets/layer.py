@@ -28,7 +28,8 @@ from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
+           "keeps_bearing", "count_down",
            "MIN_POINTS", "fits"]
 
 class TargetLayer:
