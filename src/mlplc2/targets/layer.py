@@ -195,16 +195,37 @@ class TargetLayer:
             return None
         return self._past[0], self._clock - self._past_t[0]
 
-    @staticmethod
-    def _own(t: Track, f, index: float) -> None:
+    def _own(self, t: Track, f, index: float) -> None:
         """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
         looming evidence, its collision alarm (the paper's fatal field) the alarm evidence of
-        the warning rule (:func:`alarm_warns`)."""
+        the warning rule (:func:`alarm_warns`); a target born this frame then gets its
+        :meth:`_seed_move`."""
         t.fields.add(f.id)
         if f.response > 0:
             t.last_answer = index
         if getattr(f, "collision", False):
             t.last_alarm = index
+            if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
+                t.seed_move = self._seed_move(t)
+
+    def _seed_move(self, t: Track) -> tuple[float, float, float] | None:
+        """The shift (px) and log-scale gained by the box of ``t`` since the oldest frame kept
+        (``change_frames`` before, :meth:`_reference`; the image alignment of :meth:`_grows`), so
+        that :func:`keeps_bearing` can answer on a target's first frame; None when there is no such
+        frame or the alignment fails."""
+        p = self.params
+        ref = self._reference()
+        if ref is None or self._now is None:
+            return None
+        half = p.margin * t.size / 2.0 + 3.0
+        if self.measure is not None:
+            move = self.measure(ref[0], self._now[1], t, half, float(ref[1]))
+            return None if move is None else (float(move[0]), float(move[1]), float(move[4]))
+        al = align(ref[0], self._now[1], t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                   iterations=p.iterations, kernel=self.align_kernel)
+        if al is None or al.residual > p.max_residual or al.scale <= 0:
+            return None
+        return float(al.dx), float(al.dy), math.log(al.scale)
 
     def _measuring(self, t: Track, index: int) -> bool:
         """Whether track ``t`` measures an approach: it had a time to contact within the last
@@ -453,18 +474,25 @@ DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
 
 def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
     """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
-    does, over its history (two observations at least): the static world (and an object that
+    does, over its history (two observations at least; on its first frame, the alarm seed's
+    alignment against the frame ``change_frames`` before, ``Track.seed_move``): the static world (and an object that
     will pass) expands about the heading (the focus of expansion of a camera that does not turn),
     so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
     while the centre of an object on a collision course stays put. True when the static world's
     drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
     centres are the observations' (less the camera's turn, :class:`Observation`)."""
-    if len(t.history) < 2:
+    if len(t.history) >= 2:
+        q0, q1 = t.history[0], t.history[-1]
+        x0, y0, x1, y1, growth = q0.x, q0.y, q1.x, q1.y, q1.log_scale - q0.log_scale
+    elif t.seed_move is not None:          # its first frame: the seed's own alignment
+        dx, dy, growth = t.seed_move
+        x1, y1 = t.cx, t.cy
+        x0, y0 = x1 - dx, y1 - dy
+    else:
         return False
-    q0, q1 = t.history[0], t.history[-1]
-    r0 = math.hypot(q0.x - heading[0], q0.y - heading[1])
-    r1 = math.hypot(q1.x - heading[0], q1.y - heading[1])
-    static = r0 * math.expm1(q1.log_scale - q0.log_scale)
+    r0 = math.hypot(x0 - heading[0], y0 - heading[1])
+    r1 = math.hypot(x1 - heading[0], y1 - heading[1])
+    static = r0 * math.expm1(growth)
     return static >= MIN_DRIFT_PX and r1 - r0 <= DRIFT_FRACTION * static
 
 
