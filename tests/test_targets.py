@@ -487,6 +487,20 @@ def test_alarm_alone_does_not_warn_on_the_static_world_beside_the_path():
     assert _warns(_young_track("coming"), 2)
 
 
+@pytest.mark.parametrize("kind", ["static", "coming"])
+def test_alarm_seed_judged_on_its_first_frame(kind):
+    """A target the alarm seeds this frame has one observation; the seed's own alignment against
+    the frame ``change_frames`` before (``Track.seed_move``: shift and growth) tells whether it
+    keeps its bearing: an object on a collision course 4 widths beside the heading warns on the
+    alarm's first frame (no later than the alarm), the static world there does not."""
+    t = _young_track(kind, frames=(6,))
+    g = 0.1                                     # grown by 10 % over the frames before
+    r1 = t.cx - 159.5
+    dx = r1 - r1 * math.exp(-g) if kind == "static" else 0.0
+    t.seed_move = (dx, 0.0, g)
+    assert _warns(t, 6) == (kind == "coming")
+
+
 @pytest.mark.parametrize("x", [8.0, 312.0])
 def test_alarm_alone_does_not_warn_on_a_box_cut_by_the_border(x):
     """A box cut by the image's border tells neither the object's centre nor its size (the
