@@ -133,6 +133,7 @@ class Track:
     fit_span: float = 0.0              # the span a fit needs (``min_frames``) in clock units (:func:`estimate`)
     fields: set = field(default_factory=set)
     rate: float | None = None
+    seed_move: tuple | None = None     # (dx, dy, log-scale) of an alarm's seed since ``change_frames`` before (TargetLayer._seed_move)
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
