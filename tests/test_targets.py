@@ -463,6 +463,62 @@ def test_alarm_vetoed_by_the_targets_own_measurement(case):
     assert not _warns(t, 11)
 
 
+def _young_track(kind, frames=(0, 1, 2), offset=4.0, width=20.0):
+    """A track younger than ``min_frames`` (no time to contact yet) whose field alarms on its newest
+    frame, growing as an object that reaches the camera at frame 26, ``offset`` widths right of
+    the principal point (159.5, 119.5) at first: the static world beside the path ("static":
+    its centre drifts away from the heading as its size grows), or an object on a collision
+    course from that side ("coming": its centre keeps its bearing)."""
+    ls = log_sizes_of_approach(list(frames), 26.0)
+    r0 = offset * width
+    xs = [159.5 + (r0 * math.exp(v) if kind == "static" else r0) for v in ls]
+    t = Track(1, 0, xs[-1], 119.5, width * math.exp(ls[-1]), width * math.exp(ls[-1]), log_s=ls[-1])
+    t.history = deque(Observation(k, s, x, 119.5, width * math.exp(s), 0.0) for k, s, x in zip(frames, ls, xs))
+    t.last_alarm = frames[-1]
+    return t
+
+
+def test_alarm_alone_does_not_warn_on_the_static_world_beside_the_path():
+    """A forward drive: a roadside surface 4 widths beside the heading grows and its field alarms
+    before its fit can give a course. Its centre drifts away from the heading as the static world
+    does: no warning (before, the alarm alone warned). An object on a collision course from the
+    same side keeps its bearing: it warns on the same frame."""
+    assert not _warns(_young_track("static"), 2)
+    assert _warns(_young_track("coming"), 2)
+
+
+@pytest.mark.parametrize("kind", ["static", "coming"])
+def test_alarm_seed_judged_on_its_first_frame(kind):
+    """A target the alarm seeds this frame has one observation; the seed's own alignment against
+    the frame ``change_frames`` before (``Track.seed_move``: shift and growth) tells whether it
+    keeps its bearing: an object on a collision course 4 widths beside the heading warns on the
+    alarm's first frame (no later than the alarm), the static world there does not."""
+    t = _young_track(kind, frames=(6,))
+    g = 0.1                                     # grown by 10 % over the frames before
+    r1 = t.cx - 159.5
+    dx = r1 - r1 * math.exp(-g) if kind == "static" else 0.0
+    t.seed_move = (dx, 0.0, g)
+    assert _warns(t, 6) == (kind == "coming")
+
+
+@pytest.mark.parametrize("x", [8.0, 312.0])
+def test_alarm_alone_does_not_warn_on_a_box_cut_by_the_border(x):
+    """A box cut by the image's border tells neither the object's centre nor its size (the
+    roadside hedge of a dashcam clip): its alarm alone gives no warning, before its fit is long
+    enough and after, when it has a time to contact but no course."""
+    t = _young_track("coming")
+    t.cx = x
+    assert not _warns(t, 2)
+    frames = list(range(12))
+    ls = log_sizes_of_approach(frames, 26.0)
+    t = _track_of(ls, [x] * 12, last_alarm=11)
+    t.history = deque(q._replace(cut=True) for q in t.history)
+    t.inside = deque()
+    o = mlplc2.targets.estimate(t, TargetParams(alarm_warns=True), FPS, 11, (240, 320))
+    assert o.ttc_s is not None and o.miss is None        # the precondition: a time to contact, no course
+    assert not o.warning
+
+
 def _growing_disc(n, r0=8.0, rate=0.04, at=(200, 90), start=0):
     """Grey frames of a dark disc on a plain background whose radius grows by ``rate`` per frame
     from frame ``start`` on (shrinks when negative)."""
@@ -522,6 +578,49 @@ def test_real_clip_warning_no_later_than_the_field_alarm(real_dir, clip):
     (obj,) = ev.warning_objects
     assert obj["alarm_frame"] is not None
     assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]
+
+
+def _expanding_patch(n, r0, contact=40.0, side=30.0):
+    """Grey frames of a textured square on a plain background, ``side`` px at first, whose size
+    grows as ``S = contact / (contact - k)`` and whose centre lies ``r0 S`` px right of the
+    principal point (159.5, 119.5): r0 > 0 is the static world beside the path of a camera
+    driving forward (it expands about the heading), r0 = 0 an object straight ahead; with its
+    centres."""
+    rng = np.random.default_rng(5)
+    tex = cv2.GaussianBlur(rng.uniform(30, 230, (64, 64)).astype(np.float32), (0, 0), 1.5)
+    frames, centres = [], []
+    for k in range(n):
+        s = contact / (contact - k)
+        a = int(round(side * s))
+        cx, cy = 159.5 + r0 * s, 119.5
+        img = np.full((240, 320), 128, np.float32)
+        x0, y0 = int(round(cx - a / 2.0)), int(round(cy - a / 2.0))
+        img[y0:y0 + a, x0:x0 + a] = cv2.resize(tex, (a, a), interpolation=cv2.INTER_LINEAR)
+        frames.append(img)
+        centres.append((cx, cy))
+    return frames, centres
+
+
+@pytest.mark.parametrize("r0", [60.0, 0.0])
+def test_alarming_field_on_the_roadside_does_not_warn_straight_ahead_does(r0):
+    """A forward drive past a roadside surface (60 px beside the heading, expanding about it) whose
+    field alarms from frame 6 on: no warning (before, the alarm's seed warned at once). The same
+    surface straight ahead warns no later than its alarm."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    frames, centres = _expanding_patch(16, r0)
+    layer = TargetLayer(TargetParams(alarm_warns=True), FPS)
+    outs = []
+    for k, g in enumerate(frames):
+        f = SimpleNamespace(id=1, x=centres[k][0], y=centres[k][1], radius=40, response=1.0, collision=True)
+        outs.append(layer.step(g, None, [f] if k >= 6 else [], k))
+    warned = [k for k, out in enumerate(outs) if any(t.warning for t in out)]
+    if r0:
+        assert not warned
+    else:
+        assert warned and warned[0] == 6
 
 
 def _wide_region_then_disc(n=60, disc_from=30, at=(90, 120)):

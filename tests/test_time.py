@@ -2,6 +2,9 @@
 
 from __future__ import annotations
 
+import math
+
+import cv2
 import numpy as np
 import pytest
 
@@ -150,3 +153,52 @@ def test_run_uses_the_container_timestamps(tmp_path, decoder):
     assert [r["time_s"] for r in res.rows] == [t / 1000 for t in times]
     res = mlplc2.run(str(path), "lgmd1", out=False, decoder=decoder, quiet=True, plot=False, fps=10.0)
     assert [r["time_s"] for r in res.rows] == [round(i / 10.0, 6) for i in range(len(times))]
+
+
+def _textured_square(cx, cy, side, texture):
+    img = np.full((240, 320), 200.0, np.float32)
+    patch = cv2.resize(texture, (int(round(side)), int(round(side))), interpolation=cv2.INTER_AREA)
+    x0, y0 = int(round(cx - side / 2)), int(round(cy - side / 2))
+    img[y0:y0 + patch.shape[0], x0:x0 + patch.shape[1]] = patch
+    return cv2.GaussianBlur(img, (0, 0), 1.0)
+
+
+def test_a_fast_object_is_followed_between_distant_frames():
+    """A 7.5 fps camera (frames 4 nominal frames apart): a textured object 1.4 s from contact that crosses
+    22 px per frame is followed to the end, its box on the object in every frame, and gets a time to
+    contact (the target layer's alignment, retried from the track's own motion; from rest it loses the
+    object after two frames). The object's size is 24 px x 1.4 / (1.4 - t)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    rng = np.random.default_rng(1)
+    texture = cv2.GaussianBlur(rng.uniform(0, 120, (200, 200)).astype(np.float32), (0, 0), 4) * 2
+    layer = TargetLayer(fps=FPS)
+    ttc = None
+    for k in range(9):
+        side = 24 * 1.4 / (1.4 - 4 * k / FPS)
+        cx, cy = 260 - 22 * k, 150 - 5.5 * k
+        seed = SimpleNamespace(id=1, x=cx, y=cy, radius=40, response=1.0, box=(cx, cy, side, side))
+        out = layer.step(_textured_square(cx, cy, side, texture), None, [seed] if k == 0 else [], 4 * k, 4 * k)
+        assert len(out) == 1 and abs(out[0].x - cx) < side / 2 and abs(out[0].y - cy) < side / 2, (k, out)
+        ttc = out[0].ttc_s if out[0].ttc_s is not None else ttc
+    assert ttc is not None and 0 < ttc < 1.0
+
+
+def test_the_helmet_thrown_at_a_slow_camera_gets_a_target(real_dir):
+    """The 7.5 fps helmet clip (320x240, every frame 4 times): from the frame where the flying helmet is
+    first a candidate (17) the model has a target whose centre lies within the helmet's labelled width
+    of its labelled centre (ground_truth.json). Its change box holds only the helmet's top, which does
+    not align; the edge box, tried next, does (TargetLayer._boxes)."""
+    import json
+
+    import mlplc2
+
+    truth = json.loads((real_dir / "ground_truth.json").read_text())["clips"]["helmet_attack.avi"]
+    track = {f: (x, y, w) for f, x, y, w in truth["track"]}
+    rows = mlplc2.run(real_dir / "helmet_attack.avi", ["mlplc2"], progress=False).targets
+    for frame in (17, 21):
+        x, y, w = track[frame]
+        here = [r for r in rows if r["frame"] == frame]
+        assert any(math.hypot(r["x"] - x, r["y"] - y) <= w for r in here), (frame, here)

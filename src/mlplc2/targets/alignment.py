@@ -83,7 +83,8 @@ def _sample(levels, level: int, cx: float, cy: float, step_x: float, step_y: flo
 
 
 def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float,
-          box: tuple[float, float], *, n: int = 32, iterations: int = 10, kernel=None) -> Alignment | None:
+          box: tuple[float, float], *, n: int = 32, iterations: int = 10, kernel=None,
+          guess: tuple[float, float, float] | None = None) -> Alignment | None:
     """Scales and shift of the patch of half-side ``half`` px around (cx, cy) from ``prev`` to
     ``cur`` (two :func:`pyramid` s), weighted on the object's box (half-width, half-height px).
 
@@ -94,12 +95,14 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     samples outside the frame get no weight. None when the patch has too little texture or the
     iteration does not settle.
 
+    ``guess``: (scale, dx, dy) where the iteration starts (a track's own motion carried over a long
+    interval, ``TargetLayer._align_track``), else no motion; it always runs the NumPy version.
     ``kernel``: the compiled version (:func:`mlplc2.targets._fast_align.align_patch`, the same
     alignment to ~1e-12; :mod:`mlplc2.backend` chooses it) for float32 pyramids, or None.
     """
     step = 2.0 * half / n
     level = 0 if step <= 1.5 else min(int(math.ceil(math.log2(step / 1.5))), len(prev) - 1)
-    if kernel is not None and prev[level].dtype == cur[level].dtype == np.float32 \
+    if guess is None and kernel is not None and prev[level].dtype == cur[level].dtype == np.float32 \
             and prev[level].ndim == cur[level].ndim == 2:
         ok, *out = kernel(prev[level], cur[level], level, float(cx), float(cy), step, float(box[0]),
                           float(box[1]), int(n), int(iterations))
@@ -121,6 +124,9 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
         return None
     hinv = np.linalg.inv(hess)
     px = py = tx = ty = 0.0
+    if guess is not None:                # (scale, dx, dy): where the iteration starts
+        px = py = math.log(guess[0])
+        tx, ty = guess[1] / step, guess[2] / step
     r = None
     for _ in range(max(iterations, 1)):
         kx, ky = math.exp(px), math.exp(py)

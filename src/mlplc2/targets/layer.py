@@ -28,8 +28,8 @@ from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "count_down",
-           "held", "MIN_POINTS", "fits"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
+           "keeps_bearing", "count_down", "held", "MIN_POINTS", "fits"]
 
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
@@ -112,6 +112,7 @@ class TargetLayer:
         h, w = gray.shape
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
+        far = self._prev is not None and self._far(clock - self._clock)
         self._clock = clock
         self._keep_past(clock)
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
@@ -143,18 +144,18 @@ class TargetLayer:
             if any(self._holds(t, x, y, now) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
-            box = self._box(lm, gray, x, y, field_seed=f is not None, field=f)
-            if box is None and alarm:
-                box = self._field_box(f, w, h)
-            if box is None:
-                continue
-            t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-            host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
+            t = host = None
+            for box in self._boxes(lm, gray, x, y, f, alarm, every=far):
+                t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
+                host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
+                if host is not None or self._grows(levels, t, alarm=alarm):
+                    break
+                t = None
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, now)
                 continue
-            if not self._grows(levels, t, alarm=alarm):
+            if t is None:
                 continue
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
@@ -195,16 +196,37 @@ class TargetLayer:
             return None
         return self._past[0], self._clock - self._past_t[0]
 
-    @staticmethod
-    def _own(t: Track, f, index: float) -> None:
+    def _own(self, t: Track, f, index: float) -> None:
         """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
         looming evidence, its collision alarm (the paper's fatal field) the alarm evidence of
-        the warning rule (:func:`alarm_warns`)."""
+        the warning rule (:func:`alarm_warns`); a target born this frame then gets its
+        :meth:`_seed_move`."""
         t.fields.add(f.id)
         if f.response > 0:
             t.last_answer = index
         if getattr(f, "collision", False):
             t.last_alarm = index
+            if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
+                t.seed_move = self._seed_move(t)
+
+    def _seed_move(self, t: Track) -> tuple[float, float, float] | None:
+        """The shift (px) and log-scale gained by the box of ``t`` since the oldest frame kept
+        (``change_frames`` before, :meth:`_reference`; the image alignment of :meth:`_grows`), so
+        that :func:`keeps_bearing` can answer on a target's first frame; None when there is no such
+        frame or the alignment fails."""
+        p = self.params
+        ref = self._reference()
+        if ref is None or self._now is None:
+            return None
+        half = p.margin * t.size / 2.0 + 3.0
+        if self.measure is not None:
+            move = self.measure(ref[0], self._now[1], t, half, float(ref[1]))
+            return None if move is None else (float(move[0]), float(move[1]), float(move[4]))
+        al = align(ref[0], self._now[1], t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
+                   iterations=p.iterations, kernel=self.align_kernel)
+        if al is None or al.residual > p.max_residual or al.scale <= 0:
+            return None
+        return float(al.dx), float(al.dy), math.log(al.scale)
 
     def _measuring(self, t: Track, index: int) -> bool:
         """Whether track ``t`` measures an approach: it had a time to contact within the last
@@ -291,6 +313,7 @@ class TargetLayer:
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual:
             return alarm
+        t.motion = (al.dx / ref[1], al.dy / ref[1], math.log(al.scale) / ref[1])
         g = math.log(al.scale)
         if alarm:
             return g > 0
@@ -314,11 +337,26 @@ class TargetLayer:
                   iterations=p.iterations)
         return s is None or max(abs(s[0]), abs(s[1])) > p.max_slant
 
-    def _box(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field_seed: bool, field=None):
-        """The box of a candidate at (x, y): the region that changed over the last frames
+    def _far(self, interval: float) -> bool:
+        """Whether frames ``interval`` clock units apart are more than one nominal frame apart (a
+        camera slower than ``TargetParams.nominal_fps``, or a dropped frame): a fast object then moves
+        and grows beyond what the layer's measurements assume (:meth:`_boxes`, :meth:`_align_track`)."""
+        return interval > self.params.span(1, self.fps) + _EPS
+
+    def _boxes(self, lm: LocalMotion | None, gray: np.ndarray, x: int, y: int, field=None, alarm: bool = False,
+               every: bool = False):
+        """The boxes of a candidate at (x, y), in the order they are tried (the first that is a part of
+        a track or grows, :meth:`_grows`, is taken): the region that changed over the last frames
         (:func:`change_box`, tight for a small object), else the edges of the local motion
         (:func:`measure_extent`; without LM maps, the ``box`` the front end gave its candidate
-        ``field``, if any). None when neither finds a box holding the seed within ``max_shift``."""
+        ``field``, if any), the edges first for a ``field`` seed; each only when it holds the seed
+        within ``max_shift``. When neither does, the seed of a field in ``alarm`` takes the field's
+        own extent (:meth:`_field_box`). With ``every`` (the frames lie far apart, :meth:`_far`) the
+        second box is tried too when the first does not grow: between distant frames the change of a
+        fast object is the union of where it was and where it is, cut at ``max_shift``, and such a
+        part does not align (the 7.5 fps helmet clip: its change box holds only the helmet's top).
+        At the nominal rate only the first box is tried (trying both there changed the benchmark
+        both ways: docs/model.md, "Time")."""
         p = self.params
 
         def edges():
@@ -334,11 +372,16 @@ class TargetLayer:
                 return None
             return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
 
-        for find in ((edges, change) if field_seed else (change, edges)):
+        found = False
+        for find in ((edges, change) if field is not None else (change, edges)):
             box = find()
             if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
-                return box
-        return None
+                found = True
+                yield box
+                if not every:
+                    break
+        if not found and alarm:
+            yield self._field_box(field, gray.shape[1], gray.shape[0])
 
     def _follow(self, levels, clock: float, interval: float, w: int, h: int) -> None:
         """Move and grow every track with the image alignment; drop the lost ones."""
@@ -349,10 +392,8 @@ class TargetLayer:
             if self.measure is not None:         # another front end's growth evidence
                 move = self.measure(self._prev, levels, t, half, interval)
             else:
-                al = align(self._prev, levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
-                           iterations=p.iterations, kernel=self.align_kernel)
-                move = None if al is None or al.residual > p.max_residual else \
-                    (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+                al = self._align_track(levels, t, half, interval)
+                move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
             else:
@@ -394,6 +435,26 @@ class TargetLayer:
                 t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
                 return True
         return False
+
+    def _align_track(self, levels, t: Track, half: float, interval: float):
+        """The alignment of track ``t`` from the last frame to this one (:func:`align`), None when it
+        fails or leaves more than ``max_residual``. It starts from no motion; when that fails and
+        the frames lie more than one nominal frame apart (a camera slower than ``nominal_fps``,
+        or a dropped frame), again from the track's own last motion carried over the interval
+        (``Track.motion``, constant velocity): a fast object then moves and grows beyond what the
+        iteration finds from rest (the 7.5 fps helmet clip: ~10 px and x1.3 between frames)."""
+        p = self.params
+        box = (t.w / 2.0, t.h / 2.0)
+        al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
+                   kernel=self.align_kernel)
+        if (al is None or al.residual > p.max_residual) and t.motion is not None and self._far(interval):
+            dx, dy, g = (v * interval for v in t.motion)
+            al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
+                       kernel=self.align_kernel, guess=(math.exp(g), dx, dy))
+        if al is None or al.residual > p.max_residual:
+            return None
+        t.motion = (al.dx / interval, al.dy / interval, math.log(al.scale) / interval)
+        return al
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
@@ -449,21 +510,69 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
     return tuple(sorted(out, key=Target.urgency))
 
 
-def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None) -> bool:
+def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
+                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None) -> bool:
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing). No ``max_ttc_sigma`` needed, and no time to contact while the fit is too short."""
+    (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
+    lies on the path now (:func:`on_path`) or keeps its bearing while it grows
+    (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
+    that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
     if not p.alarm_warns or t.last_alarm != index:
         return False
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
         return False
-    if ttc is None:       # before its fit can answer (min_frames) the alarm alone; after, the fit's "no"
-        return not fits(t.history, t.fit_span)
-    return ttc <= p.horizon_s and (miss is None or miss <= p.max_miss)
+    if ttc is None and fits(t.history, t.fit_span):   # the fit's "no"
+        return False
+    if ttc is not None and ttc > p.horizon_s:
+        return False
+    if miss is not None:
+        return miss <= p.max_miss
+    if heading is None or shape is None or t.cut(shape, p.border):
+        return False
+    return on_path(t, p, heading) or keeps_bearing(t, heading)
+
+
+def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
+    """Whether track ``t``'s box lies on the camera's path now: its centre's offset from ``heading``
+    (px), horizontally in its widths and vertically in its heights (the units of the course's miss),
+    is at most ``max_miss``: the miss of an object that comes straight on from where it is."""
+    return math.hypot((t.cx - heading[0]) / max(t.w, 1.0), (t.cy - heading[1]) / max(t.h, 1.0)) <= p.max_miss
+
+
+#: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
+#: world's (0: an object on a collision course, 1: the static world, halfway between), and the
+#: least drift of the static world (px) that a box's jitter cannot fake
+DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
+
+
+def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
+    """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
+    does, over its history (two observations at least; on its first frame, the alarm seed's
+    alignment against the frame ``change_frames`` before, ``Track.seed_move``): the static world (and an object that
+    will pass) expands about the heading (the focus of expansion of a camera that does not turn),
+    so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
+    while the centre of an object on a collision course stays put. True when the static world's
+    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
+    centres are the observations' (less the camera's turn, :class:`Observation`)."""
+    if len(t.history) >= 2:
+        q0, q1 = t.history[0], t.history[-1]
+        x0, y0, x1, y1, growth = q0.x, q0.y, q1.x, q1.y, q1.log_scale - q0.log_scale
+    elif t.seed_move is not None:          # its first frame: the seed's own alignment
+        dx, dy, growth = t.seed_move
+        x1, y1 = t.cx, t.cy
+        x0, y0 = x1 - dx, y1 - dy
+    else:
+        return False
+    r0 = math.hypot(x0 - heading[0], y0 - heading[1])
+    r1 = math.hypot(x1 - heading[0], y1 - heading[1])
+    static = r0 * math.expm1(growth)
+    return static >= MIN_DRIFT_PX and r1 - r0 <= DRIFT_FRACTION * static
 
 
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
@@ -496,6 +605,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
+    heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
@@ -511,7 +621,6 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
-        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         t.streak_since = index if t.streak == 0 else t.streak_since
@@ -524,7 +633,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss)
+    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape)
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)

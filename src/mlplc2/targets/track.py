@@ -134,10 +134,12 @@ class Track:
     fit_span: float = 0.0              # the span a fit needs (``min_frames``) in clock units (:func:`estimate`)
     fields: set = field(default_factory=set)
     rate: float | None = None
+    seed_move: tuple | None = None     # (dx, dy, log-scale) of an alarm's seed since ``change_frames`` before (TargetLayer._seed_move)
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
+    motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
