@@ -146,7 +146,7 @@ def repeat_threshold_option(args) -> float | str | None:
 
 
 def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
-    """``--horizon S``, ``--max-miss W`` and ``--alarm-warns``: the warning settings of the target
+    """``--horizon S``, ``--max-miss W`` and ``--alarm-warns`` / ``--no-alarm-warns``: the warning settings of the target
     layer (``TargetParams.horizon_s``, ``.max_miss``, ``.alarm_warns``), read back by
     :func:`target_options`."""
     from ..targets import TargetParams
@@ -159,10 +159,11 @@ def add_warning_options(p: argparse.ArgumentParser, what: str = "") -> None:
                    help=f"{what}... and its predicted miss at contact at most W object extents "
                         f"(widths across, heights up and down; "
                         f"TargetParams.max_miss, default {d.max_miss:g})")
-    p.add_argument("--alarm-warns", action="store_true",
+    p.add_argument("--alarm-warns", action=argparse.BooleanOptionalAction, default=None,
                    help=f"{what}a target owning a field in collision alarm warns unless its own measurement "
-                        "says otherwise (TargetParams.alarm_warns; off by default: more false warnings "
-                        "on a moving camera; docs/model.md)")
+                        "says otherwise (TargetParams.alarm_warns; on by default; --no-alarm-warns: only "
+                        "the target's own fit warns, fewer false warnings on a moving camera and fewer "
+                        "collisions warned; docs/model.md)")
 
 
 def target_options(args) -> dict:
@@ -176,8 +177,8 @@ def target_options(args) -> dict:
         options["horizon_s"] = args.horizon
     if args.max_miss is not None:
         options["max_miss"] = args.max_miss
-    if getattr(args, "alarm_warns", False):
-        options["alarm_warns"] = True
+    if getattr(args, "alarm_warns", None) is not None:
+        options["alarm_warns"] = args.alarm_warns
     TargetParams().replace(**options)
     return options
 
