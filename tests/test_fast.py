@@ -382,6 +382,22 @@ def test_bench_cli(capsys):
     assert main(["bench", "--models", "lgmd2", "--sizes", "40x32"]) == 2
 
 
+
+def _run_script(tmp_path, name: str, source: str, **env) -> str:
+    """Run ``source`` as a script in a new Python process (what a later run of ``mlplc2`` is) and
+    return its stdout; the test fails with the script's output when it exits non-zero."""
+    import os
+    import subprocess
+    import sys
+
+    script = tmp_path / name
+    script.write_text(source)
+    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
+                          env=dict(os.environ, **env))
+    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
+    return proc.stdout
+
+
 _TWO_STREAMS = r"""
 import os, sys, threading, time
 import numpy as np, mlplc2
@@ -414,16 +430,8 @@ def test_two_streams_in_two_threads_do_not_deadlock(tmp_path):
     """Two models stepping at once in two threads share the band pool: with 4 bands per frame
     and their tasks interleaved in the pool's queue, each frame's bands must still all run
     (regression: every worker waited for a sibling queued behind the other frame's tasks)."""
-    import os
-    import subprocess
-    import sys
-
-    script = tmp_path / "two_streams.py"
-    script.write_text(_TWO_STREAMS)
-    env = dict(os.environ, NUMBA_NUM_THREADS="4")
-    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240, env=env)
-    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
-    assert "done [6, 6] same True" in proc.stdout
+    out = _run_script(tmp_path, "two_streams.py", _TWO_STREAMS, NUMBA_NUM_THREADS="4")
+    assert "done [6, 6] same True" in out
 
 
 # --- the on-disk cache of the compiled kernels (issue 23) ---------------------------------------
@@ -450,17 +458,8 @@ def test_a_new_process_loads_the_kernels_from_the_disk_cache(tmp_path):
     """The first run compiles the kernels (tens of seconds) and caches them on disk; a later
     process loads every one it uses from there (Numba's ``stats``: hits, no misses), so only the
     first run after an install or upgrade stalls on its first frame."""
-    import os
-    import subprocess
-    import sys
-
     _mlplc2_on_an_approach()   # compiled here, or loaded: either way the cache now holds them
-    script = tmp_path / "new_process.py"
-    script.write_text(_NEW_PROCESS)
-    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
-                          env=dict(os.environ))
-    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
-    words = proc.stdout.split()
+    words = _run_script(tmp_path, "new_process.py", _NEW_PROCESS).split()
     used, hits, misses = (int(words[words.index(key) + 1]) for key in ("used", "hits", "misses"))
     assert used >= 5                      # the front end's and the motion kernels at least
     assert misses == 0 and hits >= used   # nothing compiled in the new process
@@ -488,17 +487,8 @@ def test_no_kernel_loads_after_the_first_frame(tmp_path):
     latency): the quadrant sums, the edge scans and the image alignment used to load at the
     frame that first needed them, tens of milliseconds in the middle of a live run (issue 23:
     the latency's tail). A new process, so that no other test has loaded them."""
-    import os
-    import subprocess
-    import sys
-
     _mlplc2_on_an_approach()   # the disk cache holds the kernels: the new process loads them
-    script = tmp_path / "later_frames.py"
-    script.write_text(_LATER_FRAMES)
-    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
-                          env=dict(os.environ))
-    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
-    words = proc.stdout.split()
+    words = _run_script(tmp_path, "later_frames.py", _LATER_FRAMES).split()
     assert int(words[words.index("targets") + 1]) > 0   # the scene makes targets: their kernels run
     assert words[words.index("late") + 1] == "none"
 
@@ -560,16 +550,7 @@ def test_gaze_stabilisation_loads_its_kernel_when_the_model_is_built(tmp_path):
     is loaded with the other kernels when the model is built, under the ``compiling`` line: it
     used to compile at the second frame of a first run (23 s with the progress bar standing at
     frame 1; a live run's second frame waited as long) and to load from the cache there later."""
-    import os
-    import subprocess
-    import sys
-
-    script = tmp_path / "stabilised.py"
-    script.write_text(_STABILISED)
-    proc = subprocess.run([sys.executable, str(script)], capture_output=True, text=True, timeout=240,
-                          env=dict(os.environ))
-    assert proc.returncode == 0, proc.stdout + proc.stderr[-2000:]
-    words = proc.stdout.split()
+    words = _run_script(tmp_path, "stabilised.py", _STABILISED).split()
     built, after = int(words[words.index("built") + 1]), int(words[words.index("after") + 1])
     assert after >= 1          # the run used the compiled fit
     assert built == after      # and nothing was loaded or compiled after the model was built
