@@ -252,19 +252,24 @@ class FastFrontEnd:
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
-        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels, in place."""
+        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels. Each plane is
+        warped straight into its spare buffer (the one :meth:`step` overwrites next: P(t), N(t), or
+        the M-hat double buffer), then the buffers swap: no copies in or out."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
         gray = np.asarray(gray, dtype=np.float32)
-        prev = self._p[0]
-        prev[...] = warp(prev, homography, fill=gray)
+        prev, spare = self._p
+        self._p = [warp(prev, homography, fill=gray, out=spare), prev]
         pad = self._pad
+        inner = (slice(pad, -pad), slice(pad, -pad)) if pad else (slice(None), slice(None))
+        for c in range(2):                                  # N(t-1) into N(t)'s buffer (zero border kept)
+            warp(self._n_prev[c][inner], homography, out=self._n[c][inner])
+        self._n, self._n_prev = self._n_prev, self._n
         for c in range(2):
-            inner = self._n_prev[c, pad:-pad, pad:-pad] if pad else self._n_prev[c]
-            inner[...] = warp(np.ascontiguousarray(inner), homography)
             for d in range(4):                              # through _m_rows: what the kernel reads
-                plane = self._m_rows[:, c, d, :]            # (a copy made by pickle no longer shares _m)
-                plane[...] = warp(np.ascontiguousarray(plane), homography)
+                warp(self._m_rows[:, c, d, :], homography, out=self._m_spare[:, c, d, :])
+        self._m_rows, self._m_spare = self._m_spare, self._m_rows
+        self._m = self._m_rows.transpose(1, 2, 0, 3)
         if self.params.after_image:
             self._on[...] = warp(self._on, homography)
             self._off[...] = warp(self._off, homography)
@@ -280,6 +285,7 @@ class FastFrontEnd:
         self._n = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._n_prev = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._m_rows = np.zeros((h, 2, 4, w), np.float32)  # what the kernel uses
+        self._m_spare = np.empty_like(self._m_rows)        # what compensate warps _m_rows into
         self._m = self._m_rows.transpose(1, 2, 0, 3)  # (2, 4, H, W) view: channel, direction
         self._plan(nbands)
 
