@@ -66,6 +66,16 @@ _F32 = np.float32
 U64 = np.uint64
 
 
+def _carry(jobs, homography: np.ndarray) -> None:
+    """Warp each ``(plane, out, fill)`` of ``jobs`` into ``out`` (:func:`mlplc2.camera.warp`; ``out``
+    None: in place, through a new plane)."""
+    for plane, out, fill in jobs:
+        if out is None:
+            plane[...] = warp(plane, homography, fill=fill)
+        else:
+            warp(plane, homography, fill=fill, out=out)
+
+
 # ---------------------------------------------------------------------------
 # Phases 1 and 2: retina, lamina (Eq. 1-5) and contrast normalisation (Eq. 6-7)
 # ---------------------------------------------------------------------------
@@ -254,25 +264,33 @@ class FastFrontEnd:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
         N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels. Each plane is
         warped straight into its spare buffer (the one :meth:`step` overwrites next: P(t), N(t), or
-        the M-hat double buffer), then the buffers swap: no copies in or out."""
+        the M-hat double buffer), then the buffers swap: no copies in or out. The planes are shared
+        out over the front end's threads (one ``warpPerspective`` per plane, as the reference's;
+        OpenCV runs a 320 x 240 warp on one thread), so the values do not depend on the threads."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
         gray = np.asarray(gray, dtype=np.float32)
-        prev, spare = self._p
-        self._p = [warp(prev, homography, fill=gray, out=spare), prev]
         pad = self._pad
         inner = (slice(pad, -pad), slice(pad, -pad)) if pad else (slice(None), slice(None))
-        for c in range(2):                                  # N(t-1) into N(t)'s buffer (zero border kept)
-            warp(self._n_prev[c][inner], homography, out=self._n[c][inner])
+        jobs = [(self._p[0], self._p[1], gray)]             # P(t-1) into P(t)'s buffer, the frame where uncovered
+        jobs += [(self._n_prev[c][inner], self._n[c][inner], 0.0) for c in range(2)]   # zero border kept
+        jobs += [(self._m_rows[:, c, d, :], self._m_spare[:, c, d, :], 0.0)  # through _m_rows: what the
+                 for c in range(2) for d in range(4)]                        # kernel reads
+        if self.params.after_image:
+            jobs += [(self._on, None, 0.0), (self._off, None, 0.0)]
+        n = len(self._bands) if self._bands else 1
+        if n > 1:
+            with _fast.BANDS_LOCK:                          # the shared pool, one frame at a time
+                futs = [_fast.pool(n - 1).submit(_carry, jobs[k::n], homography) for k in range(1, n)]
+                _carry(jobs[0::n], homography)
+                for f in futs:
+                    f.result()
+        else:
+            _carry(jobs, homography)
+        self._p = self._p[::-1]
         self._n, self._n_prev = self._n_prev, self._n
-        for c in range(2):
-            for d in range(4):                              # through _m_rows: what the kernel reads
-                warp(self._m_rows[:, c, d, :], homography, out=self._m_spare[:, c, d, :])
         self._m_rows, self._m_spare = self._m_spare, self._m_rows
         self._m = self._m_rows.transpose(1, 2, 0, 3)
-        if self.params.after_image:
-            self._on[...] = warp(self._on, homography)
-            self._off[...] = warp(self._off, homography)
 
     # -- buffers ----------------------------------------------------------------
     def _allocate(self, h: int, w: int, nbands: int) -> None:
