@@ -112,6 +112,42 @@ def test_state_before_the_power_is_bit_identical():
             assert np.array_equal(fast._m[c, k], ref.state.m_prev[channel][direction])
 
 
+def _assert_same_state(ref, fast):
+    pad = fast._pad
+    assert np.array_equal(fast._p[0], ref.state.p_prev)
+    assert np.array_equal(fast._n_prev[0, pad:-pad, pad:-pad], ref.state.n_prev["on"])
+    assert np.array_equal(fast._n_prev[1, pad:-pad, pad:-pad], ref.state.n_prev["off"])
+    assert not fast._n_prev[:, :pad].any() and not fast._n_prev[:, :, -pad:].any()  # zero border
+    for c, channel in enumerate(("on", "off")):
+        for k, direction in enumerate("rldu"):
+            assert np.array_equal(fast._m[c, k], ref.state.m_prev[channel][direction])
+            assert np.array_equal(fast._m_rows[:, c, k], ref.state.m_prev[channel][direction])
+
+
+@pytest.mark.parametrize("threads", [1, 2])
+def test_the_carried_state_is_the_references_bit_for_bit(threads):
+    """Gaze stabilisation: the compiled front end warps P(t-1), N(t-1) and M-hat(t-1) into its
+    spare buffers, shared over its threads, and swaps them; the carried state, and the state of
+    the next frames, are the reference's (one warp per plane) bit for bit, on one thread or two."""
+    if threads > numba.config.NUMBA_NUM_THREADS:
+        pytest.skip("one core")
+    old = numba.get_num_threads()
+    _fast.set_threads(threads)
+    try:
+        frames = [np.asarray(f, np.float32) for f in four_phase()[20:30]]      # 320 x 240: two bands
+        ref, fast = run_both(frames[:6])
+        assert len(fast._bands) == threads
+        turn = np.array([[0.999, 0.02, 2.3], [-0.02, 0.999, -1.4], [1e-5, -2e-5, 1.0]])
+        for gray in frames[6:]:
+            ref.compensate(turn, gray)
+            fast.compensate(turn, gray)
+            _assert_same_state(ref, fast)
+            assert_maps_close(ref.step(gray), fast.step(gray))
+        _assert_same_state(ref, fast)
+    finally:
+        _fast.set_threads(old)
+
+
 @pytest.mark.parametrize("n_c", [1, 2, 8])
 def test_any_number_of_distances_is_bit_identical_up_to_the_power(n_c):
     """The motion kernels unroll the loop over the N_c distances (N_c is compiled in, one

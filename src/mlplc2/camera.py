@@ -379,18 +379,21 @@ def _fast_rounds():
     return _FAST[0]
 
 
-def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0) -> np.ndarray:
+def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0,
+         out: np.ndarray | None = None) -> np.ndarray:
     """``image`` of the previous frame seen in this frame's pixels (``homography``: previous -> this).
 
     Bilinear (``cv2.warpPerspective``); where this frame sees what the previous one did not (the
     border the rotation uncovers), ``fill``: a number, or an image of this frame whose values are
     taken there (the current grey frame for the previous frame: no change where nothing was seen).
+    ``out``: a float32 array of the image's shape to write into (a view with rows apart in memory
+    will do; not ``image`` itself), else a new one; the values are the same either way.
     """
     h, w = image.shape
     if np.isscalar(fill):
-        return cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR,
+        return cv2.warpPerspective(image, homography, (w, h), dst=out, flags=cv2.INTER_LINEAR,
                                    borderMode=cv2.BORDER_CONSTANT, borderValue=float(fill))
-    out = cv2.warpPerspective(image, homography, (w, h), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_CONSTANT,
-                              borderValue=np.nan)
+    out = cv2.warpPerspective(image, homography, (w, h), dst=out, flags=cv2.INTER_LINEAR,
+                              borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
     np.copyto(out, fill, where=np.isnan(out))           # in place: no third image
     return out

@@ -66,6 +66,16 @@ _F32 = np.float32
 U64 = np.uint64
 
 
+def _carry(jobs, homography: np.ndarray) -> None:
+    """Warp each ``(plane, out, fill)`` of ``jobs`` into ``out`` (:func:`mlplc2.camera.warp`; ``out``
+    None: in place, through a new plane)."""
+    for plane, out, fill in jobs:
+        if out is None:
+            plane[...] = warp(plane, homography, fill=fill)
+        else:
+            warp(plane, homography, fill=fill, out=out)
+
+
 # ---------------------------------------------------------------------------
 # Phases 1 and 2: retina, lamina (Eq. 1-5) and contrast normalisation (Eq. 6-7)
 # ---------------------------------------------------------------------------
@@ -252,22 +262,35 @@ class FastFrontEnd:
 
     def compensate(self, homography: np.ndarray, gray: np.ndarray) -> None:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
-        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels, in place."""
+        N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels. Each plane is
+        warped straight into its spare buffer (the one :meth:`step` overwrites next: P(t), N(t), or
+        the M-hat double buffer), then the buffers swap: no copies in or out. The planes are shared
+        out over the front end's threads (one ``warpPerspective`` per plane, as the reference's;
+        OpenCV runs a 320 x 240 warp on one thread), so the values do not depend on the threads."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
         gray = np.asarray(gray, dtype=np.float32)
-        prev = self._p[0]
-        prev[...] = warp(prev, homography, fill=gray)
         pad = self._pad
-        for c in range(2):
-            inner = self._n_prev[c, pad:-pad, pad:-pad] if pad else self._n_prev[c]
-            inner[...] = warp(np.ascontiguousarray(inner), homography)
-            for d in range(4):                              # through _m_rows: what the kernel reads
-                plane = self._m_rows[:, c, d, :]            # (a copy made by pickle no longer shares _m)
-                plane[...] = warp(np.ascontiguousarray(plane), homography)
+        inner = (slice(pad, -pad), slice(pad, -pad)) if pad else (slice(None), slice(None))
+        jobs = [(self._p[0], self._p[1], gray)]             # P(t-1) into P(t)'s buffer, the frame where uncovered
+        jobs += [(self._n_prev[c][inner], self._n[c][inner], 0.0) for c in range(2)]   # zero border kept
+        jobs += [(self._m_rows[:, c, d, :], self._m_spare[:, c, d, :], 0.0)  # through _m_rows: what the
+                 for c in range(2) for d in range(4)]                        # kernel reads
         if self.params.after_image:
-            self._on[...] = warp(self._on, homography)
-            self._off[...] = warp(self._off, homography)
+            jobs += [(self._on, None, 0.0), (self._off, None, 0.0)]
+        n = len(self._bands) if self._bands else 1
+        if n > 1:
+            with _fast.BANDS_LOCK:                          # the shared pool, one frame at a time
+                futs = [_fast.pool(n - 1).submit(_carry, jobs[k::n], homography) for k in range(1, n)]
+                _carry(jobs[0::n], homography)
+                for f in futs:
+                    f.result()
+        else:
+            _carry(jobs, homography)
+        self._p = self._p[::-1]
+        self._n, self._n_prev = self._n_prev, self._n
+        self._m_rows, self._m_spare = self._m_spare, self._m_rows
+        self._m = self._m_rows.transpose(1, 2, 0, 3)
 
     # -- buffers ----------------------------------------------------------------
     def _allocate(self, h: int, w: int, nbands: int) -> None:
@@ -280,6 +303,7 @@ class FastFrontEnd:
         self._n = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._n_prev = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._m_rows = np.zeros((h, 2, 4, w), np.float32)  # what the kernel uses
+        self._m_spare = np.empty_like(self._m_rows)        # what compensate warps _m_rows into
         self._m = self._m_rows.transpose(1, 2, 0, 3)  # (2, 4, H, W) view: channel, direction
         self._plan(nbands)
 
