@@ -68,10 +68,9 @@ class _LPLC2Family(Model):
         """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
         if self._camera is not None:
             self._stabilise(gray)
-        lm = self.frontend.step(gray, self.interval)
-        if self._fine is not None:                         # the finer channel (Params.fine_scale)
+        lm = self.maps = self.frontend.step(gray, self.interval)
+        if self._fine is not None:       # the finer channel feeds the fields only (Params.fine_scale)
             lm = merge_channels(lm, self._fine.step(gray, self.interval), self.params.fine_silent)
-        self.maps = lm
         return lm
 
     def gyro_refusal(self) -> str | None:
