@@ -244,17 +244,6 @@ class Params(ParameterSet):
                            Sec. IV-A reports.""", symbol="g",
                            valid=Valid.real(minimum=0, also=f"lm_gain x max(1, leaky_slope) <= {LM_SCALE_MAX:g}"))
 
-    fine_scale: float = param(0.0, """Scale of a second, finer front-end channel (beyond the paper): a
-                              second front end whose windows and sigmas of Eq. 2-3 and 7 (r_e, sigma_e, r_i,
-                              sigma_i, r_c, sigma_c) are this fraction of the ones above; its LM_v replace the
-                              coarse channel's where the coarse LM (Eq. 12) is below ``fine_silent``, so that an
-                              object of 10-30 px, whose texture Table I's windows average away, drives the
-                              fields (docs/model.md, "A finer channel for small objects"). 0 (the default) = the
-                              paper's one channel.""", valid=Valid.real(minimum=0, below=1))
-    fine_silent: float = param(1.0, """LM level (Eq. 12) below which the coarse channel counts as silent and
-                               the finer channel's LM_v are used instead (only with ``fine_scale`` > 0).""",
-                               valid=Valid.real(minimum=0))
-
     # --- Attention fields, Eq. 13-16 ---------------------------------------
     r_af: int = param(40, "Radius (half-side for square fields) of an attention field.",
                       symbol="R_AF", unit="px", table="40", valid=Valid.integer(1))
@@ -300,14 +289,6 @@ class Params(ParameterSet):
         if scale > LM_SCALE_MAX:
             raise InputValueError(f"Params.lm_gain x max(1, leaky_slope) must be <= {LM_SCALE_MAX:g} (LM stays "
                                   f"finite in float32), got {scale:g}")
-
-    def fine_params(self) -> "Params":
-        """The finer channel's parameters (``fine_scale``): the lamina and medulla windows and sigmas
-        scaled by ``fine_scale`` (radii at least 1 px), everything else these, the channel itself off."""
-        k = self.fine_scale
-        return self.replace(r_e=max(1, int(self.r_e * k + 0.5)), sigma_e=self.sigma_e * k,
-                            r_i=max(1, int(self.r_i * k + 0.5)), sigma_i=self.sigma_i * k,
-                            r_c=max(1, int(self.r_c * k + 0.5)), sigma_c=self.sigma_c * k, fine_scale=0.0)
 
     def delays_ms(self) -> tuple[float, ...]:
         """Dynamic delays tau_s (ms) for sampling distances s = 1..N_c (Eq. 8, Table I)."""

@@ -11,7 +11,7 @@ import numpy as np
 from ..camera import CameraMotion, MotionEstimator
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
-from ..neuropils.lobula_plate import LocalMotion, merge_channels
+from ..neuropils.lobula_plate import LocalMotion
 from ..params import Params
 from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
 from .base import WORK_WIDTH, Model, Output, register
@@ -46,7 +46,6 @@ class _LPLC2Family(Model):
         self.backend = impl.name
         """Implementation in use: "numba" (fast, the default) or "reference" (:mod:`mlplc2.backend`)."""
         self.frontend = impl.frontend(params, self.fps)
-        self._fine = impl.frontend(params.fine_params(), self.fps) if params.fine_scale else None
         self._quadrant_sums = impl.quadrant_sums
         self._edge_kernel = impl.edge_kernel
         self._align_kernel = impl.align_kernel
@@ -68,9 +67,8 @@ class _LPLC2Family(Model):
         """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
         if self._camera is not None:
             self._stabilise(gray)
-        lm = self.maps = self.frontend.step(gray, self.interval)
-        if self._fine is not None:       # the finer channel feeds the fields only (Params.fine_scale)
-            lm = merge_channels(lm, self._fine.step(gray, self.interval), self.params.fine_silent)
+        lm = self.frontend.step(gray, self.interval)
+        self.maps = lm
         return lm
 
     def gyro_refusal(self) -> str | None:
@@ -88,8 +86,6 @@ class _LPLC2Family(Model):
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
-        if self._fine is not None:
-            self._fine.compensate(hom, gray)
         h, w = gray.shape
         for f in self._fields:
             x, y, z = hom @ np.array([f.x, f.y, 1.0])
@@ -104,8 +100,6 @@ class _LPLC2Family(Model):
 
     def _reset(self) -> None:
         self.frontend.reset()
-        if self._fine is not None:
-            self._fine.reset()
         self._fields = []
         self._next_id = 1
         self.maps = None

@@ -6,7 +6,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-__all__ = ["LocalMotion", "leaky_relu", "local_motion", "merge_channels"]
+__all__ = ["LocalMotion", "leaky_relu", "local_motion"]
 
 
 @dataclass(frozen=True)
@@ -56,12 +56,3 @@ def local_motion(t4: dict[str, np.ndarray], t5: dict[str, np.ndarray], *, gamma_
     h = np.maximum(lm_r, lm_l)
     v = np.maximum(lm_d, lm_u)
     return LocalMotion(lm_r, lm_l, lm_d, lm_u, np.sqrt(h * h + v * v))
-
-
-def merge_channels(coarse: LocalMotion, fine: LocalMotion, silent: float) -> LocalMotion:
-    """The finer channel where the coarse one is silent (``Params.fine_scale``, beyond the paper):
-    LM_v = fine LM_v where the coarse LM (Eq. 12) < ``silent``, the coarse LM_v elsewhere; LM
-    (Eq. 12) of the pixel's channel. Every direction of a pixel comes from one channel."""
-    use = coarse.magnitude < np.float32(silent)
-    return LocalMotion(*(np.where(use, getattr(fine, k), getattr(coarse, k))
-                         for k in ("r", "l", "d", "u", "magnitude")))
