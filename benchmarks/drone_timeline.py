@@ -43,7 +43,7 @@ def timeline(frames, fps, objs):
         out = model.step(frame)
         for o in objs:
             r = o["rows"].get(i)
-            if r is None:
+            if r is None or None in r[1:6]:         # not in view
                 continue
             _, x, y, w, h, ttc, _ = r
             seen = first[o["id"]]
@@ -76,7 +76,7 @@ def centred(frames, fps, objs):
         c, f = (fe.step(g) for fe in ends)
         for o in objs:
             r = o["rows"].get(i)
-            x, y = (int(round(r[1])), int(round(r[2]))) if r is not None else (-1, -1)
+            x, y = (int(round(r[1])), int(round(r[2]))) if r is not None and None not in r[1:6] else (-1, -1)
             if not (0 <= x < g.shape[1] and 0 <= y < g.shape[0]):
                 continue
             for name, lm in (("coarse", c), ("fine", f), ("merged", merged(c, f))):
