@@ -303,8 +303,10 @@ class TargetLayer:
         background or be cut by the border."""
         p = self.params
         ref = self._reference()
-        if p.min_growth <= 0 or ref is None:
+        if p.min_growth <= 0:
             return True
+        if ref is None:                          # no growth seen yet: only an alarm is evidence
+            return alarm
         half = p.margin * t.size / 2.0 + 3.0
         if self.measure is not None:             # another front end's growth evidence
             move = self.measure(ref[0], levels, t, half, float(ref[1]))
