@@ -656,7 +656,9 @@ def test_object_approaching_inside_a_stale_box_gets_its_own_target(stale_frames)
     from mlplc2.targets import TargetLayer
 
     frames, big, small = _wide_region_then_disc()
-    layer = TargetLayer(TargetParams(stale_frames=stale_frames), FPS)
+    # margin 1: the wide box's patch stays inside the frame (with 1.5 it reaches past the top and
+    # bottom, and the growth test, which needs a frame change_frames old, sees it grow unevenly)
+    layer = TargetLayer(TargetParams(stale_frames=stale_frames, margin=1.0), FPS)
     outs = []
     for k, g in enumerate(frames):
         fields = []
@@ -727,3 +729,26 @@ def test_time_to_contact_counts_down_through_a_failed_alignment():
     for k in (30, 31):
         t = next(t for t in outs[k] if abs(t.x - 200) < 6)
         assert t.ttc_s == pytest.approx((70 - k) / FPS, abs=0.02)
+
+
+@pytest.mark.parametrize("noise", [0.0, 3.0])
+def test_no_target_before_growth_can_be_seen(noise):
+    """A field (not in alarm) over a still textured scene from the clip's first frames, the frames with
+    and without codec-like noise (+-3 grey levels, fresh each frame): no target, on any frame. Before
+    the growth test had a frame ``change_frames`` old to align against, every candidate was taken, so
+    the first frames of a clip made targets of whatever the encoding's noise picked (issue 22 item 7:
+    the x264 copy of ``uav/car_attack.avi`` warned 10 frames after its original)."""
+    from types import SimpleNamespace
+
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    rng = np.random.default_rng(3)
+    img = _texture(4)
+    layer = TargetLayer(TargetParams(), FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    f = SimpleNamespace(id=1, x=150, y=110, radius=40, response=1.0, collision=False)
+    for k in range(12):
+        g = np.clip(img + rng.uniform(-noise, noise, img.shape), 0, 255).astype(np.float32)
+        assert layer.step(g, lm, [f] if k else [], k) == (), k

@@ -297,14 +297,18 @@ class TargetLayer:
         """Whether the candidate grew, alike in both directions, over the last ``change_frames``
         frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
         background that slides with a turning camera, a receding or a static object does not
-        become a target. Without that frame yet (the first frames), True. The seed of a field in
+        become a target. Without that frame yet (the first frames) no growth is seen: only an
+        ``alarm`` makes a target (issue 22 item 7: which candidate the codec's noise picked on a
+        clip's first frames decided its tracks). The seed of a field in
         collision ``alarm`` (:meth:`_alarming`) only must not be seen not to grow (an alignment
         that fails says nothing): the alarm is the expansion evidence, and its box may hold
         background or be cut by the border."""
         p = self.params
         ref = self._reference()
-        if p.min_growth <= 0 or ref is None:
+        if p.min_growth <= 0:
             return True
+        if ref is None:                          # no growth seen yet: only an alarm is evidence
+            return alarm
         half = p.margin * t.size / 2.0 + 3.0
         if self.measure is not None:             # another front end's growth evidence
             move = self.measure(ref[0], levels, t, half, float(ref[1]))
