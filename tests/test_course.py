@@ -12,7 +12,7 @@ import pytest
 from mlplc2.evaluation.truth import parse
 from mlplc2.models import MLPLC2
 from mlplc2.stimuli import ApproachObject, CameraPath, approach
-from mlplc2.targets import TargetParams, Track, estimate
+from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -167,3 +167,59 @@ def test_the_course_seen_before_the_box_reached_the_border_holds_after():
     out = estimate(t, TargetParams(), FPS, 20, SHAPE)
     assert out.ttc_s == pytest.approx((CONTACT - 20) / FPS, rel=1e-6)
     assert out.miss == pytest.approx(0.0, abs=1e-6) and out.warning
+
+
+def test_a_roadside_wall_whose_near_edge_the_camera_passes_does_not_warn():
+    # a wall 1.6 m wide beside the path, its centre 1.2 m to the left: its near edge passes 0.4 m
+    # beside the camera, which expands about the heading outside the wall's box. Its centre
+    # passes 0.75 of its widths from the camera: with the camera as wide as the object
+    # (max_miss 1, before) it warned; the camera's own point must pass through the box (0.5)
+    t = _approach_track(-1.2, 0.0, 1.6, 1.5)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
+    assert out.miss_xy == pytest.approx((-0.75, 0.0), abs=1e-6) and not out.warning
+    # the same wall across the path, its right edge 0.4 m beyond the camera, is hit: it warns
+    out = estimate(_approach_track(-0.4, 0.0, 1.6, 1.5), TargetParams(), FPS, 12, SHAPE)
+    assert out.miss_xy == pytest.approx((-0.25, 0.0), abs=1e-6) and out.warning
+
+
+def _young_static(heading_x: float, x0: float, frames=(0, 1, 2), width: float = 20.0) -> Track:
+    """A track younger than ``min_frames`` whose field alarms on its newest frame: a patch of the
+    static world first centred at ``x0`` (px) that a forward camera approaches (contact at frame
+    ``CONTACT``), so that it expands about the heading at ``heading_x`` (px, on the middle row)."""
+    ls = [math.log(CONTACT / (CONTACT - k)) for k in frames]
+    xs = [heading_x + (x0 - heading_x) * math.exp(v) for v in ls]
+    t = Track(1, 0, xs[-1], 60.0, width * math.exp(ls[-1]), width * math.exp(ls[-1]), log_s=ls[-1])
+    t.history = deque(Observation(k, s, x, 60.0, width * math.exp(s), 0.0) for k, s, x in zip(frames, ls, xs))
+    t.last_alarm = frames[-1]
+    return t
+
+
+def test_the_alarm_alone_judges_the_static_world_against_the_measured_heading():
+    # a camera whose heading lies 3 widths left of the principal point (79.5 px; a turn, a
+    # camera mounted at an angle): the static world at the principal point drifts away from the
+    # heading as it grows. Against the principal point it lay on the path and warned; against
+    # the measured heading (TargetLayer.see_heading) it does not. A box that keeps its place
+    # on the measured heading (an object on the path) warns
+    p = TargetParams(alarm_warns=True)
+    heading = (19.5, 60.0)
+    t = _young_static(heading[0], 79.5)
+    assert estimate(t, p, FPS, 2, SHAPE).warning                    # the principal point: a false warning
+    assert not estimate(_young_static(heading[0], 79.5), p, FPS, 2, SHAPE, heading=heading).warning
+    on = _young_static(heading[0], heading[0] + 1e-9)
+    assert estimate(on, p, FPS, 2, SHAPE, heading=heading).warning
+
+
+def test_the_layer_smooths_the_measured_heading_by_its_confidence():
+    layer = TargetLayer(TargetParams())
+    assert layer.heading is None                                    # none measured: the principal point
+    layer.see_heading((100.0, 50.0), 1.0)
+    assert layer.heading == (100.0, 50.0)
+    layer.see_heading(None, 0.0)                                    # a frame without an estimate
+    layer.see_heading((200.0, 50.0), 0.0)                           # ... or with no confidence
+    assert layer.heading == (100.0, 50.0)
+    for _ in range(40):                                             # a steady new heading is reached
+        layer.see_heading((200.0, 150.0), 0.9)
+    assert layer.heading == pytest.approx((200.0, 150.0), abs=0.5)
+    layer.reset()
+    assert layer.heading is None

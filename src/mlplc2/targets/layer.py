@@ -31,6 +31,10 @@ from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
            "keeps_bearing", "count_down", "held", "MIN_POINTS", "fits"]
 
+#: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
+HEADING_GAIN = 0.2
+
+
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
 
@@ -72,6 +76,23 @@ class TargetLayer:
         self._past: deque = deque()        # pyramids of the last frames (:meth:`_keep_past`)
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
+        self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
+
+    def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
+        """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
+        and its confidence (0-1): :attr:`heading` moves towards it by ``HEADING_GAIN`` times the
+        confidence (an exponential average over ~1 / ``HEADING_GAIN`` frames of a sure estimate; a
+        frame without one leaves it). The course's tests without a fit (:func:`on_path`,
+        :func:`keeps_bearing`) use it; until one is measured, ``TargetParams.heading`` or the
+        principal point."""
+        if point is None or not confidence > 0:
+            return
+        if self.heading is None:
+            self.heading = (float(point[0]), float(point[1]))
+            return
+        k = HEADING_GAIN * min(float(confidence), 1.0)
+        self.heading = (self.heading[0] + k * (point[0] - self.heading[0]),
+                        self.heading[1] + k * (point[1] - self.heading[1]))
 
     def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
         """This frame's pyramid, made once for :meth:`compensate` and :meth:`step`."""
@@ -172,7 +193,7 @@ class TargetLayer:
         for t in self._tracks:
             t.fields &= alive
             warned = t.warned
-            o = estimate(t, p, self.fps, now, (h, w), self.focal)
+            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading)
             if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
                 o, t.warned = replace(o, warning=False), warned
             out.append(o)
@@ -595,17 +616,19 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
-             focal: float | None = None) -> Target:
+             focal: float | None = None, heading: tuple[float, float] | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
     frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
-    the stamp of the track's evidence."""
+    the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
+    :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point."""
     h, w = shape
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
-    heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+    if heading is None:
+        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
