@@ -3,7 +3,8 @@
 :func:`fit_contact`: the least-squares line ``1 / S = a + b t`` through the accumulated scale
 ``S``, contact at ``-a / b`` frames, its standard error by the delta method (:class:`ContactFit`);
 :func:`fit_course`: the lines through the centre's offset from the heading point in object
-widths (horizontally) and heights (vertically), evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6).
+widths (horizontally) and heights (vertically), evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6);
+:func:`expansion_centre`: the fixed point of the box's scaling (step 7).
 """
 
 from __future__ import annotations
@@ -11,7 +12,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["ContactFit", "fit_contact", "fit_course"]
+__all__ = ["ContactFit", "fit_contact", "fit_course", "expansion_centre"]
 
 
 @dataclass(frozen=True)
@@ -88,3 +89,25 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float,
         return zm + b * (ttc - tm)
 
     return at(xs, heading[0], widths), at(ys, heading[1], heights)
+
+
+def expansion_centre(xs, ys, log_scale, min_growth: float = 0.05) -> tuple[float, float] | None:
+    """The point the box's image expands about (px): for a scaling by ``S`` about ``(x_e, y_e)``
+    the centre moves as ``x = x_e + S (x_0 - x_e) / S_0``, a line in ``S``; the least-squares
+    lines of ``x`` and ``y`` against ``S = exp(log_scale)`` give it as their value at ``S = 0``.
+    None with fewer than 3 points or a growth (largest less smallest log-scale) under ``min_growth``
+    (the lines' intercepts lie too far from the points to say anything)."""
+    n = len(xs)
+    if n < 3 or max(log_scale) - min(log_scale) < min_growth:
+        return None
+    top = max(log_scale)
+    s = [math.exp(float(v) - top) for v in log_scale]
+    sm = sum(s) / n
+    ds = [v - sm for v in s]
+    sss = sum([d * d for d in ds])
+
+    def at0(q):
+        qm = sum(float(v) for v in q) / n
+        return qm - sm * sum([d * (float(v) - qm) for d, v in zip(ds, q)]) / sss
+
+    return at0(xs), at0(ys)

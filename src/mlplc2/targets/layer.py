@@ -22,7 +22,7 @@ from ..camera import bearing
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import change_box
-from .contact import fit_contact, fit_course
+from .contact import expansion_centre, fit_contact, fit_course
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
@@ -511,6 +511,29 @@ def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> t
                       heights=[q.width if q.height is None else q.height for q in inside])
 
 
+#: :func:`miss_limit`: the static world's test: a track whose own expansion centre lies within this many
+#: of its extents of the heading expands as the static world does; its miss must then be at most
+#: ``POINT_MISS`` (the camera's point passes through its box), not ``max_miss``
+STATIC_EXTENTS, POINT_MISS = 0.4, 0.5
+
+
+def miss_limit(t: Track, p: TargetParams, heading: tuple[float, float]) -> float:
+    """The largest miss at which track ``t`` warns: ``max_miss``, or ``POINT_MISS`` when ``t``'s
+    image expands about the heading (``heading``, px) as the static world's does (its expansion
+    centre, :func:`expansion_centre` over the course's observations, within ``STATIC_EXTENTS`` of its
+    extents of ``heading``): ``max_miss`` above ``POINT_MISS`` is a margin for the camera's own size,
+    and the static world's boxes beside the path (a roadside hedge with the ground up to the path)
+    are measured with courses of 0.5-1 (docs/model.md, "The course against the heading")."""
+    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
+    centre = expansion_centre([q.x for q in inside], [q.y for q in inside], [q.log_scale for q in inside])
+    if centre is None or p.max_miss <= POINT_MISS:
+        return p.max_miss
+    q = inside[-1]
+    off = math.hypot((centre[0] - heading[0]) / max(q.width, 1.0),
+                     (centre[1] - heading[1]) / max(q.width if q.height is None else q.height, 1.0))
+    return POINT_MISS if off <= STATIC_EXTENTS else p.max_miss
+
+
 def fits(obs, span: float) -> bool:
     """Whether observations ``obs`` (oldest first) are enough for a fit: at least :data:`MIN_POINTS`
     of them over at least ``span`` clock units (``TargetParams.min_frames`` - 1 frame intervals at
@@ -532,14 +555,15 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
 
 
 def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
-                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None) -> bool:
+                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None,
+                limit: float | None = None) -> bool:
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    (passing; ``limit``: the miss allowed, :func:`miss_limit`, None: ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
     (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
@@ -553,7 +577,7 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if ttc is not None and ttc > p.horizon_s:
         return False
     if miss is not None:
-        return miss <= p.max_miss
+        return miss <= (p.max_miss if limit is None else limit)
     if heading is None or shape is None or t.cut(shape, p.border):
         return False
     return on_path(t, p, heading) or keeps_bearing(t, heading)
@@ -627,6 +651,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
+    limit = p.max_miss
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
@@ -646,6 +671,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
+        limit = p.max_miss if miss is None or miss <= POINT_MISS else miss_limit(t, p, heading)
         t.streak_since = index if t.streak == 0 else t.streak_since
         t.streak += 1
         t.last_estimate = index
@@ -653,10 +679,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     else:
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index)
-    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
+    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape)
+    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
