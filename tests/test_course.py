@@ -172,22 +172,24 @@ def test_the_course_seen_before_the_box_reached_the_border_holds_after():
     assert out.miss == pytest.approx(0.0, abs=1e-6) and out.warning
 
 
-def test_a_roadside_wall_whose_near_edge_the_camera_passes_does_not_warn():
+def test_a_roadside_wall_whose_near_edge_the_camera_passes_does_not_warn_with_static_miss():
     # a wall 1.6 m wide beside the path of a forward camera, its centre 1.2 m to the left: its near
     # edge passes 0.4 m beside the camera. Its centre passes 0.75 of its widths from the camera,
-    # within max_miss (1: a margin for the camera's size), and it warned; but its image expands
-    # about the heading, outside its box, as the static world's does (miss_limit): its course
-    # must bring the camera's point into its box (POINT_MISS 0.5), and it does not
+    # within max_miss (1: a margin for the camera's size): it warns by default. Its image expands
+    # about the heading, outside its box, as the static world's does (miss_limit): with
+    # static_miss = 0.5 its course must bring the camera's point into its box, and it does not
+    p = TargetParams(static_miss=0.5)
     t = _approach_track(-1.2, 0.0, 1.6, 1.5)
-    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert estimate(t, TargetParams(), FPS, 12, SHAPE).warning                  # off (the default)
+    out = estimate(_approach_track(-1.2, 0.0, 1.6, 1.5), p, FPS, 12, SHAPE)
     assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
     assert out.miss_xy == pytest.approx((-0.75, 0.0), abs=1e-6) and not out.warning
     # the same wall across the path, its right edge 0.4 m beyond the camera, is hit: it warns
-    out = estimate(_approach_track(-0.4, 0.0, 1.6, 1.5), TargetParams(), FPS, 12, SHAPE)
+    out = estimate(_approach_track(-0.4, 0.0, 1.6, 1.5), p, FPS, 12, SHAPE)
     assert out.miss_xy == pytest.approx((-0.25, 0.0), abs=1e-6) and out.warning
     # an object on the same course that moves across on its own (its image expands about a point
     # 50 px, 2-3 of its widths, right of the heading) keeps the camera's margin: it warns
-    out = estimate(_approach_track(-1.2, 0.0, 1.6, 1.5, across=50.0), TargetParams(), FPS, 12, SHAPE)
+    out = estimate(_approach_track(-1.2, 0.0, 1.6, 1.5, across=50.0), p, FPS, 12, SHAPE)
     assert out.miss_xy == pytest.approx((-0.75, 0.0), abs=1e-6) and out.warning
 
 

@@ -511,27 +511,26 @@ def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> t
                       heights=[q.width if q.height is None else q.height for q in inside])
 
 
-#: :func:`miss_limit`: the static world's test: a track whose own expansion centre lies within this many
-#: of its extents of the heading expands as the static world does; its miss must then be at most
-#: ``POINT_MISS`` (the camera's point passes through its box), not ``max_miss``
-STATIC_EXTENTS, POINT_MISS = 0.4, 0.5
+#: :func:`miss_limit`: a track whose own expansion centre lies within this many of its extents of the
+#: heading expands as the static world does
+STATIC_EXTENTS = 0.4
 
 
 def miss_limit(t: Track, p: TargetParams, heading: tuple[float, float]) -> float:
-    """The largest miss at which track ``t`` warns: ``max_miss``, or ``POINT_MISS`` when ``t``'s
+    """The largest miss at which track ``t`` warns: ``max_miss``, or ``static_miss`` (> 0) when ``t``'s
     image expands about the heading (``heading``, px) as the static world's does (its expansion
     centre, :func:`expansion_centre` over the course's observations, within ``STATIC_EXTENTS`` of its
-    extents of ``heading``): ``max_miss`` above ``POINT_MISS`` is a margin for the camera's own size,
+    extents of ``heading``): ``max_miss`` above 0.5 is a margin for the camera's own size,
     and the static world's boxes beside the path (a roadside hedge with the ground up to the path)
     are measured with courses of 0.5-1 (docs/model.md, "The course against the heading")."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     centre = expansion_centre([q.x for q in inside], [q.y for q in inside], [q.log_scale for q in inside])
-    if centre is None or p.max_miss <= POINT_MISS:
+    if centre is None or not 0 < p.static_miss < p.max_miss:
         return p.max_miss
     q = inside[-1]
     off = math.hypot((centre[0] - heading[0]) / max(q.width, 1.0),
                      (centre[1] - heading[1]) / max(q.width if q.height is None else q.height, 1.0))
-    return POINT_MISS if off <= STATIC_EXTENTS else p.max_miss
+    return p.static_miss if off <= STATIC_EXTENTS else p.max_miss
 
 
 def fits(obs, span: float) -> bool:
@@ -671,7 +670,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
-        limit = p.max_miss if miss is None or miss <= POINT_MISS else miss_limit(t, p, heading)
+        limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
         t.streak_since = index if t.streak == 0 else t.streak_since
         t.streak += 1
         t.last_estimate = index
