@@ -22,7 +22,7 @@ from ..camera import bearing
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import change_box
-from .contact import expansion_centre, fit_contact, fit_course
+from .contact import fit_contact, fit_course, miss_limit
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
@@ -509,28 +509,6 @@ def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> t
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
                       [q.width for q in inside], heading, ahead,
                       heights=[q.width if q.height is None else q.height for q in inside])
-
-
-#: :func:`miss_limit`: a track whose own expansion centre lies within this many of its extents of the
-#: heading expands as the static world does
-STATIC_EXTENTS = 0.4
-
-
-def miss_limit(t: Track, p: TargetParams, heading: tuple[float, float]) -> float:
-    """The largest miss at which track ``t`` warns: ``max_miss``, or ``static_miss`` (> 0) when ``t``'s
-    image expands about the heading (``heading``, px) as the static world's does (its expansion
-    centre, :func:`expansion_centre` over the course's observations, within ``STATIC_EXTENTS`` of its
-    extents of ``heading``): ``max_miss`` above 0.5 is a margin for the camera's own size,
-    and the static world's boxes beside the path (a roadside hedge with the ground up to the path)
-    are measured with courses of 0.5-1 (docs/model.md, "The course against the heading")."""
-    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
-    centre = expansion_centre([q.x for q in inside], [q.y for q in inside], [q.log_scale for q in inside])
-    if centre is None or not 0 < p.static_miss < p.max_miss:
-        return p.max_miss
-    q = inside[-1]
-    off = math.hypot((centre[0] - heading[0]) / max(q.width, 1.0),
-                     (centre[1] - heading[1]) / max(q.width if q.height is None else q.height, 1.0))
-    return p.static_miss if off <= STATIC_EXTENTS else p.max_miss
 
 
 def fits(obs, span: float) -> bool:

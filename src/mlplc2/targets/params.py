@@ -127,7 +127,7 @@ class TargetParams(ParameterSet):
                             valid=Valid.real(minimum=0))
     static_miss: float = param(0.0, """... or, for a target whose image expands about the heading as the static
                                world's does (its expansion centre within 0.4 of its extents of the heading:
-                               :func:`~mlplc2.targets.layer.miss_limit`), at most this (> 0 and below
+                               :func:`~mlplc2.targets.contact.miss_limit`), at most this (> 0 and below
                                ``max_miss``; 0.5: the camera's own point passes through its box). 0 = off,
                                ``max_miss`` for every target (the default: 0.5 cut the drive scenes' false
                                episodes 22 -> 13 and 27 -> 16 but lost 2 of the real clips' 6 warnings,
