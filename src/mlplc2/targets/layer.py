@@ -540,7 +540,8 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing; ``limit``: the miss allowed, :func:`miss_limit`, None: ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    (passing; ``limit``: the miss allowed, :func:`~mlplc2.targets.contact.miss_limit`, None:
+    ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
     (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
