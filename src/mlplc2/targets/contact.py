@@ -3,7 +3,8 @@
 :func:`fit_contact`: the least-squares line ``1 / S = a + b t`` through the accumulated scale
 ``S``, contact at ``-a / b`` frames, its standard error by the delta method (:class:`ContactFit`);
 :func:`fit_course`: the lines through the centre's offset from the heading point in object
-widths (horizontally) and heights (vertically), evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6);
+widths (horizontally) and heights (vertically), evaluated at contact (the miss distance;
+``docs/targets.md``, steps 5-6);
 :func:`expansion_centre`: the fixed point of the box's scaling, and :func:`miss_limit`, the course
 allowed to a track that expands about the heading as the static world does (step 7).
 """
