@@ -12,7 +12,8 @@ import pytest
 from mlplc2.evaluation.truth import parse
 from mlplc2.models import MLPLC2
 from mlplc2.stimuli import ApproachObject, CameraPath, approach
-from mlplc2.targets import TargetParams, Track, estimate
+from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
+from mlplc2.targets.contact import expansion_centre
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -113,17 +114,19 @@ def _on(t, obj, frame, margin=4.0):
 
 # -- the course per axis (issue 22, item 3): horizontal offset in the object's widths, vertical
 # in its heights, so that "passes within its own extent" holds for tall and for flat objects --
-def _approach_track(x_m: float, y_m: float, w_m: float, h_m: float, frames: int = 12) -> Track:
+def _approach_track(x_m: float, y_m: float, w_m: float, h_m: float, frames: int = 12, across: float = 0.0) -> Track:
     """The track of a fronto-parallel object of ``w_m`` x ``h_m`` metres whose centre passes the
     camera plane at (``x_m``, ``y_m``) (right, down of the camera), closing straight on at constant
     speed: contact at frame ``CONTACT``, its box exact (f = 100 px, the heading at the principal
-    point), built frame by frame as :meth:`Track.follow` sees it."""
+    point), built frame by frame as :meth:`Track.follow` sees it. ``across`` (px): the object moves
+    sideways as well, so that its image expands about a point that far right of the heading (a
+    crossing object; 0: the static world, or an object straight ahead in the camera's direction)."""
     f, cx, cy = 100.0, (SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0
 
     def z(k):                                    # metres: 0 at contact
         return 0.25 * (CONTACT - k)
 
-    t = Track(1, 0, cx + f * x_m / z(0), cy + f * y_m / z(0), f * w_m / z(0), f * h_m / z(0))
+    t = Track(1, 0, cx + f * x_m / z(0) + across, cy + f * y_m / z(0), f * w_m / z(0), f * h_m / z(0))
     t.last_answer = frames
     p = TargetParams()
     for k in range(1, frames + 1):
@@ -167,3 +170,75 @@ def test_the_course_seen_before_the_box_reached_the_border_holds_after():
     out = estimate(t, TargetParams(), FPS, 20, SHAPE)
     assert out.ttc_s == pytest.approx((CONTACT - 20) / FPS, rel=1e-6)
     assert out.miss == pytest.approx(0.0, abs=1e-6) and out.warning
+
+
+def test_a_roadside_wall_whose_near_edge_the_camera_passes_does_not_warn_with_static_miss():
+    # a wall 1.6 m wide beside the path of a forward camera, its centre 1.2 m to the left: its near
+    # edge passes 0.4 m beside the camera. Its centre passes 0.75 of its widths from the camera,
+    # within max_miss (1: a margin for the camera's size): it warns by default. Its image expands
+    # about the heading, outside its box, as the static world's does (miss_limit): with
+    # static_miss = 0.5 its course must bring the camera's point into its box, and it does not
+    p = TargetParams(static_miss=0.5)
+    t = _approach_track(-1.2, 0.0, 1.6, 1.5)
+    assert estimate(t, TargetParams(), FPS, 12, SHAPE).warning                  # off (the default)
+    out = estimate(_approach_track(-1.2, 0.0, 1.6, 1.5), p, FPS, 12, SHAPE)
+    assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
+    assert out.miss_xy == pytest.approx((-0.75, 0.0), abs=1e-6) and not out.warning
+    # the same wall across the path, its right edge 0.4 m beyond the camera, is hit: it warns
+    out = estimate(_approach_track(-0.4, 0.0, 1.6, 1.5), p, FPS, 12, SHAPE)
+    assert out.miss_xy == pytest.approx((-0.25, 0.0), abs=1e-6) and out.warning
+    # an object on the same course that moves across on its own (its image expands about a point
+    # 50 px, 2-3 of its widths, right of the heading) keeps the camera's margin: it warns
+    out = estimate(_approach_track(-1.2, 0.0, 1.6, 1.5, across=50.0), p, FPS, 12, SHAPE)
+    assert out.miss_xy == pytest.approx((-0.75, 0.0), abs=1e-6) and out.warning
+
+
+def test_the_expansion_centre_is_the_fixed_point_of_the_scaling():
+    ls = [0.0, 0.1, 0.25, 0.3]
+    xs = [40.0 + 25.0 * math.exp(v) for v in ls]                     # scales about (40, 70)
+    ys = [70.0 - 10.0 * math.exp(v) for v in ls]
+    assert expansion_centre(xs, ys, ls) == pytest.approx((40.0, 70.0), abs=1e-6)
+    assert expansion_centre(xs, ys, [0.0, 0.01, 0.02, 0.03]) is None  # too little growth to say
+    assert expansion_centre(xs[:2], ys[:2], ls[:2]) is None
+
+
+def _young_static(heading_x: float, x0: float, frames=(0, 1, 2), width: float = 20.0) -> Track:
+    """A track younger than ``min_frames`` whose field alarms on its newest frame: a patch of the
+    static world first centred at ``x0`` (px) that a forward camera approaches (contact at frame
+    ``CONTACT``), so that it expands about the heading at ``heading_x`` (px, on the middle row)."""
+    ls = [math.log(CONTACT / (CONTACT - k)) for k in frames]
+    xs = [heading_x + (x0 - heading_x) * math.exp(v) for v in ls]
+    t = Track(1, 0, xs[-1], 60.0, width * math.exp(ls[-1]), width * math.exp(ls[-1]), log_s=ls[-1])
+    t.history = deque(Observation(k, s, x, 60.0, width * math.exp(s), 0.0) for k, s, x in zip(frames, ls, xs))
+    t.last_alarm = frames[-1]
+    return t
+
+
+def test_the_alarm_alone_judges_the_static_world_against_the_measured_heading():
+    # a camera whose heading lies 3 widths left of the principal point (79.5 px; a turn, a
+    # camera mounted at an angle): the static world at the principal point drifts away from the
+    # heading as it grows. Against the principal point it lay on the path and warned; against
+    # the measured heading (TargetLayer.see_heading) it does not. A box that keeps its place
+    # on the measured heading (an object on the path) warns
+    p = TargetParams(alarm_warns=True)
+    heading = (19.5, 60.0)
+    t = _young_static(heading[0], 79.5)
+    assert estimate(t, p, FPS, 2, SHAPE).warning                    # the principal point: a false warning
+    assert not estimate(_young_static(heading[0], 79.5), p, FPS, 2, SHAPE, heading=heading).warning
+    on = _young_static(heading[0], heading[0] + 1e-9)
+    assert estimate(on, p, FPS, 2, SHAPE, heading=heading).warning
+
+
+def test_the_layer_smooths_the_measured_heading_by_its_confidence():
+    layer = TargetLayer(TargetParams())
+    assert layer.heading is None                                    # none measured: the principal point
+    layer.see_heading((100.0, 50.0), 1.0)
+    assert layer.heading == (100.0, 50.0)
+    layer.see_heading(None, 0.0)                                    # a frame without an estimate
+    layer.see_heading((200.0, 50.0), 0.0)                           # ... or with no confidence
+    assert layer.heading == (100.0, 50.0)
+    for _ in range(40):                                             # a steady new heading is reached
+        layer.see_heading((200.0, 150.0), 0.9)
+    assert layer.heading == pytest.approx((200.0, 150.0), abs=0.5)
+    layer.reset()
+    assert layer.heading is None

@@ -83,6 +83,8 @@ class _LPLC2Family(Model):
         self.camera_motion, hom = self._camera.turn(gray, gray.shape, hfov_deg=self.hfov_deg,
                                                     heading=self._work_point(self.target_params.heading),
                                                     omega=self.rotation_given)
+        if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
+            self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
         if hom is None:
             return
         self.frontend.compensate(hom, gray)

@@ -3,7 +3,10 @@
 :func:`fit_contact`: the least-squares line ``1 / S = a + b t`` through the accumulated scale
 ``S``, contact at ``-a / b`` frames, its standard error by the delta method (:class:`ContactFit`);
 :func:`fit_course`: the lines through the centre's offset from the heading point in object
-widths (horizontally) and heights (vertically), evaluated at contact (the miss distance; ``docs/targets.md``, steps 5-6).
+widths (horizontally) and heights (vertically), evaluated at contact (the miss distance;
+``docs/targets.md``, steps 5-6);
+:func:`expansion_centre`: the fixed point of the box's scaling, and :func:`miss_limit`, the course
+allowed to a track that expands about the heading as the static world does (step 7).
 """
 
 from __future__ import annotations
@@ -11,7 +14,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["ContactFit", "fit_contact", "fit_course"]
+__all__ = ["ContactFit", "fit_contact", "fit_course", "expansion_centre", "miss_limit", "STATIC_EXTENTS"]
 
 
 @dataclass(frozen=True)
@@ -88,3 +91,50 @@ def fit_course(frames, xs, ys, widths, heading: tuple[float, float], ttc: float,
         return zm + b * (ttc - tm)
 
     return at(xs, heading[0], widths), at(ys, heading[1], heights)
+
+
+def expansion_centre(xs, ys, log_scale, min_growth: float = 0.05) -> tuple[float, float] | None:
+    """The point the box's image expands about (px): for a scaling by ``S`` about ``(x_e, y_e)``
+    the centre moves as ``x = x_e + S (x_0 - x_e) / S_0``, a line in ``S``; the least-squares
+    lines of ``x`` and ``y`` against ``S = exp(log_scale)`` give it as their value at ``S = 0``.
+    None with fewer than 3 points or a growth (largest less smallest log-scale) under ``min_growth``
+    (the lines' intercepts lie too far from the points to say anything)."""
+    n = len(xs)
+    if n < 3 or max(log_scale) - min(log_scale) < min_growth:
+        return None
+    top = max(log_scale)
+    s = [math.exp(float(v) - top) for v in log_scale]
+    sm = sum(s) / n
+    ds = [v - sm for v in s]
+    sss = sum([d * d for d in ds])
+
+    def at0(q):
+        qm = sum(float(v) for v in q) / n
+        return qm - sm * sum([d * (float(v) - qm) for d, v in zip(ds, q)]) / sss
+
+    return at0(xs), at0(ys)
+
+
+#: :func:`miss_limit`: a track whose own expansion centre lies within this many of its extents of the
+#: heading expands as the static world does
+STATIC_EXTENTS = 0.4
+
+
+def miss_limit(t, p, heading: tuple[float, float]) -> float:
+    """The largest miss at which track ``t`` (a :class:`~mlplc2.targets.track.Track`) warns, under
+    ``p`` (:class:`~mlplc2.targets.params.TargetParams`): ``max_miss``, or ``static_miss`` (> 0) when ``t``'s
+    image expands about the heading (``heading``, px) as the static world's does (its expansion
+    centre, :func:`expansion_centre` over the course's observations, within ``STATIC_EXTENTS`` of its
+    extents of ``heading``): ``max_miss`` above 0.5 is a margin for the camera's own size,
+    and the static world's boxes beside the path (a roadside hedge with the ground up to the path)
+    are measured with courses of 0.5-1 (docs/model.md, "The course against the heading")."""
+    if not 0 < p.static_miss < p.max_miss:
+        return p.max_miss
+    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]      # the course's points
+    centre = expansion_centre([q.x for q in inside], [q.y for q in inside], [q.log_scale for q in inside])
+    if centre is None:
+        return p.max_miss
+    q = inside[-1]
+    off = math.hypot((centre[0] - heading[0]) / max(q.width, 1.0),
+                     (centre[1] - heading[1]) / max(q.width if q.height is None else q.height, 1.0))
+    return p.static_miss if off <= STATIC_EXTENTS else p.max_miss

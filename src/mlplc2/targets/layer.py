@@ -22,7 +22,7 @@ from ..camera import bearing
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import change_box
-from .contact import fit_contact, fit_course
+from .contact import fit_contact, fit_course, miss_limit
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
@@ -30,6 +30,10 @@ from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
            "keeps_bearing", "count_down", "held", "MIN_POINTS", "fits"]
+
+#: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
+HEADING_GAIN = 0.2
+
 
 class TargetLayer:
     """From attention fields to targets, frame by frame (``step``); explicit state, ``reset``.
@@ -72,6 +76,23 @@ class TargetLayer:
         self._past: deque = deque()        # pyramids of the last frames (:meth:`_keep_past`)
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
+        self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
+
+    def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
+        """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
+        and its confidence (0-1): :attr:`heading` moves towards it by ``HEADING_GAIN`` times the
+        confidence (an exponential average over ~1 / ``HEADING_GAIN`` frames of a sure estimate; a
+        frame without one leaves it). The course's tests without a fit (:func:`on_path`,
+        :func:`keeps_bearing`) use it; until one is measured, ``TargetParams.heading`` or the
+        principal point."""
+        if point is None or not confidence > 0:
+            return
+        if self.heading is None:
+            self.heading = (float(point[0]), float(point[1]))
+            return
+        k = HEADING_GAIN * min(float(confidence), 1.0)
+        self.heading = (self.heading[0] + k * (point[0] - self.heading[0]),
+                        self.heading[1] + k * (point[1] - self.heading[1]))
 
     def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
         """This frame's pyramid, made once for :meth:`compensate` and :meth:`step`."""
@@ -172,7 +193,7 @@ class TargetLayer:
         for t in self._tracks:
             t.fields &= alive
             warned = t.warned
-            o = estimate(t, p, self.fps, now, (h, w), self.focal)
+            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading)
             if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
                 o, t.warned = replace(o, warning=False), warned
             out.append(o)
@@ -515,14 +536,16 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
 
 
 def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
-                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None) -> bool:
+                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None,
+                limit: float | None = None) -> bool:
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    (passing; ``limit``: the miss allowed, :func:`~mlplc2.targets.contact.miss_limit`, None:
+    ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
     (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
@@ -536,7 +559,7 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if ttc is not None and ttc > p.horizon_s:
         return False
     if miss is not None:
-        return miss <= p.max_miss
+        return miss <= (p.max_miss if limit is None else limit)
     if heading is None or shape is None or t.cut(shape, p.border):
         return False
     return on_path(t, p, heading) or keeps_bearing(t, heading)
@@ -599,17 +622,20 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
-             focal: float | None = None) -> Target:
+             focal: float | None = None, heading: tuple[float, float] | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
     frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
-    the stamp of the track's evidence."""
+    the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
+    :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point."""
     h, w = shape
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
-    heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+    limit = p.max_miss
+    if heading is None:
+        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
@@ -627,6 +653,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
+        limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
         t.streak_since = index if t.streak == 0 else t.streak_since
         t.streak += 1
         t.last_estimate = index
@@ -634,10 +661,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     else:
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index)
-    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= p.max_miss
+    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape)
+    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
