@@ -839,13 +839,17 @@ def test_ttc_errors_per_bin_and_coverage():
 # ---------------------------------------------------------------------------
 # fragmentation: distinct targets per collision object
 # ---------------------------------------------------------------------------
-def test_fragmentation_counts_distinct_targets_while_the_object_fits_the_frame():
-    big = obj(2, "collision", range(30), 150, 50, lambda f: 250.0 if f >= 25 else 10.0, contact=30.0,
+def test_fragmentation_counts_distinct_targets_while_the_object_covers_at_most_half_the_view():
+    """Targets per object count while the object is at most half the frame's larger side wide
+    (FRAGMENT_SHARE): beyond, boxes at its edges (the ground at its foot) lie "on" it."""
+    big = obj(2, "collision", range(30), 150, 50,
+              lambda f: 250.0 if f >= 25 else 150.0 if f >= 20 else 10.0, contact=30.0,
               ttc=lambda f: (30 - f) / WARN_FPS)
     gt = {"videos": {"a.mp4": video_truth([colliding(), big], frames=32)}}
     targets = ([T(f, 1, 50, 50) for f in range(3, 11)] + [T(f, 5, 52, 50) for f in range(12, 16)]   # two on 1
                + [T(10, 7, 100, 90)]                            # on neither
                + [T(10, 8, 150, 50)]                            # on 2
+               + [T(22, 6, 215, 50)]                            # at 2's edge while it is 150 of 200 px wide
                + [T(27, 9, 10, 10)])                            # "on" 2 only while it is wider than the frame
     ev = evaluate(result("a.mp4", 32, targets=targets), gt)
     assert wobj(ev, oid=1)["targets"] == 2

@@ -34,12 +34,16 @@ from .record import TargetRow
 from .truth import ObjectTruth, VideoTruth
 
 __all__ = ["ModelRun", "score_run", "score_warnings", "warning_truth", "summarise", "summarise_warnings",
-           "TTC_BINS", "MIN_TTC_WIDTH", "EARLY_S", "LATE_S", "SEEN_S", "MID_INTERVAL_S", "mid_error"]
+           "TTC_BINS", "MIN_TTC_WIDTH", "FRAGMENT_SHARE", "EARLY_S", "LATE_S", "SEEN_S", "MID_INTERVAL_S", "mid_error"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
 #: TTC coverage counts the frames in which a collision object is at least this wide (px).
 MIN_TTC_WIDTH = 16.0
+#: Fragmentation counts the frames in which a collision object is at most this share of the frame's
+#: larger side wide: beyond it the object covers most of the view, and the boxes at its edges (the
+#: ground at its foot, the sky beside it) lie "on" it by the match radius.
+FRAGMENT_SHARE = 0.5
 #: Real clips: a warning earlier than the danger onset minus this (s) is false.
 EARLY_S = 0.5
 #: A warning on a collision object up to this long (s) after its contact is neither true nor false.
@@ -416,9 +420,9 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
         if o.track and not o.in_track(f) and o is not collider:
             continue
         width = o.width_at(f)
-        # fragmentation counts while the object fits in the frame: in the last frames before
-        # contact it covers the view, and every target anywhere lies on it
-        fits = width is None or truth.size is None or width <= max(truth.size)
+        # fragmentation counts while the object covers at most half the view: in the last frames
+        # before contact every box at its edges lies on it (FRAGMENT_SHARE)
+        fits = width is None or truth.size is None or width <= FRAGMENT_SHARE * max(truth.size)
         if run.has_targets:
             on = [t for t in run.frame_targets.get(f, ()) if on_object(t.x, t.y, o, f, radius)]
             if fits:
