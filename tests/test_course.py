@@ -280,15 +280,14 @@ def _pass_misses(x_m: float, p: TargetParams) -> list[float]:
 
 @pytest.mark.parametrize("x_m", [-1.5, 1.5])
 def test_an_object_passing_three_widths_beside_the_camera_misses_by_about_three(x_m):
-    # before (unsweep off: the change box's width and centre): medians 1.15 and 1.62, a warning's
-    # miss (<= max_miss) on no frame but 1.08 on one
-    misses = _pass_misses(x_m, TargetParams())
+    # without (unsweep off, the default: the change box's width and centre): medians 1.15 and 1.62
+    misses = _pass_misses(x_m, TargetParams(unsweep=True))
     assert misses and statistics.median(misses) == pytest.approx(3.0, abs=0.5)
     assert min(misses) > 2.0
-    off = _pass_misses(x_m, TargetParams(unsweep=False))
-    assert statistics.median(off) < 2.0                  # what the fix is for
+    off = _pass_misses(x_m, TargetParams())
+    assert statistics.median(off) < 2.0                  # what the option is for
 
 
 def test_an_object_on_a_collision_course_stays_under_half_a_width():
-    misses = _pass_misses(0.1, TargetParams())            # truth 0.2
+    misses = _pass_misses(0.1, TargetParams(unsweep=True))            # truth 0.2
     assert misses and max(misses) < 0.5
