@@ -5,6 +5,7 @@ onset), and a forward drive past and into static objects."""
 from __future__ import annotations
 
 import math
+import statistics
 from collections import deque
 
 import pytest
@@ -13,6 +14,7 @@ from mlplc2.evaluation.truth import parse
 from mlplc2.models import MLPLC2
 from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
+from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
 
 FPS = 30.0
@@ -242,3 +244,50 @@ def test_the_layer_smooths_the_measured_heading_by_its_confidence():
     assert layer.heading == pytest.approx((200.0, 150.0), abs=0.5)
     layer.reset()
     assert layer.heading is None
+
+
+# -- the course's width and centre (issue 22, the miss measured right): a faint candidate's change
+# box spans the object and its sweep over ``change_frames``; cut to the object's own box, a passing
+# object's miss is no longer short by that much --
+def test_the_change_box_less_its_sweep_is_the_object_box():
+    # the object was [45, 55] and is [52.5, 63.5] (centre 50 -> 58, scale 1.1): the union is
+    # [45, 63.5]; an alignment about the union's centre c measures the shift d + (k - 1)(c - c0)
+    c0, w0, d, k = 50.0, 10.0, 8.0, 1.1
+    left, right = c0 - w0 / 2, c0 + d + k * w0 / 2
+    c, w = (left + right) / 2, right - left
+    shift = d + (k - 1) * (c - c0)
+    for sign in (1.0, -1.0):                              # moving right, and its mirror image moving left
+        box = unswept((sign * c, 30.0, w, 12.0), sign * shift, 0.0, math.log(k))
+        assert box == pytest.approx((sign * (c0 + d), 30.0, k * w0, 12.0), abs=1e-9)
+    # a box that only grows (an object coming straight on) is its own
+    assert unswept((40.0, 30.0, 20.0, 20.0), 0.4, -0.3, math.log(1.1)) == (40.0, 30.0, 20.0, 20.0)
+
+
+def _pass_misses(x_m: float, p: TargetParams) -> list[float]:
+    """The misses a still camera's mLPLC2 measures on a dark square 0.5 m wide approaching at 8 m/s
+    over a textured background whose centre passes ``x_m`` right of the camera (truth: ``|x_m| /
+    0.5`` widths), on the frames its targets lie on it."""
+    o = ApproachObject(kind="pass" if abs(x_m) > 0.5 else "collision", shape="square", appearance="dark",
+                       width_m=0.5, start=(x_m, 0.0, 8.0), velocity=(0.0, 0.0, -8.0))
+    stim = approach([o], size=(160, 120), frames=28, background="texture", seed=1)
+    obj = parse({"videos": {"x": stim.to_ground_truth()}})["x"].objects[0]
+    model = MLPLC2(fps=FPS, target_params=p)
+    out = []
+    for i, frame in enumerate(stim.frames):
+        out += [t.miss for t in model.step(frame).targets if t.miss is not None and _on(t, obj, i)]
+    return out
+
+
+@pytest.mark.parametrize("x_m", [-1.5, 1.5])
+def test_an_object_passing_three_widths_beside_the_camera_misses_by_about_three(x_m):
+    # without (unsweep off, the default: the change box's width and centre): medians 1.15 and 1.62
+    misses = _pass_misses(x_m, TargetParams(unsweep=True))
+    assert misses and statistics.median(misses) == pytest.approx(3.0, abs=0.5)
+    assert min(misses) > 2.0
+    off = _pass_misses(x_m, TargetParams())
+    assert statistics.median(off) < 2.0                  # what the option is for
+
+
+def test_an_object_on_a_collision_course_stays_under_half_a_width():
+    misses = _pass_misses(0.1, TargetParams(unsweep=True))            # truth 0.2
+    assert misses and max(misses) < 0.5

@@ -21,7 +21,7 @@ import numpy as np
 from ..camera import bearing
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import change_box
+from .change import change_box, unswept
 from .contact import fit_contact, fit_course, miss_limit
 from .extent import measure_extent
 from .params import TargetParams
@@ -166,10 +166,12 @@ class TargetLayer:
                 continue
             alarm = self._alarming(f)
             t = host = None
-            for box in self._boxes(lm, gray, x, y, f, alarm, every=far):
+            for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
                 if host is not None or self._grows(levels, t, alarm=alarm):
+                    if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
+                        t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
                     break
                 t = None
             if host is not None:          # a part of an object already tracked
@@ -402,11 +404,11 @@ class TargetLayer:
             box = find()
             if box is not None and max(abs(box[0] - x), abs(box[1] - y)) <= p.max_shift:
                 found = True
-                yield box
+                yield box, find is change
                 if not every:
                     break
         if not found and alarm:
-            yield self._field_box(field, gray.shape[1], gray.shape[0])
+            yield self._field_box(field, gray.shape[1], gray.shape[0]), False
 
     def _follow(self, levels, clock: float, interval: float, w: int, h: int) -> None:
         """Move and grow every track with the image alignment; drop the lost ones."""

@@ -69,6 +69,13 @@ class TargetParams(ParameterSet):
                               with a turning camera, a receding or a static object does not grow. 0.005
                               over 4 frames is a time to contact of 27 s at 30 fps. 0 = no test.""",
                               valid=Valid.real(minimum=0))
+    unsweep: bool = param(False, """(off by default: it costs the real clip UAV_outdoor_1 its lead, 0.50 -> 0.03 s;
+                          docs/model.md, "The miss against the truth") A faint candidate's change box (the union of where the object was
+                          ``change_frames`` frames before and where it is) is cut to the object's own
+                          extent and centre with the move its growth test measured
+                          (:func:`~mlplc2.targets.change.unswept`): a passing object's box spanned its
+                          sweep too, and its miss in box widths came out short (issue 22).""",
+                          valid=Valid.boolean())
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
