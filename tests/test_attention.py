@@ -33,6 +33,19 @@ def test_quadrants_collect_outward_directions():
     assert lplc2_response(q, 0.0) == sum(q)
 
 
+def test_each_arbour_has_its_own_threshold():
+    """Eq. 15 with one threshold per quadrant (a field clipped by the border gates each quadrant
+    on its own area): the gate opens only when every Q_i exceeds its own threshold, and a
+    threshold list that is not one number or four is refused."""
+    q = (5.0, 6.0, 7.0, 8.0)
+    assert lplc2_response(q, [4.0, 5.0, 6.0, 7.0]) == 26.0
+    assert lplc2_response(q, (4.0, 6.0, 6.0, 7.0)) == 0.0         # Q2 only reaches its threshold
+    assert lplc2_response(q, np.array([4.0, 5.0, 6.0, 8.5])) == 0.0
+    assert lplc2_response(q, 4.5) == 26.0 and lplc2_response(q, 5.0) == 0.0
+    with pytest.raises(ValueError):
+        lplc2_response(q, [1.0, 2.0, 3.0])
+
+
 def test_gate_needs_all_four_arbours():
     lm = radial_maps()
     # Outward motion only on the right half: Q2 and Q3 see nothing.

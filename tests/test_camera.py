@@ -285,6 +285,38 @@ def test_kept_pyramids_are_carried_as_if_warped_every_turn():
     assert np.allclose(oldest[1], level1, atol=1e-3)
 
 
+def test_every_kept_pyramid_is_carried_as_if_warped_alone():
+    """The kept pyramids share each turn (targets.track.Turn: its level homographies and the mask
+    of what it uncovers made once, at the first level read): every kept pyramid, read in any
+    order, has the values of warping it alone at each turn, with that turn's frame where it saw
+    nothing, whichever pyramid made the shared mask."""
+    from mlplc2.camera import warp
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.alignment import pyramid
+
+    rng = np.random.default_rng(5)
+    frames = [rng.uniform(0, 255, (64, 80)).astype(np.float32) for _ in range(5)]
+    turns = [np.array([[1.0, 0.0, 2.5], [0.0, 1.0, -1.3], [0.0, 0.0, 1.0]]),
+             np.array([[1.0, 0.02, -1.7], [-0.02, 1.0, 0.9], [1e-4, 0.0, 1.0]]),
+             np.array([[0.98, 0.0, 3.0], [0.0, 1.02, 2.0], [0.0, -1e-4, 1.0]])]
+    layer = TargetLayer(fps=FPS)
+    layer.step(frames[0], None, [], 0)
+    layer.step(frames[1], None, [], 1)
+    for k, (hom, frame) in enumerate(zip(turns, frames[2:])):
+        layer.compensate(hom, frame)
+        layer.step(frame, None, [], k + 2)
+    s = np.array([[0.5, 0.0, -0.25], [0.0, 0.5, -0.25], [0.0, 0.0, 1.0]])   # level 1: x_1 = (x + 0.5) / 2 - 0.5
+    kept = list(layer._past)
+    assert len(kept) == 5
+    for i in (3, 1, 0, 2):                   # the newer pyramids first: their masks serve the older
+        expected0, expected1 = frames[i], pyramid(frames[i])[1]
+        for hom, frame in list(zip(turns, frames[2:]))[max(i - 1, 0):]:
+            expected0 = warp(expected0, hom, fill=frame)
+            expected1 = warp(expected1, s @ hom @ np.linalg.inv(s), fill=pyramid(frame)[1])
+        assert np.array_equal(kept[i][0], expected0), i
+        assert np.allclose(kept[i][1], expected1, atol=1e-3), i
+
+
 def test_the_estimators_grid_follows_the_frame_size():
     """The grid's points are made once per frame size (camera._grid_points): a clip whose size
     changes is tracked on the new size's grid, as a fresh estimator would."""

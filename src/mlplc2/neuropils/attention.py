@@ -138,7 +138,9 @@ def lplc2_response(q, thresholds=0.0) -> float:
 
     ``thresholds`` is one number or one per quadrant (the arbour thresholds).
     """
-    t = np.broadcast_to(np.asarray(thresholds, dtype=np.float64), (4,))
+    t = np.asarray(thresholds, dtype=np.float64)
+    if t.shape != (4,):                     # one number for all four (broadcast only then: it costs ~20 us)
+        t = np.broadcast_to(t, (4,))
     if all(qi > ti for qi, ti in zip(q, t)):
         return float(sum(q))
     return 0.0

@@ -6,6 +6,7 @@ grey-level change nearest the point (a faint candidate's box; ``docs/targets.md`
 from __future__ import annotations
 
 import math
+from functools import lru_cache
 
 import cv2
 import numpy as np
@@ -13,12 +14,24 @@ import numpy as np
 __all__ = ["change_box", "unswept"]
 
 
+@lru_cache(maxsize=None)
 def _even_dft_size(n: int) -> int:
     """The largest m <= n that is even and its own optimal DFT size (``cv2.getOptimalDFTSize``)."""
     m = n
     while m > 2 and (m % 2 or cv2.getOptimalDFTSize(m) != m):
         m -= 1
     return m
+
+
+@lru_cache(maxsize=64)
+def _hanning(shape: tuple[int, int]) -> np.ndarray:
+    """The phase correlation's Hanning window for windows of ``shape`` (h, w), made once per shape."""
+    win = cv2.createHanningWindow(shape[::-1], cv2.CV_32F)
+    win.flags.writeable = False
+    return win
+
+
+_DILATION = np.ones((3, 3), np.uint8)
 
 
 def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
@@ -44,7 +57,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     x1, y1 = x0 + _even_dft_size(x1 - x0), y0 + _even_dft_size(y1 - y0)
     a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
     b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
-    (sx, sy), _ = cv2.phaseCorrelate(a, b, cv2.createHanningWindow(a.shape[::-1], cv2.CV_32F))
+    (sx, sy), _ = cv2.phaseCorrelate(a, b, _hanning(a.shape))
     if abs(sx) > 0.5 or abs(sy) > 0.5:      # the background moved: compare it with itself
         m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
         b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
@@ -60,7 +73,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     top = float(d.max())
     if top < min_change:
         return None
-    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), np.ones((3, 3), np.uint8))
+    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), _DILATION)
     n, _, stats, _ = cv2.connectedComponentsWithStats(mask, connectivity=8)
     best, best_d = None, math.inf
     for k in range(1, n):

@@ -26,7 +26,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
-from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track
+from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track, Turn
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
            "keeps_bearing", "count_down", "held", "MIN_POINTS", "fits"]
@@ -108,9 +108,9 @@ class TargetLayer:
         The kept pyramids take the turn lazily (:class:`Carried`: a level is resampled when read,
         to the values of resampling it every turn; composing the turns into one resampling raised
         the false warnings, docs/model.md, "Camera motion")."""
-        now = self._pyramid(gray)
+        turn = Turn(homography, self._pyramid(gray))        # shared: its level matrices and masks made once
         for levels in self._past:
-            levels.turn(homography, now)
+            levels.turn(turn)
         for t in self._tracks:
             x, y, z = homography @ np.array([t.cx, t.cy, 1.0])
             dx, dy = x / z - t.cx, y / z - t.cy

@@ -14,7 +14,7 @@ import numpy as np
 
 from ..camera import warp
 
-__all__ = ["Target", "Observation", "Track", "Carried", "MIN_POINTS", "EPS"]
+__all__ = ["Target", "Observation", "Track", "Carried", "Turn", "MIN_POINTS", "EPS"]
 
 #: Fewest observations of a fit (:func:`fit_contact` needs 3): the floor of ``TargetParams.min_frames``
 #: for a camera slower than ``TargetParams.nominal_fps``.
@@ -213,24 +213,60 @@ class Track:
                     or not (0 <= self.cx <= w - 1 and 0 <= self.cy <= h - 1))
 
 
+class Turn:
+    """One turn of the camera (``homography``: previous frame -> this one, level-0 pixels; ``now``:
+    this frame's pyramid, which fills what the turn uncovers), shared by every kept pyramid
+    (:class:`Carried`): the homography in a level's pixels and the mask of the pixels the turn
+    uncovers there are made once, at the first kept level of that size it carries, and reused for
+    the others (the mask is where the resampling reaches beyond the image: the same for every
+    finite image of that size; the grey frames are finite, :mod:`mlplc2._validation`)."""
+
+    __slots__ = ("homography", "now", "_levels")
+
+    def __init__(self, homography: np.ndarray, now) -> None:
+        self.homography, self.now = homography, now
+        self._levels: dict = {}            # (level, shape, level-0 width) -> (homography there, uncovered mask)
+
+    def apply(self, img: np.ndarray, k: int, w0: int) -> np.ndarray:
+        """``img`` (level ``k`` of a pyramid whose level 0 is ``w0`` px wide) carried through this turn:
+        :func:`mlplc2.camera.warp` with this frame's level ``k`` as its fill; ``img`` itself when this
+        frame has no level of that size."""
+        now = self.now
+        if not (k < len(now) and now[k].shape == img.shape):
+            return img
+        key = (k, img.shape, w0)
+        known = self._levels.get(key)
+        if known is None:
+            s = img.shape[1] / w0                           # pixel centres: x_k = (x + 0.5) s - 0.5
+            o = 0.5 * s - 0.5
+            sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
+            sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
+            known = (sm @ self.homography @ sm_inv, None)
+        out = warp(img, known[0], fill=math.nan)            # NaN where the turn uncovers
+        if known[1] is None:
+            known = self._levels[key] = (known[0], np.isnan(out))
+        np.copyto(out, now[k], where=known[1])              # as warp(img, ..., fill=now[k])
+        return out
+
+
 class Carried:
     """A pyramid of a past frame carried through the camera's turns since (gaze stabilisation),
     each level resampled only when it is read: on reading, the turns not yet applied to that
-    level are applied in turn (:meth:`turn` records them), each exactly as an eager carry would
-    (bilinear, :func:`mlplc2.camera.warp`, with the grey levels of the frame of that turn where the
-    earlier frame saw nothing), so the values are those of warping every level every turn, while a
-    level never read is never resampled. Indexing and ``len`` as the list it stands for."""
+    level are applied in turn (:meth:`turn` records them, :meth:`Turn.apply`), each exactly as an
+    eager carry would (bilinear, :func:`mlplc2.camera.warp`, with the grey levels of the frame of
+    that turn where the earlier frame saw nothing), so the values are those of warping every level
+    every turn, while a level never read is never resampled. Indexing and ``len`` as the list it
+    stands for."""
 
     def __init__(self, levels):
         self.levels = list(levels)
         self._w0 = self.levels[0].shape[1]
-        self._turns: list = []                   # (homography previous -> that frame, that frame's pyramid)
+        self._turns: list[Turn] = []
         self._done = [0] * len(self.levels)      # turns applied to each level
 
-    def turn(self, homography: np.ndarray, now) -> None:
-        """One more turn (``homography``: previous frame -> this one, level-0 pixels; ``now``: this
-        frame's pyramid, which fills what the turn uncovers)."""
-        self._turns.append((homography, now))
+    def turn(self, turn: Turn) -> None:
+        """One more turn (one :class:`Turn` shared by every kept pyramid)."""
+        self._turns.append(turn)
 
     def __len__(self) -> int:
         return len(self.levels)
@@ -238,12 +274,7 @@ class Carried:
     def __getitem__(self, k: int) -> np.ndarray:
         k = range(len(self.levels))[k]
         img = self.levels[k]
-        for homography, now in self._turns[self._done[k]:]:
-            if k < len(now) and now[k].shape == img.shape:
-                s = img.shape[1] / self._w0                     # pixel centres: x_k = (x + 0.5) s - 0.5
-                o = 0.5 * s - 0.5
-                sm = np.array([[s, 0.0, o], [0.0, s, o], [0.0, 0.0, 1.0]])
-                sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
-                img = warp(img, sm @ homography @ sm_inv, fill=now[k])
+        for turn in self._turns[self._done[k]:]:
+            img = turn.apply(img, k, self._w0)
         self.levels[k], self._done[k] = img, len(self._turns)
         return img
