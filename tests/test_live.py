@@ -46,13 +46,11 @@ def _lines(path):
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
-def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tmp_path):
-    """FFmpeg cannot seek back in a pipe to the frames of an MP4 whose index (moov atom) comes
-    after them (most cameras' and phones' files, nc07.mp4 of the real clips): one error line
-    that says so and what to do, exit 2, nothing written."""
+def _late_index_mp4(clip):
+    """Write an MP4 whose index (moov atom) comes after its frames (most cameras' and phones'
+    files, nc07.mp4 of the real clips); return its bytes."""
     import av
 
-    clip = tmp_path / "late_index.mp4"
     with av.open(str(clip), "w") as out:      # PyAV's MP4 muxer writes the index last by default
         stream = out.add_stream("mpeg4", rate=30)
         stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
@@ -63,12 +61,31 @@ def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tm
         out.mux(stream.encode(None))
     data = clip.read_bytes()
     assert data.find(b"moov") > data.find(b"mdat")
+    return data
+
+
+def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tmp_path):
+    """FFmpeg cannot seek back in a pipe to the frames of an MP4 whose index (moov atom) comes
+    after them: one error line that says so and what to do, exit 2, nothing written."""
+    data = _late_index_mp4(tmp_path / "late_index.mp4")
     proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-o", str(tmp_path / "s")],
                           input=data, capture_output=True, timeout=120)   # a pipe (a file could seek)
     proc.stderr = proc.stderr.decode()
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "index (moov atom) is at its end" in proc.stderr
     assert "give its path" in proc.stderr and not (tmp_path / "s").exists()
+
+
+def test_an_mp4_with_its_index_at_the_end_over_http_without_ranges_says_why(tmp_path, http_dir, capsys):
+    """Python's http.server (the first server a user tries) answers no range requests, so FFmpeg
+    cannot seek to the index at the end: one line that says so and what to do (it said
+    "Input/output error"), exit 2, nothing written."""
+    root, base = http_dir
+    _late_index_mp4(root / "late_index.mp4")
+    assert main(["run", f"{base}/late_index.mp4", "-q", "-o", str(tmp_path / "h")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "index (moov atom) is at its end" in err and "range requests" in err
+    assert not (tmp_path / "h").exists()
 
 
 def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, capsys):

@@ -118,6 +118,8 @@ class _PyAVDecoder(Decoder):
         # stopping (FFmpeg reports a closed connection or an RTCP BYE as the end of the input).
         self._realtime = stream and is_live(path)
         self._pipe = hasattr(path, "read")   # a file object (stdin): FFmpeg cannot seek back in it
+        # An HTTP server that ignores range requests cannot seek either (a file served whole, in order).
+        self._http = not self._pipe and str(path).lower().startswith(("http:", "https:"))
         self._decoded = 0
         options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
         try:
@@ -147,9 +149,14 @@ class _PyAVDecoder(Decoder):
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
             self.error = _one_line(str(exc))
-            if self._pipe and not self._decoded and "mp4" in self.container.format.name:
-                self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
-                              "pipe: give its path instead")
+            if not self._decoded and "mp4" in self.container.format.name:
+                if self._pipe:
+                    self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
+                                  "pipe: give its path instead")
+                elif self._http:
+                    self.error = ("an MP4/MOV file whose index (moov atom) is at its end needs a server that "
+                                  "answers range requests (Python's http.server does not): serve it from one "
+                                  "that does, or give its path")
             return None
         self._decoded += 1
         self.time_s = None if frame.time is None else float(frame.time)
