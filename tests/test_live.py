@@ -108,6 +108,20 @@ def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, c
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
 
 
+def test_a_truncated_video_on_stdin_is_reported_as_from_a_file(data, tmp_path):
+    """A cut AVI (its header states 60 frames) piped in: the frames that decode are processed and
+    one warning line says where decoding stopped, exit 2, as for the file (it ended with exit 0
+    and nothing said)."""
+    clip = data["avi"].read_bytes()
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "s")],
+                          input=clip[: len(clip) * 2 // 3], capture_output=True, timeout=120)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2, err
+    assert err.count("\n") == 1 and "stdin: decoding stopped at frame" in err and "of 60" in err
+    summary = json.loads((tmp_path / "s" / "fields.json").read_text())
+    assert summary["truncated"] and 0 < summary["n_frames"] < 60
+
+
 def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
     """The first line is read while the process still runs: its stdin (the clip) is not closed yet."""
     clip = data["avi"].read_bytes()
