@@ -108,6 +108,23 @@ def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, c
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
 
 
+def test_run_on_stdin_from_a_terminal_says_so_instead_of_waiting(tmp_path):
+    """``mlplc2 run -`` typed without a pipe: one error line at once (it waited for the keyboard)."""
+    import os
+    import pty
+
+    leader, tty = pty.openpty()
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "t")],
+                              stdin=tty, capture_output=True, timeout=60)
+    finally:
+        os.close(tty)
+        os.close(leader)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2 and err.count("\n") == 1 and "standard input is a terminal" in err
+    assert not (tmp_path / "t").exists()
+
+
 def test_a_truncated_video_on_stdin_is_reported_as_from_a_file(data, tmp_path):
     """A cut AVI (its header states 60 frames) piped in: the frames that decode are processed and
     one warning line says where decoding stopped, exit 2, as for the file (it ended with exit 0

@@ -274,6 +274,9 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
     if isinstance(source, str) and source == STDIN:
+        if sys.stdin.isatty():  # nothing piped in: FFmpeg would wait for the keyboard
+            raise InputValueError("stdin: standard input is a terminal, not a video: pipe one in "
+                                  "(cat clip.mkv | mlplc2 run -)")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, source, stream=True), "stream"
