@@ -256,6 +256,25 @@ def test_an_unreachable_stream_is_one_line(source, capsys):
     assert err.startswith(f"mlplc2: error: {source}: cannot open the stream") and "\n" not in err
 
 
+@pytest.mark.parametrize("scheme", ["http", "rtsp"])
+def test_a_server_that_never_answers_is_one_line_that_says_so(scheme, monkeypatch, capsys):
+    """A port that accepts the connection and sends nothing: after the wait (shortened to 1 s) one
+    line says there was no answer (FFmpeg's own words were "Immediate exit requested" for HTTP
+    and "Invalid data found when processing input" for RTSP)."""
+    import socket
+
+    from mlplc2.io import decoders
+
+    monkeypatch.setattr(decoders._PyAVDecoder, "TIMEOUT_S", 1.0)
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(4)
+        url = f"{scheme}://127.0.0.1:{server.getsockname()[1]}/stream"
+        assert main(["run", url, "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"mlplc2: error: {url}: cannot open the stream (no answer within 1 s)"
+
+
 def test_latency_percentiles():
     lat = Latency()
     for ms in range(1, 201):            # 1 .. 200 ms

@@ -11,6 +11,7 @@ import math
 import os
 import re
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -122,11 +123,15 @@ class _PyAVDecoder(Decoder):
         self._http = not self._pipe and str(path).lower().startswith(("http:", "https:"))
         self._decoded = 0
         options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
+        began = time.monotonic()
         try:
             self.container = av.open(path, mode="r", options=options, timeout=self.TIMEOUT_S if stream else None)
         except (av.error.FFmpegError, OSError) as exc:
             if stream:
-                raise InputValueError(f"{name}: cannot open the stream ({_one_line(str(exc))})") from None
+                # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
+                why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
+                       else _one_line(str(exc)))
+                raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
             self.container.close()
