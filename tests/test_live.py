@@ -46,13 +46,11 @@ def _lines(path):
     return [json.loads(line) for line in path.read_text().splitlines()]
 
 
-def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tmp_path):
-    """FFmpeg cannot seek back in a pipe to the frames of an MP4 whose index (moov atom) comes
-    after them (most cameras' and phones' files, nc07.mp4 of the real clips): one error line
-    that says so and what to do, exit 2, nothing written."""
+def _late_index_mp4(clip):
+    """Write an MP4 whose index (moov atom) comes after its frames (most cameras' and phones'
+    files, nc07.mp4 of the real clips); return its bytes."""
     import av
 
-    clip = tmp_path / "late_index.mp4"
     with av.open(str(clip), "w") as out:      # PyAV's MP4 muxer writes the index last by default
         stream = out.add_stream("mpeg4", rate=30)
         stream.width, stream.height, stream.pix_fmt = 160, 120, "yuv420p"
@@ -63,12 +61,31 @@ def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tm
         out.mux(stream.encode(None))
     data = clip.read_bytes()
     assert data.find(b"moov") > data.find(b"mdat")
+    return data
+
+
+def test_an_mp4_with_its_index_at_the_end_on_stdin_says_why_it_cannot_be_read(tmp_path):
+    """FFmpeg cannot seek back in a pipe to the frames of an MP4 whose index (moov atom) comes
+    after them: one error line that says so and what to do, exit 2, nothing written."""
+    data = _late_index_mp4(tmp_path / "late_index.mp4")
     proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-o", str(tmp_path / "s")],
                           input=data, capture_output=True, timeout=120)   # a pipe (a file could seek)
     proc.stderr = proc.stderr.decode()
     assert proc.returncode == 2
     assert proc.stderr.count("\n") == 1 and "index (moov atom) is at its end" in proc.stderr
     assert "give its path" in proc.stderr and not (tmp_path / "s").exists()
+
+
+def test_an_mp4_with_its_index_at_the_end_over_http_without_ranges_says_why(tmp_path, http_dir, capsys):
+    """Python's http.server (the first server a user tries) answers no range requests, so FFmpeg
+    cannot seek to the index at the end: one line that says so and what to do (it said
+    "Input/output error"), exit 2, nothing written."""
+    root, base = http_dir
+    _late_index_mp4(root / "late_index.mp4")
+    assert main(["run", f"{base}/late_index.mp4", "-q", "-o", str(tmp_path / "h")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "index (moov atom) is at its end" in err and "range requests" in err
+    assert not (tmp_path / "h").exists()
 
 
 def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, capsys):
@@ -89,6 +106,37 @@ def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, c
     assert [json.loads(line) for line in proc.stdout.decode().splitlines()] == from_file
     for out in ("h", "s"):
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
+
+
+def test_run_on_stdin_from_a_terminal_says_so_instead_of_waiting(tmp_path):
+    """``mlplc2 run -`` typed without a pipe: one error line at once (it waited for the keyboard)."""
+    import os
+    import pty
+
+    leader, tty = pty.openpty()
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "t")],
+                              stdin=tty, capture_output=True, timeout=60)
+    finally:
+        os.close(tty)
+        os.close(leader)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2 and err.count("\n") == 1 and "standard input is a terminal" in err
+    assert not (tmp_path / "t").exists()
+
+
+def test_a_truncated_video_on_stdin_is_reported_as_from_a_file(data, tmp_path):
+    """A cut AVI (its header states 60 frames) piped in: the frames that decode are processed and
+    one warning line says where decoding stopped, exit 2, as for the file (it ended with exit 0
+    and nothing said)."""
+    clip = data["avi"].read_bytes()
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "s")],
+                          input=clip[: len(clip) * 2 // 3], capture_output=True, timeout=120)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2, err
+    assert err.count("\n") == 1 and "stdin: decoding stopped at frame" in err and "of 60" in err
+    summary = json.loads((tmp_path / "s" / "fields.json").read_text())
+    assert summary["truncated"] and 0 < summary["n_frames"] < 60
 
 
 def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
@@ -206,6 +254,25 @@ def test_an_unreachable_stream_is_one_line(source, capsys):
     assert main(["run", source, "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"mlplc2: error: {source}: cannot open the stream") and "\n" not in err
+
+
+@pytest.mark.parametrize("scheme", ["http", "rtsp"])
+def test_a_server_that_never_answers_is_one_line_that_says_so(scheme, monkeypatch, capsys):
+    """A port that accepts the connection and sends nothing: after the wait (shortened to 1 s) one
+    line says there was no answer (FFmpeg's own words were "Immediate exit requested" for HTTP
+    and "Invalid data found when processing input" for RTSP)."""
+    import socket
+
+    from mlplc2.io import decoders
+
+    monkeypatch.setattr(decoders._PyAVDecoder, "TIMEOUT_S", 1.0)
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(4)
+        url = f"{scheme}://127.0.0.1:{server.getsockname()[1]}/stream"
+        assert main(["run", url, "-q"]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"mlplc2: error: {url}: cannot open the stream (no answer within 1 s)"
 
 
 def test_latency_percentiles():

@@ -11,6 +11,7 @@ import math
 import os
 import re
 import sys
+import time
 from pathlib import Path
 
 import numpy as np
@@ -118,13 +119,19 @@ class _PyAVDecoder(Decoder):
         # stopping (FFmpeg reports a closed connection or an RTCP BYE as the end of the input).
         self._realtime = stream and is_live(path)
         self._pipe = hasattr(path, "read")   # a file object (stdin): FFmpeg cannot seek back in it
+        # An HTTP server that ignores range requests cannot seek either (a file served whole, in order).
+        self._http = not self._pipe and str(path).lower().startswith(("http:", "https:"))
         self._decoded = 0
         options = {"rtsp_transport": "tcp"} if str(path).lower().startswith("rtsp") else None
+        began = time.monotonic()
         try:
             self.container = av.open(path, mode="r", options=options, timeout=self.TIMEOUT_S if stream else None)
         except (av.error.FFmpegError, OSError) as exc:
             if stream:
-                raise InputValueError(f"{name}: cannot open the stream ({_one_line(str(exc))})") from None
+                # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
+                why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
+                       else _one_line(str(exc)))
+                raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
             self.container.close()
@@ -147,9 +154,14 @@ class _PyAVDecoder(Decoder):
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
             self.error = _one_line(str(exc))
-            if self._pipe and not self._decoded and "mp4" in self.container.format.name:
-                self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
-                              "pipe: give its path instead")
+            if not self._decoded and "mp4" in self.container.format.name:
+                if self._pipe:
+                    self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
+                                  "pipe: give its path instead")
+                elif self._http:
+                    self.error = ("an MP4/MOV file whose index (moov atom) is at its end needs a server that "
+                                  "answers range requests (Python's http.server does not): serve it from one "
+                                  "that does, or give its path")
             return None
         self._decoded += 1
         self.time_s = None if frame.time is None else float(frame.time)
@@ -267,6 +279,9 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         index = int(source)
         return _OpenCVDecoder(index, f"camera {index}", camera=True), "camera"
     if isinstance(source, str) and source == STDIN:
+        if sys.stdin.isatty():  # nothing piped in: FFmpeg would wait for the keyboard
+            raise InputValueError("stdin: standard input is a terminal, not a video: pipe one in "
+                                  "(cat clip.mkv | mlplc2 run -)")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, source, stream=True), "stream"

@@ -287,7 +287,8 @@ class FrameSource:
         elif failed_image is not None:
             self.truncated, self.truncated_at = True, index
             self.message = f"{self.name}: {failed_image} (frame {index}); stopped there"
-        elif self.kind == "video" and expected is not None and index < expected:
+        elif (self.kind == "video" or (self.kind == "stream" and not self.live)) and expected is not None \
+                and index < expected:  # a file, or one read whole from a pipe or HTTP that states its count
             self.truncated, self.truncated_at = True, index
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
                             "(file truncated or damaged); results cover frames before it")
