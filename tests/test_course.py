@@ -64,6 +64,29 @@ def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
     assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
 
 
+def test_a_warning_does_not_begin_on_a_cut_box_near_contact():
+    # in view for its first 5 frames (a course of 0: a collision), then its growing box reaches the
+    # border; by frame 12 its time to contact is 0.4 s, below cut_onset_s: as the static world
+    # beside the path sweeping out of view, no warning begins there (before: it warned)
+    t = _looming(15.0, 12, contact=24)
+    assert t.history[-1].cut and len(t.inside) == TargetParams().min_frames
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    assert out.ttc_s == pytest.approx(12 / FPS, rel=1e-6) and out.ttc_s < 0.5     # cut_onset_s, 0.5 s
+    assert out.miss == pytest.approx(0.0, abs=1e-6) and not out.warning
+    assert estimate(_looming(15.0, 12, contact=24), TargetParams(cut_onset_s=0.0), FPS, 12, SHAPE).warning
+
+
+def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():
+    # the same approach judged every frame: it warns from its first fit (in view, 0.63 s), and
+    # goes on warning down to contact while its box is cut (0.13 s at frame 20)
+    seen = []
+    t = _looming(15.0, 20, contact=24, each=lambda t, k: seen.append(
+        (k, t.history[-1].cut, estimate(t, TargetParams(), FPS, k, SHAPE).warning)))
+    first = min(k for k, _, w in seen if w)
+    assert first == TargetParams().min_frames and not seen[first - 1][1]
+    assert all(w for k, _, w in seen[first - 1:]) and seen[-1][1]
+
+
 def test_border_zero_still_cuts_a_box_past_the_edge():
     p = TargetParams(border=0.0)
     t = Track(1, 0, 5.0, 60.0, 20.0, 20.0)

@@ -667,6 +667,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
     warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
+    # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
+    # static world beside the path sweeps out of view through the border with a short time to contact
+    if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s):
+        warning = False
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)

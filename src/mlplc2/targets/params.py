@@ -173,6 +173,13 @@ class TargetParams(ParameterSet):
                            sweeps out of view, while an object on a collision course is seen coming.
                            0 = off (the default: 0.3 s lost a collision whose time to contact was
                            underestimated, ``docs/targets.md``).""", unit="s", valid=Valid.real(minimum=0))
+    cut_onset_s: float = param(0.5, """A warning begins on a box cut by the image's border (``border``) only
+                               while ``ttc_s`` is at least this (and with a time to contact); once a target
+                               has warned, it warns on while cut. The static world beside the path and the
+                               ground sweep out of view through the border with a short time to contact
+                               (the drive scenes' false episodes that begin cut: 0.12-0.47 s), while an
+                               object on a collision course is seen coming. 0 = off.""", unit="s",
+                               valid=Valid.real(minimum=0))
     stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
                               one, or its birth) holds no measurable approach: only the middle of its box
                               (a quarter of its width and height from the centre) owns fields and seeds,
