@@ -655,6 +655,23 @@ def test_warning_only_after_contact_is_a_miss():
     assert wvid(ev, "a.mp4")["false_frames"] == 0
 
 
+def test_a_warning_that_goes_on_into_contact_stays_the_objects():
+    """A target that warned on the collision object and goes on warning without a break in the last
+    LATE_S (5 frames) before its contact is the object's wherever its box centre has gone (the box
+    grows past the view at contact); a break, or a centre off the object earlier, is false."""
+    gt = {"videos": {"a.mp4": video_truth([colliding()])}}     # contact at 20
+    off = (150, 90)
+    targets = ([T(f, 1, 50, 50, warn=True) for f in range(10, 15)]          # on the object ...
+               + [T(f, 1, *off, warn=True) for f in range(15, 20)]          # ... then past it, unbroken
+               + [T(f, 2, 50, 50, warn=True) for f in range(5, 9)]          # on it, a break at 9 ...
+               + [T(f, 2, *off, warn=True) for f in range(16, 20)]          # ... then off it: false
+               + [T(f, 3, 50, 50, warn=True) for f in range(3, 10)]         # on it ...
+               + [T(f, 3, *off, warn=True) for f in range(10, 15)])         # ... off it before the last 0.5 s
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    v = wvid(ev, "a.mp4")
+    assert v["false_episodes"] == 2 and v["false_frames"] == len(set(range(16, 20)) | set(range(10, 15)))
+
+
 def test_lead_time_median_and_10th_percentile_over_objects_and_videos():
     """Six collision objects in two videos, warned 2.0, 1.5, 1.0, 0.5, 0.2 s before contact and never."""
     xs = (30, 80, 130)

@@ -446,15 +446,29 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
 def _false_warnings(run: ModelRun, truth: VideoTruth,
                     rules: _WarningRules) -> tuple[dict[str, set[int]], dict[str, int]]:
     """False warnings: their frames per cause, and their episodes per cause (runs of frames per
-    target and cause)."""
+    target and cause). A target's warning that was on a collision object and goes on without a
+    break within ``LATE_S`` before that object's contact is the object's wherever its box has
+    grown (past the view, its centre off the object): the mirror of :func:`_just_hit`."""
     false_frames: dict[str, set[int]] = {}
     runs: dict[tuple, list[int]] = {}
+    held: dict = {}         # target key -> the collision object its unbroken warning was on
     for f in range(rules.first, rules.end):
+        now = {}
         for key, x, y in run.warnings_at(f):
+            o = held.get(key)
+            if o is not None and o.contact_frame is not None \
+                    and o.contact_frame - rules.late <= f < o.contact_frame:
+                now[key] = o                # the warning of the object about to hit, its box past the view
+                continue
             cause = _false_cause(x, y, f, truth, rules)
             if cause is not None:
                 false_frames.setdefault(cause, set()).add(f)
                 runs.setdefault((key, cause), []).append(f)
+            elif x is not None:
+                o = next((c for c in rules.colliders if on_object(x, y, c, f, rules.radius)), None)
+                if o is not None:
+                    now[key] = o
+        held = now
     episodes_by: dict[str, int] = {}
     for (key, cause), frames in runs.items():
         episodes_by[cause] = episodes_by.get(cause, 0) + episodes(frames)
