@@ -315,3 +315,37 @@ def test_the_border_a_fast_pan_uncovers_makes_no_local_motion():
         if k >= 2:
             entering.append(float(model.maps.magnitude[:, -45:].max()))    # 3 frames' turn + the lamina's window
     assert max(entering) < 0.1 * Params().t_a
+
+
+def test_the_uncovered_margin_is_what_the_turn_uncovered_within_the_memory():
+    """A pan that moves the scene 9 px left a frame uncovers 9 columns on the right each frame; with a
+    memory of 90 ms at 30 fps the columns uncovered by the last two turns (33 and 67 ms ago) are young,
+    widened by ``reach``; the camera still again, the margin is gone once the memory has passed."""
+    from mlplc2.camera import Uncovered
+
+    shift = np.array([[1.0, 0.0, -9.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]])
+    margin, ms = Uncovered(90.0, reach=0), 1000.0 / FPS
+    margin.step(None, (40, 100), ms)
+    assert margin.mask is None                                  # nothing turned: nothing uncovered
+    for _ in range(4):
+        margin.step(shift, (40, 100), ms)
+    assert margin.mask.all(axis=0).tolist() == [False] * 82 + [True] * 18
+    assert margin.mask.any(axis=0).tolist() == [False] * 82 + [True] * 18
+    wide = Uncovered(90.0, reach=3)
+    for _ in range(4):
+        wide.step(shift, (40, 100), ms)
+    assert wide.mask.all(axis=0).tolist() == [False] * 79 + [True] * 21
+    margin.step(None, (40, 100), ms)
+    assert margin.mask.all(axis=0).tolist() == [False] * 91 + [True] * 9
+    margin.step(None, (40, 100), ms)
+    assert margin.mask is None
+
+
+def test_a_still_camera_places_fields_and_seeds_on_the_front_ends_own_local_motion():
+    """Nothing uncovered, nothing masked: the LM that places fields and seeds is the front end's."""
+    import mlplc2
+
+    model = mlplc2.MLPLC2(fps=FPS, hfov_deg=60.0, stabilise=True)
+    for fr in _frames("static", 0.0, frames=6):
+        model.step(fr)
+        assert model.placing is model.maps.magnitude

@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import CameraMotion, MotionEstimator, Uncovered
+from ..camera import UNCOVERED_DELAYS, CameraMotion, MotionEstimator, Uncovered
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -62,9 +62,10 @@ class _LPLC2Family(Model):
         self._camera = MotionEstimator(hfov_deg=hfov_deg) if self.stabilise else None
         self.camera_motion: CameraMotion | None = None
         """The camera's motion measured at the last frame (with ``stabilise``), else None."""
-        # the margin a turn uncovered within the front end's memory (3 x its longest delay, Eq. 8-10),
-        # widened by the lamina's inhibitory window and the detectors' sampling distances
-        self._uncovered = Uncovered(3.0 * max(params.delays_ms()), params.r_i + params.n_c) if self.stabilise else None
+        # the margin a turn uncovered within the front end's memory (its longest delay, Eq. 8-10,
+        # UNCOVERED_DELAYS times), widened by the lamina's inhibitory window and the detectors' reach
+        memory = UNCOVERED_DELAYS * max(params.delays_ms())
+        self._uncovered = Uncovered(memory, params.r_i + params.n_c) if self.stabilise else None
         self.placing: np.ndarray | None = None
         """The LM (Eq. 12) that places fields and seeds: ``maps.magnitude``, 0 in the margin a turn
         uncovered recently (:class:`mlplc2.camera.Uncovered`; docs/model.md, "Camera motion")."""
