@@ -349,3 +349,23 @@ def test_a_still_camera_places_fields_and_seeds_on_the_front_ends_own_local_moti
     for fr in _frames("static", 0.0, frames=6):
         model.step(fr)
         assert model.placing is model.maps.magnitude
+
+
+def test_no_field_or_target_is_placed_in_the_margin_a_turn_uncovered():
+    """A camera panning at 40 deg/s keeps uncovering its right border; a patch that moves there on its
+    own (a checkerboard stepping 3 px a frame, fixed in the image) makes local motion. Until the front
+    end's memory holds that part of the scene (``camera.Uncovered``) it places no field and seeds no
+    target: every field and target lies outside the margin (without the margin a field is born on the patch)."""
+    import mlplc2
+
+    frames = [f.copy() for f in _frames("pan", 40.0, frames=12)]
+    yy, xx = np.mgrid[0:40, 0:20]
+    for k, fr in enumerate(frames):
+        fr[100:140, 292:312] = np.where(((yy + 3 * k) // 5 + xx // 5) % 2 == 0, 30, 220)
+    model = mlplc2.MLPLC2(fps=FPS, hfov_deg=60.0, stabilise=True)
+    for fr in frames:
+        out = model.step(fr)
+        for f in out.fields:
+            assert f.x < 250, (f.x, f.y)
+        for t in out.targets:
+            assert t.x < 250, (t.x, t.y)
