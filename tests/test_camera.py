@@ -146,13 +146,14 @@ def test_both_front_ends_stabilise_alike():
         assert np.allclose(maps[0], maps[1], atol=1e-4 * max(1.0, float(maps[0].max())))
 
 
-def test_a_stabilised_model_honours_the_model_contract():
-    """MLPLC2(stabilise=True) passes every check of mlplc2.testing (streaming = batch, reset,
+@pytest.mark.parametrize("name", ["MLPLC2", "SLPLC2"])
+def test_a_stabilised_model_honours_the_model_contract(name):
+    """MLPLC2 and SLPLC2 (stabilise=True) pass every check of mlplc2.testing (streaming = batch, reset,
     pickling, determinism, bad input, size change, ...)."""
     import mlplc2
     from mlplc2.testing import run_checks
 
-    assert run_checks(lambda: mlplc2.MLPLC2(fps=FPS, stabilise=True))
+    assert run_checks(lambda: getattr(mlplc2, name)(fps=FPS, stabilise=True))
 
 
 def test_stabilised_targets_of_a_panning_camera_keep_their_time_to_contact():

@@ -219,7 +219,7 @@ class SLPLC2(_LPLC2Family):
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
-        self._front(gray)
+        lm = self._front(gray)
         mag = self.placing
         if not self._fields and float(mag.max()) > p.t_a:
             self._new_field(0, 0, index, p.r_af)
