@@ -26,7 +26,7 @@ MIN_ROTATION_CONFIDENCE = 0.5
 #: of the points than the rotation does is taken instead: no rotation.
 TRANSLATION_MARGIN = 0.15
 #: How long what a turn uncovered stays out of the placing of fields and seeds, in the front end's
-#: longest delay (Eq. 8-10: tau_1 = 80 ms): :class:`Uncovered`.
+#: longest delay (Eq. 8-10: tau_1 = 80 ms): :class:`Uncovered`. 0 = no margin.
 UNCOVERED_DELAYS = 3.0
 
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp",

@@ -65,7 +65,7 @@ class _LPLC2Family(Model):
         # the margin a turn uncovered within the front end's memory (its longest delay, Eq. 8-10,
         # UNCOVERED_DELAYS times), widened by the lamina's inhibitory window and the detectors' reach
         memory = UNCOVERED_DELAYS * max(params.delays_ms())
-        self._uncovered = Uncovered(memory, params.r_i + params.n_c) if self.stabilise else None
+        self._uncovered = Uncovered(memory, params.r_i + params.n_c) if self.stabilise and memory > 0 else None
         self.placing: np.ndarray | None = None
         """The LM (Eq. 12) that places fields and seeds: ``maps.magnitude``, 0 in the margin a turn
         uncovered recently (:class:`mlplc2.camera.Uncovered`; docs/model.md, "Camera motion")."""
@@ -94,7 +94,8 @@ class _LPLC2Family(Model):
                                                     omega=self.rotation_given)
         if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
             self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
-        self._uncovered.step(hom, gray.shape, 1000.0 * self.interval / self.fps)
+        if self._uncovered is not None:
+            self._uncovered.step(hom, gray.shape, 1000.0 * self.interval / self.fps)
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
@@ -118,6 +119,7 @@ class _LPLC2Family(Model):
         self._layer = None
         if self._camera is not None:
             self._camera.reset()
+        if self._uncovered is not None:
             self._uncovered.reset()
         self.camera_motion = None
         self.placing = None
