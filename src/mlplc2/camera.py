@@ -25,12 +25,9 @@ MIN_ROTATION_CONFIDENCE = 0.5
 #: lengths from the principal point: sideways, e.g. over near ground) that explains this much larger a share
 #: of the points than the rotation does is taken instead: no rotation.
 TRANSLATION_MARGIN = 0.15
-#: How long what a turn uncovered stays out of the placing of fields and seeds, in the front end's
-#: longest delay (Eq. 8-10: tau_1 = 80 ms): :class:`Uncovered`. 0 = no margin.
-UNCOVERED_DELAYS = 3.0
 
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp",
-           "compensation", "Uncovered"]
+           "compensation"]
 
 
 def check_hfov(hfov_deg, *, required: bool = False) -> float | None:
@@ -400,44 +397,3 @@ def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float 
                               borderMode=cv2.BORDER_CONSTANT, borderValue=np.nan)
     np.copyto(out, fill, where=np.isnan(out))           # in place: no third image
     return out
-
-
-class Uncovered:
-    """The margin a turning camera uncovered recently: where the front end's memory is not yet the scene's.
-
-    Compensation fills what the turn uncovers with the new frame in P(t-1) and 0 in the delayed
-    signals (``FrontEnd.compensate``); until the delays and low-pass filters of Eq. 8-10 have filled
-    again (``memory_ms``, 3 times their longest time constant) the seam between those and the real
-    signals makes local motion that no object made, and the lamina's and detectors' windows carry
-    it ``reach`` px further in. :attr:`mask` is that margin (True = uncovered within the memory,
-    widened by ``reach``), or None when there is none: a still camera never has one.
-    Computed once per frame by the model (``docs/model.md``, "Camera motion").
-    """
-
-    def __init__(self, memory_ms: float, reach: int):
-        self.memory_ms = float(memory_ms)
-        self.reach = int(reach)
-        self._age: np.ndarray | None = None      # ms since each pixel was first seen (float32)
-        self.mask: np.ndarray | None = None
-
-    def reset(self) -> None:
-        self._age = None
-        self.mask = None
-
-    def step(self, homography: np.ndarray | None, shape: tuple[int, int], elapsed_ms: float) -> None:
-        """One frame: ``homography`` (previous frame -> this one, None: no turn), ``elapsed_ms`` since
-        the last frame."""
-        if homography is not None:
-            age = np.full(shape, self.memory_ms, np.float32) if self._age is None else self._age
-            self._age = warp(age, homography, fill=0.0)
-        if self._age is None:
-            return
-        self._age += np.float32(elapsed_ms)
-        young = self._age < self.memory_ms
-        if not young.any():
-            self._age = self.mask = None
-            return
-        if self.reach > 0:
-            k = 2 * self.reach + 1
-            young = cv2.dilate(young.view(np.uint8), np.ones((k, k), np.uint8)).view(bool)
-        self.mask = young

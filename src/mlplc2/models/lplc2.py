@@ -8,7 +8,7 @@ from dataclasses import replace
 
 import numpy as np
 
-from ..camera import UNCOVERED_DELAYS, CameraMotion, MotionEstimator, Uncovered
+from ..camera import CameraMotion, MotionEstimator
 from ..neuropils.attention import AttentionField, argmax_outside, gate_area, lplc2_response, quadrant_areas
 from ..backend import resolve
 from ..neuropils.lobula_plate import LocalMotion
@@ -62,13 +62,6 @@ class _LPLC2Family(Model):
         self._camera = MotionEstimator(hfov_deg=hfov_deg) if self.stabilise else None
         self.camera_motion: CameraMotion | None = None
         """The camera's motion measured at the last frame (with ``stabilise``), else None."""
-        # the margin a turn uncovered within the front end's memory (its longest delay, Eq. 8-10,
-        # UNCOVERED_DELAYS times), widened by the lamina's inhibitory window and the detectors' reach
-        memory = UNCOVERED_DELAYS * max(params.delays_ms())
-        self._uncovered = Uncovered(memory, params.r_i + params.n_c) if self.stabilise and memory > 0 else None
-        self.placing: np.ndarray | None = None
-        """The LM (Eq. 12) that places fields and seeds: ``maps.magnitude``, 0 in the margin a turn
-        uncovered recently (:class:`mlplc2.camera.Uncovered`; docs/model.md, "Camera motion")."""
 
     def _front(self, gray: np.ndarray) -> LocalMotion:
         """Eq. 1-12 on ``gray``, after gaze stabilisation when the model has it."""
@@ -76,8 +69,6 @@ class _LPLC2Family(Model):
             self._stabilise(gray)
         lm = self.frontend.step(gray, self.interval)
         self.maps = lm
-        mask = None if self._uncovered is None else self._uncovered.mask
-        self.placing = lm.magnitude if mask is None else np.where(mask, np.float32(0), lm.magnitude)
         return lm
 
     def gyro_refusal(self) -> str | None:
@@ -94,8 +85,6 @@ class _LPLC2Family(Model):
                                                     omega=self.rotation_given)
         if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
             self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
-        if self._uncovered is not None:
-            self._uncovered.step(hom, gray.shape, 1000.0 * self.interval / self.fps)
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
@@ -119,10 +108,7 @@ class _LPLC2Family(Model):
         self._layer = None
         if self._camera is not None:
             self._camera.reset()
-        if self._uncovered is not None:
-            self._uncovered.reset()
         self.camera_motion = None
-        self.placing = None
 
     # -- field bookkeeping ---------------------------------------------------
     def _new_field(self, x: int, y: int, index: int, radius: int) -> AttentionField:
@@ -151,8 +137,7 @@ class _LPLC2Family(Model):
                 tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
-        targets = self._layer.step(gray, self.maps, self._fields, index, self.clock,
-                                   uncovered=None if self._uncovered is None else self._uncovered.mask)
+        targets = self._layer.step(gray, self.maps, self._fields, index, self.clock)
         fields = tuple(f.snapshot() for f in self._fields)
         response = max((f.response for f in fields), default=0.0)
         collision = any(f.collision for f in fields)
@@ -201,7 +186,7 @@ class MLPLC2(_LPLC2Family):
             # A responding field also claims the blurred edges just beyond it (``exclusion``).
             zones = [(f.x, f.y, round(p.exclusion * f.radius) if f.response > 0 else f.radius)
                      for f in self._fields]
-            cand = argmax_outside(self.placing, zones, p.field_shape)
+            cand = argmax_outside(lm.magnitude, zones, p.field_shape)
             if cand is not None and cand[2] > p.t_a:
                 self._new_field(cand[0], cand[1], index, p.r_af)
         # Eq. 14-15 for every field, then Eq. 16 removal (never the last field).
@@ -222,7 +207,7 @@ class SLPLC2(_LPLC2Family):
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params
         lm = self._front(gray)
-        mag = self.placing
+        mag = lm.magnitude
         if not self._fields and float(mag.max()) > p.t_a:
             self._new_field(0, 0, index, p.r_af)
         if self._fields:

@@ -119,16 +119,14 @@ class TargetLayer:
 
     # -- one frame -----------------------------------------------------------------------
     def step(self, gray: np.ndarray, lm: LocalMotion | None, fields, index: int,
-             clock: float | None = None, uncovered: np.ndarray | None = None) -> tuple[Target, ...]:
+             clock: float | None = None) -> tuple[Target, ...]:
         """Targets of this frame. ``gray``: the model's float32 grey frame; ``lm``: its LM maps
         (None for a front end without them, the optical-flow baseline: no LM seed, no edge box);
         ``fields``: the attention fields (objects with ``id``, ``x``, ``y``, ``radius``, ``response``;
         another front end's candidate regions play their part: evidence under a target when
         their response is > 0, else a seed);
         ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
-        fits of the time to contact and the course use (``docs/model.md``, "Time");
-        ``uncovered``: the margin a turn uncovered recently (:class:`mlplc2.camera.Uncovered`), where
-        neither the LM nor the change seeds (None: none)."""
+        fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
         clock = index if clock is None else clock
         levels = self._pyramid(gray)
@@ -156,10 +154,9 @@ class TargetLayer:
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
-            mag = lm.magnitude if uncovered is None else np.where(uncovered, np.float32(0), lm.magnitude)
-            cand = argmax_outside(mag, zones)
+            cand = argmax_outside(lm.magnitude, zones)
             if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-                cand = self._change_seed(levels, zones, uncovered)
+                cand = self._change_seed(levels, zones)
             if cand is not None:
                 seeds.append((cand[0], cand[1], None))
         for x, y, f in seeds:
@@ -296,7 +293,7 @@ class TargetLayer:
         y0, y1 = max(f.y - f.radius, 0.0), min(f.y + f.radius, h - 1.0)
         return (x0 + x1) / 2.0, (y0 + y1) / 2.0, max(x1 - x0, 2.0), max(y1 - y0, 2.0)
 
-    def _change_seed(self, levels, zones, uncovered=None):
+    def _change_seed(self, levels, zones):
         """A candidate where the image changed most over the last ``change_frames`` frames (at
         half resolution, outside the zones of targets and fields), when that change stands out:
         at least ``seed_change`` grey levels and ``seed_contrast`` times the frame's mean change.
@@ -312,8 +309,6 @@ class TargetLayer:
             x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
             y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
             d[y0:y1, x0:x1] = 0
-        if uncovered is not None:                # the margin a turn uncovered recently (at half resolution)
-            d[uncovered[: 2 * d.shape[0]:2, : 2 * d.shape[1]:2]] = 0
         _, top, _, (x, y) = cv2.minMaxLoc(d)
         if top < max(p.seed_change, p.seed_contrast * float(d.mean())):
             return None
