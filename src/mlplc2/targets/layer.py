@@ -132,7 +132,7 @@ class TargetLayer:
         levels = self._pyramid(gray)
         h, w = gray.shape
         if self._prev is not None:
-            self._follow(levels, clock, clock - self._clock, w, h, lm)
+            self._follow(levels, clock, clock - self._clock, w, h)
         far = self._prev is not None and self._far(clock - self._clock)
         self._clock = clock
         self._keep_past(clock)
@@ -410,9 +410,8 @@ class TargetLayer:
         if not found and alarm:
             yield self._field_box(field, gray.shape[1], gray.shape[0]), False
 
-    def _follow(self, levels, clock: float, interval: float, w: int, h: int, lm=None) -> None:
-        """Move and grow every track with the image alignment; drop the lost ones. With ``refit`` and
-        LM maps, the box then moves that fraction of the way to its own edges (:meth:`_edges`)."""
+    def _follow(self, levels, clock: float, interval: float, w: int, h: int) -> None:
+        """Move and grow every track with the image alignment; drop the lost ones."""
         p = self.params
         kept = []
         for t in self._tracks:
@@ -422,24 +421,11 @@ class TargetLayer:
             else:
                 al = self._align_track(levels, t, half, interval)
                 move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
-            box = self._edges(lm, t, move) if p.refit > 0 and move is not None else None
-            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border,
-                        box=box, refit=p.refit):
+            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
-
-    def _edges(self, lm: LocalMotion | None, t: Track, move) -> tuple | None:
-        """The box of the local motion's edges (:func:`measure_extent`) around the centre of track ``t``
-        moved by ``move``, None without LM maps or when an axis has no edge pair."""
-        if lm is None:
-            return None
-        ext = measure_extent(lm, int(round(t.cx + move[0])), int(round(t.cy + move[1])), self.params,
-                             kernel=self.kernel)
-        if ext.width is None or ext.height is None:
-            return None
-        return ext.cx, ext.cy, ext.width, ext.height
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

@@ -81,13 +81,6 @@ class TargetParams(ParameterSet):
     # --- the image measurement ------------------------------------------------------------
     patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",
                        unit="samples", valid=Valid.integer(8, 256))
-    refit: float = param(0.0, """Each frame a followed target's box moves this fraction of the way (geometrically
-                         for its size, shrinking only) towards the extent of the local motion's
-                         edges around its centre (:func:`measure_extent`, as a candidate's edge box):
-                         the alignment's scale, applied to a box that holds background beside the
-                         object, grows it with the background's expansion (a forward-moving
-                         camera's passing objects, issue 22). 0 = the box only follows the alignment.""",
-                         valid=Valid.real(minimum=0, maximum=1))
     margin: float = param(1.5, "Patch half-side = ``margin`` x half the box's larger side + 3 px.",
                           valid=Valid.real(minimum=1))
     iterations: int = param(10, "Most Gauss-Newton iterations per alignment.", valid=Valid.integer(1))
