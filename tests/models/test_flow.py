@@ -266,4 +266,6 @@ def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_wor
         misses.append([t.miss for out in (model.step(f) for f in st.frames) for t in out.targets])
     assert any(m is not None for m in misses[0])
     assert [m is None for m in misses[0]] == [m is None for m in misses[1]]
-    assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None])
+    # the same course to rounding (the fit's miss is the centre's offset from its own expansion
+    # centre at contact: the heading drops out but for the rounding of the subtraction)
+    assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None], abs=1e-6)

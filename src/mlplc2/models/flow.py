@@ -37,7 +37,8 @@ from ..backend import resolve
 from ..camera import CameraMotion, MotionEstimator, check_hfov, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
 from ..targets.change import change_box
-from ..targets.layer import TargetLayer, count_down
+from ..targets.layer import TargetLayer
+from ..targets.warning import count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
 

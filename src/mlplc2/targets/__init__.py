@@ -33,7 +33,8 @@ from .alignment import Alignment, align, pyramid
 from .change import change_box
 from .contact import ContactFit, fit_contact, fit_course
 from .extent import Extent, edge_distance, measure_extent
-from .layer import Observation, Target, TargetLayer, Track, alarm_warns, count_down, estimate
+from .layer import Observation, Target, TargetLayer, Track
+from .warning import alarm_warns, count_down, estimate
 from .params import TargetParams
 
 __all__ = ["TargetParams", "Target", "TargetLayer", "Track", "Extent", "Alignment", "measure_extent", "edge_distance",

@@ -18,18 +18,16 @@ from dataclasses import replace
 import cv2
 import numpy as np
 
-from ..camera import bearing
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import change_box, unswept
-from .contact import fit_contact, fit_course, miss_limit
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
-from .track import EPS as _EPS, MIN_POINTS, Carried, Observation, Target, Track, Turn
+from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn
+from .warning import estimate
 
-__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried", "estimate", "course", "alarm_warns", "on_path",
-           "keeps_bearing", "count_down", "held", "MIN_POINTS", "fits"]
+__all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
@@ -500,187 +498,3 @@ class TargetLayer:
                 host.last_answer = max(host.last_answer, t.last_answer)
                 host.last_alarm = max(host.last_alarm, t.last_alarm)
         self._tracks = out
-
-
-def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
-    """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
-    heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
-    pixels), from its last observations whose box was wholly inside the frame (``Track.inside``,
-    however old: a cut box gives neither the object's centre nor its size); None when they are too
-    few for a fit over ``span`` clock units (:func:`fits`)."""
-    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
-    if not fits(inside, span):
-        return None
-    ahead = ttc + (t.history[-1].frame - inside[-1].frame)
-    return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
-                      [q.width for q in inside], heading, ahead,
-                      heights=[q.width if q.height is None else q.height for q in inside])
-
-
-def fits(obs, span: float) -> bool:
-    """Whether observations ``obs`` (oldest first) are enough for a fit: at least :data:`MIN_POINTS`
-    of them over at least ``span`` clock units (``TargetParams.min_frames`` - 1 frame intervals at
-    ``nominal_fps``: :meth:`TargetParams.span`)."""
-    return len(obs) >= MIN_POINTS and obs[-1].frame - obs[0].frame >= span - _EPS
-
-
-def count_down(targets, elapsed: float) -> tuple[Target, ...]:
-    """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down; an estimate
-    whose contact has passed becomes None and loses its warning; re-sorted by urgency."""
-    out = []
-    for t in targets:
-        if t.ttc_s is not None:
-            left = t.ttc_s - elapsed
-            t = replace(t, ttc_s=left) if left > 0 else replace(t, ttc_s=None, miss=None, warning=False,
-                                                                 ttc_sigma_s=None, miss_xy=None)
-        out.append(t)
-    return tuple(sorted(out, key=Target.urgency))
-
-
-def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
-                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None,
-                limit: float | None = None) -> bool:
-    """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
-    attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
-    warns, unless its own measurement says otherwise: its box did not grow over its history
-    (receding, static), its fit found no time to contact although its history is long enough
-    (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
-    path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing; ``limit``: the miss allowed, :func:`~mlplc2.targets.contact.miss_limit`, None:
-    ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
-    by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
-    lies on the path now (:func:`on_path`) or keeps its bearing while it grows
-    (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
-    that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
-    if not p.alarm_warns or t.last_alarm != index:
-        return False
-    if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
-        return False
-    if ttc is None and fits(t.history, t.fit_span):   # the fit's "no"
-        return False
-    if ttc is not None and ttc > p.horizon_s:
-        return False
-    if miss is not None:
-        return miss <= (p.max_miss if limit is None else limit)
-    if heading is None or shape is None or t.cut(shape, p.border):
-        return False
-    return on_path(t, p, heading) or keeps_bearing(t, heading)
-
-
-def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
-    """Whether track ``t``'s box lies on the camera's path now: its centre's offset from ``heading``
-    (px), horizontally in its widths and vertically in its heights (the units of the course's miss),
-    is at most ``max_miss``: the miss of an object that comes straight on from where it is."""
-    return math.hypot((t.cx - heading[0]) / max(t.w, 1.0), (t.cy - heading[1]) / max(t.h, 1.0)) <= p.max_miss
-
-
-#: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
-#: world's (0: an object on a collision course, 1: the static world, halfway between), and the
-#: least drift of the static world (px) that a box's jitter cannot fake
-DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
-
-
-def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
-    """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
-    does, over its history (two observations at least; on its first frame, the alarm seed's
-    alignment against the frame ``change_frames`` before, ``Track.seed_move``): the static world (and an object that
-    will pass) expands about the heading (the focus of expansion of a camera that does not turn),
-    so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
-    while the centre of an object on a collision course stays put. True when the static world's
-    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
-    centres are the observations' (less the camera's turn, :class:`Observation`)."""
-    if len(t.history) >= 2:
-        q0, q1 = t.history[0], t.history[-1]
-        x0, y0, x1, y1, growth = q0.x, q0.y, q1.x, q1.y, q1.log_scale - q0.log_scale
-    elif t.seed_move is not None:          # its first frame: the seed's own alignment
-        dx, dy, growth = t.seed_move
-        x1, y1 = t.cx, t.cy
-        x0, y0 = x1 - dx, y1 - dy
-    else:
-        return False
-    r0 = math.hypot(x0 - heading[0], y0 - heading[1])
-    r1 = math.hypot(x1 - heading[0], y1 - heading[1])
-    static = r0 * math.expm1(growth)
-    return static >= MIN_DRIFT_PX and r1 - r0 <= DRIFT_FRACTION * static
-
-
-def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
-    """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
-    down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
-    (as :func:`count_down` for a held frame); else four None. Reported, never a warning."""
-    if t.held is None or p.hold_frames == 0 or now - t.held[0] > p.span(p.hold_frames, fps) + _EPS:
-        return None, None, None, None
-    left = t.held[1] - (now - t.held[0]) / fps
-    return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
-
-
-def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
-    """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
-    or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
-    ``nominal_fps``: :meth:`TargetParams.span`)."""
-    if now - t.last_answer <= p.span(p.evidence_frames, fps) + _EPS:
-        return True
-    return p.confirm_frames == 0 or (t.streak > 0 and now - t.streak_since >= p.span(p.confirm_frames - 1, fps) - _EPS)
-
-
-def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
-             focal: float | None = None, heading: tuple[float, float] | None = None) -> Target:
-    """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
-    course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
-    by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
-    frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
-    the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
-    :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point."""
-    h, w = shape
-    t.fit_span = p.span(p.min_frames - 1, fps)
-    frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
-    ttc = sigma = miss = miss_xy = None
-    limit = p.max_miss
-    if heading is None:
-        heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
-    fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
-    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
-    # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
-    # along the motion: none of them is an object approaching, none gets a time to contact
-    isotropic = True
-    if fit is not None and fit.ttc is not None:
-        growth = t.history[-1].log_scale - t.history[0].log_scale
-        skew = t.history[-1].anisotropy - t.history[0].anisotropy
-        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
-    # the fit's contact is counted from its newest observation: a frame whose measurement failed
-    # (``max_fails``) added none, and the contact is that much nearer
-    ago = index - t.history[-1].frame if t.history else 0.0
-    if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
-            and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
-        ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
-        miss_xy = course(t, heading, fit.ttc, t.fit_span)
-        miss = None if miss_xy is None else math.hypot(*miss_xy)
-        limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
-        t.streak_since = index if t.streak == 0 else t.streak_since
-        t.streak += 1
-        t.last_estimate = index
-        t.held = (index, ttc, sigma, miss, miss_xy)
-    else:
-        t.streak = 0
-    looming = ttc is not None and _evident(t, p, fps, index)
-    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
-                   and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
-    # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
-    # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
-    # static world beside the path sweeps out of view through the border with a short time to contact
-    if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s):
-        warning = False
-    t.warned = t.warned or warning
-    if ttc is None:
-        ttc, sigma, miss, miss_xy = held(t, p, fps, index)
-    az = el = None
-    if focal is not None:
-        az, el = bearing(t.cx, t.cy, (h, w), focal)
-    def num(v):
-        return None if v is None else float(v)
-
-    return Target(t.id, float(t.cx), float(t.cy), float(t.w), float(t.h), ttc_s=num(ttc), miss=num(miss),
-                  warning=warning, fields=tuple(sorted(t.fields)), born=t.born, looming=looming,
-                  expansion=num(t.rate), ttc_sigma_s=num(sigma), azimuth_deg=num(az), elevation_deg=num(el),
-                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])))

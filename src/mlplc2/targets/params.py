@@ -153,8 +153,8 @@ class TargetParams(ParameterSet):
                               nothing against it (no time to contact from a history of ``min_frames``, one
                               beyond the horizon, a course beyond ``max_miss``; without a course, a box
                               cut by the border, or one neither on the path now nor keeping its bearing
-                              while it grows: :func:`~mlplc2.targets.layer.on_path`,
-                              :func:`~mlplc2.targets.layer.keeps_bearing`); such a field belongs only
+                              while it grows: :func:`~mlplc2.targets.warning.on_path`,
+                              :func:`~mlplc2.targets.warning.keeps_bearing`); such a field belongs only
                               to a target whose box holds its centre, else it seeds one that needs only
                               some growth, with the field's extent when no box is found.""",
                               valid=Valid.boolean())
