@@ -418,12 +418,28 @@ class TargetLayer:
                 move = self.measure(self._prev, levels, t, half, interval)
             else:
                 al = self._align_track(levels, t, half, interval)
-                move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
+                move = None if al is None else (al.dx, al.dy, *self._core_scale(levels, t, al),
+                                                math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _core_scale(self, levels, t: Track, al) -> tuple[float, float]:
+        """The factors on the box's width and height this frame: the alignment ``al``'s of the whole box,
+        or (``core_growth`` > 0) those of the alignment weighted on the box's middle ``core_growth`` of its
+        width and height, when that one succeeds (the object's own growth, not its background's)."""
+        p = self.params
+        if p.core_growth <= 0:
+            return al.kx, al.ky
+        box = (p.core_growth * t.w / 2.0, p.core_growth * t.h / 2.0)
+        half = p.margin * p.core_growth * t.size / 2.0 + 3.0
+        core = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
+                     kernel=self.align_kernel)
+        if core is None or core.residual > p.max_residual:
+            return al.kx, al.ky
+        return core.kx, core.ky
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""
