@@ -75,8 +75,9 @@ class TargetLayer:
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
+        self.expansion = 0.0      # the static world's measured expansion rate (1 / frame interval), smoothed
 
-    def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
+    def see_heading(self, point: tuple[float, float] | None, confidence: float, expansion: float = 0.0) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
         and its confidence (0-1): :attr:`heading` moves towards it by ``HEADING_GAIN`` times the
         confidence (an exponential average over ~1 / ``HEADING_GAIN`` frames of a sure estimate; a
@@ -87,8 +88,10 @@ class TargetLayer:
             return
         if self.heading is None:
             self.heading = (float(point[0]), float(point[1]))
+            self.expansion = float(expansion)
             return
         k = HEADING_GAIN * min(float(confidence), 1.0)
+        self.expansion += k * (float(expansion) - self.expansion)
         self.heading = (self.heading[0] + k * (point[0] - self.heading[0]),
                         self.heading[1] + k * (point[1] - self.heading[1]))
 
@@ -395,7 +398,10 @@ class TargetLayer:
         def change():
             if not self._past:
                 return None
-            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
+            static = None
+            if p.static_change and self.heading is not None and self.expansion > 0:
+                static = (*self.heading, math.exp(self.expansion * (self._clock - self._past_t[0])))
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift), static=static)
 
         found = False
         for find in ((edges, change) if field is not None else (change, edges)):
