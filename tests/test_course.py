@@ -8,8 +8,6 @@ import math
 import statistics
 from collections import deque
 
-import cv2
-import numpy as np
 import pytest
 
 from mlplc2.evaluation.truth import parse
@@ -316,43 +314,3 @@ def test_an_object_passing_three_widths_beside_the_camera_misses_by_about_three(
 def test_an_object_on_a_collision_course_stays_under_half_a_width():
     misses = _pass_misses(0.1, TargetParams(unsweep=True))            # truth 0.2
     assert misses and max(misses) < 0.5
-
-
-# -- the box's own size (issue 22, session 10): a followed box that holds background beside the object
-# grows with the background's expansion (a forward-moving camera's, faster than a far object's) unless
-# it grows by its core's scale only (``core_growth``) --
-def _scaled(img, s, c):
-    m = np.array([[1 / s, 0, c[0] - c[0] / s], [0, 1 / s, c[1] - c[1] / s]], np.float32)
-    return cv2.warpAffine(img, m, img.shape[::-1], flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                          borderMode=cv2.BORDER_REFLECT)
-
-
-def _box_over_object(core: float) -> list[float]:
-    """The followed box's width over the object's, frame by frame: a textured square 20 px wide growing
-    1 % per frame over a textured ground that expands 4 % per frame about the same point, its box
-    made twice the square's width."""
-    rng = np.random.default_rng(7)
-    ground, obj = (cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 2.0) for _ in "go")
-    c = (80.0, 60.0)
-    yy, xx = np.mgrid[:120, :160]
-    layer = TargetLayer(TargetParams(core_growth=core), 30.0)
-    widths = []
-    for k in range(13):
-        so = 1.01 ** k
-        frame = np.where((abs(xx - c[0]) <= 10 * so) & (abs(yy - c[1]) <= 10 * so), _scaled(obj, so, c),
-                         _scaled(ground, 1.04 ** k, c)).astype(np.float32)
-        layer.step(frame, None, [], k)
-        if k == 0:
-            t = Track(1, 0, c[0], c[1], 40.0, 40.0, span=11, keep=12)
-            t.history = deque([Observation(0, 0.0, c[0], c[1], 40.0, 0.0, height=40.0)])
-            layer._tracks.append(t)
-        elif layer._tracks:
-            widths.append(layer._tracks[0].w / (20 * so))
-    return widths
-
-
-def test_a_box_grows_by_its_cores_scale_not_by_the_background_beside_the_object():
-    off = _box_over_object(0.0)
-    assert off[-1] == pytest.approx(2.0 * (1.04 / 1.01) ** 12, rel=0.05)      # 2.83: the background's growth
-    core = _box_over_object(0.5)
-    assert len(core) == 12 and all(w == pytest.approx(2.0, abs=0.15) for w in core)

@@ -135,30 +135,6 @@ def test_change_box_on_a_still_textured_background_for_any_window():
         assert (cx, cy) == pytest.approx((100.3, 80.6), abs=1.0) and 9 <= w <= 14 and 9 <= h <= 14, radius
 
 
-def test_change_box_less_the_static_worlds_expansion():
-    """A camera moving forward: the textured static world expands about the heading (here by 8 %
-    over the frames compared), so that every pixel beside the heading changed and no compact
-    region is found; with the static world's predicted expansion undone (``static``) the change
-    left is the object's: a small disc that does not move with the static world, its box the disc
-    at where the static world's expansion would have put it and where it is (``TargetParams.static_change``)."""
-    rng = np.random.default_rng(5)
-    a = cv2.GaussianBlur(rng.uniform(0, 255, (160, 200)).astype(np.float32), (0, 0), 1.5)
-    hx, hy, k = 60.0, 60.0, 1.08
-    m = np.array([[1 / k, 0, hx - hx / k], [0, 1 / k, hy - hy / k]], np.float32)
-    b = cv2.warpAffine(a, m, (200, 160), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                       borderMode=cv2.BORDER_REFLECT)
-    yy, xx = np.mgrid[:160, :200]
-    r = np.hypot(xx - 120.3, yy - 90.6)
-    a = np.where(r <= 5.0, 100.0, a).astype(np.float32)
-    b = np.where(r <= 5.6, 100.0, b).astype(np.float32)
-    plain = change_box(a, b, 121, 89, 40)
-    assert plain is None or plain[2] > 30                    # the background's change, not the disc
-    cx, cy, w, h = change_box(a, b, 121, 89, 40, static=(hx, hy, k))
-    # the predicted place of the old disc: (hx, hy) + k ((120.3, 90.6) - (hx, hy)) = (125.1, 93.0)
-    assert (cx, cy) == pytest.approx((122.7, 91.8), abs=1.5) and 10 <= w <= 19 and 10 <= h <= 17
-    assert change_box(a, a, 121, 89, 40, static=(hx, hy, 1.0)) is None
-
-
 def test_edge_distance_outer_boundary_and_nearest_edge():
     p = np.zeros(120)
     p[20:26] = [1, 4, 8, 8, 4, 1]           # this object's edge

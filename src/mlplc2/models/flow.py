@@ -379,8 +379,7 @@ class FlowTTC(Model):
                                                     heading=self._work_point(self.target_params.heading),
                                                     omega=self.rotation_given)
         if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
-            self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence,
-                                    self.camera_motion.expansion)
+            self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
         if hom is None:
             return
         ones = np.ones(cur.shape, np.float32)

@@ -35,8 +35,7 @@ _DILATION = np.ones((3, 3), np.uint8)
 
 
 def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
-               rel: float = 0.2, static: tuple[float, float, float] | None = None
-               ) -> tuple[float, float, float, float] | None:
+               rel: float = 0.2) -> tuple[float, float, float, float] | None:
     """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y).
 
     Within ``radius`` px of (x, y), the window's own image motion (a turning camera moves the
@@ -46,8 +45,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     object growing against its background, the ring of its edge, hence its size to a pixel,
     long before its edges move a pixel per frame. None when nothing changed or the region
     reaches the window's border (a background that does not move as a whole: no compact
-    object to box). ``static``: (x, y, k), the static world's predicted motion since ``prev``, an
-    expansion by ``k`` about the heading (x, y): ``prev`` is expanded so before the comparison.
+    object to box).
     """
     h, w = cur.shape
     x0, x1 = max(x - radius, 0), min(x + radius + 1, w)
@@ -57,18 +55,9 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     # OpenCV's phase correlation reports a spurious half-pixel shift of identical windows whose
     # DFT size is odd (81 px: (0.5, 0.5)); an even DFT size has none
     x1, y1 = x0 + _even_dft_size(x1 - x0), y0 + _even_dft_size(y1 - y0)
-    if static is not None and static[2] != 1.0:    # the static world's expansion about the heading undone
-        hx, hy, k = static
-        m = np.array([[1.0 / k, 0.0, hx + (x0 - hx) / k], [0.0, 1.0 / k, hy + (y0 - hy) / k]], np.float32)
-        a = cv2.warpAffine(np.asarray(prev, np.float32), m, (x1 - x0, y1 - y0),
-                           flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
-    else:
-        a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
+    a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
     b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
-    if static is not None:                   # the static world's motion is the prediction's, not a shift
-        sx = sy = 0.0
-    else:
-        (sx, sy), _ = cv2.phaseCorrelate(a, b, _hanning(a.shape))
+    (sx, sy), _ = cv2.phaseCorrelate(a, b, _hanning(a.shape))
     if abs(sx) > 0.5 or abs(sy) > 0.5:      # the background moved: compare it with itself
         m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
         b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)

@@ -75,9 +75,8 @@ class TargetLayer:
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
-        self.expansion = 0.0      # the static world's measured expansion rate (1 / frame interval), smoothed
 
-    def see_heading(self, point: tuple[float, float] | None, confidence: float, expansion: float = 0.0) -> None:
+    def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
         and its confidence (0-1): :attr:`heading` moves towards it by ``HEADING_GAIN`` times the
         confidence (an exponential average over ~1 / ``HEADING_GAIN`` frames of a sure estimate; a
@@ -88,10 +87,8 @@ class TargetLayer:
             return
         if self.heading is None:
             self.heading = (float(point[0]), float(point[1]))
-            self.expansion = float(expansion)
             return
         k = HEADING_GAIN * min(float(confidence), 1.0)
-        self.expansion += k * (float(expansion) - self.expansion)
         self.heading = (self.heading[0] + k * (point[0] - self.heading[0]),
                         self.heading[1] + k * (point[1] - self.heading[1]))
 
@@ -398,10 +395,7 @@ class TargetLayer:
         def change():
             if not self._past:
                 return None
-            static = None
-            if p.static_change and self.heading is not None and self.expansion > 0:
-                static = (*self.heading, math.exp(self.expansion * (self._clock - self._past_t[0])))
-            return change_box(self._past[0][0], gray, x, y, int(p.max_shift), static=static)
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
 
         found = False
         for find in ((edges, change) if field is not None else (change, edges)):
@@ -424,28 +418,12 @@ class TargetLayer:
                 move = self.measure(self._prev, levels, t, half, interval)
             else:
                 al = self._align_track(levels, t, half, interval)
-                move = None if al is None else (al.dx, al.dy, *self._core_scale(levels, t, al),
-                                                math.log(al.scale), al.anisotropy)
+                move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
-
-    def _core_scale(self, levels, t: Track, al) -> tuple[float, float]:
-        """The factors on the box's width and height this frame: the alignment ``al``'s of the whole box,
-        or (``core_growth`` > 0) those of the alignment weighted on the box's middle ``core_growth`` of its
-        width and height, when that one succeeds (the object's own growth, not its background's)."""
-        p = self.params
-        if p.core_growth <= 0:
-            return al.kx, al.ky
-        box = (p.core_growth * t.w / 2.0, p.core_growth * t.h / 2.0)
-        half = p.margin * p.core_growth * t.size / 2.0 + 3.0
-        core = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
-                     kernel=self.align_kernel)
-        if core is None or core.residual > p.max_residual:
-            return al.kx, al.ky
-        return core.kx, core.ky
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

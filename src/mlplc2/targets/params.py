@@ -76,21 +76,6 @@ class TargetParams(ParameterSet):
                           (:func:`~mlplc2.targets.change.unswept`): a passing object's box spanned its
                           sweep too, and its miss in box widths came out short (issue 22).""",
                           valid=Valid.boolean())
-    static_change: bool = param(False, """(off by default: the holdout's drive 5/5 -> 4/5; docs/model.md, "The box's own size: the static
-                                world's motion, the core's scale") A faint
-                                candidate's change box (:func:`change_box`) is the change left once the static world's
-                                predicted motion is undone: the older frame expanded about the measured heading by the
-                                camera's measured expansion rate (``CameraMotion.expansion``) over the ``change_frames``
-                                frames, before the window's own shift; without a measured heading, as before.""",
-                                valid=Valid.boolean())
-    core_growth: float = param(0.0, """(off by default: 0.5 lost collisions, 42/45 -> 39/45 and the holdout's drive 5/5 -> 3/5;
-                               docs/model.md, "The box's own size: the static world's motion, the core's scale") A followed box
-                               grows by the scale of its core only: each frame a second alignment (:func:`align`)
-                               weighted on the middle ``core_growth`` of the box's width and height sets the box's
-                               growth (its shift and the log-scale of the time to contact stay the whole box's). A box
-                               that holds background beside the object measured the background's expansion, which a
-                               forward-moving camera makes faster than a far passing object's, and outgrew it. 0 = off.""",
-                               valid=Valid.real(minimum=0, maximum=1))
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
