@@ -254,6 +254,47 @@ def test_the_alarm_alone_judges_the_static_world_against_the_measured_heading():
     assert estimate(on, p, FPS, 2, SHAPE, heading=heading).warning
 
 
+def _approach(x0: float, heading_x: float, static: bool, width: float = 24.0, frames=range(10, 20)) -> Track:
+    """A track of 10 frames (10-19: contact 0.7 s after its last, ``CONTACT``) approached by a forward
+    camera, ``x0`` (px) its centre at scale 1 (frame 0): ``static`` (the static world beside the path) expands about the heading at ``heading_x``
+    (px, middle row), so its centre drifts away from it as ``r0 S``; otherwise (an object on a
+    collision course) its centre stays at ``x0``."""
+    frames = list(frames)
+    ls = [math.log(CONTACT / (CONTACT - k)) for k in frames]
+    xs = [heading_x + (x0 - heading_x) * math.exp(v) if static else x0 for v in ls]
+    t = Track(1, frames[0], xs[-1], 60.0, width * math.exp(ls[-1]), width * math.exp(ls[-1]), log_s=ls[-1])
+    t.history = deque(Observation(k, s, x, 60.0, width * math.exp(s), 0.0) for k, s, x in zip(frames, ls, xs))
+    t.inside = deque(t.history)
+    t.last_answer = frames[-1]                                       # looming evidence: a field answered
+    return t
+
+
+def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing():
+    # path_drift: a forward camera (heading measured at the principal point) nears a patch of the
+    # static world whose box lies beside the path, its centre 0.83 widths off the heading: it
+    # expands about the heading, so its measured course gives a miss of 0.83 (within max_miss),
+    # and it warned. Its centre drifts away from the heading as the static world's (drift 1): with
+    # path_drift it does not; an object on a collision course at the same place keeps its bearing
+    # (drift 0) and warns; so does the static patch when one of its fields is in collision alarm
+    # (evidence of its own), or when no heading is measured (a still camera: no test)
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    x0 = heading[0] + 20.0                     # 0.83 widths right of the heading at first
+    off, on = TargetParams(alarm_warns=False, path_drift=0.0), TargetParams(alarm_warns=False, path_drift=0.4)
+    last = 19
+    static = _approach(x0, heading[0], True)
+    assert estimate(static, off, FPS, last, SHAPE, heading=heading).warning      # the false warning
+    static = _approach(x0, heading[0], True)
+    assert not estimate(static, on, FPS, last, SHAPE, heading=heading).warning
+    hits = _approach(x0, heading[0], False)
+    assert estimate(hits, on, FPS, last, SHAPE, heading=heading).warning
+    alarmed = _approach(x0, heading[0], True)
+    alarmed.last_alarm = last
+    assert estimate(alarmed, on, FPS, last, SHAPE, heading=heading).warning
+    assert estimate(_approach(x0, heading[0], True), on, FPS, last, SHAPE).warning   # no measured heading
+    # on the path (its box holds the heading): a wall ahead warns whatever its drift
+    assert estimate(_approach(heading[0] + 5.0, heading[0], True), on, FPS, last, SHAPE, heading=heading).warning
+
+
 def test_the_layer_smooths_the_measured_heading_by_its_confidence():
     layer = TargetLayer(TargetParams())
     assert layer.heading is None                                    # none measured: the principal point

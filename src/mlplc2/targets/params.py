@@ -180,6 +180,16 @@ class TargetParams(ParameterSet):
                                (the drive scenes' false episodes that begin cut: 0.12-0.47 s), while an
                                object on a collision course is seen coming. 0 = off.""", unit="s",
                                valid=Valid.real(minimum=0))
+    path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
+                              warning begins without a field of the target in collision alarm only on a box
+                              that holds the heading or whose centre keeps its bearing: it drifted away from
+                              the heading by at most this fraction of the static world's drift over the same
+                              growth (:func:`~mlplc2.targets.warning.off_path`). The static world beside the
+                              path expands about the heading (1), an object on a collision course keeps its
+                              bearing (0). 0 = off (0.4, the default since session 10: the drive scenes' false
+                              episodes 15.74 -> 10.19 per 1000 frames, holdout 10.19 -> 9.26, no collision or
+                              lead lost; docs/model.md, "A warning that begins off the path").""",
+                              valid=Valid.real(minimum=0))
     stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
                               one, or its birth) holds no measurable approach: only the middle of its box
                               (a quarter of its width and height from the centre) owns fields and seeds,

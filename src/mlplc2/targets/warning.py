@@ -16,8 +16,8 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "count_down", "held", "fits",
-           "MIN_POINTS"]
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "holds", "off_path",
+           "count_down", "held", "fits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -106,6 +106,16 @@ def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
     while the centre of an object on a collision course stays put. True when the static world's
     drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
     centres are the observations' (less the camera's turn, :class:`Observation`)."""
+    ratio = drift(t, heading)
+    return ratio is not None and ratio <= DRIFT_FRACTION
+
+
+def drift(t: Track, heading: tuple[float, float]) -> float | None:
+    """How far track ``t``'s centre drifted away from ``heading`` (px) over its history, as a fraction
+    of the static world's drift over the same growth, ``r0 (S - 1)`` (0: it keeps its bearing, as an
+    object on a collision course; 1: the static world); on its first frame, from the alarm seed's
+    alignment (``Track.seed_move``). None when the static world's drift is under ``MIN_DRIFT_PX``
+    (a box near the heading, or one that did not grow: the ratio says nothing) or nothing is known."""
     if len(t.history) >= 2:
         q0, q1 = t.history[0], t.history[-1]
         x0, y0, x1, y1, growth = q0.x, q0.y, q1.x, q1.y, q1.log_scale - q0.log_scale
@@ -114,11 +124,30 @@ def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
         x1, y1 = t.cx, t.cy
         x0, y0 = x1 - dx, y1 - dy
     else:
-        return False
+        return None
     r0 = math.hypot(x0 - heading[0], y0 - heading[1])
     r1 = math.hypot(x1 - heading[0], y1 - heading[1])
     static = r0 * math.expm1(growth)
-    return static >= MIN_DRIFT_PX and r1 - r0 <= DRIFT_FRACTION * static
+    return (r1 - r0) / static if static >= MIN_DRIFT_PX else None
+
+
+def holds(t: Track, heading: tuple[float, float]) -> bool:
+    """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now."""
+    return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
+
+
+def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None) -> bool:
+    """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
+    would begin this frame on track ``t`` is the static world's, so does not begin: the camera
+    translates (``heading``: the measured heading, px; None: none measured, no test), no field of
+    ``t`` is in collision alarm this frame (the field alarm is evidence of its own, issue 22 item 4),
+    its box does not hold the heading (:func:`holds`) and its centre drifts away from the heading by
+    more than ``path_drift`` of the static world's drift (:func:`drift`): the static world beside the
+    path expands about the heading, while an object on a collision course keeps its bearing."""
+    if p.path_drift <= 0 or heading is None or t.last_alarm == index or holds(t, heading):
+        return False
+    ratio = drift(t, heading)
+    return ratio is not None and ratio > p.path_drift
 
 
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
@@ -149,6 +178,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
     :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point."""
     h, w = shape
+    measured = heading
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
@@ -187,6 +217,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s):
+        warning = False
+    # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
+    if warning and not t.warned and off_path(t, p, index, measured):
         warning = False
     t.warned = t.warned or warning
     if ttc is None:
