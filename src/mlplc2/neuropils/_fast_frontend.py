@@ -68,10 +68,10 @@ U64 = np.uint64
 
 def _carry(jobs, homography: np.ndarray) -> None:
     """Warp each job of ``jobs`` into its output (:func:`mlplc2.camera.warp`): ``(plane, out, fill)``
-    (``out`` None: in place, through a new plane), or ``(planes, outs, fills, packed, warped)``: four
+    (``out`` None: in place, through a new plane), or ``(planes, outs, packed, warped)``: four
     planes warped as one four-channel image (:func:`_warp4`)."""
     for job in jobs:
-        if len(job) == 5:
+        if len(job) == 4:
             _warp4(homography, *job)
         elif job[1] is None:
             job[0][...] = warp(job[0], homography, fill=job[2])
@@ -79,21 +79,18 @@ def _carry(jobs, homography: np.ndarray) -> None:
             warp(job[0], homography, fill=job[2], out=job[1])
 
 
-def _warp4(homography: np.ndarray, planes, outs, fills, packed: np.ndarray, warped: np.ndarray) -> None:
-    """Four planes of one shape warped at once: interleaved into ``packed`` (H, W, 4), one
-    ``cv2.warpPerspective`` of that four-channel image into ``warped``, split into ``outs``.
-    OpenCV computes each pixel's source coordinates once for the four channels and interpolates
-    each channel as it does a single plane: the values are those of four single-plane warps bit
-    for bit (``tests/test_fast.py``), at about 0.4 of the time (measured 320x240, OpenCV 5.0:
-    0.18 ms against 4 x 0.15). ``fills``: four numbers, or an image for the first plane only
-    (the grey frame for P(t-1): where the turn uncovers, the frame itself)."""
+def _warp4(homography: np.ndarray, planes, outs, packed: np.ndarray, warped: np.ndarray) -> None:
+    """Four planes of one shape warped at once, with zeros where the turn uncovers: interleaved into
+    ``packed`` (H, W, 4), one ``cv2.warpPerspective`` of that four-channel image into ``warped``,
+    split into ``outs``. OpenCV computes each pixel's source coordinates once for the four channels
+    and interpolates each channel as it does a single plane: the values are those of four
+    single-plane warps bit for bit (``tests/test_fast.py``), at about half the CPU time
+    (docs/model.md, "Camera motion")."""
     _pack4(planes[0], planes[1], planes[2], planes[3], packed)
     h, w = planes[0].shape
-    image = fills[0] if not np.isscalar(fills[0]) else None
-    border = (math.nan if image is not None else float(fills[0]),) + tuple(float(f) for f in fills[1:])
     cv2.warpPerspective(packed, homography, (w, h), dst=warped, flags=cv2.INTER_LINEAR,
-                        borderMode=cv2.BORDER_CONSTANT, borderValue=border)
-    _unpack4(warped, outs[0], outs[1], outs[2], outs[3], image)
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=(0.0, 0.0, 0.0, 0.0))
+    _unpack4(warped, outs[0], outs[1], outs[2], outs[3])
 
 
 @jit()
@@ -109,16 +106,12 @@ def _pack4(a, b, c, d, out):
 
 
 @jit()
-def _unpack4(src, a, b, c, d, fill):
-    """``(a, b, c, d)[y, x] = src[y, x]``; with ``fill`` (an image, else None) ``a`` takes its
-    value where ``src`` is NaN (as :func:`mlplc2.camera.warp` with an image as fill)."""
+def _unpack4(src, a, b, c, d):
+    """``(a, b, c, d)[y, x] = src[y, x]``."""
     for y in range(src.shape[0]):
         s, ar, br, cr, dr = src[y], a[y], b[y], c[y], d[y]
         for x in range(src.shape[1]):
-            v = s[x, 0]
-            if fill is not None and math.isnan(v):
-                v = fill[y, x]
-            ar[x] = v
+            ar[x] = s[x, 0]
             br[x] = s[x, 1]
             cr[x] = s[x, 2]
             dr[x] = s[x, 3]
@@ -312,28 +305,24 @@ class FastFrontEnd:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
         N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels. Each plane is
         warped straight into its spare buffer (the one :meth:`step` overwrites next: P(t), N(t), or
-        the M-hat double buffer), then the buffers swap. The eleven planes go four at a time through
-        one four-channel ``warpPerspective`` (:func:`_warp4`: P(t-1) with N(t-1), each channel's
-        M-hat(t-1)), the values of the reference's one warp per plane bit for bit; the three warps are
-        shared out over the front end's threads (OpenCV runs a 320 x 240 warp on one thread), so the
+        the M-hat double buffer), then the buffers swap. Each channel's four M-hat(t-1) planes go
+        through one four-channel ``warpPerspective`` (:func:`_warp4`), the values of the reference's
+        one warp per plane bit for bit; the five jobs (two of them four-channel) are shared out over
+        the front end's threads (OpenCV runs a 320 x 240 warp on one thread), so the
         values do not depend on the threads."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
         gray = np.asarray(gray, dtype=np.float32)
         pad = self._pad
         inner = (slice(pad, -pad), slice(pad, -pad)) if pad else (slice(None), slice(None))
-        if self._packed is None:                            # per job: packed, warped; a plane of zeros
-            self._packed = np.empty((3, 2) + self._shape + (4,), np.float32)   # and one to drop
-            self._spare = np.zeros((2,) + self._shape, np.float32)
-        m_in = [[self._m_rows[:, c, d, :] for d in range(4)] for c in range(2)]   # through _m_rows: what
-        m_out = [[self._m_spare[:, c, d, :] for d in range(4)] for c in range(2)]  # the kernel reads
-        # P(t-1) into P(t)'s buffer (the frame where uncovered), N(t-1) with its zero border kept, and a
-        # fourth plane (warped, unused) to make a four-channel image; M-hat(t-1): four directions a job
-        jobs = [(m_in[0], m_out[0], (0.0,) * 4, *self._packed[0]),
-                (m_in[1], m_out[1], (0.0,) * 4, *self._packed[1]),
-                ((self._p[0], self._n_prev[0][inner], self._n_prev[1][inner], self._spare[0]),
-                 (self._p[1], self._n[0][inner], self._n[1][inner], self._spare[1]), (gray, 0.0, 0.0, 0.0),
-                 *self._packed[2])]
+        if self._packed is None:                            # per channel: packed, warped
+            self._packed = np.empty((2, 2) + self._shape + (4,), np.float32)
+        # each channel's four M-hat(t-1) directions through _m_rows (what the kernel reads) as one
+        # warp; P(t-1) into P(t)'s buffer (the frame where uncovered), N(t-1) with its zero border kept
+        jobs = [([self._m_rows[:, c, d, :] for d in range(4)], [self._m_spare[:, c, d, :] for d in range(4)],
+                 *self._packed[c]) for c in range(2)]
+        jobs += [(self._p[0], self._p[1], gray)]
+        jobs += [(self._n_prev[c][inner], self._n[c][inner], 0.0) for c in range(2)]
         if self.params.after_image:
             jobs += [(self._on, None, 0.0), (self._off, None, 0.0)]
         n = len(self._bands) if self._bands else 1
