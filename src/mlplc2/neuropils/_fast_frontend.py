@@ -67,13 +67,54 @@ U64 = np.uint64
 
 
 def _carry(jobs, homography: np.ndarray) -> None:
-    """Warp each ``(plane, out, fill)`` of ``jobs`` into ``out`` (:func:`mlplc2.camera.warp`; ``out``
-    None: in place, through a new plane)."""
-    for plane, out, fill in jobs:
-        if out is None:
-            plane[...] = warp(plane, homography, fill=fill)
+    """Warp each job of ``jobs`` into its output (:func:`mlplc2.camera.warp`): ``(plane, out, fill)``
+    (``out`` None: in place, through a new plane), or ``(planes, outs, packed, warped)``: four
+    planes warped as one four-channel image (:func:`_warp4`)."""
+    for job in jobs:
+        if len(job) == 4:
+            _warp4(homography, *job)
+        elif job[1] is None:
+            job[0][...] = warp(job[0], homography, fill=job[2])
         else:
-            warp(plane, homography, fill=fill, out=out)
+            warp(job[0], homography, fill=job[2], out=job[1])
+
+
+def _warp4(homography: np.ndarray, planes, outs, packed: np.ndarray, warped: np.ndarray) -> None:
+    """Four planes of one shape warped at once, with zeros where the turn uncovers: interleaved into
+    ``packed`` (H, W, 4), one ``cv2.warpPerspective`` of that four-channel image into ``warped``,
+    split into ``outs``. OpenCV computes each pixel's source coordinates once for the four channels
+    and interpolates each channel as it does a single plane: the values are those of four
+    single-plane warps bit for bit (``tests/test_fast.py``), at about half the CPU time
+    (docs/model.md, "Camera motion")."""
+    _pack4(planes[0], planes[1], planes[2], planes[3], packed)
+    h, w = planes[0].shape
+    cv2.warpPerspective(packed, homography, (w, h), dst=warped, flags=cv2.INTER_LINEAR,
+                        borderMode=cv2.BORDER_CONSTANT, borderValue=(0.0, 0.0, 0.0, 0.0))
+    _unpack4(warped, outs[0], outs[1], outs[2], outs[3])
+
+
+@jit()
+def _pack4(a, b, c, d, out):
+    """``out[y, x] = (a, b, c, d)[y, x]``."""
+    for y in range(out.shape[0]):
+        ar, br, cr, dr, o = a[y], b[y], c[y], d[y], out[y]
+        for x in range(out.shape[1]):
+            o[x, 0] = ar[x]
+            o[x, 1] = br[x]
+            o[x, 2] = cr[x]
+            o[x, 3] = dr[x]
+
+
+@jit()
+def _unpack4(src, a, b, c, d):
+    """``(a, b, c, d)[y, x] = src[y, x]``."""
+    for y in range(src.shape[0]):
+        s, ar, br, cr, dr = src[y], a[y], b[y], c[y], d[y]
+        for x in range(src.shape[1]):
+            ar[x] = s[x, 0]
+            br[x] = s[x, 1]
+            cr[x] = s[x, 2]
+            dr[x] = s[x, 3]
 
 
 # ---------------------------------------------------------------------------
@@ -264,18 +305,24 @@ class FastFrontEnd:
         """Gaze stabilisation, as :meth:`mlplc2.neuropils.frontend.FrontEnd.compensate`: P(t-1),
         N(t-1), M-hat(t-1) (and the after-image) carried into this frame's pixels. Each plane is
         warped straight into its spare buffer (the one :meth:`step` overwrites next: P(t), N(t), or
-        the M-hat double buffer), then the buffers swap: no copies in or out. The planes are shared
-        out over the front end's threads (one ``warpPerspective`` per plane, as the reference's;
-        OpenCV runs a 320 x 240 warp on one thread), so the values do not depend on the threads."""
+        the M-hat double buffer), then the buffers swap. Each channel's four M-hat(t-1) planes go
+        through one four-channel ``warpPerspective`` (:func:`_warp4`), the values of the reference's
+        one warp per plane bit for bit; the five jobs (two of them four-channel) are shared out over
+        the front end's threads (OpenCV runs a 320 x 240 warp on one thread), so the
+        values do not depend on the threads."""
         if self._shape is None or self._first or np.shape(gray) != self._shape:
             return
         gray = np.asarray(gray, dtype=np.float32)
         pad = self._pad
         inner = (slice(pad, -pad), slice(pad, -pad)) if pad else (slice(None), slice(None))
-        jobs = [(self._p[0], self._p[1], gray)]             # P(t-1) into P(t)'s buffer, the frame where uncovered
-        jobs += [(self._n_prev[c][inner], self._n[c][inner], 0.0) for c in range(2)]   # zero border kept
-        jobs += [(self._m_rows[:, c, d, :], self._m_spare[:, c, d, :], 0.0)  # through _m_rows: what the
-                 for c in range(2) for d in range(4)]                        # kernel reads
+        if self._packed is None:                            # per channel: packed, warped
+            self._packed = np.empty((2, 2) + self._shape + (4,), np.float32)
+        # each channel's four M-hat(t-1) directions through _m_rows (what the kernel reads) as one
+        # warp; P(t-1) into P(t)'s buffer (the frame where uncovered), N(t-1) with its zero border kept
+        jobs = [([self._m_rows[:, c, d, :] for d in range(4)], [self._m_spare[:, c, d, :] for d in range(4)],
+                 *self._packed[c]) for c in range(2)]
+        jobs += [(self._p[0], self._p[1], gray)]
+        jobs += [(self._n_prev[c][inner], self._n[c][inner], 0.0) for c in range(2)]
         if self.params.after_image:
             jobs += [(self._on, None, 0.0), (self._off, None, 0.0)]
         n = len(self._bands) if self._bands else 1
@@ -304,6 +351,7 @@ class FastFrontEnd:
         self._n_prev = np.zeros((2, h + 2 * pad, w + 2 * pad), np.float32)
         self._m_rows = np.zeros((h, 2, 4, w), np.float32)  # what the kernel uses
         self._m_spare = np.empty_like(self._m_rows)        # what compensate warps _m_rows into
+        self._packed = None                                # compensate's four-channel images, made at its first turn
         self._m = self._m_rows.transpose(1, 2, 0, 3)  # (2, 4, H, W) view: channel, direction
         self._plan(nbands)
 
