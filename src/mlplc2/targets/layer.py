@@ -131,7 +131,8 @@ class TargetLayer:
         h, w = gray.shape
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h)
-        far = self._prev is not None and self._far(clock - self._clock)
+        interval = None if self._prev is None else clock - self._clock
+        far = interval is not None and self._far(interval)
         self._clock = clock
         self._keep_past(clock)
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
@@ -152,11 +153,14 @@ class TargetLayer:
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
-            cand = argmax_outside(lm.magnitude, zones)
-            if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-                cand = self._change_seed(levels, zones)
-            if cand is not None:
+            for _ in range(self._seeds(interval)):
+                cand = argmax_outside(lm.magnitude, zones)
+                if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
+                    cand = self._change_seed(levels, zones)
+                if cand is None:
+                    break
                 seeds.append((cand[0], cand[1], None))
+                zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
@@ -361,6 +365,17 @@ class TargetLayer:
         s = slant(self._past[0], levels, old, (t.cx, t.cy, t.w, t.h), n=p.patch, margin=p.margin,
                   iterations=p.iterations)
         return s is None or max(abs(s[0]), abs(s[1])) > p.max_slant
+
+    def _seeds(self, interval: float | None) -> int:
+        """How many LM seeds (outside every target and field) this frame may give: one per nominal
+        frame (``TargetParams.nominal_fps``) the interval since the last frame stands for, at most
+        ``change_frames`` (the growth test's span); one at the first frame or at the nominal rate. A
+        camera at 7.5 fps thus seeds as often in time as one at 30 fps: between distant frames a fast
+        object is often not the strongest LM (issue 23: the thrown helmet, the thrower's body)."""
+        if interval is None:
+            return 1
+        n = int(round(interval / self.params.span(1, self.fps)))
+        return max(1, min(n, self.params.change_frames))
 
     def _far(self, interval: float) -> bool:
         """Whether frames ``interval`` clock units apart are more than one nominal frame apart (a

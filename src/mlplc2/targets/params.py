@@ -50,7 +50,8 @@ class TargetParams(ParameterSet):
                          sought there (the front end's local motion spreads about r_Di = 11 px beyond a
                          moving edge).""", unit="px", valid=Valid.real(minimum=0))
     seed_lm: float = param(0.5, """Local motion (LM, Eq. 12) above which the strongest point outside every
-                           target and attention field also seeds a candidate (one per frame), far below
+                           target and attention field also seeds a candidate (one per nominal frame interval
+                           since the last frame, at most ``change_frames``: a 7.5 fps frame seeds 4), far below
                            the field threshold T_a = 10: a far object grows by a fraction of a pixel per
                            frame. 0 = attention fields only.""", valid=Valid.real(minimum=0))
     seed_contrast: float = param(20.0, """... and above this many times the frame's mean LM (a salient
