@@ -66,7 +66,8 @@ def test_sampling_and_inside_mask_match_opencv(n):
         cx, cy = rng.uniform(-40, W + 40), rng.uniform(-40, H + 40)     # some patches cross the border
         sx, sy = rng.uniform(0.3, 4.0, 2)
         ref, inside = _sample(levels, level, cx, cy, sx, sy, n)
-        everywhere = _fast_align._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y)
+        everywhere = _fast_align._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y,
+                                         _fast_align.EXACT_COORDINATES)
         np.testing.assert_array_equal(in_y[:, None] & in_x[None, :], inside)
         assert everywhere == inside.all()
         partial += 0 < inside.sum() < inside.size

@@ -1,14 +1,17 @@
 """Numba kernel of the image alignment of :mod:`mlplc2.targets.alignment`, chosen by :mod:`mlplc2.backend`.
 
 :func:`align_patch` is :func:`mlplc2.targets.alignment.align` on one pyramid level: the patch sampled,
-blurred and differentiated as OpenCV (>= 4.11, whose ``cv2.warpAffine`` computes float
-coordinates) does it in float32: the warp's coordinates and ``fma`` interpolations,
-``cv2.GaussianBlur``'s and ``cv2.Sobel``'s tap order. That is bit for bit on x86-64 with
-AVX2 for a patch side that is a multiple of 16 (the default 32), and within a float32 ulp or
-so otherwise (OpenCV's scalar tail rounds differently). Then the same float32 weights and
-Jacobian, the same float64 normal equations (the Gauss-Newton Hessian of the template),
-iteration and stopping rules: the alignments agree to ~1e-12 (``tests/test_fast_targets.py``).
-Every kernel is ``nogil`` and cached on disk where possible; nothing here is public API.
+blurred and differentiated as OpenCV does it in float32: the warp's coordinates and ``fma``
+interpolations, ``cv2.GaussianBlur``'s and ``cv2.Sobel``'s tap order. ``cv2.warpAffine`` computes
+the source coordinates in float32 up to OpenCV 5.0 and in float64 from 5.1 (:data:`EXACT_COORDINATES`,
+probed once at import, says which the installed OpenCV does). That is bit for bit on x86-64 with
+AVX2 for a patch side that is a multiple of 16 (the default 32) inside the image, and within a
+float32 ulp or so otherwise (OpenCV's scalar tail, and 5.1's replicated border, round differently).
+Then the same float32 weights and Jacobian, the same float64 normal equations (the Gauss-Newton
+Hessian of the template), iteration and stopping rules: the alignments agree to ~1e-12
+(``tests/test_fast_targets.py``). Every kernel is ``nogil`` and cached on disk where possible (the
+choice of coordinates is an argument, not a global: Numba's cache would keep a global's value
+across an OpenCV upgrade); nothing here is public API.
 """
 
 from __future__ import annotations
@@ -32,6 +35,27 @@ _BLUR_SIGMA = 0.8
 _TAPS = cv2.getGaussianKernel(int(round(8 * _BLUR_SIGMA + 1)) | 1, _BLUR_SIGMA, cv2.CV_32F).ravel().copy()
 
 _F32 = np.float32
+
+
+def _warp_coordinates_in_double() -> bool:
+    """True when the installed ``cv2.warpAffine`` (``INTER_LINEAR | WARP_INVERSE_MAP``, float32)
+    computes the source coordinates in float64 (OpenCV >= 5.1), False for float32 (<= 5.0).
+
+    A row alternating 0 and 1000 sampled near column 1000, where a float32 coordinate is off by up
+    to 3e-5 px: the interpolation magnifies that to up to 0.03 grey levels, against ~1e-4 for
+    float64 coordinates (float32 rounding of the interpolation itself)."""
+    row = np.tile(np.array([0.0, 1000.0], np.float32), (2, 1024))
+    m = np.array([[0.0371, 0.0, 1000.3], [0.0, 1.0, 0.0]], np.float32)
+    got = cv2.warpAffine(row, m, (64, 1), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
+                         borderMode=cv2.BORDER_REPLICATE)[0].astype(np.float64)
+    xs = np.float64(m[0, 0]) * np.arange(64) + np.float64(m[0, 2])
+    x0 = np.floor(xs).astype(np.int64)
+    exact = row[0, x0] + (xs - x0) * (row[0, x0 + 1].astype(np.float64) - row[0, x0])
+    return bool(np.abs(got - exact).max() < 1e-3)
+
+
+#: The installed OpenCV's ``warpAffine`` coordinates: float64 (True, >= 5.1) or float32 (False).
+EXACT_COORDINATES = _warp_coordinates_in_double()
 
 
 @intrinsic
@@ -61,16 +85,18 @@ def _reflect101(i, n):
 
 
 @jit()
-def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
+def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y, exact):
     """:func:`mlplc2.targets.alignment._sample` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
     inside mask per column / row (the mask is their outer product). True when all inside.
 
     ``cv2.warpAffine(INTER_LINEAR | WARP_INVERSE_MAP, BORDER_REPLICATE)`` with the float32
-    matrix ``[[sx, 0, ox], [0, sy, oy]]`` as OpenCV 4.11+/5 computes it for float32 images: the
-    source column ``fma(sx, x, ox)``, the source row ``sy y + oy`` (two roundings), both in
-    float32, their floor and fraction, and two linear interpolations by ``fma`` (along the row,
-    then between the rows), the four neighbours clamped to the image (replicated border). The
-    mask follows NumPy's float32 ``ox + idx * sx`` of the reference.
+    matrix ``[[sx, 0, ox], [0, sy, oy]]`` as OpenCV computes it for float32 images: the source
+    column and row, their floor and fraction (float32), and two linear interpolations by ``fma``
+    (along the row, then between the rows), the four neighbours clamped to the image (replicated
+    border). The coordinates: with ``exact`` (OpenCV >= 5.1, :data:`EXACT_COORDINATES`)
+    ``sx x + ox`` and ``sy y + oy`` in float64; without (4.11-5.0) ``fma(sx, x, ox)`` and
+    ``sy y + oy`` (two roundings) in float32. The mask follows NumPy's float32 ``ox + idx * sx``
+    of the reference.
     """
     h, w = img.shape
     f = float(1 << level)
@@ -88,9 +114,14 @@ def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
     everywhere = True
     for j in range(n):
         fj = _F32(j)
-        xs = _fma32(m0, fj, m2)
-        ix = int(math.floor(xs))
-        ax[j] = xs - _F32(ix)
+        if exact:
+            xd = np.float64(m0) * j + np.float64(m2)
+            ix = int(math.floor(xd))
+            ax[j] = _F32(xd - ix)
+        else:
+            xs = _fma32(m0, fj, m2)
+            ix = int(math.floor(xs))
+            ax[j] = xs - _F32(ix)
         x0[j] = min(max(ix, 0), w - 1)
         x1[j] = min(max(ix + 1, 0), w - 1)
         xm = m2 + fj * m0
@@ -98,9 +129,14 @@ def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y):
         everywhere = everywhere and in_x[j]
     for i in range(n):
         fi = _F32(i)
-        ys = fi * m4 + m5
-        iy = int(math.floor(ys))
-        by = ys - _F32(iy)
+        if exact:
+            yd = np.float64(m4) * i + np.float64(m5)
+            iy = int(math.floor(yd))
+            by = _F32(yd - iy)
+        else:
+            ys = fi * m4 + m5
+            iy = int(math.floor(ys))
+            by = ys - _F32(iy)
         y0 = min(max(iy, 0), h - 1)
         y1 = min(max(iy + 1, 0), h - 1)
         ym = m5 + fi * m4
@@ -245,7 +281,7 @@ def _normal_equations(a, in_x, in_y, u, wx, wy, i0, i1, j0, j1, jw, wgt):
 
 
 @jit()
-def _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j1, pad, tmp, taps, r):
+def _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j1, pad, tmp, taps, r, exact):
     """The Gauss-Newton iteration (forward-additive, fixed Hessian ``hinv``) of the patch of
     ``cur`` against the template ``a``: the residuals of the last round into ``r`` (n n).
     Returns ``(ok, px, py, tx, ty)`` (log kx, log ky, shift in samples); ``ok`` False when
@@ -258,7 +294,7 @@ def _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j
     px = py = tx = ty = 0.0
     for _ in range(max(iterations, 1)):
         kx, ky = math.exp(px), math.exp(py)
-        _sample(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n, b0, bx, by)
+        _sample(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n, b0, bx, by, exact)
         _blur(b0, pad, tmp, b, taps)
         g0 = g1 = g2 = g3 = 0.0
         for i in range(i0, i1):
@@ -300,8 +336,13 @@ def _rms(wgt, r, n, i0, i1, j0, j1):
     return math.sqrt(rr / wsum) if wsum > 0 else math.inf
 
 
-@jit()
 def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
+    """:func:`_align_patch` with the installed OpenCV's coordinates (:data:`EXACT_COORDINATES`)."""
+    return _align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations, EXACT_COORDINATES)
+
+
+@jit()
+def _align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations, exact):
     """:func:`mlplc2.targets.alignment.align` on pyramid level ``level`` (``prev`` and ``cur``: that level
     of the two pyramids, float32), patch ``n`` x ``n`` every ``step`` level-0 px.
 
@@ -319,7 +360,7 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     pad = np.empty(n + taps.shape[0] - 1, np.float32)
     in_x = np.empty(n, np.bool_)
     in_y = np.empty(n, np.bool_)
-    _sample(prev, level, cx, cy, step, step, n, a0, in_x, in_y)
+    _sample(prev, level, cx, cy, step, step, n, a0, in_x, in_y, exact)
     _blur(a0, pad, tmp, a, taps)
     u, wx, wy = _weights(n, step, box_w, box_h)
     # the samples of zero weight add exact zeros to every sum below: only the rows i0:i1 and
@@ -336,7 +377,7 @@ def align_patch(prev, cur, level, cx, cy, step, box_w, box_h, n, iterations):
     hinv = np.linalg.inv(hess)
     r = np.empty(m, np.float32)
     ok, px, py, tx, ty = _iterate(cur, level, cx, cy, step, n, iterations, a, jw, hinv, i0, i1, j0, j1, pad, tmp,
-                                  taps, r)
+                                  taps, r, exact)
     if not ok:
         return fail
     res = _rms(wgt, r, n, i0, i1, j0, j1)

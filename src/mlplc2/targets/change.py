@@ -40,7 +40,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
 
     Within ``radius`` px of (x, y), the window's own image motion (a turning camera moves the
     background as a whole) is found by phase correlation and undone; then the pixels whose
-    grey level still changed by at least ``max(min_change, rel x`` the largest change``)`` are
+    grey level, Hann-windowed about the window's centre, still changed by at least ``max(min_change, rel x`` the largest change``)`` are
     joined (3 x 3 dilation) and the connected region nearest to (x, y) is taken: for a small
     object growing against its background, the ring of its edge, hence its size to a pixel,
     long before its edges move a pixel per frame. None when nothing changed or the region
@@ -57,7 +57,14 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     x1, y1 = x0 + _even_dft_size(x1 - x0), y0 + _even_dft_size(y1 - y0)
     a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
     b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
-    (sx, sy), _ = cv2.phaseCorrelate(a, b, _hanning(a.shape))
+    win = _hanning(a.shape)
+    # the change is measured on the Hann-windowed windows (a change fades towards the window's
+    # border). OpenCV up to 5.0 gave that by a side effect: its phaseCorrelate multiplies its
+    # inputs by the window in place; 5.1 leaves them alone. So the window is applied here, and
+    # phaseCorrelate gets arrays not used after it (docs/model.md, "Dependencies: OpenCV 5.1")
+    aw, bw = a * win, b * win
+    (sx, sy), _ = cv2.phaseCorrelate(a, b, win)
+    a, b = aw, bw
     if abs(sx) > 0.5 or abs(sy) > 0.5:      # the background moved: compare it with itself
         m = np.array([[1.0, 0.0, -sx], [0.0, 1.0, -sy]], np.float32)
         b = cv2.warpAffine(b, m, (b.shape[1], b.shape[0]), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
