@@ -4,8 +4,8 @@
 and on two Dask workers, ``evaluate``, ``reproduce``, ``demo``, and :func:`mlplc2.run` from
 Python, whose rows stay in memory) on the paper's videos and on generated stimuli, into one
 folder; ``compare`` diffs two such folders byte for byte, after masking what holds a wall
-time (``"seconds"`` in JSON and CSV, ``in 1.2 s (34.5 frames/s)`` and ``Run time 12 s`` in
-text). Record with the old code
+time (``"seconds"`` in JSON and CSV, ``"latency_ms"`` in JSON, ``in 1.2 s (34.5 frames/s)``,
+``Run time 12 s`` and the latency line in text). Record with the old code
 (e.g. ``git archive BASE | tar -x -C /tmp/old`` and ``PYTHONPATH=/tmp/old/src``), record with
 the new one, compare::
 
@@ -32,7 +32,9 @@ MODELS = "mlplc2,slplc2,lplc2,lgmd2,lgmd1,flow"
 _TEXT_MASKS = [(re.compile(r"in \d+(\.\d+)? s \(\d+(\.\d+)?|inf frames/s\)"), "in <time>"),
                (re.compile(r"in \d+(\.\d+)? s on "), "in <time> on "),
                (re.compile(r"Run time \d+ s"), "Run time <time>"),
-               (re.compile(r"\b\d+(\.\d+)? frames/s\b"), "<rate>")]
+               (re.compile(r"\b\d+(\.\d+)? frames/s\b"), "<rate>"),
+               (re.compile(r"latency from decoding to results: [^\n]*"), "latency <time>"),
+               (re.compile(r'("latency_ms": )\{[^}]*\}'), r'\1"<time>"')]
 _JSON_MASK = re.compile(r'("seconds": )(-?\d+(\.\d+)?(e[-+]?\d+)?|null)')
 
 
