@@ -295,6 +295,42 @@ def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing(
     assert estimate(_approach(heading[0] + 5.0, heading[0], True), on, FPS, last, SHAPE, heading=heading).warning
 
 
+def test_the_alarm_alone_from_a_moving_camera_begins_once_it_has_lasted():
+    # alarm_frames: an object on a collision course 2 widths beside the measured heading keeps its
+    # bearing and its field alarms before its fit can give a course. Its first frame in alarm
+    # (Track.alarm_run 1) begins no warning; its second in a row does. Without a measured heading
+    # (no translation known), on a box that holds the heading, or with the rule off (1), the first
+    # frame warns
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    p, off = TargetParams(alarm_warns=True, alarm_frames=2), TargetParams(alarm_warns=True, alarm_frames=1)
+
+    def coming(x0: float, run: int) -> Track:
+        t = _young_static(heading[0], x0)
+        t.history = deque(q._replace(x=x0) for q in t.history)   # keeps its bearing
+        t.cx, t.alarm_run = x0, run
+        return t
+
+    x0 = heading[0] + 40.0
+    assert not estimate(coming(x0, 1), p, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(coming(x0, 2), p, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(coming(x0, 1), p, FPS, 2, SHAPE).warning                       # no measured heading
+    assert estimate(coming(x0, 1), off, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(coming(heading[0] + 5.0, 1), p, FPS, 2, SHAPE, heading=heading).warning   # on the path
+
+
+class _Field:
+    """An attention field in collision alarm (what TargetLayer._own reads)."""
+    id, response, collision = 1, 1.0, True
+
+
+def test_the_layer_counts_the_frames_in_a_row_a_target_is_in_alarm():
+    layer = TargetLayer(TargetParams(alarm_warns=True), fps=FPS)
+    t = _young_static(80.0, 100.0)
+    for index, run in [(3, 1), (3, 1), (4, 2), (5, 3), (7, 1), (8, 2)]:      # a gap at frame 6
+        layer._own(t, _Field(), index)
+        assert t.alarm_run == run
+
+
 def test_the_layer_smooths_the_measured_heading_by_its_confidence():
     layer = TargetLayer(TargetParams())
     assert layer.heading is None                                    # none measured: the principal point

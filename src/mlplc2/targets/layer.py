@@ -230,6 +230,9 @@ class TargetLayer:
         if f.response > 0:
             t.last_answer = index
         if getattr(f, "collision", False):
+            if t.last_alarm != index:
+                follows = index - t.last_alarm <= self.params.span(1, self.fps) + _EPS
+                t.alarm_run = t.alarm_run + 1 if follows else 1
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
                 t.seed_move = self._seed_move(t)
@@ -511,5 +514,6 @@ class TargetLayer:
                 self._lose(t, index)
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
-                host.last_alarm = max(host.last_alarm, t.last_alarm)
+                if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
+                    host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
         self._tracks = out

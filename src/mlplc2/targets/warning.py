@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "holds", "off_path",
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "holds", "off_path", "fleeting",
            "count_down", "held", "fits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -150,6 +150,15 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     return ratio is not None and ratio > p.path_drift
 
 
+def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
+    """``alarm_frames`` (docs/model.md, "The field alarm on the static world"): whether the field
+    alarm of track ``t`` is too young to begin a warning without a course: the camera translates
+    (``heading``: the measured heading, px; None: none measured, no test), its box does not hold the
+    heading (:func:`holds`) and a field of it has been in collision alarm fewer than ``alarm_frames``
+    frames in a row (``Track.alarm_run``)."""
+    return p.alarm_frames > 1 and heading is not None and not holds(t, heading) and t.alarm_run < p.alarm_frames
+
+
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
     down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
@@ -212,8 +221,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     looming = ttc is not None and _evident(t, p, fps, index)
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
                    and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
-    # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it
-    warning = warning or alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
+    # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
+    # and, without a course from a translating camera, once it has lasted (alarm_frames)
+    if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
+        warning = t.warned or miss is not None or not fleeting(t, p, measured)
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s):
