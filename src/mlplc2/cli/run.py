@@ -10,7 +10,7 @@ import math
 import sys
 import warnings
 
-from .._validation import InputValueError
+from .._validation import InputError, InputValueError
 from ..io import parse_resize
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
@@ -109,6 +109,10 @@ def _run(args, jsonl) -> int:
                              max_frames=args.max_frames, duration_s=args.duration, gyro=args.gyro, **stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
+        except InputError as exc:
+            if args.gyro is None:
+                raise
+            raise type(exc)(_cli_names(str(exc))) from None
     _print_run_summary(args, result)
     if result.dropped or (result.message and not result.truncated):  # a dropped stream, a closed --jsonl pipe
         print(f"{PROG}: {result.message}", file=sys.stderr)
@@ -116,6 +120,17 @@ def _run(args, jsonl) -> int:
         warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
+
+
+#: The keywords a model's gyro refusal names (Python) and this command's options for them.
+_GYRO_KEYWORDS = {"stabilise=False": "--no-stabilise", "(hfov_deg)": "(--hfov)"}
+
+
+def _cli_names(message: str) -> str:
+    """``message`` with the Python keywords of a gyro refusal (``Model.gyro_refusal``) as this command's options."""
+    for keyword, option in _GYRO_KEYWORDS.items():
+        message = message.replace(keyword, option)
+    return message
 
 
 def _timing(result) -> str:
