@@ -595,6 +595,16 @@ def test_cli_zero_byte_file(tmp_path, capsys):
 
 
 @pytest.mark.parametrize("n", [1, 2])
+def test_a_one_frame_video_says_that_no_model_could_respond(tmp_path, capsys, n):
+    """A single image or a one-frame clip is valid (below), but its summary's "no fields, no alarm"
+    would read as "nothing approaches": a note says that one frame shows no motion."""
+    p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)
+    assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "note: one frame only" in line]
+    assert len(notes) == (n == 1)
+
+
+@pytest.mark.parametrize("n", [1, 2])
 def test_cli_one_and_two_frame_videos_are_valid(tmp_path, capsys, n):
     """One frame has no motion (every model at rest) but is a valid input: exit 0, all outputs."""
     p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)

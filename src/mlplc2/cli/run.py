@@ -185,6 +185,9 @@ def _print_run_summary(args, result) -> None:
     if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
+    if result.n_frames == 1 and not args.quiet:  # valid, but "no fields, no alarm" would read as "nothing approaches"
+        print(f"{PROG}: note: one frame only: the models respond to change between frames, so none could respond",
+              file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------
