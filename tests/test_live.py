@@ -254,6 +254,27 @@ def test_an_unreachable_stream_is_one_line(source, capsys):
     assert main(["run", source, "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"mlplc2: error: {source}: cannot open the stream") and "\n" not in err
+    assert "Errno" not in err and err.count(source) == 1          # FFmpeg's words: the URL is named once
+
+
+def test_a_missing_file_on_a_server_is_one_line_that_says_404(tmp_path, capsys):
+    import functools
+    import http.server
+    import threading
+
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(tmp_path)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    url = f"http://127.0.0.1:{server.server_address[1]}/none.mp4"
+    try:
+        assert main(["run", url, "-q", "--out", str(tmp_path / "o")]) == 2
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert capsys.readouterr().err.strip() == f"mlplc2: error: {url}: cannot open the stream (Server returned 404 Not Found)"
 
 
 @pytest.mark.parametrize("scheme", ["http", "rtsp"])

@@ -129,8 +129,9 @@ class _PyAVDecoder(Decoder):
         except (av.error.FFmpegError, OSError) as exc:
             if stream:
                 # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
+                # FFmpeg's own words, without PyAV's "[Errno -875574520] ...: 'URL'" around them
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
-                       else _one_line(str(exc)))
+                       else _one_line(getattr(exc, "strerror", None) or str(exc)))
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
