@@ -329,6 +329,7 @@ def test_stimulus_options_reach_the_generator(tmp_path, capsys):
     (["dark_approach", "--seed", "3"], "--seed: stimulus 'dark_approach' has no such option (its options: "
                                        "--size, --frames, --fps; see 'mlplc2 stimulus --help')"),
     (["looming", "--size", "100"], "--size: expected WxH (e.g. 320x240), got '100' (see 'mlplc2 stimulus --help')"),
+    (["looming", "--size", "0x10"], "--size: width must be an integer >= 1, got 0 (see 'mlplc2 stimulus --help')"),
     (["looming", "--center", "3"], "--center: expected X,Y"),
     (["looming", "--contact-time", "soon"], "--contact-time: expected a number, got 'soon'"),
     (["four_phase", "--hold", "2.5"], "--hold: expected an integer, got '2.5'"),
