@@ -108,6 +108,14 @@ def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, c
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
 
 
+def test_run_on_an_empty_stdin_says_so(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "e")],
+                          stdin=subprocess.DEVNULL, capture_output=True, timeout=120)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2 and err == "mlplc2: error: stdin: standard input is empty: no video was piped in\n"
+    assert not (tmp_path / "e").exists()
+
+
 def test_run_on_stdin_from_a_terminal_says_so_instead_of_waiting(tmp_path):
     """``mlplc2 run -`` typed without a pipe: one error line at once (it waited for the keyboard)."""
     import os

@@ -283,6 +283,9 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         if sys.stdin.isatty():  # nothing piped in: FFmpeg would wait for the keyboard
             raise InputValueError("stdin: standard input is a terminal, not a video: pipe one in "
                                   "(cat clip.mkv | mlplc2 run -)")
+        peek = getattr(sys.stdin.buffer, "peek", None)     # waits for the first bytes, reads none of them
+        if peek is not None and not peek(1):   # FFmpeg would say "Invalid data found when processing input"
+            raise InputValueError("stdin: standard input is empty: no video was piped in")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, source, stream=True), "stream"
