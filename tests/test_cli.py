@@ -329,6 +329,7 @@ def test_stimulus_options_reach_the_generator(tmp_path, capsys):
     (["dark_approach", "--seed", "3"], "--seed: stimulus 'dark_approach' has no such option (its options: "
                                        "--size, --frames, --fps; see 'mlplc2 stimulus --help')"),
     (["looming", "--size", "100"], "--size: expected WxH (e.g. 320x240), got '100' (see 'mlplc2 stimulus --help')"),
+    (["looming", "--size", "0x10"], "--size: width must be an integer >= 1, got 0 (see 'mlplc2 stimulus --help')"),
     (["looming", "--center", "3"], "--center: expected X,Y"),
     (["looming", "--contact-time", "soon"], "--contact-time: expected a number, got 'soon'"),
     (["four_phase", "--hold", "2.5"], "--hold: expected an integer, got '2.5'"),
@@ -592,6 +593,16 @@ def test_cli_zero_byte_file(tmp_path, capsys):
     assert main(["run", str(p), "--out", str(tmp_path / "o"), "--quiet"]) == 2
     assert "not a video file" in _one_line(capsys.readouterr().err)
     assert _written(tmp_path / "o") == []
+
+
+@pytest.mark.parametrize("n", [1, 2])
+def test_a_one_frame_video_says_that_no_model_could_respond(tmp_path, capsys, n):
+    """A single image or a one-frame clip is valid (below), but its summary's "no fields, no alarm"
+    would read as "nothing approaches": a note says that one frame shows no motion."""
+    p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)
+    assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 0
+    notes = [line for line in capsys.readouterr().err.splitlines() if "note: one frame only" in line]
+    assert len(notes) == (n == 1)
 
 
 @pytest.mark.parametrize("n", [1, 2])

@@ -107,3 +107,25 @@ def test_the_brake_consumer_of_robot_md_takes_a_warning_without_a_time_to_contac
     out = proc.stdout.splitlines()
     assert [line.split(":")[0] for line in out] == ["BRAKE at frame 1", "BRAKE at frame 2", "BRAKE at frame 3"]
     assert "0.50 s" in out[1]
+
+
+def test_the_readme_python_example_runs_and_names_real_attributes():
+    """README, "Use it from Python": the block runs on a short approach (``frames`` is the reader's),
+    and the attributes its comments list (``.id .x ...`` of a field, ``.r ... .magnitude`` of
+    ``model.maps``) exist: it named the maps LM_r ... LM, the paper's symbols, not their names."""
+    import re
+
+    from mlplc2 import stimuli
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    block = text.split("```python\n", 1)[1].split("```", 1)[0]
+    scope = {"frames": stimuli.looming(size=(160, 120), contact_time=0.5).frames}
+    exec(compile(block.replace("model.reset()", ""), "README.md", "exec"), scope)
+    model, out = scope["model"], scope["out"]
+    for line in block.splitlines():
+        code, _, comment = line.partition("#")
+        names = re.findall(r"(?<![\w.])\.(\w+)", comment)
+        if code.startswith("for f in out.fields"):
+            assert names and out.fields and all(hasattr(out.fields[0], n) for n in names), names
+        elif code.strip() == "model.maps":
+            assert names and all(hasattr(model.maps, n) for n in names), names

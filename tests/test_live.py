@@ -108,6 +108,14 @@ def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, c
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
 
 
+def test_run_on_an_empty_stdin_says_so(tmp_path):
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-q", "-o", str(tmp_path / "e")],
+                          stdin=subprocess.DEVNULL, capture_output=True, timeout=120)
+    err = proc.stderr.decode()
+    assert proc.returncode == 2 and err == "mlplc2: error: stdin: standard input is empty: no video was piped in\n"
+    assert not (tmp_path / "e").exists()
+
+
 def test_run_on_stdin_from_a_terminal_says_so_instead_of_waiting(tmp_path):
     """``mlplc2 run -`` typed without a pipe: one error line at once (it waited for the keyboard)."""
     import os
@@ -254,6 +262,27 @@ def test_an_unreachable_stream_is_one_line(source, capsys):
     assert main(["run", source, "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"mlplc2: error: {source}: cannot open the stream") and "\n" not in err
+    assert "Errno" not in err and err.count(source) == 1          # FFmpeg's words: the URL is named once
+
+
+def test_a_missing_file_on_a_server_is_one_line_that_says_404(tmp_path, capsys):
+    import functools
+    import http.server
+    import threading
+
+    class Quiet(http.server.SimpleHTTPRequestHandler):
+        def log_message(self, *args):
+            pass
+
+    server = http.server.ThreadingHTTPServer(("127.0.0.1", 0), functools.partial(Quiet, directory=str(tmp_path)))
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    url = f"http://127.0.0.1:{server.server_address[1]}/none.mp4"
+    try:
+        assert main(["run", url, "-q", "--out", str(tmp_path / "o")]) == 2
+    finally:
+        server.shutdown()
+        server.server_close()
+    assert capsys.readouterr().err.strip() == f"mlplc2: error: {url}: cannot open the stream (Server returned 404 Not Found)"
 
 
 @pytest.mark.parametrize("scheme", ["http", "rtsp"])

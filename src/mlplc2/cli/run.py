@@ -10,7 +10,7 @@ import math
 import sys
 import warnings
 
-from .._validation import InputValueError
+from .._validation import InputError, InputValueError
 from ..io import parse_resize
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
@@ -109,6 +109,10 @@ def _run(args, jsonl) -> int:
                              max_frames=args.max_frames, duration_s=args.duration, gyro=args.gyro, **stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
+        except InputError as exc:
+            if args.gyro is None:
+                raise
+            raise type(exc)(_cli_names(str(exc))) from None
     _print_run_summary(args, result)
     if result.dropped or (result.message and not result.truncated):  # a dropped stream, a closed --jsonl pipe
         print(f"{PROG}: {result.message}", file=sys.stderr)
@@ -116,6 +120,17 @@ def _run(args, jsonl) -> int:
         warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
+
+
+#: The keywords a model's gyro refusal names (Python) and this command's options for them.
+_GYRO_KEYWORDS = {"stabilise=False": "--no-stabilise", "(hfov_deg)": "(--hfov)"}
+
+
+def _cli_names(message: str) -> str:
+    """``message`` with the Python keywords of a gyro refusal (``Model.gyro_refusal``) as this command's options."""
+    for keyword, option in _GYRO_KEYWORDS.items():
+        message = message.replace(keyword, option)
+    return message
 
 
 def _timing(result) -> str:
@@ -170,6 +185,9 @@ def _print_run_summary(args, result) -> None:
     if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
+    if result.n_frames == 1 and not args.quiet:  # valid, but "no fields, no alarm" would read as "nothing approaches"
+        print(f"{PROG}: note: one frame only: the models respond to change between frames, so none could respond",
+              file=sys.stderr)
 
 
 # ---------------------------------------------------------------------------

@@ -129,8 +129,9 @@ class _PyAVDecoder(Decoder):
         except (av.error.FFmpegError, OSError) as exc:
             if stream:
                 # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
+                # FFmpeg's own words, without PyAV's "[Errno -875574520] ...: 'URL'" around them
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
-                       else _one_line(str(exc)))
+                       else _one_line(getattr(exc, "strerror", None) or str(exc)))
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
@@ -282,6 +283,9 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         if sys.stdin.isatty():  # nothing piped in: FFmpeg would wait for the keyboard
             raise InputValueError("stdin: standard input is a terminal, not a video: pipe one in "
                                   "(cat clip.mkv | mlplc2 run -)")
+        peek = getattr(sys.stdin.buffer, "peek", None)     # waits for the first bytes, reads none of them
+        if peek is not None and not peek(1):   # FFmpeg would say "Invalid data found when processing input"
+            raise InputValueError("stdin: standard input is empty: no video was piped in")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, source, stream=True), "stream"

@@ -327,7 +327,7 @@ class FlowTTC(Model):
 
     def gyro_refusal(self) -> str | None:
         if self.hfov_deg is None:
-            return "a gyro needs the camera's field of view (hfov_deg, --hfov) to turn its rotation into pixels"
+            return "a gyro needs the camera's field of view (hfov_deg) to turn its rotation into pixels"
         return None
 
     def _hold(self, last: Output, elapsed: float) -> Output:

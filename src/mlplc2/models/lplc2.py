@@ -73,9 +73,9 @@ class _LPLC2Family(Model):
 
     def gyro_refusal(self) -> str | None:
         if not self.stabilise:
-            return f"model {self.name!r} was built with stabilise=False (--no-stabilise): it takes no gyro"
+            return f"model {self.name!r} does not stabilise its gaze (stabilise=False): it takes no gyro"
         if self.hfov_deg is None:
-            return "a gyro needs the camera's field of view (hfov_deg, --hfov) to turn its rotation into pixels"
+            return "a gyro needs the camera's field of view (hfov_deg) to turn its rotation into pixels"
         return None
 
     def _stabilise(self, gray: np.ndarray) -> None:

@@ -143,7 +143,10 @@ def check_size(size) -> tuple[int, int]:
         w, h = size
     except (TypeError, ValueError):
         raise InputValueError(f"size must be (width, height), got {size!r}") from None
-    return check_count(w, "width", 1), check_count(h, "height", 1)
+    try:
+        return check_count(w, "width", 1), check_count(h, "height", 1)
+    except InputValueError as exc:   # named, so that `mlplc2 stimulus` can say --size
+        raise InputValueError(f"size: {exc}") from None
 
 
 def plain_level(appearances: Sequence[str]) -> float:
