@@ -196,7 +196,7 @@ class TargetParams(ParameterSet):
                               once a field of the target has been in collision alarm this many frames in a
                               row (``Track.alarm_run``; :func:`~mlplc2.targets.warning.fleeting`): the static
                               world's alarms beside the path are fleeting. 1 = off (2, the default since
-                              session 11: the drive scenes' false episodes 10.19 -> 5.56 per 1000 frames,
+                              session 10: the drive scenes' false episodes 10.19 -> 5.56 per 1000 frames,
                               holdout 9.26 -> 7.41, no collision or clip lost, the real clips' leads
                               ``bear_attack`` 0.67 -> 0.57 s, ``UAV_outdoor_1`` 0.50 -> 0.47 s; docs/model.md,
                               "The field alarm on the static world").""", unit="frames", valid=Valid.integer(1))
