@@ -218,3 +218,9 @@ def test_the_helmet_thrown_at_a_slow_camera_gets_a_target(real_dir):
         x, y, w = track[frame]
         here = [r for r in rows if r["frame"] == frame]
         assert any(math.hypot(r["x"] - x, r["y"] - y) <= w for r in here), (frame, here)
+    # ... and is held through its turn at 25 (x1.5; its alignment fails from every start, the box measured
+    # afresh where its motion carries it grew as that motion says: TargetLayer._remeasure), so that its
+    # third observation gives a time to contact: under 1 s (the contact, 29, is 4 frames = 0.13 s away)
+    x, y, w = track[25]
+    on = [r for r in rows if r["frame"] == 25 and math.hypot(r["x"] - x, r["y"] - y) <= w]
+    assert any(r["ttc_s"] is not None and 0 < r["ttc_s"] < 1.0 for r in on), on

@@ -87,6 +87,12 @@ class TargetParams(ParameterSet):
     iterations: int = param(10, "Most Gauss-Newton iterations per alignment.", valid=Valid.integer(1))
     max_residual: float = param(25.0, "Largest rms residual of an accepted alignment (0-255 scale).",
                                 unit="grey levels", valid=Valid.real(minimum=0))
+    remeasure: float = param(2.0, """Between frames more than one nominal frame apart (``nominal_fps``), a
+                             growing track whose alignment fails takes the box measured afresh (the
+                             change, else the edges) where its own motion carries it, when that box grew
+                             by a log-scale within this factor of the one the motion predicts
+                             (``TargetLayer._remeasure``; the 7.5 fps helmet clip). At the nominal rate
+                             nothing changes. 1 = off.""", valid=Valid.real(minimum=1))
     max_fails: int = param(3, "Consecutive failed alignments after which a target is dropped.",
                            unit="frames", valid=Valid.integer(1))
     # --- time to contact and course -------------------------------------------------------
