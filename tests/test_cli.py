@@ -182,10 +182,10 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
     assert rc == 2
     line = _one_error_line(capsys.readouterr().err)
     expect = {"missing": "no such file", "empty_dir": "no images", "text_mp4": "not a video",
-              "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "bad --resize 'big'",
-              "bad_resize_zero": "bad --resize", "resize_and_scale": "not allowed with",
+              "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "argument --resize: expected WxH with positive integers, e.g. 320x240, got 'big' (see 'mlplc2 run --help')",
+              "bad_resize_zero": "argument --resize: width and height must be positive", "resize_and_scale": "not allowed with",
               "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps",
-              "huge_resize": "--resize 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large",
+              "huge_resize": "argument --resize: size 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large",
               "overflow_scale": "is too large"}[case]
     assert expect in line
     assert not (tmp_path / "o" / "fields.json").exists()
@@ -702,7 +702,8 @@ def test_cli_only_undecodable_images(tmp_path, capsys):
     (["--start", "-1"], "argument --start: expected an integer >= 0, got '-1'"),
     (["--start", "99"], "start frame 99 is past the end (4 frames)"),
     (["--end", "0"], "--end (0) must be larger than --start (0)"),
-    (["--resize", "320x"], "bad --resize '320x': expected WxH with positive integers, e.g. 320x240"),
+    (["--resize", "320x"], "argument --resize: expected WxH with positive integers, e.g. 320x240, got '320x' "
+                           "(see 'mlplc2 run --help')"),
     (["--backend", "gstreamer"], "argument --backend: invalid choice: 'gstreamer'"),
 ])
 def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
@@ -711,6 +712,14 @@ def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
     assert main(["run", str(p), *argv, "--out", str(out), "--quiet"]) == 2
     assert expect in _one_line(capsys.readouterr().err)
     assert _written(out) == []
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
+def test_a_bad_resize_says_where_the_help_is(tmp_path, capsys, command):
+    assert main([command, str(tmp_path / "v.avi"), "--resize", "3x"]) == 2
+    assert _one_line(capsys.readouterr().err) == (
+        "mlplc2: error: argument --resize: expected WxH with positive integers, e.g. 320x240, got '3x' "
+        f"(see 'mlplc2 {command} --help')")
 
 
 def test_cli_out_is_a_file(tmp_path, capsys):

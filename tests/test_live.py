@@ -167,7 +167,7 @@ def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
     assert first["schema"] == 1 and first["frame"] == 0 and first["skipped"] == 0
     assert set(first) >= {"time_s", "warning", "targets", "models"}
     assert len(rest) == 59 and all(line.startswith("{") for line in rest)  # stdout: the JSON lines alone
-    assert "60 frames of -" in err  # the summary went to stderr
+    assert "60 frames of stdin" in err  # the summary went to stderr, naming the source as the progress bar does
 
 
 class _Clock(Decoder):
