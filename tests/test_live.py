@@ -403,3 +403,12 @@ def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
     assert frames[-1] == 59 and len(frames) + sum(line["skipped"] for line in lines) == 60
     assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
     assert json.loads((tmp_path / "o" / "fields.json").read_text())["frames_skipped"] == 60 - len(frames)
+
+
+def test_a_misspelt_keyword_names_the_function_and_the_likely_one():
+    with pytest.raises(TypeError, match=r"^stream\(\) got an unexpected keyword argument 'max_frame' "
+                                        r"\(did you mean 'max_frames'\?\)$"):
+        next(mlplc2.stream("clip.mp4", max_frame=3))
+    with pytest.raises(TypeError, match=r"^run\(\) got an unexpected keyword argument 'nonsense' \(the keywords "
+                                        r"are mlplc2.runner.RunOptions' fields\)$"):
+        mlplc2.run("clip.mp4", nonsense=1)
