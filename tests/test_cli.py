@@ -755,6 +755,20 @@ def test_cli_skip_repeats(tmp_path, capsys):
     assert "--repeat-level" in capsys.readouterr().err
 
 
+def test_the_summary_says_how_many_frames_skip_repeats_held(tmp_path, capsys):
+    """7 frames repeated twice each, within +-6 grey levels, as lossless PNGs: --skip-repeats (16 levels)
+    holds the 14 copies, and the summary says so (no prescan with the flag, so no note line)."""
+    import cv2
+
+    frames, _ = duplicated(stimuli.four_phase(seed=0).frames[:20])
+    (tmp_path / "f").mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(tmp_path / "f" / f"{i:03d}.png"), f)
+    assert cli.main(["run", str(tmp_path / "f"), "--skip-repeats", "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "repeated frames: the models held their output on 14 of 34 frames" in out
+
+
 def test_run_summary_lists_only_fields_that_responded(monkeypatch, capsys):
     """Issue 24, item 6: the summary's six strongest fields leave out fields whose peak is 0."""
     import mlplc2.runner as runner

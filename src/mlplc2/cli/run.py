@@ -175,6 +175,10 @@ def _print_run_summary(args, result) -> None:
                             if warned else ""))
     if result.skipped:
         lines.append(f"skipped {result.skipped} frame(s) of the live source: the models took the newest frame")
+    held = max(result.repeated.values(), default=0)
+    if held and not result.duplicated:  # --skip-repeats, --repeat-level, or found out in a stream (else: the note)
+        lines.append(f"repeated frames: the models held their output on {held} of {result.n_frames} frames "
+                     f"(--every-frame processes every frame)")
     if result.latency:
         lat = result.latency
         lines.append(f"latency from decoding to results: median {lat['median_ms']:.1f} ms, "
@@ -182,7 +186,6 @@ def _print_run_summary(args, result) -> None:
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)
-    held = max(result.repeated.values(), default=0)
     if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)
