@@ -399,7 +399,7 @@ def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
     finally:
         server.close()
     lines = _lines(tmp_path / "o.jsonl")
-    frames = [line["frame"] for line in lines]; print(frames, newest)
+    frames = [line["frame"] for line in lines]
     assert frames[-1] == 59 and len(frames) + sum(line["skipped"] for line in lines) == 60
     assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
     assert json.loads((tmp_path / "o" / "fields.json").read_text())["frames_skipped"] == 60 - len(frames)
