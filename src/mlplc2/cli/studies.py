@@ -13,8 +13,7 @@ from .._validation import InputValueError
 from ..models.base import resolve_names
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
                      add_stabilise_option, add_warning_options, frame_size, nonneg_int, one_line, pos_float, say,
-                     target_options,
-                     video_run_options, warn)
+                     target_options, video_run_options, warn)
 
 
 # ---------------------------------------------------------------------------

@@ -194,8 +194,8 @@ def _run_options(options: RunOptions | None, keywords: Mapping[str, Any], caller
     unknown = [k for k in keywords if k not in _OPTION_NAMES]
     if unknown:
         close = difflib.get_close_matches(unknown[0], _OPTION_NAMES, n=1)
-        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r}"
-                        + (f" (did you mean {close[0]!r}?)" if close else " (the keywords are mlplc2.runner.RunOptions' fields)"))
+        hint = f"did you mean {close[0]!r}?" if close else "the keywords are mlplc2.runner.RunOptions' fields"
+        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r} ({hint})")
     if options is not None and not isinstance(options, RunOptions):
         raise InputTypeError(f"options must be a RunOptions, got {type(options).__name__}")
     options = RunOptions(**keywords) if options is None else replace(options, **keywords)
