@@ -16,7 +16,9 @@ runs the models (default ``mlplc2`` and ``flow``) on each with ``mlplc2.run`` (d
 ``work_width=320``) and prints, per clip, copy and model, the first warning frame, the warning target's position
 (in the clip's native pixels) and whether it lies on the colliding object (within 20 px of its labelled box,
 ``evaluation.match.on_object``), the frames mLPLC2 held as repeats and each file's SHA-256, then per clip and model
-how far apart the first warnings lie and whether issue 22's item 7 holds (every copy warns first within 2 frames of
+where the field of the first alarm lies (native px) and when it was born, where each copy's run first parts from the
+original's (the first field born elsewhere, the first frame whose target boxes differ: ``parting``), how far apart
+the first warnings lie and whether issue 22's item 7 holds (every copy warns first within 2 frames of
 the others, on the colliding object; on a clip without a collision no copy warns). (A ``320x240`` copy of a clip
 that is 320x240 already is an x264 copy too.) ``*_fullres`` clips are scored against the labels of their 320x240
 version, scaled.
@@ -24,8 +26,8 @@ version, scaled.
     python benchmarks/encoding_invariance.py [--data ../shared/data] [--clip helmet] [--model mlplc2] [--json out.json]
         [--cache DIR]
 
-Takes some minutes on two cores the first time (the x264 encodes of the full-resolution clips dominate), about a
-minute once the copies are cached.
+The first run writes the copies (411 s for all of them and mLPLC2 on two cores at a load of about 20); later runs
+reuse them (305 s at a load of 25; the model runs took ~65 s on a quiet machine in session 10).
 """
 
 from __future__ import annotations
@@ -124,20 +126,44 @@ def measure(video: Path, truth, native: tuple[int, int], models: list[str]) -> d
     probe = _HeldFrames(fps=fps)
     res = mlplc2.run(str(video), [*models, probe], out=False, quiet=True, progress=False, plot=False)
     sx, sy = native[0] / res.size[0], native[1] / res.size[1]
+    nat = lambda x, y: ((x + 0.5) * sx - 0.5, (y + 0.5) * sy - 0.5)  # noqa: E731
     out = {}
     for m in models:
+        fields = res.fields.get(m, [])
+        alarmed = [f for f in fields if f.get("first_alarm_frame") is not None]
+        alarm_field = min(alarmed, key=lambda f: f["first_alarm_frame"]) if alarmed else None
+        boxes: dict[int, list] = {}
+        for r in res.targets:
+            if r["model"] == m:
+                boxes.setdefault(r["frame"], []).append((*nat(r["x"], r["y"]), r["width"] * sx, r["height"] * sy))
+        out[m] = {"frame": None, "held": res.repeated.get(m, 0), "duplicated": res.duplicated,
+                  "held_frames": probe.held, "alarm": res.alarms.get(m, {}).get("first"),
+                  "alarm_field": None if alarm_field is None else
+                  [*(round(v) for v in nat(alarm_field["x"], alarm_field["y"])), alarm_field["born"]],
+                  "_births": sorted((f["born"], *nat(f["x"], f["y"])) for f in fields),
+                  "_boxes": {k: sorted(v) for k, v in boxes.items()}}
         row = first_warning(res, m)
-        if row is None:
-            out[m] = {"frame": None, "held": res.repeated.get(m, 0), "duplicated": res.duplicated,
-                      "held_frames": probe.held, "alarm": res.alarms.get(m, {}).get("first")}
-            continue
-        x, y = (row["x"] + 0.5) * sx - 0.5, (row["y"] + 0.5) * sy - 0.5
-        col = truth.collider if truth is not None else None
-        on = None if col is None or not col.track else bool(on_object(x, y, col, row["frame"]))
-        out[m] = {"frame": row["frame"], "x": round(x), "y": round(y), "on": on,
-                  "held": res.repeated.get(m, 0), "duplicated": res.duplicated, "held_frames": probe.held,
-                  "alarm": res.alarms.get(m, {}).get("first")}
+        if row is not None:
+            x, y = nat(row["x"], row["y"])
+            col = truth.collider if truth is not None else None
+            on = None if col is None or not col.track else bool(on_object(x, y, col, row["frame"]))
+            out[m].update(frame=row["frame"], x=round(x), y=round(y), on=on)
     return out
+
+
+def parting(a: dict, b: dict, unit: float) -> str:
+    """Where run ``b`` of a copy first parts from run ``a`` of the original (``measure``'s rows of one model;
+    ``unit``: native px per working px): the first field born elsewhere (more than 4 working px) or not
+    at all, and the first frame whose target boxes differ in number or by more than 6 working px."""
+    fa, fb = a["_births"], b["_births"]
+    born = next((min(p[0], q[0]) for p, q in zip(fa, fb)
+                 if p[0] != q[0] or max(abs(p[1] - q[1]), abs(p[2] - q[2])) > 4 * unit), None)
+    if born is None and len(fa) != len(fb):              # one has a field more
+        born = max(fa, fb, key=len)[min(len(fa), len(fb))][0]
+    ta, tb = a["_boxes"], b["_boxes"]
+    boxes = next((k for k in sorted(set(ta) | set(tb)) if len(ta.get(k, ())) != len(tb.get(k, ()))
+                  or any(max(abs(u - v) for u, v in zip(p, q)) > 6 * unit for p, q in zip(ta[k], tb[k]))), None)
+    return f"fields part at {born if born is not None else '-'}, targets at {boxes if boxes is not None else '-'}"
 
 
 def held_diff(a: list[int], b: list[int]) -> str:
@@ -201,10 +227,18 @@ def main(argv=None) -> int:
             print(f"{video.name:34s} {copy:8s} " + "  ".join(f"{m}: {fmt(rows[copy][m]):24s}" for m in models)
                   + f" held {rows[copy][models[0]]['held']}, first alarm {rows[copy][models[0]]['alarm']},"
                   f" sha256 {rows[copy]['sha256'][:16]}", flush=True)
-        ref = next(iter(rows.values()))[models[0]]["held_frames"]
+        first = next(iter(rows.values()))
+        ref = first[models[0]]["held_frames"]
         for copy, r in rows.items():
             print(f"{'':34s} held ({copy}): " + (held_diff(ref, r[models[0]]["held_frames"]) if copy != "orig"
                                                  else " ".join(map(str, ref)) or "none"), flush=True)
+        for m in models:
+            for copy, r in rows.items():
+                print(f"{'':34s} {m} ({copy}): first alarm's field at {r[m]['alarm_field'] or '-'} (x, y, born)"
+                      + ("" if r is first else "; " + parting(first[m], r[m], native[0] / 320)), flush=True)
+        for r in rows.values():
+            for m in models:
+                r[m].pop("_births"), r[m].pop("_boxes")
         collision = truth is not None and truth.label == "collision"
         for m in models:
             print(f"{'':34s} {m}: {verdict([r[m] for k, r in rows.items()], collision)}", flush=True)

@@ -194,3 +194,18 @@ def test_the_encoding_check_writes_each_copy_once_and_the_same_every_time(tmp_pa
     assert small != first and small.exists()
     with av.open(str(small)) as c:
         assert (c.streams.video[0].width, c.streams.video[0].height) == (48, 32)
+
+
+def test_the_encoding_check_says_where_two_runs_part():
+    """``parting``: the first field born elsewhere (beyond 4 working px) or not at all, and the first frame
+    whose target boxes differ (in number, or beyond 6 working px)."""
+    enc = _encoding_check()
+    a = {"_births": [(1, 10.0, 10.0), (5, 50.0, 50.0)], "_boxes": {4: [(20.0, 20.0, 8.0, 8.0)], 6: []}}
+    same = {"_births": [(1, 13.0, 10.0), (5, 50.0, 47.0)], "_boxes": {4: [(25.0, 20.0, 8.0, 8.0)], 6: []}}
+    assert enc.parting(a, same, 1.0) == "fields part at -, targets at -"
+    moved = {"_births": [(1, 10.0, 10.0), (5, 55.0, 50.0)], "_boxes": {4: [(20.0, 20.0, 8.0, 8.0)],
+                                                                       6: [(1.0, 1.0, 2.0, 2.0)]}}
+    assert enc.parting(a, moved, 1.0) == "fields part at 5, targets at 6"
+    assert enc.parting(a, moved, 2.0) == "fields part at -, targets at 6"     # 5 native px = 2.5 working px
+    fewer = {"_births": [(1, 10.0, 10.0)], "_boxes": {}}
+    assert enc.parting(a, fewer, 1.0) == "fields part at 5, targets at 4"
