@@ -150,9 +150,9 @@ class RunOptions:
     duration_s : float, optional
         Stop after this many seconds of wall time.
     spare_core : bool
-        While the decoding thread resizes the frames of a source that is not live (a file wider than
-        the working width), the models run on one thread fewer (:func:`mlplc2.backend.one_fewer`),
-        leaving it a core; the outputs do not depend on the threads. False: every thread.
+        While :func:`run`'s decoding thread resizes the frames of a source that is not live (a file wider
+        than the working width), the models run on one thread fewer (:func:`mlplc2.backend.one_fewer`),
+        leaving it a core; the outputs do not depend on the threads. False (and :func:`stream`): every thread.
     """
 
     fps: float | None = None
