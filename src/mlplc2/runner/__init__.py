@@ -150,9 +150,7 @@ class RunOptions:
     duration_s : float, optional
         Stop after this many seconds of wall time.
     spare_core : bool
-        While :func:`run`'s decoding thread resizes the frames of a source that is not live (a file wider
-        than the working width), the models run on one thread fewer (:func:`mlplc2.backend.one_fewer`),
-        leaving it a core; the outputs do not depend on the threads. False (and :func:`stream`): every thread.
+        :func:`run` on a source not live resized in its decoding thread: the models on one thread fewer (same outputs).
     """
 
     fps: float | None = None
@@ -583,8 +581,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
-    spare = options.spare_core and not src.live and src.resized   # docs/model.md, "Decoding beside the model"
-    with interrupts(defer=True) as stop, threads(one_fewer() if spare else None):
+    with interrupts(defer=True) as stop, threads(one_fewer() if options.spare_core and src.resized and not src.live else None):
         t0 = time.perf_counter()
         try:
             frames.open(out_dir)
