@@ -348,3 +348,45 @@ def test_the_border_a_fast_pan_uncovers_makes_no_local_motion():
         if k >= 2:
             entering.append(float(model.maps.magnitude[:, -45:].max()))    # 3 frames' turn + the lamina's window
     assert max(entering) < 0.1 * Params().t_a
+
+
+def test_the_levels_read_last_frame_are_carried_ahead_in_a_thread_of_their_own():
+    """On two threads, a stabilised model carries the kept pyramids' levels its target layer read the
+    frame before through the new turn in a thread of its own while it works out its fields
+    (TargetLayer.carry_ahead); the targets are those of one thread, where every level is carried
+    when read."""
+    import threading
+
+    from mlplc2 import MLPLC2
+    from mlplc2.backend import threads
+    from mlplc2.bench import synthetic_frames
+    from mlplc2.targets import track
+
+    frames = synthetic_frames(160, 120, 40)       # a slow pan with approaching squares
+    where = []
+    apply = track.Turn.apply
+
+    def spy(self, *args):
+        where.append(threading.current_thread().name.startswith("mlplc2-carry"))
+        return apply(self, *args)
+
+    track.Turn.apply = spy
+    try:
+        runs = {}
+        for n in (1, 2):
+            where.clear()
+            with threads(n):
+                model = MLPLC2(fps=30.0, stabilise=True, repeat_threshold=None)
+                runs[n] = [[(t.id, t.warning, vars(t)) for t in model.step(f).targets] for f in frames]
+            runs[n, "ahead"] = sum(where)
+            runs[n, "warps"] = len(where)
+    finally:
+        track.Turn.apply = apply
+    assert runs[1, "ahead"] == 0 and runs[2, "ahead"] > runs[2, "warps"] / 2
+    assert sum(map(len, runs[1])) > 20
+    for a, b in zip(runs[1], runs[2]):
+        assert [t[:2] for t in a] == [t[:2] for t in b]
+        for (_, _, va), (_, _, vb) in zip(a, b):
+            for key, value in va.items():
+                other = vb[key]
+                assert value == other or np.isclose(value, other, rtol=1e-6), key

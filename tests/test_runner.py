@@ -224,3 +224,33 @@ def test_stabilisation_is_on_by_default_for_run_and_stream_and_off_for_reproduce
     run_model("mlplc2", [np.zeros((24, 32), np.uint8)] * 3, 30.0)
     assert [m.stabilise for m in built] == [False]
     assert mlplc2.MLPLC2(fps=30.0).stabilise is False
+
+
+def test_a_file_reduced_in_the_decoding_thread_leaves_it_a_core(data):
+    """RunOptions.spare_core: while the decoding thread resizes a file's frames, the model steps on one
+    thread fewer (the front end's and OpenCV's counts, given back after the run); a file at its own
+    size, spare_core=False and a live source keep every thread; the outputs are the same either way."""
+    import cv2
+    import numba
+
+    from mlplc2.backend import threads
+
+    if numba.config.NUMBA_NUM_THREADS < 2:
+        pytest.skip("one core: no thread to spare")
+    seen = []
+
+    class Spy(mlplc2.MLPLC2):
+        def step(self, frame, t=None, **kw):
+            seen.append((numba.get_num_threads(), cv2.getNumThreads()))
+            return super().step(frame, t, **kw)
+
+    results = {}
+    with threads(2):
+        for key, kw in (("spare", {"scale": 0.5}), ("all", {"scale": 0.5, "spare_core": False}),
+                        ("own size", {}), ("live", {"scale": 0.5, "live": True})):
+            seen.clear()
+            results[key] = run(str(data["avi"]), [Spy(fps=30.0, stabilise=True)], out=False, quiet=True, end=12,
+                               **kw)
+            assert set(seen) == {(1, 1) if key == "spare" else (2, 2)}, key
+            assert (numba.get_num_threads(), cv2.getNumThreads()) == (2, 2)
+    assert results["spare"].targets == results["all"].targets and results["spare"].rows == results["all"].rows

@@ -18,7 +18,7 @@ from dataclasses import dataclass
 
 from ._validation import InputValueError
 
-__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels", "threads"]
+__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels", "threads", "one_fewer"]
 
 #: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
 #: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
@@ -181,3 +181,11 @@ def threads(n: int | None) -> Iterator[int]:
     finally:
         numba.set_num_threads(before)
         cv2.setNumThreads(before_cv)
+
+
+def one_fewer() -> int | None:
+    """One thread fewer than in force for the compiled front end and OpenCV, for a run whose decoding
+    thread resizes a file's frames beside the model (:class:`mlplc2.runner.RunOptions`, ``spare_core``;
+    docs/model.md, "Decoding beside the model"); None (as they are) on one thread or without Numba."""
+    with threads(None) as n:
+        return n - 1 if n > 1 else None

@@ -341,8 +341,10 @@ def describe(frames: int, rounds: int) -> str:
 # ---------------------------------------------------------------------------
 @dataclass
 class LatencyRow:
-    """Per source size: ms per frame of decoding alone, the model alone, ``run`` end to end (with
-    the model on every thread, and on one thread fewer: ``run_fewer_ms``, None on one core), each
+    """Per source size: ms per frame of decoding alone, the model alone, ``run`` end to end (as it
+    runs by default; with the model on every thread, ``run_all_ms``, where the default leaves a core to
+    the decoding thread, ``RunOptions.spare_core``, else None; and on one thread fewer: ``run_fewer_ms``,
+    None on one core), each
     by the wall clock and as CPU time of the process (``*_cpu_ms``: every thread's), and, played
     as a live camera at 30 frames/s, the latency from decoding to the JSON line (ms) and the
     frames skipped; ``threads``: the model's threads; ``load``: the 1-minute load average after."""
@@ -362,6 +364,8 @@ class LatencyRow:
     run_fewer_cpu_ms: float | None = None
     threads: int = 1
     load: float | None = None
+    run_all_ms: float | None = None
+    run_all_cpu_ms: float | None = None
 
 
 class _Paced:
@@ -410,9 +414,11 @@ def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc
     else), ``model`` stepping on the frames in memory (as ``run`` builds it: frames wider than 320
     px reduced, gaze stabilisation on where the model has it; every frame stepped),
     :func:`mlplc2.run` on the clip writing its JSON lines (``jsonl``) and CSV files (its frame
-    loop's ms per frame), the same with the model on one thread fewer (leaving a core to the
-    decoding thread), and ``run`` on the clip played as a live camera (frames handed out at 30
-    frames/s; the newest taken): its latency from a frame's decoding to its JSON line. Each
+    loop's ms per frame; as it runs by default, which leaves a core to the decoding thread where that
+    reduces the frames: ``RunOptions.spare_core``), the same with the model on every thread (where the
+    default leaves a core) and on one thread fewer, and ``run`` on the clip played as a live camera
+    (frames handed out at 30 frames/s; the newest taken): its latency from a frame's decoding to its
+    JSON line. Each
     time also as the process's CPU time per frame (every thread), which a busy machine blurs less."""
     from .backend import threads
     from .io import FrameSource, open_source, write_video
@@ -438,10 +444,10 @@ def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc
                 m.step(f)
             return len(video) - 1
 
-        def end_to_end(out: str, n_threads: int | None):
+        def end_to_end(out: str, n_threads: int | None, spare_core: bool = True):
             def work() -> int:
                 with threads(n_threads):
-                    box.append(run(clip, [model], out=Path(tmp) / out, **options))
+                    box.append(run(clip, [model], out=Path(tmp) / out, spare_core=spare_core, **options))
                 return box[-1].n_frames
             box: list = []
             _, cpu, _ = _per_frame(work)
@@ -453,13 +459,16 @@ def time_latency(width: int, height: int, frames: int = 150, model: str = "mlplc
         with threads(None) as n_threads:
             pass
         run_ms, run_cpu, n = end_to_end("out", None)
-        fewer_ms = fewer_cpu = None
+        fewer_ms = fewer_cpu = all_ms = all_cpu = None
         if n_threads > 1:
-            fewer_ms, fewer_cpu, _ = end_to_end("fewer", n_threads - 1)
+            fewer_ms, fewer_cpu, _ = end_to_end("fewer", n_threads - 1, False)
+            if m.work_width is not None and width > m.work_width:     # run leaves a core to the decoding
+                all_ms, all_cpu, _ = end_to_end("all", None, False)   # thread by default: every thread
         camera = FrameSource(_Paced(open_decoder(str(clip), "opencv")[0], 30.0), "camera", live=True)
         live = run(camera, [model], out=Path(tmp) / "live", **options)
     return LatencyRow(model, (width, height), n, decode_ms, model_ms, run_ms, live.latency, live.skipped,
-                      decode_cpu, model_cpu, run_cpu, fewer_ms, fewer_cpu, n_threads, os.getloadavg()[0])
+                      decode_cpu, model_cpu, run_cpu, fewer_ms, fewer_cpu, n_threads, os.getloadavg()[0], all_ms,
+                      all_cpu)
 
 
 def format_latency(rows) -> str:
@@ -468,13 +477,14 @@ def format_latency(rows) -> str:
         return "-" if wall is None else f"{wall:.2f} / {cpu:.2f}"
 
     lines = ["| model | source | frames | threads | decode ms/frame | model ms/frame | run ms/frame | "
-             "run, one thread fewer | max(decode, model) / run | live: latency median ms | p99 ms | max ms | "
-             "skipped | load |", "|" + "---|" * 14]
+             "run, every thread | run, one thread fewer | max(decode, model) / run | live: latency median ms | "
+             "p99 ms | max ms | skipped | load |", "|" + "---|" * 15]
     for r in rows:
         lat = r.latency
         lines.append(f"| {r.model} | {r.size[0]}x{r.size[1]} | {r.frames} | {r.threads} | "
                      f"{both(r.decode_ms, r.decode_cpu_ms)} | {both(r.model_ms, r.model_cpu_ms)} | "
-                     f"{both(r.run_ms, r.run_cpu_ms)} | {both(r.run_fewer_ms, r.run_fewer_cpu_ms)} | "
+                     f"{both(r.run_ms, r.run_cpu_ms)} | {both(r.run_all_ms, r.run_all_cpu_ms)} | "
+                     f"{both(r.run_fewer_ms, r.run_fewer_cpu_ms)} | "
                      f"{100 * max(r.decode_ms, r.model_ms) / r.run_ms:.0f} % | "
                      f"{lat.get('median_ms', 0):.1f} | {lat.get('p99_ms', 0):.1f} | {lat.get('max_ms', 0):.1f} | "
                      f"{r.skipped} | {'-' if r.load is None else f'{r.load:.1f}'} |")

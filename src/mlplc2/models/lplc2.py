@@ -68,6 +68,8 @@ class _LPLC2Family(Model):
         if self._camera is not None:
             self._stabilise(gray)
         lm = self.frontend.step(gray, self.interval)
+        if self._camera is not None and self._layer is not None:   # the kept images' turns, beside Eq. 13-16
+            self._layer.carry_ahead(self.clock)
         self.maps = lm
         return lm
 

@@ -49,6 +49,7 @@ from typing import Any
 from .._signals import interrupts
 from .._validation import InputTypeError, InputValueError, as_gray
 from .._files import write_json
+from ..backend import one_fewer, threads
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from ..io.gyro import Gyro
 from ..io.formats import STDIN
@@ -66,7 +67,6 @@ __all__ = ["run", "stream", "RunOptions", "RunResult", "RunInterrupted", "Trunca
            "default_out_dir", "demo", "DemoResult"]
 
 log = logging.getLogger(__name__)
-
 
 
 @dataclass(frozen=True)
@@ -150,6 +150,8 @@ class RunOptions:
         Stop after this many frames (e.g. of a live source).
     duration_s : float, optional
         Stop after this many seconds of wall time.
+    spare_core : bool
+        :func:`run` on a source not live resized in its decoding thread: the models on one thread fewer (same outputs).
     """
 
     fps: float | None = None
@@ -174,6 +176,7 @@ class RunOptions:
     jsonl: Any = None
     max_frames: int | None = None
     duration_s: float | None = None
+    spare_core: bool = True
 
     def source_options(self) -> dict[str, Any]:
         """The keywords of :func:`mlplc2.io.open_source` that choose the frames."""
@@ -500,7 +503,7 @@ class _Frames:
     def step(self, item: tuple) -> dict:
         """One frame: the models step, then the frame's share of every output, together; returns
         the frame's JSON line (:func:`~mlplc2.runner.live.frame_record`). Its latency runs from the
-        frame's decoding to the end of its writing."""
+        frame's decoding to its JSON line, written before its CSV rows (without ``jsonl``: to where it would be)."""
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
         time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
@@ -508,8 +511,6 @@ class _Frames:
         # the gyro only to the models that take it (a model of the user's may not know the keyword)
         outputs = [m.step(frame, src.time_s) if rate is None or m.gyro_refusal() else
                    m.step(frame, src.time_s, gyro=rate) for m in self.built]
-        frame_rows = [row for name, out in zip(names, outputs)
-                      for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.vw is not None:
             from ..plots import annotate_frame
 
@@ -519,27 +520,29 @@ class _Frames:
                 self.vw.write(img)
             except OSError as exc:  # a full disk: this frame goes nowhere, the others' outputs are kept
                 raise _VideoFailed(exc) from exc
-        # The frame's share of every output, together (a few dict updates and two writes).
+        # The frame's share of every output, together: the JSON line first (its latency ends there), the CSV rows after.
         target_rows = []
         for name, out in zip(names, outputs):
             if out.repeated:
                 result.repeated[name] += 1
             target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                for t in self.recorder.update(index, name, out))
+        record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
+        if self.lines is not None and not self.lines.write(record) and self.result.message is None:
+            self.result.message = f"the reader of the JSON lines went away (frame {index} not delivered); stopped there"
+        result.n_frames += 1
+        if result.n_frames > 1:  # the first frame's step builds the models' state (and compiles): not latency
+            self.latency.add(time.perf_counter() - src.decoded_at)
+        frame_rows = [row for name, out in zip(names, outputs)
+                      for row in response_rows(index, time_s, name, out, src.to_input)]
         if self.targets is not None and target_rows:
             self.targets.write(target_rows)
         if self.responses is not None:
             self.responses.write(frame_rows)
-        record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
-        if self.lines is not None and not self.lines.write(record) and self.result.message is None:
-            self.result.message = f"the reader of the JSON lines went away (frame {index} not delivered); stopped there"
         if self.options.keep_rows:
             result.targets.extend(target_rows)
             result.rows.extend(frame_rows)
-        result.n_frames += 1
         result.skipped += src.skipped
-        if result.n_frames > 1:  # the first frame's step builds the models' state (and compiles): not latency
-            self.latency.add(time.perf_counter() - src.decoded_at)
         return record
 
     def close_csv(self) -> None:
@@ -581,7 +584,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
-    with interrupts(defer=True) as stop:
+    with interrupts(defer=True) as stop, threads(one_fewer() if options.spare_core and src.resized and not src.live else None):
         t0 = time.perf_counter()
         try:
             frames.open(out_dir)

@@ -24,7 +24,7 @@ from .change import change_box, unswept
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
-from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn
+from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
 from .warning import estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
@@ -66,6 +66,8 @@ class TargetLayer:
         self.reset()
 
     def reset(self) -> None:
+        self._settle()
+        self._hot: tuple[list[int], list[int]] = ([], [])   # levels read last frame: of the last and the oldest frame
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
         self._next = 1
@@ -93,6 +95,29 @@ class TargetLayer:
         self.heading = (self.heading[0] + k * (point[0] - self.heading[0]),
                         self.heading[1] + k * (point[1] - self.heading[1]))
 
+    def _settle(self) -> None:
+        """Wait for the levels :meth:`carry_ahead` is carrying (none: nothing to wait for)."""
+        job, self._job = getattr(self, "_job", None), None
+        if job is not None:
+            job.result()
+
+    def carry_ahead(self, clock: float) -> None:
+        """Start carrying, in a thread of their own, the levels of the kept pyramids this frame
+        (``clock``) will likely read: those its last and its oldest kept frame had read the frame
+        before (:func:`~mlplc2.targets.track.carry_ahead`: the same values, and every level always
+        carried by the same thread for the same inputs). Called by the model after its front end,
+        while it works out its fields; nothing on one thread. docs/model.md, "Decoding beside the model"."""
+        if self._prev is None or cv2.getNumThreads() < 2:
+            return
+        span = self.params.span(self.params.change_frames, self.fps) - _EPS
+        i = 0                                             # the oldest kept after :meth:`_keep_past`
+        while len(self._past_t) - i > 1 and clock - self._past_t[i + 1] >= span:
+            i += 1
+        jobs = dict.fromkeys([(self._prev, k) for k in self._hot[0]] + [(self._past[i], k) for k in self._hot[1]])
+        jobs = [(c, k) for c, k in jobs if k < len(c) and c.pending(k)]
+        if jobs:
+            self._job = carry_ahead(jobs)
+
     def _pyramid(self, gray: np.ndarray) -> list[np.ndarray]:
         """This frame's pyramid, made once for :meth:`compensate` and :meth:`step`."""
         if self._now is None or self._now[0] is not gray:
@@ -107,6 +132,7 @@ class TargetLayer:
         The kept pyramids take the turn lazily (:class:`Carried`: a level is resampled when read,
         to the values of resampling it every turn; composing the turns into one resampling raised
         the false warnings, docs/model.md, "Camera motion")."""
+        self._settle()
         turn = Turn(homography, self._pyramid(gray))        # shared: its level matrices and masks made once
         for levels in self._past:
             levels.turn(turn)
@@ -131,6 +157,7 @@ class TargetLayer:
         levels = self._pyramid(gray)
         h, w = gray.shape
         self._keep_past(clock)
+        last, oldest = self._prev, (self._past[0] if self._past else None)
         if self._prev is not None:
             self._follow(levels, clock, clock - self._clock, w, h, lm, gray)
         interval = None if self._prev is None else clock - self._clock
@@ -204,6 +231,10 @@ class TargetLayer:
                 o, t.warned = replace(o, warning=False), warned
             out.append(o)
         self._drop_idle(now)
+        self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
+        for c in self._past:
+            c.read.clear()
+        self._settle()
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 

@@ -6,7 +6,9 @@ frame, and the pyramids of past frames carried through the camera's turns (:clas
 from __future__ import annotations
 
 import math
+import threading
 from collections import deque
+from concurrent.futures import Future, ThreadPoolExecutor
 from dataclasses import dataclass, field
 from typing import NamedTuple
 
@@ -14,7 +16,7 @@ import numpy as np
 
 from ..camera import warp
 
-__all__ = ["Target", "Observation", "Track", "Carried", "Turn", "MIN_POINTS", "EPS"]
+__all__ = ["Target", "Observation", "Track", "Carried", "Turn", "carry_ahead", "MIN_POINTS", "EPS"]
 
 #: Fewest observations of a fit (:func:`fit_contact` needs 3): the floor of ``TargetParams.min_frames``
 #: for a camera slower than ``TargetParams.nominal_fps``.
@@ -264,6 +266,8 @@ class Carried:
         self._w0 = self.levels[0].shape[1]
         self._turns: list[Turn] = []
         self._done = [0] * len(self.levels)      # turns applied to each level
+        self._ahead: dict[int, threading.Event] = {}   # levels being carried in :func:`carry_ahead`'s thread
+        self.read: set[int] = set()              # levels read (the target layer clears it every frame)
 
     def turn(self, turn: Turn) -> None:
         """One more turn (one :class:`Turn` shared by every kept pyramid)."""
@@ -274,8 +278,45 @@ class Carried:
 
     def __getitem__(self, k: int) -> np.ndarray:
         k = range(len(self.levels))[k]
+        ahead = self._ahead.pop(k, None)
+        if ahead is not None:                    # carried in the other thread: wait for it there
+            ahead.wait()
+        self.read.add(k)
+        return self._carry(k)
+
+    def pending(self, k: int) -> bool:
+        """Whether level ``k`` has turns not yet applied."""
+        return self._done[k] < len(self._turns)
+
+    def _carry(self, k: int) -> np.ndarray:
         img = self.levels[k]
         for turn in self._turns[self._done[k]:]:
             img = turn.apply(img, k, self._w0)
         self.levels[k], self._done[k] = img, len(self._turns)
         return img
+
+
+_AHEAD: list = []
+
+
+def carry_ahead(jobs: list[tuple[Carried, int]]) -> Future:
+    """Carry the levels ``jobs`` (pyramid, level) through their pending turns in a thread of their
+    own, in order, while the caller goes on; reading such a level (``Carried[k]``) waits for it. The
+    values are those of carrying them when read; which thread carries a level depends on ``jobs``
+    alone, never on timing. The caller waits for the returned future before the next turn."""
+    if not _AHEAD:
+        _AHEAD.append(ThreadPoolExecutor(1, thread_name_prefix="mlplc2-carry"))
+    events = [threading.Event() for _ in jobs]
+    for (c, k), event in zip(jobs, events):
+        c._ahead[k] = event
+
+    def work() -> None:
+        try:
+            for (c, k), event in zip(jobs, events):
+                c._carry(k)
+                event.set()
+        finally:                                 # a failure: the reader carries the level itself
+            for event in events:
+                event.set()
+
+    return _AHEAD[0].submit(work)
