@@ -16,22 +16,27 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
+from mlplc2.targets.warning import cut_keeps_bearing, drift
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
 CONTACT = 40                           # frame of contact
 
 
-def _looming(cx: float, frames: int = 12, *, width: float = 20.0, contact: int = CONTACT, each=None) -> Track:
+def _looming(cx: float, frames: int = 12, *, width: float = 20.0, contact: int = CONTACT, each=None,
+             static: bool = False) -> Track:
     """A track of an object approaching at constant speed straight at the camera (its image grows
     about its own centre, ``1 / S`` linear in time, contact at frame ``contact``), its box centred
-    at ``cx`` px; ``each(track, frame)`` after every frame."""
+    at ``cx`` px; ``each(track, frame)`` after every frame. ``static``: its image expands about the
+    principal point instead (the static world ahead of a camera driving forward)."""
     p = TargetParams()
     t = Track(1, 0, cx, 60.0, width, width, history=deque(maxlen=p.window))   # as the layer keeps it
     t.last_answer = frames                               # an attention field answered: looming evidence
     for k in range(1, frames + 1):
         k_scale = (contact - (k - 1)) / (contact - k)    # Z_{k-1} / Z_k
-        assert t.follow((0.0, 0.0, k_scale, k_scale, math.log(k_scale), 0.0), k, FPS, SHAPE, p.max_fails,
+        dx, dy = ((t.cx - (SHAPE[1] - 1) / 2.0) * (k_scale - 1), (t.cy - (SHAPE[0] - 1) / 2.0) * (k_scale - 1)) \
+            if static else (0.0, 0.0)
+        assert t.follow((dx, dy, k_scale, k_scale, math.log(k_scale), 0.0), k, FPS, SHAPE, p.max_fails,
                         border=p.border)
         if each is not None:
             each(t, k)
@@ -67,13 +72,33 @@ def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
 def test_a_warning_does_not_begin_on_a_cut_box_near_contact():
     # in view for its first 5 frames (a course of 0: a collision), then its growing box reaches the
     # border; by frame 12 its time to contact is 0.4 s, below cut_onset_s: as the static world
-    # beside the path sweeping out of view, no warning begins there (before: it warned)
+    # beside the path sweeping out of view, no warning begins there (before: it warned) unless the
+    # box keeps its bearing (cut_drift, off here)
+    held_back = TargetParams(cut_drift=0.0)
     t = _looming(15.0, 12, contact=24)
     assert t.history[-1].cut and len(t.inside) == TargetParams().min_frames
-    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    out = estimate(t, held_back, FPS, 12, SHAPE)
     assert out.ttc_s == pytest.approx(12 / FPS, rel=1e-6) and out.ttc_s < 0.5     # cut_onset_s, 0.5 s
     assert out.miss == pytest.approx(0.0, abs=1e-6) and not out.warning
-    assert estimate(_looming(15.0, 12, contact=24), TargetParams(cut_onset_s=0.0), FPS, 12, SHAPE).warning
+    assert estimate(_looming(15.0, 12, contact=24), held_back.replace(cut_onset_s=0.0), FPS, 12, SHAPE).warning
+
+
+def test_a_cut_box_that_keeps_its_bearing_may_begin_a_warning_near_contact():
+    # the same approach near the border (its centre keeps its bearing while it grows: a collision
+    # course) warns by default although its box is cut 0.4 s before contact (cut_drift, 0.2); the
+    # static world beside the path, expanding about the heading (here the principal point) by the
+    # same growth, drifts as the static world does (1) and is held back
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    p = TargetParams()
+    hit, side = _looming(15.0, 12, contact=24), _looming(45.0, 12, contact=24, static=True)
+    assert hit.history[-1].cut and side.history[-1].cut
+    assert drift(hit, heading) == pytest.approx(0.0, abs=1e-6)
+    assert drift(side, heading) == pytest.approx(1.0, rel=1e-6)
+    assert cut_keeps_bearing(hit, p, 0.4, heading) and not cut_keeps_bearing(side, p, 0.4, heading)
+    assert not cut_keeps_bearing(hit, p, None, heading)                    # no time to contact this frame
+    assert not cut_keeps_bearing(hit, p.replace(cut_drift=0.0), 0.4, heading)     # off
+    out = estimate(hit, p, FPS, 12, SHAPE)
+    assert out.ttc_s < p.cut_onset_s and out.warning
 
 
 def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():

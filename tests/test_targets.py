@@ -755,6 +755,30 @@ def test_brief_occlusion_keeps_one_id_and_its_time_to_contact(hold_frames, refin
         assert len(ids) == 2 or None in after
 
 
+@pytest.mark.parametrize("drop_passed", [True, False])
+def test_a_target_whose_contact_has_passed_is_dropped(drop_passed):
+    """``drop_passed`` (off by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
+    contact at clock 25) has run out with no time to contact since is dropped (its object hit or
+    passed; its box, grown over the view, would own every field and seed); before the contact, or with
+    the option off, it stays (an answering field keeps it from ``idle_frames``). A track refound after
+    a gap, whose last time to contact is its predecessor's (``refind_frames``), is not dropped for it."""
+    from mlplc2.targets import TargetLayer, Track
+
+    assert not TargetParams().drop_passed
+    layer = TargetLayer(TargetParams(drop_passed=drop_passed), FPS)
+    for now, kept in ((24.0, True), (26.0, not drop_passed)):
+        t = Track(1, 0, 160.0, 120.0, 400.0, 300.0)
+        t.held, t.last_estimate, t.last_answer = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0)), 10.0, now
+        layer._tracks = [t]
+        layer._drop_idle(now)
+        assert (layer._tracks == [t]) == kept, now
+    refound = Track(2, 0, 160.0, 120.0, 40.0, 40.0, birth=20.0)
+    refound.held, refound.last_answer = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0)), 26.0
+    layer._tracks = [refound]
+    layer._drop_idle(26.0)
+    assert layer._tracks == [refound]
+
+
 def test_time_to_contact_counts_down_through_a_failed_alignment():
     """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
     is the fit's contact less the frames since its newest point (else it stands still)."""

@@ -484,11 +484,21 @@ class TargetLayer:
         idle = self.params.span(self.params.idle_frames, self.fps) + _EPS
         kept = []
         for t in self._tracks:
-            if now - max(t.last_answer, t.last_estimate, t.birth) <= idle:
+            if now - max(t.last_answer, t.last_estimate, t.birth) <= idle and not self._passed(t, now):
                 kept.append(t)
             else:
                 self._lose(t, now)
         self._tracks = kept
+
+    def _passed(self, t: Track, now: float) -> bool:
+        """``drop_passed`` (off by default): whether the contact of track ``t``'s last time to contact
+        (``Track.held``) has passed with no time to contact since: its object has hit or passed, and its
+        box, grown over the view, would own every field and seed inside it (docs/model.md, "Objects
+        missed"). Not for a last time to contact taken over from a lost track (:meth:`_refind`): it is
+        not the track's own."""
+        if not self.params.drop_passed or t.held is None or t.held[0] < t.birth:    # none of its own
+            return False
+        return now - t.held[0] > t.held[1] * self.fps + _EPS
 
     def _lose(self, t: Track, now: float) -> None:
         """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""

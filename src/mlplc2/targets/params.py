@@ -187,6 +187,15 @@ class TargetParams(ParameterSet):
                                (the drive scenes' false episodes that begin cut: 0.12-0.47 s), while an
                                object on a collision course is seen coming. 0 = off.""", unit="s",
                                valid=Valid.real(minimum=0))
+    cut_drift: float = param(0.2, """... unless the cut box keeps its bearing while it grows: its centre drifted
+                             away from the heading by at most this fraction of the static world's drift over
+                             the same growth (:func:`~mlplc2.targets.warning.drift`, against the measured
+                             heading, else ``heading`` or the principal point; measured only where the
+                             static world's drift is at least 2 px). The static world beside the path expands
+                             about the heading (1) as it sweeps out of view; an object on a collision course
+                             near the border keeps its bearing (0) and often shows itself whole only for a
+                             few frames. 0 = off (every cut box under ``cut_onset_s`` is held back;
+                             docs/model.md, "Objects missed", session 11).""", valid=Valid.real(minimum=0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning begins without a field of the target in collision alarm only on a box
                               that holds the heading or whose centre keeps its bearing: it drifted away from
@@ -226,6 +235,13 @@ class TargetParams(ParameterSet):
                                and of a size within a factor of 3 of it, takes over its id and its last time to contact (``hold_frames``):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
+    drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
+                              episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
+                              "Objects missed", session 11) A target whose last time to contact has run out (its
+                              contact passed) with no time to contact since is dropped: its object hit or passed,
+                              and its box, grown over the view, would own every attention field and seed inside
+                              it (an object behind it goes unseen). False = kept until ``idle_frames``.""",
+                              valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

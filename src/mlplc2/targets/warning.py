@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "holds", "off_path", "fleeting",
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "fleeting",
            "count_down", "held", "fits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -136,6 +136,19 @@ def drift(t: Track, heading: tuple[float, float], *, away: bool = False) -> floa
     return (r1 - r0) / static
 
 
+def cut_keeps_bearing(t: Track, p: TargetParams, ttc: float | None, heading: tuple[float, float]) -> bool:
+    """``cut_drift`` (docs/model.md, "Objects missed"): whether track ``t``, whose box is cut by the
+    border, may begin its fit's warning under ``cut_onset_s`` because it keeps its bearing while it
+    grows: a time to contact this frame, and its centre drifted away from ``heading`` (px) by at most
+    ``cut_drift`` of the static world's drift (:func:`drift`; unknown: no). The static world beside the
+    path sweeps out of view through the border expanding about the heading; an object on a collision
+    course near the border does not."""
+    if p.cut_drift <= 0 or ttc is None:
+        return False
+    ratio = drift(t, heading)
+    return ratio is not None and ratio <= p.cut_drift
+
+
 def holds(t: Track, heading: tuple[float, float]) -> bool:
     """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now."""
     return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
@@ -234,7 +247,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = t.warned or miss is not None or not fleeting(t, p, measured)
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
-    if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s):
+    if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
+            and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured):
