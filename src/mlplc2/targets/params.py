@@ -217,7 +217,8 @@ class TargetParams(ParameterSet):
                               world's alarms beside the path are fleeting. 1 = off (2, the default since
                               session 10: the drive scenes' false episodes 10.19 -> 5.56 per 1000 frames,
                               holdout 9.26 -> 7.41, no collision or clip lost, the real clips' leads
-                              ``bear_attack`` 0.67 -> 0.57 s, ``UAV_outdoor_1`` 0.50 -> 0.47 s; docs/model.md,
+                              ``bear_attack`` 0.67 -> 0.57 s (0.60 s since session 11 counts processed frames), ``UAV_outdoor_1``
+                              0.50 -> 0.47 s; docs/model.md,
                               "The field alarm on the static world").""", unit="frames", valid=Valid.integer(1))
     stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
                               one, or its birth) holds no measurable approach: only the middle of its box
