@@ -199,11 +199,12 @@ class TargetParams(ParameterSet):
                               valid=Valid.real(minimum=0))
     countdown_frames: int = param(3, """A target's warning goes on only while its time to contact counts down: once it
                                   has warned, a warning frame whose ``ttc_s`` exceeds the one the target had this
-                                  many frames (at ``nominal_fps``) before ends its warning for good (``Track.spent``).
+                                  many frames (at ``nominal_fps``) before by more than its standard error
+                                  (``ttc_sigma_s``) ends its warning for good (``Track.spent``).
                                   A box that slid off its object onto the road or the background, or a passing
                                   object's, stops growing at the fitted rate, and its time to contact rises; an
                                   approach's falls by a frame's time each frame. 0 = off (3, the default since
-                                  session 11: with ``onset_miss``, false episodes per 1000 frames 1.13 -> 0.82
+                                  session 11: with ``onset_miss``, false episodes per 1000 frames 1.13 -> 0.93
                                   standard, 1.34 -> 1.13 holdout 1, no collision or lead lost; docs/model.md,
                                   "A course that crosses max_miss").""", unit="frames", valid=Valid.integer(0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a

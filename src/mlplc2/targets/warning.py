@@ -158,16 +158,18 @@ def wide(p: TargetParams, miss: float) -> bool:
     return 0 < p.onset_miss < miss
 
 
-def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None) -> bool:
+def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
+          sigma: float | None = None) -> bool:
     """``countdown_frames`` (docs/model.md, "A course that crosses max_miss"): whether track ``t``'s
     time to contact ``ttc`` (s) at clock ``index`` exceeds its time to contact of ``countdown_frames``
-    frames (at ``nominal_fps``) before (its newest estimate at least that old, ``Track.ttcs``): an
-    approach's falls by the time between them. False when either is unknown or the rule is off."""
+    frames (at ``nominal_fps``) before (its newest estimate at least that old, ``Track.ttcs``) by more
+    than ``sigma`` (s, the standard error of ``ttc``; None: 0): an approach's falls by the time
+    between them. False when either is unknown or the rule is off."""
     if p.countdown_frames <= 0 or ttc is None:
         return False
     then = index - p.span(p.countdown_frames, fps) + _EPS
     old = next((v for clock, v in reversed(t.ttcs) if clock <= then), None)
-    return old is not None and ttc > old
+    return old is not None and ttc > old + (sigma or 0.0)
 
 
 def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
@@ -257,7 +259,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
     # ... and goes on only while its time to contact counts down (countdown_frames)
-    if warning and began and rises(t, p, fps, index, ttc):
+    if warning and began and rises(t, p, fps, index, ttc, sigma):
         t.spent = True
     warning = warning and not t.spent
     t.ttcs.append((index, ttc))
