@@ -192,6 +192,13 @@ def test_rerun_skips_finished_tasks(videos, tmp_path):
     assert forced.ran == 2
 
 
+def test_the_progress_bar_ends_once(videos, tmp_path, capsys, monkeypatch):
+    monkeypatch.setenv("TQDM_MININTERVAL", "0")   # every update drawn, however fast the tasks
+    batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=True)
+    err = capsys.readouterr().err   # not a terminal: every redraw stays in the text
+    assert err.count("1/2") == 1 and err.count("2/2") == 1 and err.endswith("\n"), err
+
+
 def test_param_sets_and_ids(tmp_path):
     assert parse_sweep(["t_a=8,10", "lgmd2.a_on=0.5"]) == {"t_a": [8, 10], "lgmd2.a_on": [0.5]}
     sets = param_sets({"beta": 1.2}, ["t_a=8,10", "d=5,6"], ["mlplc2"])

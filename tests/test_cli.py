@@ -182,10 +182,10 @@ def test_bad_input_exit_2(case, data, tmp_path, capsys):
     assert rc == 2
     line = _one_error_line(capsys.readouterr().err)
     expect = {"missing": "no such file", "empty_dir": "no images", "text_mp4": "not a video",
-              "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "bad --resize 'big'",
-              "bad_resize_zero": "bad --resize", "resize_and_scale": "not allowed with",
+              "unknown_model": "unknown model 'nosuchmodel'", "bad_resize": "argument --resize: expected WxH with positive integers, e.g. 320x240, got 'big' (see 'mlplc2 run --help')",
+              "bad_resize_zero": "argument --resize: width and height must be positive", "resize_and_scale": "not allowed with",
               "end_before_start": "--end", "no_source": "source", "bad_fps": "--fps",
-              "huge_resize": "--resize 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large",
+              "huge_resize": "argument --resize: size 20000x20000 is too large", "huge_scale": "scale 100.0 (frames of 32000x24000) is too large",
               "overflow_scale": "is too large"}[case]
     assert expect in line
     assert not (tmp_path / "o" / "fields.json").exists()
@@ -591,7 +591,7 @@ def test_cli_zero_byte_file(tmp_path, capsys):
     p = tmp_path / "empty.mp4"
     p.write_bytes(b"")
     assert main(["run", str(p), "--out", str(tmp_path / "o"), "--quiet"]) == 2
-    assert "not a video file" in _one_line(capsys.readouterr().err)
+    assert _one_line(capsys.readouterr().err) == f"mlplc2: error: {p}: empty file (0 bytes)"
     assert _written(tmp_path / "o") == []
 
 
@@ -702,7 +702,8 @@ def test_cli_only_undecodable_images(tmp_path, capsys):
     (["--start", "-1"], "argument --start: expected an integer >= 0, got '-1'"),
     (["--start", "99"], "start frame 99 is past the end (4 frames)"),
     (["--end", "0"], "--end (0) must be larger than --start (0)"),
-    (["--resize", "320x"], "bad --resize '320x': expected WxH with positive integers, e.g. 320x240"),
+    (["--resize", "320x"], "argument --resize: expected WxH with positive integers, e.g. 320x240, got '320x' "
+                           "(see 'mlplc2 run --help')"),
     (["--backend", "gstreamer"], "argument --backend: invalid choice: 'gstreamer'"),
 ])
 def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
@@ -711,6 +712,14 @@ def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
     assert main(["run", str(p), *argv, "--out", str(out), "--quiet"]) == 2
     assert expect in _one_line(capsys.readouterr().err)
     assert _written(out) == []
+
+
+@pytest.mark.parametrize("command", ["run", "evaluate", "batch"])
+def test_a_bad_resize_says_where_the_help_is(tmp_path, capsys, command):
+    assert main([command, str(tmp_path / "v.avi"), "--resize", "3x"]) == 2
+    assert _one_line(capsys.readouterr().err) == (
+        "mlplc2: error: argument --resize: expected WxH with positive integers, e.g. 320x240, got '3x' "
+        f"(see 'mlplc2 {command} --help')")
 
 
 def test_cli_out_is_a_file(tmp_path, capsys):
@@ -740,6 +749,20 @@ def test_cli_skip_repeats(tmp_path, capsys):
     assert held != (tmp_path / "r" / "responses.csv").read_text()  # holding changed the responses
     assert cli.main(["run", str(video), "--repeat-level", "-1", "--out", str(tmp_path / "p"), "-q"]) == 2
     assert "--repeat-level" in capsys.readouterr().err
+
+
+def test_the_summary_says_how_many_frames_skip_repeats_held(tmp_path, capsys):
+    """7 frames repeated twice each, within +-6 grey levels, as lossless PNGs: --skip-repeats (16 levels)
+    holds the 14 copies, and the summary says so (no prescan with the flag, so no note line)."""
+    import cv2
+
+    frames, _ = duplicated(stimuli.four_phase(seed=0).frames[:20])
+    (tmp_path / "f").mkdir()
+    for i, f in enumerate(frames):
+        cv2.imwrite(str(tmp_path / "f" / f"{i:03d}.png"), f)
+    assert cli.main(["run", str(tmp_path / "f"), "--skip-repeats", "--out", str(tmp_path / "o")]) == 0
+    out = capsys.readouterr().out
+    assert "repeated frames: the models held their output on 14 of 34 frames" in out
 
 
 def test_run_summary_lists_only_fields_that_responded(monkeypatch, capsys):

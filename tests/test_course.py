@@ -395,10 +395,18 @@ class _Field:
 
 
 def test_the_layer_counts_the_frames_in_a_row_a_target_is_in_alarm():
+    # the frames in a row are the processed ones: frame 6 is processed without an alarm (the run
+    # begins again), frame 9 is a repeat the model holds (no gap: the run goes on), as in a clip
+    # whose duplicated frames fall within an alarm (bear_attack, docs/model.md)
     layer = TargetLayer(TargetParams(alarm_warns=True), fps=FPS)
     t = _young_static(80.0, 100.0)
-    for index, run in [(3, 1), (3, 1), (4, 2), (5, 3), (7, 1), (8, 2)]:      # a gap at frame 6
-        layer._own(t, _Field(), index)
+    layer._clock = 2
+    for index, alarm, run in [(3, True, 1), (3, True, 1), (4, True, 2), (5, True, 3), (6, False, 3), (7, True, 1),
+                              (8, True, 2), (10, True, 3)]:
+        if index != layer._clock:                   # a new processed frame (TargetLayer.step)
+            layer._before, layer._clock = layer._clock, index
+        if alarm:
+            layer._own(t, _Field(), index)
         assert t.alarm_run == run
 
 
@@ -462,3 +470,34 @@ def test_an_object_passing_three_widths_beside_the_camera_misses_by_about_three(
 def test_an_object_on_a_collision_course_stays_under_half_a_width():
     misses = _pass_misses(0.1, TargetParams(unsweep=True))            # truth 0.2
     assert misses and max(misses) < 0.5
+
+
+def test_a_box_that_began_at_the_heading_and_moved_away_is_off_the_path():
+    # path_drift where the static world would barely drift: an oncoming van seen first at the
+    # (measured) heading, 1 px from it, whose box grew 1.8 times while its centre moved 30 px away
+    # from the heading, its box no longer holding it (sudden_turning_vehicle's T2, frames 13-24:
+    # it passes on the left). The
+    # static world there would drift 1 px x 0.8 = 0.8 px, under MIN_DRIFT_PX: no ratio; but the box
+    # moved away by more than its jitter can fake, so it does not keep its bearing and its fit's
+    # warning does not begin. A box that moved 1.5 px (jitter) gets no ratio, as before
+    from mlplc2.targets.warning import MIN_DRIFT_PX, drift, off_path
+
+    heading = (113.0, 99.0)
+    p = TargetParams(path_drift=0.4)
+
+    def box(moved: float) -> Track:
+        g = math.log(1.8)
+        x1 = heading[0] - 1.0 - moved
+        t = Track(2, 13, x1, heading[1], 59.0, 63.0, log_s=g)
+        t.history = deque([Observation(13, 0.0, heading[0] - 1.0, heading[1], 33.0, 0.0),
+                           Observation(24, g, x1, heading[1], 59.0, 0.0)])
+        return t
+
+    van = box(30.0)
+    assert drift(van, heading) is None                               # the ratio alone says nothing
+    assert drift(van, heading, away=True) == pytest.approx(30.0 / MIN_DRIFT_PX)
+    assert off_path(van, p, 24, heading)
+    assert not off_path(van, TargetParams(path_drift=0.0), 24, heading)   # the rule off
+    jitter = box(1.5)
+    assert drift(jitter, heading, away=True) is None
+    assert not off_path(jitter, p, 24, heading)

@@ -520,7 +520,7 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2.neuropils import _fast
 frames = stimuli.basic("dark_approach", frames=40).frames
-model = mlplc2.MLPLC2(fps=30.0)
+model = mlplc2.MLPLC2(fps=30.0, params=mlplc2.Params(PARAMS))
 loaded = {k.__name__: len(k.signatures) for k in _fast.KERNELS}
 targets = 0
 for frame in frames:
@@ -530,15 +530,17 @@ print("targets", targets, "late", ",".join(late) or "none")
 """
 
 
-def test_no_kernel_loads_once_the_model_is_built(tmp_path):
+@pytest.mark.parametrize("params", ["", "n_c=3"])
+def test_no_kernel_loads_once_the_model_is_built(tmp_path, params):
     """Every kernel a model calls is loaded when it is built (``backend.warm_kernels``): the quadrant
     sums, the edge scans and the image alignment used to load at the frame that first needed them,
     tens of milliseconds in the middle of a live run (issue 23: the latency's tail), and the front
     end's kernels at the first frame, while the decoding thread queued the next frames, whose
     latency then held a first run's compilation (17 s 99th percentile through stdin). A new
-    process, so that no other test has loaded them."""
+    process, so that no other test has loaded them. Also with other parameters (N_c is a compile-time
+    constant of the front end's kernels): they were warmed with the default ones until session 11."""
     _mlplc2_on_an_approach()   # the disk cache holds the kernels: the new process loads them
-    words = _run_script(tmp_path, "later_frames.py", _LATER_FRAMES).split()
+    words = _run_script(tmp_path, "later_frames.py", _LATER_FRAMES.replace("PARAMS", params)).split()
     assert int(words[words.index("targets") + 1]) > 0   # the scene makes targets: their kernels run
     assert words[words.index("late") + 1] == "none"
 

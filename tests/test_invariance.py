@@ -161,3 +161,51 @@ def test_twenty_five_in_thirty_holds_the_copies(tmp_path):
             copies.append(len(frames))
             frames.append(img)
     assert _held(_write(frames, tmp_path / "pulldown.mp4")) == copies
+
+
+def _encoding_check():
+    """``benchmarks/encoding_invariance.py`` as a module."""
+    import importlib.util
+    from pathlib import Path
+
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / "encoding_invariance.py"
+    spec = importlib.util.spec_from_file_location("encoding_invariance", path)
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def test_the_encoding_check_writes_each_copy_once_and_the_same_every_time(tmp_path, monkeypatch):
+    """The check's copies are written by a process of their own: two writes of the same copy (into two caches)
+    give the same bytes, a second call with the same cache reuses the file without writing, and other settings
+    make another file."""
+    enc = _encoding_check()
+    src = _write([np.round(_texture(200, 64)[:, k:k + 96]).astype(np.uint8) for k in range(20)],
+                 tmp_path / "src.mp4", crf=0)
+    sha = enc.sha256(src)
+    first = enc.cached_copy(src, sha, "x264", None, tmp_path / "a")
+    again = enc.cached_copy(src, sha, "x264", None, tmp_path / "b")
+    assert first.read_bytes() == again.read_bytes()
+    assert enc.sha256(first) != sha                          # a copy, not the source
+    monkeypatch.setattr(enc.subprocess, "run", lambda *a, **k: pytest.fail("wrote a cached copy again"))
+    assert enc.cached_copy(src, sha, "x264", None, tmp_path / "a") == first
+    monkeypatch.undo()
+    small = enc.cached_copy(src, sha, "320x240", (48, 32), tmp_path / "a")
+    assert small != first and small.exists()
+    with av.open(str(small)) as c:
+        assert (c.streams.video[0].width, c.streams.video[0].height) == (48, 32)
+
+
+def test_the_encoding_check_says_where_two_runs_part():
+    """``parting``: the first field born elsewhere (beyond 4 working px) or not at all, and the first frame
+    whose target boxes differ (in number, or beyond 6 working px)."""
+    enc = _encoding_check()
+    a = {"_births": [(1, 10.0, 10.0), (5, 50.0, 50.0)], "_boxes": {4: [(20.0, 20.0, 8.0, 8.0)], 6: []}}
+    same = {"_births": [(1, 13.0, 10.0), (5, 50.0, 47.0)], "_boxes": {4: [(25.0, 20.0, 8.0, 8.0)], 6: []}}
+    assert enc.parting(a, same, 1.0) == "fields part at -, targets at -"
+    moved = {"_births": [(1, 10.0, 10.0), (5, 55.0, 50.0)], "_boxes": {4: [(20.0, 20.0, 8.0, 8.0)],
+                                                                       6: [(1.0, 1.0, 2.0, 2.0)]}}
+    assert enc.parting(a, moved, 1.0) == "fields part at 5, targets at 6"
+    assert enc.parting(a, moved, 2.0) == "fields part at -, targets at 6"     # 5 native px = 2.5 working px
+    fewer = {"_births": [(1, 10.0, 10.0)], "_boxes": {}}
+    assert enc.parting(a, fewer, 1.0) == "fields part at 5, targets at 4"

@@ -167,12 +167,13 @@ def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
     assert first["schema"] == 1 and first["frame"] == 0 and first["skipped"] == 0
     assert set(first) >= {"time_s", "warning", "targets", "models"}
     assert len(rest) == 59 and all(line.startswith("{") for line in rest)  # stdout: the JSON lines alone
-    assert "60 frames of -" in err  # the summary went to stderr
+    assert "60 frames of stdin" in err  # the summary went to stderr, naming the source as the progress bar does
 
 
 class _Clock(Decoder):
-    """A live camera stand-in: frame k is ready at ``t0 + k * period`` (read waits for it); a
-    square on noise that grows. ``produced`` counts the frames delivered so far."""
+    """A live camera stand-in: frame k is ready at ``t0 + k * period`` (read waits for it; a source
+    that lags its schedule reads on without waiting); a square on noise that grows. ``produced``
+    counts the frames delivered so far."""
 
     def __init__(self, n, period):
         self.name, self.fps, self.size = "clock", 1.0 / period, (160, 120)
@@ -188,7 +189,7 @@ class _Clock(Decoder):
         if wait > 0:
             time.sleep(wait)
         f = self.bg.copy()
-        s = 2 + self.produced // 4
+        s = 2 + (self.produced // 4) % 40
         f[60 - s:60 + s, 80 - s:80 + s] = 0
         self.produced += 1
         return np.repeat(f[:, :, None], 3, axis=2)
@@ -196,22 +197,33 @@ class _Clock(Decoder):
 
 @pytest.mark.parametrize("live", [True, False])
 def test_a_live_source_faster_than_the_model_skips_to_the_newest_frame(live):
-    period = 0.01                     # the source: 100 frames/s
-    dec = _Clock(60, period)
+    # Frame counts and a median, not a bound on every delay, so that a loaded machine does not fail it
+    # (it failed at load ~12): the source runs on for as long as the test needs (however long the
+    # models take to build or compile), the consumer takes 12 lines.
+    period, work = 0.003, 0.06        # the source: 333 frames/s; the consumer: 60 ms a frame and its step
+    dec = _Clock(10**7, period)
     src = FrameSource(dec, "camera", live=live)
-    delays, lines = [], []
-    for line in mlplc2.stream(src, "mlplc2", repeat_threshold=None):
-        delays.append(time.perf_counter() - (dec.t0 + line["frame"] * period))  # since the scene was filmed
+    lines, due, delays = [], [], []     # due: the newest frame the camera had filmed when the next was asked
+    gen = mlplc2.stream(src, "mlplc2", repeat_threshold=None)
+    for line in gen:
+        delays.append(time.perf_counter() - (dec.t0 + line["frame"] * period))  # since it was due
         lines.append(line)
-        time.sleep(4 * period)         # the model, slowed to a quarter of the source's rate
+        if len(lines) == 12:
+            break
+        time.sleep(work)
+        due.append(int((time.perf_counter() - dec.t0) / period))
+    gen.close()
     frames = [line["frame"] for line in lines]
-    if live:
-        assert max(delays[1:]) < 0.25, delays  # (the first frame's step compiles): 4 periods + a step
-        assert sum(line["skipped"] for line in lines) == src.n_skipped > 30
+    assert frames == sorted(set(frames))
+    assert sum(line["skipped"] for line in lines) == src.n_skipped == frames[-1] + 1 - len(frames)
+    if live:                            # each line: (about) the newest frame when it was asked for
         assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
-        assert frames[-1] == 59 and len(frames) + src.n_skipped == 60
+        lag = sorted(d - f for f, d in zip(frames[1:], due))   # frames; ~20 come during each wait
+        assert lag[len(lag) // 2] < 10, (frames, due)   # the median: a loaded machine may stall a few
+        assert src.n_skipped > 11 * 4
     else:                               # a file is read frame by frame: nothing skipped, the lag grows
-        assert frames == list(range(60)) and src.n_skipped == 0 and delays[-1] > 1.0
+        assert frames == list(range(12)) and src.n_skipped == 0
+        assert all(b - a > work - period for a, b in zip(delays[1:], delays[2:])), delays
 
 
 def test_run_stops_after_max_frames_and_reports_latency(data, tmp_path, capsys):
@@ -391,3 +403,12 @@ def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):
     assert frames[-1] == 59 and len(frames) + sum(line["skipped"] for line in lines) == 60
     assert all(b - a - 1 == line["skipped"] for a, b, line in zip(frames, frames[1:], lines[1:]))
     assert json.loads((tmp_path / "o" / "fields.json").read_text())["frames_skipped"] == 60 - len(frames)
+
+
+def test_a_misspelt_keyword_names_the_function_and_the_likely_one():
+    with pytest.raises(TypeError, match=r"^stream\(\) got an unexpected keyword argument 'max_frame' "
+                                        r"\(did you mean 'max_frames'\?\)$"):
+        next(mlplc2.stream("clip.mp4", max_frame=3))
+    with pytest.raises(TypeError, match=r"^run\(\) got an unexpected keyword argument 'nonsense' \(the keywords "
+                                        r"are mlplc2.runner.RunOptions' fields\)$"):
+        mlplc2.run("clip.mp4", nonsense=1)

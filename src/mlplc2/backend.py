@@ -28,6 +28,7 @@ _log = logging.getLogger("mlplc2")
 _FAST_ERROR: str | None = None
 _WARNED = False
 _WARM = False
+_WARM_PARAMS: set = set()   # the parameter sets whose front-end kernels are loaded (_warm_frontend)
 
 
 def fast_available() -> bool:
@@ -53,7 +54,10 @@ class Backend:
     align_kernel: Callable | None
 
     def frontend(self, params, fps: float):
-        """A new front end (Eq. 1-12) for ``params`` at ``fps``."""
+        """A new front end (Eq. 1-12) for ``params`` at ``fps`` (its kernels loaded for these
+        ``params`` first: :func:`_warm_frontend`)."""
+        if self.name == "numba":
+            _warm_frontend(params)
         return self.frontend_class(params, fps)
 
 
@@ -123,21 +127,27 @@ def warm_kernels() -> None:
     _WARM = True
 
 
-def _warm_frontend() -> None:
-    """The front end's kernels (default :class:`~mlplc2.params.Params`), on three blank 320 x 240 frames
-    and one carry: a first run used to compile them at its first frame, while the decoding thread queued
-    the next frames, whose latency then held the compilation (a 17 s 99th percentile on a 25-frame clip
-    piped through stdin, 2 busy cores). Compiled kernels take a few milliseconds here."""
+def _warm_frontend(params=None) -> None:
+    """The front end's kernels for ``params`` (default :class:`~mlplc2.params.Params`; once per process
+    for each parameter set: N_c is a compile-time constant of the kernels, the relative floor runs a
+    kernel of its own), on three blank 320 x 240 frames and one carry: a first run used to compile them
+    at its first frame, while the decoding thread queued the next frames, whose latency then held the
+    compilation (a 17 s 99th percentile on a 25-frame clip piped through stdin, 2 busy cores); a model
+    with other parameters still did so until session 11. Compiled kernels take a few milliseconds here."""
     import numpy as np
 
     from .neuropils._fast_frontend import FastFrontEnd
     from .params import Params
 
-    fe = FastFrontEnd(Params(), 30.0)
+    params = Params() if params is None else params
+    if params in _WARM_PARAMS:
+        return
+    fe = FastFrontEnd(params, 30.0)
     blank = np.zeros((240, 320), np.float32)
     for _ in range(3):
         fe.step(blank)
     fe.compensate(np.eye(3), blank)
+    _WARM_PARAMS.add(params)
 
 
 def make_frontend(params, fps: float, backend: str = "auto"):

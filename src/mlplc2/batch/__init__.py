@@ -550,7 +550,10 @@ def _run_jobs(state: _BatchState, scheduler, workers, client, sequential: bool, 
             for i, row in _completed(jobs, c):
                 rows[i] = row
                 state.finished.add(i)
-                bar.update()
+                if bar.n + 1 < bar.total:
+                    bar.update()
+                else:            # the last task: close() draws the full bar (drawn here too, it came twice)
+                    bar.n += 1
     except KeyboardInterrupt:
         res = state.result()
         if prepared:

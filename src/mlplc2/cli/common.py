@@ -120,6 +120,18 @@ hfov_degrees = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "d
 nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
+def frame_size(text: str) -> tuple[int, int]:
+    """An argparse ``type`` for ``--resize``: ``'WxH'`` -> ``(W, H)`` (:func:`mlplc2.io.parse_resize`'s
+    checks; its message as a one-line usage error, as the other options')."""
+    try:
+        return parse_resize(text, name="size")
+    except InputValueError as exc:
+        message, prefix = str(exc), f"bad size {text!r}: "
+        if message.startswith(prefix):
+            message = f"{message[len(prefix):]}, got {text!r}"
+        raise argparse.ArgumentTypeError(message) from None
+
+
 def add_repeat_options(p: argparse.ArgumentParser, help: str) -> None:
     """``--skip-repeats`` (a plain flag: threshold ``REPEAT_THRESHOLD``), ``--repeat-level N``
     (that threshold instead; implies skipping) and ``--every-frame`` (never hold), read back by
@@ -193,7 +205,7 @@ def add_stabilise_option(p: argparse.ArgumentParser, prefix: str = "") -> None:
 def video_run_options(args) -> dict:
     """The ``run_options`` of ``mlplc2 evaluate`` and ``batch``: ``--resize``, the repeat, the warning
     and the stabilisation options."""
-    options = {"resize": parse_resize(args.resize, name="--resize")} if args.resize else {}
+    options = {"resize": args.resize} if args.resize else {}
     if getattr(args, "stabilise", None) is not None:
         options["stabilise"] = args.stabilise
     if repeat_threshold_option(args) != "auto":  # --skip-repeats / --repeat-level / --every-frame

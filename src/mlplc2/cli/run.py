@@ -11,10 +11,10 @@ import sys
 import warnings
 
 from .._validation import InputError, InputValueError
-from ..io import parse_resize
+from ..io.formats import STDIN
 from ..models.base import MAX_REPEATS, REPEAT_THRESHOLD, available_models, resolve_names
 from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_warning_options, compile_notice, hfov_degrees, nonneg_int, pos_float, pos_int,
+                     add_warning_options, compile_notice, frame_size, hfov_degrees, nonneg_int, pos_float, pos_int,
                      repeat_threshold_option, say,
                      target_options, warn)
 
@@ -31,7 +31,7 @@ def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("--fps", type=pos_float, metavar="F",
                    help="frame rate to assume (default: the video's; images: 30)")
     size = p.add_mutually_exclusive_group()
-    size.add_argument("--resize", metavar="WxH",
+    size.add_argument("--resize", type=frame_size, metavar="WxH",
                       help="resize frames before the models (e.g. 320x240); coordinates in the "
                            "outputs stay in input pixels")
     size.add_argument("--scale", type=pos_float, metavar="S", help="resize by a factor (e.g. 0.5)")
@@ -90,7 +90,7 @@ def _run(args, jsonl) -> int:
     from ..runner import RunInterrupted, TruncatedInputWarning, run
 
     models = resolve_names(args.model or ["mlplc2"], what="--model")
-    resize = parse_resize(args.resize, name="--resize") if args.resize is not None else None
+    resize = args.resize
     if args.end is not None and args.end <= args.start:
         raise InputValueError(f"--end ({args.end}) must be larger than --start ({args.start})")
     if (args.fields or args.all_fields) and not args.video:
@@ -150,7 +150,8 @@ def _print_run_summary(args, result) -> None:
     w, h = result.size
     mw, mh = result.model_size
     size = f"{w}x{h}" + (f" -> {mw}x{mh}" if (mw, mh) != (w, h) else "")
-    lines = [f"{result.n_frames} frames of {result.source} ({size}, {result.fps:g} fps) {_timing(result)}"]
+    source = "stdin" if result.source == STDIN else result.source   # as the progress bar says
+    lines = [f"{result.n_frames} frames of {source} ({size}, {result.fps:g} fps) {_timing(result)}"]
     for name in result.models:
         fields = result.fields.get(name, [])
         if fields:
@@ -174,6 +175,10 @@ def _print_run_summary(args, result) -> None:
                             if warned else ""))
     if result.skipped:
         lines.append(f"skipped {result.skipped} frame(s) of the live source: the models took the newest frame")
+    held = max(result.repeated.values(), default=0)
+    if held and not result.duplicated:  # --skip-repeats, --repeat-level, or found out in a stream (else: the note)
+        lines.append(f"repeated frames: the models held their output on {held} of {result.n_frames} frames "
+                     f"(--every-frame processes every frame)")
     if result.latency:
         lat = result.latency
         lines.append(f"latency from decoding to results: median {lat['median_ms']:.1f} ms, "
@@ -181,7 +186,6 @@ def _print_run_summary(args, result) -> None:
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)
-    held = max(result.repeated.values(), default=0)
     if result.duplicated and not args.quiet:  # the decision of fields.json's "duplicated"
         print(f"{PROG}: note: the video repeats its frames (duplicated frames): the models held their output on "
               f"{held} of {result.n_frames} frames (--every-frame processes every frame)", file=sys.stderr)

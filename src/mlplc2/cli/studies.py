@@ -12,8 +12,8 @@ import warnings
 from .._validation import InputValueError
 from ..models.base import resolve_names
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_stabilise_option, add_warning_options, nonneg_int, one_line, pos_float, say, target_options,
-                     video_run_options, warn)
+                     add_stabilise_option, add_warning_options, frame_size, nonneg_int, one_line, pos_float, say,
+                     target_options, video_run_options, warn)
 
 
 # ---------------------------------------------------------------------------
@@ -32,7 +32,7 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
                    help="a field this close to an object's centre stands for it (default 20, ground-truth pixels)")
     p.add_argument("--tail", type=nonneg_int, default=25, metavar="FRAMES",
                    help="frames after an approach during which its fields/alarms still count (default 25)")
-    p.add_argument("--resize", metavar="WxH", help="for video inputs: resize frames before the models")
+    p.add_argument("--resize", type=frame_size, metavar="WxH", help="for video inputs: resize frames before the models")
     add_repeat_options(p, "for video inputs: hold the models' output on duplicated frames "
                           "(as in 'mlplc2 run --skip-repeats')")
     add_warning_options(p, "for video inputs: ")
@@ -77,7 +77,7 @@ def _add_batch(p: argparse.ArgumentParser) -> None:
                    help="tcp://host:8786 of a running Dask scheduler (default: start a local cluster)")
     p.add_argument("--workers", type=nonneg_int, metavar="N",
                    help="local cluster workers (default min(4, CPUs); 0 = sequential, no Dask)")
-    p.add_argument("--resize", metavar="WxH", help="resize frames before the models")
+    p.add_argument("--resize", type=frame_size, metavar="WxH", help="resize frames before the models")
     add_repeat_options(p, "hold the models' output on duplicated frames (as in 'mlplc2 run --skip-repeats')")
     add_warning_options(p)
     add_stabilise_option(p)

@@ -301,6 +301,8 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"
     if os.path.isfile(source):
+        if os.path.getsize(source) == 0:   # the decoders would call it an unknown format
+            raise InputValueError(f"{source}: empty file (0 bytes)")
         if Path(source).suffix.lower() in IMAGE_EXTENSIONS:
             return _ImageDecoder([source], source), "images"
         if decoder == "pyav":

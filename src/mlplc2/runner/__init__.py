@@ -35,6 +35,7 @@ its files, is in :mod:`mlplc2.runner.result` (re-exported here).
 
 from __future__ import annotations
 
+import difflib
 import json
 import logging
 import sys
@@ -188,11 +189,13 @@ class RunOptions:
 _OPTION_NAMES = tuple(f.name for f in fields(RunOptions))
 
 
-def _run_options(options: RunOptions | None, keywords: Mapping[str, Any]) -> RunOptions:
+def _run_options(options: RunOptions | None, keywords: Mapping[str, Any], caller: str = "run") -> RunOptions:
     """``options`` with the fields given as keywords changed (no ``options``: the defaults)."""
     unknown = [k for k in keywords if k not in _OPTION_NAMES]
     if unknown:
-        raise TypeError(f"run() got an unexpected keyword argument {unknown[0]!r}")
+        close = difflib.get_close_matches(unknown[0], _OPTION_NAMES, n=1)
+        hint = f"did you mean {close[0]!r}?" if close else "the keywords are mlplc2.runner.RunOptions' fields"
+        raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r} ({hint})")
     if options is not None and not isinstance(options, RunOptions):
         raise InputTypeError(f"options must be a RunOptions, got {type(options).__name__}")
     options = RunOptions(**keywords) if options is None else replace(options, **keywords)
@@ -381,7 +384,7 @@ def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, opt
     ...     if line["warning"]:
     ...         brake()
     """
-    options = replace(_run_options(options, keywords), video=False, keep_rows=False)
+    options = replace(_run_options(options, keywords, "stream"), video=False, keep_rows=False)
     src, built, result = _open(source, model, options, False)
     frames = _Frames(src, built, result, options)
     t0 = time.perf_counter()

@@ -71,6 +71,7 @@ class TargetLayer:
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
+        self._before: float | None = None   # ... and of the frame processed before it (None: none)
         self._past: deque = deque()        # pyramids of the last frames (:meth:`_keep_past`)
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
@@ -134,6 +135,7 @@ class TargetLayer:
             self._follow(levels, clock, clock - self._clock, w, h, lm, gray)
         interval = None if self._prev is None else clock - self._clock
         far = interval is not None and self._far(interval)
+        self._before = None if self._prev is None else self._clock
         self._clock = clock
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
@@ -230,8 +232,8 @@ class TargetLayer:
         if f.response > 0:
             t.last_answer = index
         if getattr(f, "collision", False):
-            if t.last_alarm != index:
-                follows = index - t.last_alarm <= self.params.span(1, self.fps) + _EPS
+            if t.last_alarm != index:    # the frames in a row are processed ones: a held repeat is no gap
+                follows = self._before is not None and abs(t.last_alarm - self._before) <= _EPS
                 t.alarm_run = t.alarm_run + 1 if follows else 1
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:

@@ -211,16 +211,20 @@ class TargetParams(ParameterSet):
                               warning begins without a field of the target in collision alarm only on a box
                               that holds the heading or whose centre keeps its bearing: it drifted away from
                               the heading by at most this fraction of the static world's drift over the same
-                              growth (:func:`~mlplc2.targets.warning.off_path`). The static world beside the
-                              path expands about the heading (1), an object on a collision course keeps its
-                              bearing (0). 0 = off (0.4, the default since session 10: the drive scenes' false
-                              episodes 15.74 -> 10.19 per 1000 frames, holdout 10.19 -> 9.26, no collision or
-                              lead lost; docs/model.md, "A warning that begins off the path").""",
+                              growth (:func:`~mlplc2.targets.warning.off_path`); where that drift is under
+                              ``MIN_DRIFT_PX`` (a box that began at the heading), it moved away from the
+                              heading by at most ``MIN_DRIFT_PX`` (session 11: sudden_turning_vehicle's
+                              passing van). The static world beside the path expands about the heading (1),
+                              an object on a collision course keeps its bearing (0). 0 = off (0.4, the
+                              default since session 10: the drive scenes' false episodes 15.74 -> 10.19 per
+                              1000 frames, holdout 10.19 -> 9.26, no collision or lead lost; docs/model.md,
+                              "A warning that begins off the path").""",
                               valid=Valid.real(minimum=0))
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
-                              once a field of the target has been in collision alarm this many frames in a
-                              row (``Track.alarm_run``; :func:`~mlplc2.targets.warning.fleeting`): the static
+                              once a field of the target has been in collision alarm this many processed
+                              frames in a row (``Track.alarm_run``: a repeated frame the model holds is no
+                              gap; :func:`~mlplc2.targets.warning.fleeting`): the static
                               world's alarms beside the path are fleeting. 1 = off (2, the default since
                               session 10: the drive scenes' false episodes 10.19 -> 5.56 per 1000 frames,
                               holdout 9.26 -> 7.41, no collision or clip lost, the real clips' leads

@@ -125,7 +125,7 @@ class Track:
     fails: int = 0
     last_answer: float = -(10 ** 9)    # clock of the frame an attention field of it last answered
     last_alarm: float = -(10 ** 9)     # clock of the frame a field of it was last in collision alarm
-    alarm_run: int = 0                 # frames in a row, up to ``last_alarm``, with a field of it in collision alarm
+    alarm_run: int = 0                 # processed frames in a row, up to ``last_alarm``, with a field of it in collision alarm
     last_estimate: float = -(10 ** 9)  # clock of its last time to contact
     streak: int = 0
     streak_since: float = 0.0          # clock of the first estimate of the streak

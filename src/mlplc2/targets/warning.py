@@ -110,12 +110,15 @@ def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
     return ratio is not None and ratio <= DRIFT_FRACTION
 
 
-def drift(t: Track, heading: tuple[float, float]) -> float | None:
+def drift(t: Track, heading: tuple[float, float], *, away: bool = False) -> float | None:
     """How far track ``t``'s centre drifted away from ``heading`` (px) over its history, as a fraction
     of the static world's drift over the same growth, ``r0 (S - 1)`` (0: it keeps its bearing, as an
     object on a collision course; 1: the static world); on its first frame, from the alarm seed's
     alignment (``Track.seed_move``). None when the static world's drift is under ``MIN_DRIFT_PX``
-    (a box near the heading, or one that did not grow: the ratio says nothing) or nothing is known."""
+    (a box near the heading, or one that did not grow: the ratio says nothing) or nothing is known;
+    with ``away``, a box whose centre moved away from the heading by more than ``MIN_DRIFT_PX`` (more
+    than its jitter can fake) while the static world there would drift less (it began at the
+    heading) gets the ratio over ``MIN_DRIFT_PX``: more than the static world's drift, > 1."""
     if len(t.history) >= 2:
         q0, q1 = t.history[0], t.history[-1]
         x0, y0, x1, y1, growth = q0.x, q0.y, q1.x, q1.y, q1.log_scale - q0.log_scale
@@ -128,7 +131,9 @@ def drift(t: Track, heading: tuple[float, float]) -> float | None:
     r0 = math.hypot(x0 - heading[0], y0 - heading[1])
     r1 = math.hypot(x1 - heading[0], y1 - heading[1])
     static = r0 * math.expm1(growth)
-    return (r1 - r0) / static if static >= MIN_DRIFT_PX else None
+    if static < MIN_DRIFT_PX:
+        return (r1 - r0) / MIN_DRIFT_PX if away and r1 - r0 > MIN_DRIFT_PX else None
+    return (r1 - r0) / static
 
 
 def holds(t: Track, heading: tuple[float, float]) -> bool:
@@ -142,11 +147,13 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
     ``t`` is in collision alarm this frame (the field alarm is evidence of its own, issue 22 item 4),
     its box does not hold the heading (:func:`holds`) and its centre drifts away from the heading by
-    more than ``path_drift`` of the static world's drift (:func:`drift`): the static world beside the
-    path expands about the heading, while an object on a collision course keeps its bearing."""
+    more than ``path_drift`` of the static world's drift (:func:`drift`), or, where the static world
+    would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
+    world beside the path expands about the heading, while an object on a collision course keeps its
+    bearing."""
     if p.path_drift <= 0 or heading is None or t.last_alarm == index or holds(t, heading):
         return False
-    ratio = drift(t, heading)
+    ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
 
 
