@@ -304,7 +304,9 @@ def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing(
     # (evidence of its own), or when no heading is measured (a still camera: no test)
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
     x0 = heading[0] + 20.0                     # 0.83 widths right of the heading at first
-    off, on = TargetParams(alarm_warns=False, path_drift=0.0), TargetParams(alarm_warns=False, path_drift=0.4)
+    # (onset_miss off: the patch's course, 0.83, lies beyond its default 0.8)
+    off = TargetParams(alarm_warns=False, path_drift=0.0, onset_miss=0.0)
+    on = TargetParams(alarm_warns=False, path_drift=0.4, onset_miss=0.0)
     last = 19
     static = _approach(x0, heading[0], True)
     assert estimate(static, off, FPS, last, SHAPE, heading=heading).warning      # the false warning
@@ -318,6 +320,75 @@ def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing(
     assert estimate(_approach(x0, heading[0], True), on, FPS, last, SHAPE).warning   # no measured heading
     # on the path (its box holds the heading): a wall ahead warns whatever its drift
     assert estimate(_approach(heading[0] + 5.0, heading[0], True), on, FPS, last, SHAPE, heading=heading).warning
+
+
+def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
+    # onset_miss: an object that passes 0.9 of its widths beside a still camera (no measured
+    # heading; its image expands about the principal point, so its course is 0.9 on every frame,
+    # within max_miss 1.0) warned; with onset_miss 0.8 the fit does not begin a warning on it. An
+    # object whose course is 0.5 widths warns; so does the 0.9 one when a field of it is in
+    # collision alarm this frame (the alarm with a course keeps max_miss) or once it has warned
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    on, off = TargetParams(alarm_warns=True, onset_miss=0.8), TargetParams(alarm_warns=True, onset_miss=0.0)
+    last = 19
+
+    def passing(miss: float) -> Track:
+        return _approach(heading[0] + miss * 24.0, heading[0], True)
+
+    o = estimate(passing(0.9), off, FPS, last, SHAPE)
+    assert o.warning and o.miss == pytest.approx(0.9, abs=1e-6)     # the warning onset_miss removes
+    o = estimate(passing(0.9), on, FPS, last, SHAPE)
+    assert not o.warning and o.miss == pytest.approx(0.9, abs=1e-6) and o.ttc_s is not None
+    assert estimate(passing(0.5), on, FPS, last, SHAPE).warning
+    alarmed = passing(0.9)
+    alarmed.last_alarm = last
+    assert estimate(alarmed, on, FPS, last, SHAPE).warning
+    warned = passing(0.9)
+    warned.warned = True
+    assert estimate(warned, on, FPS, last, SHAPE).warning
+    assert not estimate(passing(1.1), off, FPS, last, SHAPE).warning          # beyond max_miss either way
+
+
+def test_a_warning_ends_for_good_when_its_time_to_contact_stops_counting_down():
+    # countdown_frames: an object on a collision course (contact at frame CONTACT, its time to
+    # contact falling by a frame's time each frame) warns on to contact. When its box slides off
+    # onto the background at frame 25 (it stops growing at the approach's rate: its growth per
+    # frame halves), its time to contact rises; 3 frames later its warning ends and does not come
+    # back, although its time to contact, its course and its evidence would allow it. With the
+    # rule off (0) it warns on
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    p, off = TargetParams(alarm_warns=False, countdown_frames=3), TargetParams(alarm_warns=False, countdown_frames=0)
+
+    def run(params, slide: int | None) -> list[tuple[int, bool, float]]:
+        t, out = None, []
+        ls = 0.0
+        for k in range(10, 35):
+            step = math.log(CONTACT / (CONTACT - k)) - math.log(CONTACT / (CONTACT - k + 1)) if k > 10 \
+                else math.log(CONTACT / (CONTACT - k))
+            ls += step if slide is None or k < slide else step / 2.0
+            if t is None:
+                t = Track(1, k, heading[0], 60.0, 24.0 * math.exp(ls), 24.0 * math.exp(ls), log_s=ls)
+            t.history.append(Observation(k, ls, heading[0], 60.0, 24.0 * math.exp(ls), 0.0))
+            while len(t.history) > params.window:
+                t.history.popleft()
+            t.inside = deque(t.history)
+            t.cx, t.w, t.h, t.last_answer = heading[0], 24.0 * math.exp(ls), 24.0 * math.exp(ls), k
+            o = estimate(t, params, FPS, k, SHAPE, heading=heading)
+            out.append((k, o.warning, o.ttc_s))
+        return out
+
+    hits = run(p, None)
+    first = next(k for k, w, _ in hits if w)
+    assert all(w for k, w, _ in hits if k >= first)              # it warns on to contact
+    ttcs = [v for k, _, v in hits if k >= first]
+    assert all(b < a for a, b in zip(ttcs, ttcs[1:]))              # its time to contact counts down
+    slid = run(p, 25)
+    assert [w for k, w, _ in slid if k < 25] == [w for k, w, _ in hits if k < 25]
+    end = next(k for k, w, _ in slid if k > first and not w)
+    assert end <= 30 and not any(w for k, w, _ in slid if k >= end)   # ended for good
+    rise = [v for k, _, v in slid if 25 <= k <= end]
+    assert rise[-1] > min(rise)                                      # it ended as its contact receded
+    assert all(w for k, w, _ in run(off, 25) if k >= first)          # the rule off: it warns on
 
 
 def test_the_alarm_alone_from_a_moving_camera_begins_once_it_has_lasted():

@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "fleeting",
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "wide", "rises", "fleeting",
            "count_down", "held", "fits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -170,6 +170,28 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     return ratio is not None and ratio > p.path_drift
 
 
+def wide(p: TargetParams, miss: float) -> bool:
+    """``onset_miss`` (docs/model.md, "A course that crosses max_miss"): whether the fit's course
+    ``miss`` is too wide to begin a warning: a passing object's box holds its sweep and the
+    background beside it, so its miss is measured short and crosses ``max_miss`` from above.
+    The field alarm with a course is not held to it (:func:`alarm_warns`: ``max_miss``)."""
+    return 0 < p.onset_miss < miss
+
+
+def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
+          sigma: float | None = None) -> bool:
+    """``countdown_frames`` (docs/model.md, "A course that crosses max_miss"): whether track ``t``'s
+    time to contact ``ttc`` (s) at clock ``index`` exceeds its time to contact of ``countdown_frames``
+    frames (at ``nominal_fps``) before (its newest estimate at least that old, ``Track.ttcs``) by more
+    than ``sigma`` (s, the standard error of ``ttc``; None: 0): an approach's falls by the time
+    between them. False when either is unknown or the rule is off."""
+    if p.countdown_frames <= 0 or ttc is None:
+        return False
+    then = index - p.span(p.countdown_frames, fps) + _EPS
+    old = next((v for clock, v in reversed(t.ttcs) if clock <= then), None)
+    return old is not None and ttc > old + (sigma or 0.0)
+
+
 def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
     """``alarm_frames`` (docs/model.md, "The field alarm on the static world"): whether the field
     alarm of track ``t`` is too young to begin a warning without a course: the camera translates
@@ -240,7 +262,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index)
     warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
-                   and sigma <= p.max_ttc_sigma * ttc and (t.warned or ttc >= p.onset_s))
+                   and sigma <= p.max_ttc_sigma * ttc and (t.warned or (ttc >= p.onset_s and not wide(p, miss))))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
     # and, without a course from a translating camera, once it has lasted (alarm_frames)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
@@ -253,9 +275,15 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured):
         warning = False
+    began = t.warned
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
+    # ... and goes on only while its time to contact counts down (countdown_frames)
+    if warning and began and rises(t, p, fps, index, ttc, sigma):
+        t.spent = True
+    warning = warning and not t.spent
+    t.ttcs.append((index, ttc))
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
