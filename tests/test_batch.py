@@ -194,6 +194,7 @@ def test_rerun_skips_finished_tasks(videos, tmp_path):
 
 def test_the_progress_bar_ends_once(videos, tmp_path, capsys, monkeypatch):
     monkeypatch.setenv("TQDM_MININTERVAL", "0")   # every update drawn, however fast the tasks
+    monkeypatch.setenv("TQDM_MINITERS", "1")
     batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=True)
     err = capsys.readouterr().err   # not a terminal: every redraw stays in the text
     assert err.count("1/2") == 1 and err.count("2/2") == 1 and err.endswith("\n"), err
