@@ -193,8 +193,13 @@ def test_rerun_skips_finished_tasks(videos, tmp_path):
 
 
 def test_the_progress_bar_ends_once(videos, tmp_path, capsys, monkeypatch):
-    monkeypatch.setenv("TQDM_MININTERVAL", "0")   # every update drawn, however fast the tasks
-    monkeypatch.setenv("TQDM_MINITERS", "1")
+    import tqdm
+
+    class EveryUpdate(tqdm.tqdm):   # every update drawn, however fast the tasks (tqdm reads its TQDM_*
+        def __init__(self, *args, **kwargs):   # environment once, at import: no use here)
+            super().__init__(*args, **{**kwargs, "mininterval": 0, "miniters": 1})
+
+    monkeypatch.setattr(tqdm, "tqdm", EveryUpdate)
     batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=True)
     err = capsys.readouterr().err   # not a terminal: every redraw stays in the text
     assert err.count("1/2") == 1 and err.count("2/2") == 1 and err.endswith("\n"), err
