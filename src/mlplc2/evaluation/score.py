@@ -35,7 +35,7 @@ from .truth import ObjectTruth, VideoTruth
 
 __all__ = ["ModelRun", "score_run", "score_warnings", "warning_truth", "summarise", "summarise_warnings",
            "TTC_BINS", "MIN_TTC_WIDTH", "FRAGMENT_SHARE", "EARLY_S", "LATE_S", "SEEN_S", "HIDDEN_SHARE",
-           "MID_INTERVAL_S", "mid_error"]
+           "MID_INTERVAL_S", "mid_error", "unseen", "hidden_frames"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
