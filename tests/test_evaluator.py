@@ -723,6 +723,28 @@ def test_collision_object_out_of_view_before_contact_is_not_scored():
     assert (s["collision_objects"], s["warned"], s["collision_objects_unseen"]) == (1, 0, 1)
 
 
+@pytest.mark.parametrize("other_x, other_width_m, other_frames, hidden", [
+    (100, 2.0, range(40), True),       # behind the nearer object all its last second
+    (117.5, 2.0, range(40), True),     # 3/4 of its box behind it
+    (120, 2.0, range(40), False),      # half of its box behind it
+    (150, 2.0, range(40), False),      # beside it
+    (100, 20.0, range(40), False),     # in front of it (the other object is farther)
+    (100, 2.0, range(35), False),      # behind it in only half of its last second
+])
+def test_collision_object_hidden_behind_a_nearer_object_is_not_scored(other_x, other_width_m, other_frames, hidden):
+    """A collision object 10 px and 1 m wide (depth 1/10 of the focal length) at (100, 50), with
+    another object 40 px wide: 2 m wide it is nearer (2/40 = 1/20), 20 m farther (1/2). Hidden
+    (``HIDDEN_SHARE``: at least 3/4 of its box within the nearer object's) in more than half of its
+    last second (frames 30-39), it cannot be warned of: not a miss, only counted as unseen."""
+    contact = 40
+    ttc = lambda f: (contact - f) / WARN_FPS                                  # noqa: E731
+    target = dict(obj(1, "collision", range(contact), 100, 50, 10.0, contact=float(contact), ttc=ttc), width_m=1.0)
+    other = dict(obj(2, "static", other_frames, other_x, 50, 40.0), width_m=other_width_m)
+    ev = evaluate(result("a.mp4", 45), {"videos": {"a.mp4": video_truth([target, other], frames=45)}})
+    assert wvid(ev, "a.mp4")["collision_objects_unseen"] == int(hidden)
+    assert [o["object"] for o in ev.warning_objects] == ([] if hidden else [1])
+
+
 @pytest.mark.parametrize("camera, speed, scored", [("pan", 10.0, False), ("static", 0.0, True)])
 def test_a_rendered_pan_that_turns_away_from_its_collision_does_not_score_it(camera, speed, scored):
     """A collision aimed at the camera from the left of the view: a camera panning right at 10 deg/s

@@ -246,7 +246,7 @@ def _setting_of(sc: Scene) -> str:
 def by_setting(ev, scenes: Sequence[Scene], models: Sequence[str]) -> list[dict]:
     """Per setting of the generated suite, then for the still and the moving cameras together: per
     model the collision objects warned before contact (of those scored), those not scored because
-    the camera had turned away from them (``unseen``), and the false-warning episodes per 1000 scored frames (from ``ev.warning_objects`` / ``ev.warning_videos``)."""
+    they were out of view or hidden in their last second (``unseen``), and the false-warning episodes per 1000 scored frames (from ``ev.warning_objects`` / ``ev.warning_videos``)."""
     group = {f"{sc.name}.mkv": _setting_of(sc) for sc in scenes}
     still = {_setting_of(sc): sc.camera == "static" for sc in scenes}
     names = list(dict.fromkeys(group.values()))

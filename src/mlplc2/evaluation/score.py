@@ -34,7 +34,8 @@ from .record import TargetRow
 from .truth import ObjectTruth, VideoTruth
 
 __all__ = ["ModelRun", "score_run", "score_warnings", "warning_truth", "summarise", "summarise_warnings",
-           "TTC_BINS", "MIN_TTC_WIDTH", "FRAGMENT_SHARE", "EARLY_S", "LATE_S", "SEEN_S", "MID_INTERVAL_S", "mid_error"]
+           "TTC_BINS", "MIN_TTC_WIDTH", "FRAGMENT_SHARE", "EARLY_S", "LATE_S", "SEEN_S", "HIDDEN_SHARE",
+           "MID_INTERVAL_S", "mid_error", "unseen", "hidden_frames"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
@@ -48,10 +49,14 @@ FRAGMENT_SHARE = 0.5
 EARLY_S = 0.5
 #: A warning on a collision object up to this long (s) after its contact is neither true nor false.
 LATE_S = 0.5
-#: A 3-D collision object is scored only when it is in view (a track row) in at least half of the
-#: frames of its last ``SEEN_S`` seconds before contact: a camera that turned away from it (a pan, a
-#: tilt) cannot warn of it, whatever the model (docs/evaluation.md, "Warning metrics").
+#: A 3-D collision object is scored only when it is seen in at least half of the frames of its last
+#: ``SEEN_S`` seconds before contact: in view (a track row) and not hidden behind nearer objects
+#: (``HIDDEN_SHARE``). A camera that turned away from it (a pan, a tilt) or a vehicle in front of it
+#: leaves nothing to warn of, whatever the model (docs/evaluation.md, "Warning metrics").
 SEEN_S = 1.0
+#: A 3-D object is hidden in a frame when at least this share of its image box (within the image) lies
+#: in the boxes of nearer 3-D objects (depth from the truth: physical width over image width).
+HIDDEN_SHARE = 0.75
 #: MiD (the TSTTC benchmark's motion-in-depth error) compares the depth ratio over this interval (s):
 #: TSTTC's frame interval (10 fps).
 MID_INTERVAL_S = 0.1
@@ -334,7 +339,7 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
     rules = _warning_rules(run, truth, radius)
     objects = []
     outside = 0
-    hidden = [o for o in rules.colliders if o is not rules.collider and unseen(o, rules.fps)]
+    hidden = [o for o in rules.colliders if o is not rules.collider and unseen(o, rules.fps, truth)]
     for o in rules.colliders:
         if o in hidden:
             continue
@@ -364,18 +369,67 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
     return video, objects
 
 
-def unseen(o: ObjectTruth, fps: float) -> bool:
-    """Whether the 3-D collision object ``o`` is out of view (no track row) in more than half of the
-    frames of its last :data:`SEEN_S` before contact: it left the view long before it hit (a camera
-    that turned away from it), so no warning can be asked of it. False without a track or a contact."""
+def unseen(o: ObjectTruth, fps: float, video: VideoTruth | None = None) -> bool:
+    """Whether the 3-D collision object ``o`` is not seen in more than half of the frames of its last
+    :data:`SEEN_S` before contact: out of view (no track row; a camera that turned away from it) or,
+    given its ``video``, hidden behind nearer objects (:func:`hidden_frames`), so no warning can be
+    asked of it. False without a track or a contact."""
     cf = o.contact_frame
     if not o.track or cf is None:
         return False
     window = range(max(int(math.ceil(cf - SEEN_S * fps)), 0), int(math.ceil(cf)))       # true TTC <= SEEN_S
     if not window:
         return False
-    seen = {p.frame for p in o.track}
+    seen = {p.frame for p in o.track} - (hidden_frames(o, video) if video is not None else set())
     return sum(f in seen for f in window) < 0.5 * len(window)
+
+
+def _depth_box(o: ObjectTruth, p) -> tuple[float, tuple[float, float, float, float]] | None:
+    """A 3-D track row's depth up to the camera's focal length (physical width over image width: the
+    larger side, as a turned plane only shrinks) and image box; None without either (a 2-D or
+    labelled object, a row whose object is partly behind the camera)."""
+    width_m = o.extra.get("width_m")
+    if not isinstance(width_m, (int, float)) or p.width is None or p.height is None or max(p.width, p.height) <= 0:
+        return None
+    w, h = p.width / 2.0, p.height / 2.0
+    return width_m / max(p.width, p.height), (p.x - w, p.x + w, p.y - h, p.y + h)
+
+
+def _covered_share(box, covers) -> float:
+    """The share of ``box`` (x0, x1, y0, y1) inside the union of the boxes ``covers`` (exact: the
+    rectangles cut on the grid of their edges)."""
+    x0, x1, y0, y1 = box
+    area = (x1 - x0) * (y1 - y0)
+    covers = [(max(a, x0), min(b, x1), max(c, y0), min(d, y1)) for a, b, c, d in covers]
+    covers = [c for c in covers if c[0] < c[1] and c[2] < c[3]]
+    if area <= 0 or not covers:
+        return 0.0
+    xs = sorted({v for c in covers for v in c[:2]})
+    ys = sorted({v for c in covers for v in c[2:]})
+    inside = sum((xa - xb) * (ya - yb) for xb, xa in zip(xs, xs[1:]) for yb, ya in zip(ys, ys[1:])
+                 if any(c[0] <= xb and xa <= c[1] and c[2] <= yb and ya <= c[3] for c in covers))
+    return inside / area
+
+
+def hidden_frames(o: ObjectTruth, video: VideoTruth) -> set[int]:
+    """The frames in which the 3-D object ``o`` is hidden: at least :data:`HIDDEN_SHARE` of its image box
+    (within the image when its size is known) lies in the boxes of the nearer 3-D objects of ``video``
+    (:func:`_depth_box`). Empty for objects without a physical width (2-D stimuli, labelled clips)."""
+    others = [(v, {p.frame: p for p in v.track}) for v in video.objects if v is not o and v.track]
+    hidden = set()
+    for p in o.track:
+        own = _depth_box(o, p)
+        if own is None:
+            continue
+        depth, box = own
+        if video.size:
+            box = (max(box[0], 0.0), min(box[1], float(video.size[0])),
+                   max(box[2], 0.0), min(box[3], float(video.size[1])))
+        covers = [db[1] for v, rows in others if p.frame in rows
+                  for db in [_depth_box(v, rows[p.frame])] if db is not None and db[0] < depth]
+        if covers and _covered_share(box, covers) >= HIDDEN_SHARE:
+            hidden.add(p.frame)
+    return hidden
 
 
 def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _WarningRules) -> dict | None:
