@@ -390,3 +390,25 @@ def test_the_levels_read_last_frame_are_carried_ahead_in_a_thread_of_their_own()
             for key, value in va.items():
                 other = vb[key]
                 assert value == other or np.isclose(value, other, rtol=1e-6), key
+
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "fork"), reason="needs os.fork")
+def test_a_forked_child_carries_ahead_in_a_thread_of_its_own():
+    """A process forked after the carry thread started (multiprocessing's fork) has no such thread:
+    its first carry must start one, not wait for ever on the parent's."""
+    import os
+
+    from mlplc2.targets import track
+
+    track.carry_ahead([]).result(timeout=10)     # the parent's thread exists
+    pid = os.fork()
+    if pid == 0:                                 # the child: exit 0 only if its carry ran
+        code = 1
+        try:
+            track.carry_ahead([]).result(timeout=10)
+            code = 0
+        finally:
+            os._exit(code)
+    _, status = os.waitpid(pid, 0)
+    assert os.waitstatus_to_exitcode(status) == 0

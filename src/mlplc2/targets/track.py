@@ -6,6 +6,7 @@ frame, and the pyramids of past frames carried through the camera's turns (:clas
 from __future__ import annotations
 
 import math
+import os
 import threading
 from collections import deque
 from concurrent.futures import Future, ThreadPoolExecutor
@@ -299,6 +300,7 @@ class Carried:
 
 
 _AHEAD: list = []
+os.register_at_fork(after_in_child=_AHEAD.clear)   # a forked child has no such thread: it starts its own
 
 
 def carry_ahead(jobs: list[tuple[Carried, int]]) -> Future:
