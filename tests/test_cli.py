@@ -218,6 +218,20 @@ def test_truncated_video_keeps_outputs_and_exits_nonzero(data, tmp_path, capsys)
     assert (out / "responses.png").exists()
 
 
+def test_a_damaged_frame_is_skipped_named_and_the_run_goes_on(tmp_path, capsys):
+    from tests.test_io import _damaged_video
+    path, _, key = _damaged_video(tmp_path)
+    out = tmp_path / "out"
+    rc = main(["run", str(path), "--decoder", "pyav", "-m", "lgmd1", "--out", str(out), "--quiet"])
+    assert rc == 0
+    err = capsys.readouterr().err
+    assert f"{key - 20} damaged frame(s) could not be decoded (20, " in err and "Traceback" not in err
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["complete"] and summary["frames_damaged"] == list(range(20, key))
+    _, rows = _read_csv(out / "responses.csv")
+    assert sorted({int(r["frame"]) for r in rows}) == [f for f in range(40) if not 20 <= f < key]
+
+
 def test_ctrl_c_exit_130_and_valid_csv(data, tmp_path, monkeypatch, capsys):
     k = 12
     original = mlplc2.MLPLC2.step

@@ -10,7 +10,7 @@ import pytest
 
 from mlplc2._validation import InputError, InputValueError
 from mlplc2.io import (FrameSource, TruncatedInputWarning, VideoWriter, open_source, parse_resize, read_video,
-                       write_video)
+                       write_lossless_video, write_video)
 
 W, H, T = 160, 120, 24
 
@@ -217,6 +217,48 @@ def test_truncated_mp4_we_wrote_still_decodes(tmp_path):
     got = [i for i, _ in src]
     assert 0 < len(got) < 60
     assert src.truncated and f"frame {len(got)}" in src.message
+
+
+def _damaged_video(tmp_path):
+    """40 frames (FFV1) whose frame 20 is damaged (bytes of its packet changed: its slice CRC fails),
+    and the index of the next key frame."""
+    p = tmp_path / "damaged.mkv"
+    frames = [f[..., 0] for f in _frames(40)]               # the red block's width encodes the index
+    write_lossless_video(p, frames, 30.0)
+    import av
+    with av.open(str(p)) as c:          # where frame 20's packet lies in the file
+        packets = [k for k in c.demux(c.streams.video[0]) if k.size]
+        at, size = packets[20].pos, packets[20].size
+        key = next(i for i, k in enumerate(packets) if i > 20 and k.is_keyframe)
+    data = bytearray(p.read_bytes())
+    data[at + size // 4:at + size // 2] = bytes((b * 7 + 13) & 255 for b in data[at + size // 4:at + size // 2])
+    p.write_bytes(bytes(data))          # the packet's bytes, not the container's
+    return p, frames, key
+
+
+def test_a_damaged_frame_in_the_middle_is_skipped_not_the_end(tmp_path):
+    """PyAV: a damaged packet mid-file costs its frame and those predicted from it up to the next key
+    frame (FFV1's coder state; they decode as garbage without an error), not the rest of the run:
+    the frames after come with their own indices and times (their content says which frame they
+    are), the skipped ones are named."""
+    p, frames, key = _damaged_video(tmp_path)
+    src = open_source(p, decoder="pyav")
+    got = {i: f for i, f in src}
+    assert not src.truncated and src.message is None
+    assert src.damaged == list(range(20, key)) and key < 40   # the damaged frame, those predicted from it
+    assert sorted(list(got) + src.damaged) == list(range(40))
+    for i, f in got.items():            # grey written, RGB read: a few levels of range conversion
+        assert np.abs(f[..., 0].astype(int) - frames[i]).max() <= 4, i
+    assert abs(src.time_s - 39 / 30.0) < 1e-3
+
+
+def test_opencv_stops_at_a_damaged_frame_and_names_the_decoder_that_goes_on(tmp_path):
+    """OpenCV's reads after a damaged frame give earlier frames' pictures: it stops there, and says so."""
+    p, _, _ = _damaged_video(tmp_path)
+    src = open_source(p, decoder="opencv")
+    got = [i for i, _ in src]
+    assert got == list(range(20)) and src.truncated and src.truncated_at == 20
+    assert "--decoder pyav" in src.message
 
 
 # -- writing --------------------------------------------------------------------

@@ -114,6 +114,9 @@ def _run(args, jsonl) -> int:
                 raise
             raise type(exc)(_cli_names(str(exc))) from None
     _print_run_summary(args, result)
+    if result.damaged:
+        shown = ", ".join(map(str, result.damaged[:5])) + (", ..." if len(result.damaged) > 5 else "")
+        warn(f"{result.source}: {len(result.damaged)} damaged frame(s) could not be decoded ({shown}); skipped")
     if result.dropped or (result.message and not result.truncated):  # a dropped stream, a closed --jsonl pipe
         print(f"{PROG}: {result.message}", file=sys.stderr)
     elif result.truncated:

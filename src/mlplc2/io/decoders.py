@@ -21,6 +21,10 @@ from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_li
 
 log = logging.getLogger(__name__)
 
+#: Consecutive packets that cannot be decoded (damaged) that PyAV skips before a video counts as
+#: ending there: a damaged frame in the middle of a file or a stream is skipped, not the end of the run.
+MAX_DAMAGED = 30
+
 
 def _natural_key(path: str):
     """Sort key: 'frame2.png' before 'frame10.png'."""
@@ -36,6 +40,9 @@ class Decoder:
 
     #: The container's timestamp (s) of the frame :meth:`read` returned last, None without one.
     time_s: float | None = None
+    #: Frames skipped just before the frame :meth:`read` returned last: damaged ones (a packet
+    #: that could not be decoded) and those predicted from them, up to the next key frame (PyAV).
+    gap: int = 0
 
     fps: float | None = None
     size: tuple[int, int] = (0, 0)
@@ -85,6 +92,8 @@ class _OpenCVDecoder(Decoder):
         return self.cap.grab()
 
     def read(self):
+        # A damaged frame ends the file here: OpenCV's reads after one give earlier frames' pictures
+        # (its decoding threads' old buffers; measured on FFV1), so it cannot be skipped (PyAV can).
         ok, frame = self.cap.read()
         if not ok or frame is None:
             if self._camera:
@@ -143,9 +152,33 @@ class _PyAVDecoder(Decoder):
         self.fps = float(rate) if rate else None
         self.frame_count = int(stream.frames) or None
         self.size = (int(stream.codec_context.width), int(stream.codec_context.height))
-        self._frames = self.container.decode(stream)
+        self._frames = self._decode(stream)
+
+    def _decode(self, stream):
+        """The stream's frames, packet by packet. A packet that cannot be decoded (damaged) is
+        skipped, and so are the frames decoded after it up to the next key frame (they are
+        predicted from the damaged one: an FFV1 frame's coder state, an H.264 P-frame's picture;
+        measured on FFV1, they come out as garbage without an error); all are counted in
+        :attr:`gap`. More than :data:`MAX_DAMAGED` undecodable packets in a row end the video."""
+        gap, bad, waiting = 0, 0, False
+        for packet in self.container.demux(stream):
+            try:
+                frames = packet.decode()
+            except self._av.error.InvalidDataError:
+                if bad >= MAX_DAMAGED:
+                    raise
+                gap, bad, waiting = gap + 1, bad + 1, True
+                continue
+            bad = 0
+            for frame in frames:
+                if waiting and not frame.key_frame:
+                    gap += 1
+                    continue
+                self.gap, gap, waiting = gap, 0, False
+                yield frame
 
     def read(self):
+        self.gap = 0
         try:
             frame = next(self._frames)
         except StopIteration:

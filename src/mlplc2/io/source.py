@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .._validation import InputValueError, check_fps
-from .decoders import Decoder, open_decoder
+from .decoders import Decoder, _PyAVDecoder, open_decoder
 from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
 _QUEUE_SIZE = 4
@@ -73,6 +73,9 @@ class FrameSource:
     dropped : bool
         A stream or camera stopped with an error (connection lost, no frame): :attr:`message`
         says so; the frames before it were yielded.
+    damaged : list of int
+        The frames that could not be decoded (a damaged packet of a file or a stream), skipped;
+        the frames after them are yielded with their own indices.
     """
 
     def __init__(self, decoder: Decoder, kind: str, *, fps=None, start: int = 0, end: int | None = None,
@@ -97,6 +100,7 @@ class FrameSource:
         self.truncated_at: int | None = None
         self.message: str | None = None
         self.n_read = 0
+        self.damaged: list[int] = []      # decoders.MAX_DAMAGED in a row at most
         # First frame read now, in the caller's thread, so that empty or
         # undecodable inputs fail at open time with a clear message.
         skipped = decoder.skip(self.start) if self.start else 0
@@ -232,6 +236,11 @@ class FrameSource:
                     break
                 frame = None if self._drained_to_end else dec.read()
                 t, decoded = dec.time_s, time.perf_counter()
+                if frame is not None and dec.gap:    # damaged frames skipped: the index counts them
+                    self.damaged.extend(range(index, index + dec.gap))
+                    index += dec.gap
+                    if self.end is not None and index >= self.end:
+                        break
             self._put(("end", index, None, 0.0, 0))
         except BaseException as exc:  # noqa: BLE001 - handed to the consumer thread
             self._put(("error", index, exc, 0.0, 0))
@@ -291,7 +300,9 @@ class FrameSource:
                 and index < expected:  # a file, or one read whole from a pipe or HTTP that states its count
             self.truncated, self.truncated_at = True, index
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
-                            "(file truncated or damaged); results cover frames before it")
+                            "(file truncated or damaged); results cover frames before it"
+                            + ("" if isinstance(self._dec, _PyAVDecoder) else
+                               " (--decoder pyav skips a damaged frame and goes on)"))
 
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""

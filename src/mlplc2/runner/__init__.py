@@ -559,7 +559,7 @@ class _Frames:
         if video_error is not None:
             result.error = f"annotated.mp4: {video_error.strerror or video_error}"
         result.truncated = self.src.truncated
-        result.dropped = self.src.dropped
+        result.dropped, result.damaged = self.src.dropped, self.src.damaged
         result.message = self.src.message or result.message
         result.latency = self.latency.stats()
         # One decision on duplicated frames: the pre-scan's, or a model left to find out held frames.

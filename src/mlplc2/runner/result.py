@@ -93,6 +93,8 @@ class RunResult:
     previous one (``Output.repeated``)."""
     skipped: int = 0
     """Frames of a live source skipped because the models were behind (the newest frame was taken)."""
+    damaged: list[int] = field(default_factory=list)
+    """Frames of the input that could not be decoded (a damaged packet), skipped: decoding went on after them."""
     dropped: bool = False
     """A stream or camera stopped with an error (``message`` says which); the results cover the frames before."""
     latency: dict[str, float] = field(default_factory=dict)
@@ -137,6 +139,7 @@ class RunResult:
             "duplicated": self.duplicated,
             "frames_held": self.repeated,
             "frames_skipped": self.skipped,
+            "frames_damaged": self.damaged,
             "dropped": self.dropped,
             "latency_ms": self.latency,
         }
