@@ -356,6 +356,25 @@ def test_stimulus_option_errors_name_the_option(args, expect, tmp_path, capsys):
     assert list(tmp_path.iterdir()) == []
 
 
+@pytest.mark.parametrize("argv, hint", [
+    (["rnu", "x.mp4"], "invalid choice: 'rnu' (choose from 'run', "),
+    (["run", "x.mp4", "--jsnl", "-"], "unrecognized arguments: --jsnl -; did you mean '--jsonl'? (see 'mlplc2 run --help')"),
+    (["run", "x.mp4", "--maxframes=3"], "did you mean '--max-frames'?"),
+    (["benchmark", "--out", "x", "--holdot", "1"], "did you mean '--holdout'?"),
+])
+def test_a_mistyped_command_or_option_is_named_with_the_closest_one(argv, hint, capsys):
+    assert main(argv) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert hint in line and "did you mean" in line
+    if argv[0] == "rnu":
+        assert line.endswith("; did you mean 'run'? (see 'mlplc2 --help')")
+
+
+def test_a_word_like_no_option_gets_no_guess(capsys):
+    assert main(["run", "x.mp4", "--zzzzzz"]) == 2
+    assert "did you mean" not in capsys.readouterr().err
+
+
 def test_stimulus_help_lists_each_stimulus_and_its_options(capsys):
     from mlplc2 import stimuli
 

@@ -26,7 +26,7 @@ from .._signals import interrupts
 from .._validation import InputError
 from . import run, stimulus, studies, tools
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Parser, Subcommand, UsageError,
-                     number_type, one_line, warn)
+                     did_you_mean, number_type, one_line, warn)
 from .stimulus import STIMULUS_OWN_OPTIONS
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
@@ -47,7 +47,7 @@ def build_parser() -> argparse.ArgumentParser:
     for cmd in SUBCOMMANDS:
         p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
         cmd.add_arguments(p)
-        p.set_defaults(_handler=cmd.handler)
+        p.set_defaults(_handler=cmd.handler, _parser=p)
     return parser
 
 
@@ -92,7 +92,9 @@ def _main(argv: list[str] | None) -> int:
     try:
         args, extra = parser.parse_known_args(argv)
         if extra:  # pointing at the subcommand's help, not the top level's
-            raise UsageError(f"unrecognized arguments: {' '.join(extra)} (see '{PROG} {args.command} --help')")
+            options = [o for a in args._parser._actions for o in a.option_strings]
+            hint = did_you_mean(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""
+            raise UsageError(f"unrecognized arguments: {' '.join(extra)}{hint} (see '{PROG} {args.command} --help')")
     except UsageError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)
         return EXIT_INPUT

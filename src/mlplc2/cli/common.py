@@ -7,9 +7,11 @@ options with the run options they give.
 from __future__ import annotations
 
 import argparse
+import difflib
 import importlib.util
 import inspect
 import math
+import re
 import sys
 import threading
 from collections.abc import Callable, Iterator
@@ -35,7 +37,17 @@ class UsageError(Exception):
 
 class Parser(argparse.ArgumentParser):
     def error(self, message):  # noqa: D102 - one line instead of usage + message
-        raise UsageError(f"{message} (see '{self.prog} --help')")
+        bad = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
+        hint = did_you_mean(bad.group(1), re.findall(r"'([^']*)'", bad.group(2))) if bad else ""
+        raise UsageError(f"{message}{hint} (see '{self.prog} --help')")
+
+
+def did_you_mean(word: str, choices) -> str:
+    """``"; did you mean 'X'?"`` for the choice closest to a mistyped ``word``, else ``""``.
+    Options are compared without their dashes (``--colour`` is not ``--scroll``)."""
+    bare = {c.lstrip("-"): c for c in choices}
+    close = difflib.get_close_matches(word.lstrip("-"), list(bare), n=1, cutoff=0.6 if word[:1] != "-" else 0.7)
+    return f"; did you mean '{bare[close[0]]}'?" if close else ""
 
 
 @dataclass(frozen=True)
