@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_keeps_bearing, drift
+from mlplc2.targets.warning import cut_keeps_bearing, drift, exits, holds
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -110,6 +110,41 @@ def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():
     first = min(k for k, _, w in seen if w)
     assert first == TargetParams().min_frames and not seen[first - 1][1]
     assert all(w for k, _, w in seen[first - 1:]) and seen[-1][1]
+
+
+def test_a_warning_is_held_back_where_a_passing_box_leaves_through_the_border_beside_the_path():
+    # cut_exit: the static world ahead of a camera driving forward (here its heading is the
+    # principal point), 0.75 of its widths beside the heading: its image expands about the heading,
+    # its centre's offset keeps 0.75 of its width, so its course misses by 0.75 (within max_miss
+    # and onset_miss: it warns while in view, as the drive's roadside objects do). Its growing box
+    # reaches the border without ever holding the heading, and from that frame on its warning is
+    # held back (before: it warned on down to its contact, as it passed beside the camera); with
+    # the rule off (0) it warns on. The approach on a collision course near the border above (a
+    # course of 0) warns on while cut
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    on, off = TargetParams(alarm_warns=False), TargetParams(alarm_warns=False, cut_exit=0.0)
+
+    def run(p):
+        seen = []
+        _looming(heading[0] - 15.0, 19, contact=24, static=True, each=lambda t, k: seen.append(
+            (k, t.cut(SHAPE, p.border), holds(t, heading), estimate(t, p, FPS, k, SHAPE))))
+        return seen
+
+    seen = run(on)
+    first = min(k for k, _, _, o in seen if o.warning)
+    cut = min(k for k, c, _, _ in seen if c)
+    assert first < cut < seen[-1][0] and not any(h for _, _, h, _ in seen)
+    assert all(o.miss == pytest.approx(0.75, abs=0.02) for k, _, _, o in seen if k >= first)
+    assert all(o.warning for k, _, _, o in seen if first <= k < cut)           # in view: it warns
+    assert not any(o.warning for k, _, _, o in seen if k >= cut)                # cut off the path: held back
+    assert all(o.ttc_s is not None and o.ttc_s > 0 for k, _, _, o in seen if k >= cut)   # not at contact yet
+    assert all(o.warning for k, _, _, o in run(off) if k >= first)             # off: it warns on
+    hit = _looming(15.0, 20, contact=24)          # a collision course cut by the border: a course of 0
+    hit.warned = True
+    assert hit.history[-1].cut and not exits(hit, on, SHAPE, heading, 0.0)
+    assert exits(hit, on, SHAPE, heading, 0.75)
+    hit.onset_cut = True                          # its warning began on a cut box: never held back
+    assert not exits(hit, on, SHAPE, heading, 0.75)
 
 
 def test_border_zero_still_cuts_a_box_past_the_edge():

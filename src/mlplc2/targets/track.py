@@ -145,6 +145,7 @@ class Track:
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
     ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None) of its last estimates
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
+    onset_cut: bool = False            # its warning began on a box cut by the border (``cut_exit``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "wide", "rises", "fleeting",
-           "count_down", "held", "fits", "MIN_POINTS"]
+           "count_down", "held", "fits", "exits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -201,6 +201,19 @@ def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> 
     return p.alarm_frames > 1 and heading is not None and not holds(t, heading) and t.alarm_run < p.alarm_frames
 
 
+def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
+          miss: float | None) -> bool:
+    """``cut_exit`` (docs/model.md, "A warning that leaves through the border"): whether the warning of
+    track ``t``, which has warned and whose warning began on a box wholly inside the frame
+    (``Track.onset_cut``), is held back this frame: its box is cut by the border of a frame of
+    ``shape`` (h, w) while it does not hold ``heading`` (px; :func:`holds`) and its course ``miss``
+    (None: none known, no test) exceeds ``cut_exit``. What leaves the view through the border beside
+    the path (a passing object, the ground, a roadside object) passes; the box of an object on a
+    collision course spreads over the view about the path."""
+    return (p.cut_exit > 0 and t.warned and not t.onset_cut and miss is not None and miss > p.cut_exit
+            and t.cut(shape, p.border) and not holds(t, heading))
+
+
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
     down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
@@ -276,9 +289,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and off_path(t, p, index, measured):
         warning = False
     began = t.warned
+    if warning and not began:
+        t.onset_cut = t.cut(shape, p.border)
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
+    # ... goes on while cut by the border off the heading only on a course through its box (cut_exit)
+    if warning and began and exits(t, p, shape, heading, miss):
+        warning = False
     # ... and goes on only while its time to contact counts down (countdown_frames)
     if warning and began and rises(t, p, fps, index, ttc, sigma):
         t.spent = True
