@@ -809,3 +809,48 @@ def test_no_target_before_growth_can_be_seen(noise):
     for k in range(12):
         g = np.clip(img + rng.uniform(-noise, noise, img.shape), 0, 255).astype(np.float32)
         assert layer.step(g, lm, [f] if k else [], k) == (), k
+
+
+@pytest.mark.parametrize("aspect", [1.0, 0.0])
+def test_box_follows_the_alignments_anisotropy_as_far_as_follow_aspect(aspect):
+    """``follow_aspect`` (issue 22, session 12): a box over the ground ahead grows twice as fast
+    vertically (kx = 1.1, ky = 1.21 each frame). With 1 each side follows its own factor; with 0
+    both follow the mean factor sqrt(kx ky) = 1.1^1.5, so the box keeps its seeded shape (a square
+    stays a square), while the log-scale and the accumulated anisotropy (the isotropy test's) are
+    the alignment's either way."""
+    from mlplc2.targets import Track
+
+    t = Track(1, 0, 100.0, 100.0, 20.0, 20.0)
+    kx, ky = 1.1, 1.21
+    move = (0.0, 0.0, kx, ky, 0.5 * math.log(kx * ky), math.log(ky / kx))
+    for k in range(1, 4):
+        assert t.follow(move, float(k), FPS, (240, 320), 3, aspect=aspect)
+    if aspect == 1.0:
+        assert (t.w, t.h) == pytest.approx((20.0 * kx ** 3, 20.0 * ky ** 3))
+    else:
+        assert t.w == pytest.approx(t.h) and t.w == pytest.approx(20.0 * 1.1 ** 4.5)
+    assert t.log_s == pytest.approx(3 * 1.5 * math.log(1.1))
+    assert t.aniso == pytest.approx(3 * math.log(1.1))
+
+
+@pytest.mark.parametrize("refind_motion", [False, True])
+def test_a_lost_track_is_refound_where_its_motion_carries_it(refind_motion):
+    """``refind_motion`` (issue 22, session 12): a track lost at clock 10 with a box of 20 px at
+    (100, 100), moving 2 px right and growing by 0.02 (log-scale) per frame. Twenty frames later the
+    object, at constant velocity, lies at (140, 100) and is 20 e^0.4 = 29.8 px wide: a new track
+    there is the lost one carried on (its id kept) only with the motion; without it, its centre lies
+    beyond the old box plus a quarter of its size (100 +- 15 px) and it gets a new id. A lost track
+    whose last motion shrank is not shrunk (the refinding box is its last one, moved)."""
+    from mlplc2.targets import TargetLayer, Track
+
+    assert not TargetParams().refind_motion
+    layer = TargetLayer(TargetParams(refind_motion=refind_motion, refind_frames=30), FPS)
+    lost = Track(3, 0, 100.0, 100.0, 20.0, 20.0)
+    lost.motion = (2.0, 0.0, 0.02)
+    layer._lose(lost, 10.0)
+    new = Track(7, 30, 140.0, 100.0, 30.0, 30.0)
+    assert layer._refind(new, 30.0) == refind_motion
+    assert new.id == (3 if refind_motion else 7)
+    lost.motion = (2.0, 0.0, -0.02)
+    carried = TargetLayer._carried(lost, 20.0)
+    assert (carried.cx, carried.cy, carried.w, carried.h) == pytest.approx((140.0, 100.0, 20.0, 20.0))

@@ -177,7 +177,7 @@ class Track:
 
     def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
                box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1,
-               border: float | None = None) -> bool:
+               border: float | None = None, aspect: float = 1.0) -> bool:
         """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
         centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
         the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
@@ -185,7 +185,9 @@ class Track:
         the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
         the box (the camera's image motion) adds to ``ox``, ``oy``. ``clock``: the frame's time
         (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one;
-        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge."""
+        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge;
+        ``aspect`` (``TargetParams.follow_aspect``): how much of the anisotropy ``fx / fy`` the box's shape
+        follows (1: each side by its own factor, 0: both by the mean ``sqrt(fx fy)``)."""
         if move is None:
             self.fails += 1
             return self.fails < max_fails
@@ -193,6 +195,9 @@ class Track:
         self.fails = 0
         self.cx += dx
         self.cy += dy
+        if aspect != 1.0:
+            mean = math.sqrt(fx * fy)
+            fx, fy = mean * (fx / mean) ** aspect, mean * (fy / mean) ** aspect
         self.w *= fx
         self.h *= fy
         if box is not None and refit > 0:
