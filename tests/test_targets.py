@@ -854,3 +854,21 @@ def test_a_lost_track_is_refound_where_its_motion_carries_it(refind_motion):
     lost.motion = (2.0, 0.0, -0.02)
     carried = TargetLayer._carried(lost, 20.0)
     assert (carried.cx, carried.cy, carried.w, carried.h) == pytest.approx((140.0, 100.0, 20.0, 20.0))
+
+
+@pytest.mark.parametrize("reshape", [0.0, 1.5])
+def test_box_aspect_stays_within_max_reshape_of_its_seeded_one(reshape):
+    """``max_reshape`` (issue 22, session 12): a square box over the ground ahead grows twice as fast
+    vertically (kx = 1.1, ky = 1.21 per frame) for 5 frames: its aspect would become 1.1^5 = 1.61.
+    With 1.5 it stays at 1.5 (cut back at the area the alignment gives, 400 (1.1 x 1.21)^5 px^2);
+    off (0), each side follows its own factor."""
+    from mlplc2.targets import Track
+
+    t = Track(1, 0, 100.0, 100.0, 20.0, 20.0)
+    kx, ky = 1.1, 1.21
+    for k in range(1, 6):
+        assert t.follow((0.0, 0.0, kx, ky, 0.5 * math.log(kx * ky), math.log(ky / kx)), float(k), FPS,
+                        (240, 320), 3, reshape=reshape)
+    assert t.w * t.h == pytest.approx(400.0 * (kx * ky) ** 5)
+    assert t.h / t.w == pytest.approx(1.5 if reshape else 1.1 ** 5)
+    assert t.aniso == pytest.approx(5 * math.log(1.1))

@@ -474,7 +474,7 @@ class TargetLayer:
                 if move is None and gray is not None:
                     move = self._remeasure(lm, gray, t, interval)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border,
-                        aspect=p.follow_aspect):
+                        aspect=p.follow_aspect, reshape=p.max_reshape):
                 kept.append(t)
             else:
                 self._lose(t, clock)

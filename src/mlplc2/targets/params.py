@@ -263,6 +263,12 @@ class TargetParams(ParameterSet):
                                  ``max_anisotropy``). A box that slid from its object onto the ground grows
                                  twice as fast vertically and ends as a tall strip over the road (issue 22,
                                  session 12: 90 x 490 px boxes on 60 px cars).""", valid=Valid.real(minimum=0, maximum=1))
+    max_reshape: float = param(0.0, """(> 1) The box's aspect (height over width) stays within this factor of the one
+                               it was seeded with (:meth:`~mlplc2.targets.track.Track.follow`: a larger change is
+                               cut back at the same area); the anisotropy is still accumulated for
+                               ``max_anisotropy``. A box that slid from its object onto the ground grows twice as
+                               fast vertically and ends as a tall strip over the road (issue 22, session 12:
+                               90 x 490 px boxes on 60 px cars). 0 = off.""", valid=Valid.real(minimum=0))
     refind_motion: bool = param(False, """A lost track (``refind_frames``) is refound where its last measured motion
                                 (``Track.motion``: shift and growth per frame) and the camera's turns since
                                 carry its box, rather than at its last box (:meth:`TargetLayer._refind`):
