@@ -516,14 +516,15 @@ class TargetLayer:
         It then takes over the lost track's id, frame of birth and last time to contact
         (``Track.held``, ``hold_frames``), not its history (the new box is measured afresh: its
         size against the old box's would be a jump in the log-scale fit); the newest such wins.
-        With ``refind_motion`` the lost box is first carried by its last measured motion over the time
-        since it was lost (:meth:`_carried`; the camera's turns carried it in :meth:`compensate`)."""
+        With ``refind_motion`` the lost box carried by its last measured motion over the time since it
+        was lost (:meth:`_carried`; the camera's turns carried it in :meth:`compensate`) counts too."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            b = self._carried(o, now - c) if self.params.refind_motion else o
-            if now - c <= span and o.id not in live and b.contains(t.cx, t.cy, 0.25 * b.size) \
-                    and max(t.size / b.size, b.size / t.size) <= 3.0:
+            boxes = (o, self._carried(o, now - c)) if self.params.refind_motion else (o,)
+            if now - c <= span and o.id not in live and any(
+                    b.contains(t.cx, t.cy, 0.25 * b.size) and max(t.size / b.size, b.size / t.size) <= 3.0
+                    for b in boxes):
                 self._lost.remove((c, o))
                 t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
                 return True

@@ -271,7 +271,7 @@ class TargetParams(ParameterSet):
                                90 x 490 px boxes on 60 px cars). 0 = off.""", valid=Valid.real(minimum=0))
     refind_motion: bool = param(False, """A lost track (``refind_frames``) is refound where its last measured motion
                                 (``Track.motion``: shift and growth per frame) and the camera's turns since
-                                carry its box, rather than at its last box (:meth:`TargetLayer._refind`):
+                                carry its box, as well as at its last box (:meth:`TargetLayer._refind`):
                                 an approaching object grows and moves while it is not tracked.""",
                                 valid=Valid.boolean())
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
