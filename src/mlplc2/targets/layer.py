@@ -136,7 +136,7 @@ class TargetLayer:
         turn = Turn(homography, self._pyramid(gray))        # shared: its level matrices and masks made once
         for levels in self._past:
             levels.turn(turn)
-        for t in self._tracks + ([o for _, o in self._lost] if self.params.refind_motion else []):
+        for t in self._tracks:
             x, y, z = homography @ np.array([t.cx, t.cy, 1.0])
             dx, dy = x / z - t.cx, y / z - t.cy
             t.cx, t.cy = t.cx + dx, t.cy + dy
@@ -473,8 +473,7 @@ class TargetLayer:
                 move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
                 if move is None and gray is not None:
                     move = self._remeasure(lm, gray, t, interval)
-            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border,
-                        aspect=p.follow_aspect, reshape=p.max_reshape):
+            if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 kept.append(t)
             else:
                 self._lose(t, clock)
@@ -515,31 +514,16 @@ class TargetLayer:
         the box alone: 0.07 more targets per collision object, docs/model.md).
         It then takes over the lost track's id, frame of birth and last time to contact
         (``Track.held``, ``hold_frames``), not its history (the new box is measured afresh: its
-        size against the old box's would be a jump in the log-scale fit); the newest such wins.
-        With ``refind_motion`` the lost box carried by its last measured motion over the time since it
-        was lost (:meth:`_carried`; the camera's turns carried it in :meth:`compensate`) counts too."""
+        size against the old box's would be a jump in the log-scale fit); the newest such wins."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            boxes = (o, self._carried(o, now - c)) if self.params.refind_motion else (o,)
-            if now - c <= span and o.id not in live and any(
-                    b.contains(t.cx, t.cy, 0.25 * b.size) and max(t.size / b.size, b.size / t.size) <= 3.0
-                    for b in boxes):
+            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
+                    and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
                 return True
         return False
-
-    @staticmethod
-    def _carried(o: Track, elapsed: float) -> Track:
-        """Lost track ``o``'s box carried ``elapsed`` clock units on by its last measured motion
-        (``Track.motion``: shift and log-scale per clock unit; growth only, a shrinking box stays);
-        ``o`` itself without one."""
-        if o.motion is None or not elapsed > 0:
-            return o
-        dx, dy, g = (v * elapsed for v in o.motion)
-        k = math.exp(max(g, 0.0))
-        return Track(o.id, o.born, o.cx + dx, o.cy + dy, o.w * k, o.h * k)
 
     def _align_track(self, levels, t: Track, half: float, interval: float):
         """The alignment of track ``t`` from the last frame to this one (:func:`align`), None when it

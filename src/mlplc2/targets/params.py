@@ -256,24 +256,6 @@ class TargetParams(ParameterSet):
                                and of a size within a factor of 3 of it, takes over its id and its last time to contact (``hold_frames``):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
-    follow_aspect: float = param(1.0, """How much of the alignment's anisotropy the box's shape follows each frame
-                                 (:meth:`~mlplc2.targets.track.Track.follow`): 1 = each side by its own scale
-                                 (``kx``, ``ky``), 0 = both by the mean scale ``sqrt(kx ky)`` (the box keeps the
-                                 shape it was seeded with; the anisotropy is still accumulated for
-                                 ``max_anisotropy``). A box that slid from its object onto the ground grows
-                                 twice as fast vertically and ends as a tall strip over the road (issue 22,
-                                 session 12: 90 x 490 px boxes on 60 px cars).""", valid=Valid.real(minimum=0, maximum=1))
-    max_reshape: float = param(0.0, """(> 1) The box's aspect (height over width) stays within this factor of the one
-                               it was seeded with (:meth:`~mlplc2.targets.track.Track.follow`: a larger change is
-                               cut back at the same area); the anisotropy is still accumulated for
-                               ``max_anisotropy``. A box that slid from its object onto the ground grows twice as
-                               fast vertically and ends as a tall strip over the road (issue 22, session 12:
-                               90 x 490 px boxes on 60 px cars). 0 = off.""", valid=Valid.real(minimum=0))
-    refind_motion: bool = param(False, """A lost track (``refind_frames``) is refound where its last measured motion
-                                (``Track.motion``: shift and growth per frame) and the camera's turns since
-                                carry its box, as well as at its last box (:meth:`TargetLayer._refind`):
-                                an approaching object grows and moves while it is not tracked.""",
-                                valid=Valid.boolean())
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its

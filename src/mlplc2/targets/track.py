@@ -146,7 +146,6 @@ class Track:
     ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None) of its last estimates
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
-    aspect0: float | None = None       # the aspect (h / w) of its box at its first move (``TargetParams.max_reshape``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
@@ -178,7 +177,7 @@ class Track:
 
     def follow(self, move: tuple | None, clock: float, fps: float, shape: tuple[int, int], max_fails: int, *,
                box: tuple | None = None, refit: float = 0.0, camera=None, interval: float = 1,
-               border: float | None = None, aspect: float = 1.0, reshape: float = 0.0) -> bool:
+               border: float | None = None) -> bool:
         """Move and grow the box by this frame's measurement (:func:`align`); False when it is lost: its
         centre left the frame (``shape`` = (h, w)), it is under 2 px or over 4 frames wide, or
         the measurement (``move`` = None) failed ``max_fails`` times in a row. ``move``: shift
@@ -186,11 +185,7 @@ class Track:
         the box then moves ``refit`` of the way towards it (shrinking only); ``camera.flow`` at
         the box (the camera's image motion) adds to ``ox``, ``oy``. ``clock``: the frame's time
         (frame intervals, :class:`Observation`), ``interval`` frame intervals after the last one;
-        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge;
-        ``aspect`` (``TargetParams.follow_aspect``): how much of the anisotropy ``fx / fy`` the box's shape
-        follows (1: each side by its own factor, 0: both by the mean ``sqrt(fx fy)``); ``reshape``
-        (``TargetParams.max_reshape``, > 1): the box's aspect stays within this factor of its first one
-        (cut back at the same area)."""
+        ``border`` (px): the observation is marked cut when the box lies within it of the frame's edge."""
         if move is None:
             self.fails += 1
             return self.fails < max_fails
@@ -198,17 +193,8 @@ class Track:
         self.fails = 0
         self.cx += dx
         self.cy += dy
-        if aspect != 1.0:
-            mean = math.sqrt(fx * fy)
-            fx, fy = mean * (fx / mean) ** aspect, mean * (fy / mean) ** aspect
-        if self.aspect0 is None:
-            self.aspect0 = self.h / max(self.w, 1e-9)
         self.w *= fx
         self.h *= fy
-        if reshape > 1.0:
-            r = self.h / max(self.w, 1e-9) / self.aspect0
-            k = math.sqrt(r / reshape) if r > reshape else math.sqrt(r * reshape) if r * reshape < 1.0 else 1.0
-            self.w, self.h = self.w * k, self.h / k
         if box is not None and refit > 0:
             self.cx += refit * (box[0] - self.cx)
             self.cy += refit * (box[1] - self.cy)
