@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_keeps_bearing, drift, exits, holds
+from mlplc2.targets.warning import cut_keeps_bearing, drift, exits, holds, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -433,7 +433,8 @@ def test_the_alarm_alone_from_a_moving_camera_begins_once_it_has_lasted():
     # (no translation known), on a box that holds the heading, or with the rule off (1), the first
     # frame warns
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
-    p, off = TargetParams(alarm_warns=True, alarm_frames=2), TargetParams(alarm_warns=True, alarm_frames=1)
+    p = TargetParams(alarm_warns=True, alarm_frames=2, alarm_course=False)
+    off = TargetParams(alarm_warns=True, alarm_frames=1, alarm_course=False)
 
     def coming(x0: float, run: int) -> Track:
         t = _young_static(heading[0], x0)
@@ -447,6 +448,75 @@ def test_the_alarm_alone_from_a_moving_camera_begins_once_it_has_lasted():
     assert estimate(coming(x0, 1), p, FPS, 2, SHAPE).warning                       # no measured heading
     assert estimate(coming(x0, 1), off, FPS, 2, SHAPE, heading=heading).warning
     assert estimate(coming(heading[0] + 5.0, 1), p, FPS, 2, SHAPE, heading=heading).warning   # on the path
+
+
+def _crossing(heading: tuple[float, float], u0: float, uc: float, frames=(0, 1, 2), width: float = 20.0,
+              contact: int = CONTACT) -> Track:
+    """A track whose field alarms on its newest frame: an object of width W approaching a forward
+    camera at constant velocity (contact at frame ``contact``, its image scale ``S = contact /
+    (contact - k)``), ``u0`` widths right of the heading at frame 0 and ``uc`` at contact (its lateral
+    offset X moves linearly in time): its centre lies ``u W S`` px right of the heading."""
+    ls = [math.log(contact / (contact - k)) for k in frames]
+    us = [u0 + (uc - u0) * k / contact for k in frames]
+    ws = [width * math.exp(v) for v in ls]
+    xs = [heading[0] + u * w for u, w in zip(us, ws)]
+    t = Track(1, 0, xs[-1], heading[1], ws[-1], ws[-1], log_s=ls[-1])
+    t.history = deque(Observation(k, v, x, heading[1], w, 0.0) for k, v, x, w in zip(frames, ls, xs, ws))
+    t.last_alarm, t.alarm_run = frames[-1], 1
+    return t
+
+
+def _seed(t: Track) -> Track:
+    """Track ``t`` as an alarm seed on its newest frame: one observation, and its move from its first
+    (the seed's alignment over ``change_frames``, ``Track.seed_move``)."""
+    q0, q1 = t.history[0], t.history[-1]
+    s = Track(t.id, int(q1.frame), q1.x, q1.y, q1.width, q1.width)
+    s.history = deque([q1._replace(log_scale=0.0)])
+    s.seed_move = (q1.x - q0.x, q1.y - q0.y, q1.log_scale - q0.log_scale)
+    s.last_alarm, s.alarm_run = q1.frame, 1
+    return s
+
+
+def test_the_seed_course_is_where_the_object_passes():
+    # an object u widths beside the heading stays u widths beside it at any depth unless it moves
+    # sideways: the static world passes at its offset, an object on a collision course reaches the
+    # heading; the seed's alignment over change_frames gives where it passes: the miss at contact,
+    # in its widths
+    heading = (79.5, 60.0)
+    for u0, uc in [(2.0, 2.0), (2.0, 0.0), (3.5, 1.5), (-1.0, 0.3)]:
+        t = _crossing(heading, u0, uc, frames=(0, 4))
+        assert seed_course(_seed(t), heading) == pytest.approx((uc, 0.0), abs=1e-9)
+    static = _seed(_young_static(heading[0], heading[0] + 50.0, frames=(0, 4)))
+    assert seed_course(static, heading) == pytest.approx((50.0 / 20.0, 0.0), abs=1e-9)
+    assert seed_course(_crossing(heading, 2.0, 0.0), heading) is None     # a young track: its fit's course
+    assert seed_course(Track(3, 0, 10.0, 10.0, 5.0, 5.0, history=deque([Observation(0, 0.0, 10.0, 10.0, 5.0, 0.0)])),
+                       heading) is None                                  # no alignment
+
+
+def test_the_alarm_first_frame_warns_on_a_seed_course_within_max_miss():
+    # alarm_course (issue 22 item 4): from a translating camera the field alarm's first frame in a
+    # row begins a warning on its seed, off the path, when the seed's alignment over change_frames
+    # puts the object's contact within max_miss: a collision course 2 widths beside the heading (to
+    # hit at 0.5 widths) warns at once; an object 3.5 widths beside that keeps most of its bearing
+    # (drift 0.43, keeps_bearing) but will pass 1.5 widths beside waits for its alarm's second frame
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    p = TargetParams(alarm_warns=True, alarm_frames=2)
+    assert p.alarm_course                                           # the default
+    waits = TargetParams(alarm_warns=True, alarm_frames=2, alarm_course=False)
+
+    def crossing(u0, uc):
+        return _seed(_crossing(heading, u0, uc, frames=(0, 4), width=14.0, contact=20))
+
+    assert estimate(crossing(2.0, 0.5), p, FPS, 4, SHAPE, heading=heading).warning
+    assert not estimate(crossing(2.0, 0.5), waits, FPS, 4, SHAPE, heading=heading).warning
+    passes = crossing(3.5, 1.5)
+    assert drift(passes, heading) == pytest.approx(1.5 / 3.5, abs=0.01)
+    assert not estimate(passes, p, FPS, 4, SHAPE, heading=heading).warning
+    second = crossing(3.5, 1.5)
+    second.alarm_run = 2
+    assert estimate(second, p, FPS, 4, SHAPE, heading=heading).warning
+    young = _crossing(heading, 2.0, 0.5, width=14.0, contact=20)   # a young track, not a seed: it waits
+    assert not estimate(young, p, FPS, 2, SHAPE, heading=heading).warning
 
 
 class _Field:

@@ -253,6 +253,14 @@ class TargetParams(ParameterSet):
                               ``bear_attack`` 0.67 -> 0.57 s (0.60 s since session 11 counts processed frames), ``UAV_outdoor_1``
                               0.50 -> 0.47 s; docs/model.md,
                               "The field alarm on the static world").""", unit="frames", valid=Valid.integer(1))
+    alarm_course: bool = param(True, """With ``alarm_frames`` > 1: the field alarm's first frame in a row begins a
+                              warning on an alarm seed (a target born on it) without waiting when the course
+                              of the seed's own alignment over ``change_frames`` (``Track.seed_move``;
+                              :func:`~mlplc2.targets.warning.seed_course`) passes within ``max_miss``, as the
+                              alarm with a fitted course does (issue 22 item 4: the real clips' warnings on
+                              their field alarm's first frame; docs/model.md, "The field alarm's first frame
+                              with the seed's course"). False = off (``alarm_frames`` alone).""",
+                              valid=Valid.boolean())
     stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
                               one, or its birth) holds no measurable approach: only the middle of its box
                               (a quarter of its width and height from the centre) owns fields and seeds,

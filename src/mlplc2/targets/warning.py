@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "wide", "rises", "fleeting",
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "count_down", "held", "fits", "exits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -196,9 +196,39 @@ def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> 
     """``alarm_frames`` (docs/model.md, "The field alarm on the static world"): whether the field
     alarm of track ``t`` is too young to begin a warning without a course: the camera translates
     (``heading``: the measured heading, px; None: none measured, no test), its box does not hold the
-    heading (:func:`holds`) and a field of it has been in collision alarm fewer than ``alarm_frames``
-    frames in a row (``Track.alarm_run``)."""
-    return p.alarm_frames > 1 and heading is not None and not holds(t, heading) and t.alarm_run < p.alarm_frames
+    heading (:func:`holds`), a field of it has been in collision alarm fewer than ``alarm_frames``
+    frames in a row (``Track.alarm_run``) and, with ``alarm_course``, the course of its seed's own
+    alignment (:func:`seed_course`) is unknown or passes beyond ``max_miss``."""
+    if p.alarm_frames <= 1 or heading is None or holds(t, heading) or t.alarm_run >= p.alarm_frames:
+        return False
+    if p.alarm_course:
+        miss = seed_course(t, heading)
+        if miss is not None and math.hypot(*miss) <= p.max_miss:
+            return False
+    return True
+
+
+def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] | None:
+    """``alarm_course``: the course of an alarm seed on its first frame (one observation) from its own
+    alignment over ``change_frames`` (``Track.seed_move``): where its centre passes the camera plane
+    against ``heading`` (px), right in its widths and down in its heights (the units of
+    :func:`course`). An object at lateral offset X and width W lies ``u = X / W`` extents from the
+    heading at any depth: ``u`` changes only by its own lateral motion, and the box's scale S over the
+    interval puts its contact ``1 / (S - 1)`` intervals ahead, so ``miss = u1 + (u1 - u0) / (S - 1)``:
+    the static world keeps ``u`` (it passes at its offset), an object on a collision course keeps its
+    bearing (``u`` falls to 0 at contact). None for a track with more observations (its course waits
+    for the fit, ``min_frames``: the seed's interval is as long as a fit's span, a young track's
+    history shorter), without the seed's alignment, or when the box did not grow."""
+    if len(t.history) != 1 or t.seed_move is None:
+        return None
+    dx, dy, growth = t.seed_move
+    s1 = math.expm1(growth)
+    if s1 <= _EPS or t.w <= 0 or t.h <= 0:
+        return None
+    k = math.exp(growth)
+    u1 = ((t.cx - heading[0]) / t.w, (t.cy - heading[1]) / t.h)
+    u0 = ((t.cx - dx - heading[0]) * k / t.w, (t.cy - dy - heading[1]) * k / t.h)
+    return u1[0] + (u1[0] - u0[0]) / s1, u1[1] + (u1[1] - u0[1]) / s1
 
 
 def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
