@@ -13,7 +13,8 @@ benchmark's workers), so the same design runs in ``benchmarks/encoding_invarianc
 Kinds (``kind``; everything else is Eq. 13-16 as in ``mlplc2.models.lplc2.MLPLC2._step``):
 
 ``persist``   a field is born only where the LM also exceeded ``frac`` (default 1) x T_a within ``r`` (default 5)
-              working px on the previous processed frame (a birth confirmed over two frames);
+              working px on the previous processed frame (a birth confirmed over two frames), unless its LM is
+              above ``strong`` x T_a (default: none is);
 ``tavg``      the new field is sought (and T_a applied) on the mean LM of this and the previous processed frame;
 ``smooth``    the new field is placed at the largest LM after a Gaussian blur (``sigma``, default 3 px), born when
               the raw LM within ``r`` (default 5) px of it exceeds T_a;
@@ -59,7 +60,7 @@ if _SPEC:
             else:
                 cand = argmax_outside(m, zones, p.field_shape)
             ok = cand is not None and cand[2] > p.t_a
-            if ok and KIND == "persist":
+            if ok and KIND == "persist" and cand[2] <= D.get("strong", np.inf) * p.t_a:
                 ok = prev is not None and _peak(prev, cand[0], cand[1], D.get("r", 5)) > D.get("frac", 1.0) * p.t_a
             if ok and KIND == "warm":
                 ok = index >= D["n"]
