@@ -412,3 +412,32 @@ def test_a_forked_child_carries_ahead_in_a_thread_of_its_own():
             os._exit(code)
     _, status = os.waitpid(pid, 0)
     assert os.waitstatus_to_exitcode(status) == 0
+
+
+def test_the_compiled_texture_test_and_conversion_give_opencvs_and_numpys_values():
+    """The estimate's texture test at the grid's points alone (``_fast_camera.grid_texture``) gives
+    what the whole-image Sobel + 7x7 box filter of OpenCV gives there, bit for bit (integer
+    gradients, their sums exact), and ``to_uint8`` is NumPy's clip and cast (truncation); a grid
+    point nearer than 4 px to the border takes OpenCV's path (``_grid_points``' flag)."""
+    pytest.importorskip("numba")
+    import cv2
+    from mlplc2 import _fast_camera
+
+    rng = np.random.default_rng(3)
+    est = MotionEstimator()
+    for shape in ((120, 160), (100, 100), (90, 160), (240, 200)):
+        for img in (rng.integers(0, 256, shape, dtype=np.uint8),
+                    cv2.GaussianBlur(rng.integers(0, 256, shape, dtype=np.uint8), (5, 5), 1.5)):
+            _, rows, cols, inside = est._grid_points(img.shape)
+            assert inside
+            gx = cv2.Sobel(img, cv2.CV_32F, 1, 0, ksize=3)
+            gy = cv2.Sobel(img, cv2.CV_32F, 0, 1, ksize=3)
+            assert np.array_equal(_fast_camera.grid_texture(img, rows, cols),
+                                  cv2.blur(gx * gx + gy * gy, (7, 7))[rows, cols])
+    assert not est._grid_points((60, 80))[3]                  # points 3 px from the border: OpenCV's path
+    gray = rng.uniform(-30.0, 290.0, (37, 53)).astype(np.float32)
+    gray[0, :4] = (0.0, 254.999, 255.0, 0.5)
+    out = np.empty(gray.shape, np.uint8)
+    _fast_camera.to_uint8(gray, out)
+    assert np.array_equal(out, np.clip(gray, 0, 255).astype(np.uint8))
+    assert np.array_equal(est._reduce(gray)[0], np.clip(gray, 0, 255).astype(np.uint8))

@@ -590,11 +590,12 @@ import numpy as np
 import mlplc2
 from mlplc2 import _fast_camera
 model = mlplc2.MLPLC2(fps=30.0, stabilise=True)
-built = len(_fast_camera.fit_rounds.signatures)
+kernels = (_fast_camera.fit_rounds, _fast_camera.to_uint8, _fast_camera.grid_texture)
+built = sum(len(k.signatures) for k in kernels)
 texture = np.random.default_rng(0).uniform(0, 255, (120, 220))
 for i in range(6):                     # a camera that pans over a texture: the motion fit runs
     model.step(texture[:, 2 * i:2 * i + 160].copy())
-print("built", built, "after", len(_fast_camera.fit_rounds.signatures))
+print("built", built, "after", sum(len(k.signatures) for k in kernels), "kinds", sum(bool(k.signatures) for k in kernels))
 """
 
 
@@ -606,4 +607,5 @@ def test_gaze_stabilisation_loads_its_kernel_when_the_model_is_built(tmp_path):
     words = _run_script(tmp_path, "stabilised.py", _STABILISED).split()
     built, after = int(words[words.index("built") + 1]), int(words[words.index("after") + 1])
     assert after >= 1          # the run used the compiled fit
+    assert int(words[words.index("kinds") + 1]) == 3   # and the conversion and texture kernels
     assert built == after      # and nothing was loaded or compiled after the model was built

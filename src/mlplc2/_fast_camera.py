@@ -95,3 +95,46 @@ def fit_rounds(x, y, dx, dy, w0, e0, fit_omega, fit_heading, sigma, iterations):
             u = err[i] / (4.685 * scale)
             wts[i] = (1.0 - u * u) ** 2 if u < 1.0 else 0.0
     return w, e, scale, err, s, rr
+
+
+@numba.njit(cache=True, nogil=True)
+def to_uint8(gray, out):
+    """``out[...] = np.clip(gray, 0, 255).astype(np.uint8)`` in one pass (truncation toward zero, as
+    NumPy's cast); ``gray`` a 2-D float array, ``out`` uint8 of its shape."""
+    h, w = gray.shape
+    for y in range(h):
+        g = gray[y]
+        o = out[y]
+        for x in range(w):
+            v = g[x]
+            v = 0.0 if v < 0.0 else v
+            v = 255.0 if v > 255.0 else v
+            o[x] = np.uint8(v)
+
+
+@numba.njit(cache=True, nogil=True)
+def grid_texture(img, rows, cols):
+    """At each point (rows[k], cols[k]) of the uint8 image ``img`` (each at least 4 px inside it),
+    what ``cv2.blur(gx * gx + gy * gy, (7, 7))`` gives there, ``gx``, ``gy`` the 3x3 Sobel
+    derivatives (``cv2.Sobel(img, cv2.CV_32F, ...)``): those are integers, their squares' sums
+    exact in float32, and OpenCV's box filter sums float32 in float64 (exact for these integers)
+    and scales by 1/49 in float64 before rounding to float32, as done here."""
+    n = rows.size
+    out = np.empty(n, np.float32)
+    scale = 1.0 / 49.0
+    for k in range(n):
+        r0 = rows[k]
+        c0 = cols[k]
+        total = 0
+        for r in range(r0 - 3, r0 + 4):
+            up = img[r - 1]
+            mid = img[r]
+            dn = img[r + 1]
+            for c in range(c0 - 3, c0 + 4):
+                gx = (np.int64(up[c + 1]) - np.int64(up[c - 1]) + 2 * (np.int64(mid[c + 1]) - np.int64(mid[c - 1]))
+                      + np.int64(dn[c + 1]) - np.int64(dn[c - 1]))
+                gy = (np.int64(dn[c - 1]) - np.int64(up[c - 1]) + 2 * (np.int64(dn[c]) - np.int64(up[c]))
+                      + np.int64(dn[c + 1]) - np.int64(up[c + 1]))
+                total += gx * gx + gy * gy
+        out[k] = np.float32(np.float64(total) * scale)
+    return out

@@ -95,7 +95,8 @@ def warm_kernels() -> None:
     a small blank frame through its public caller, so with the argument types of a run's calls.
     The camera-motion fit of gaze stabilisation (:mod:`mlplc2._fast_camera`, on by default in
     ``mlplc2 run``) is called directly, with the types :mod:`mlplc2.camera` passes: it used to
-    compile at a first run's second frame, silently (23 s on 2 busy cores).
+    compile at a first run's second frame, silently (23 s on 2 busy cores); so are the estimate's
+    conversion to uint8 and texture test (``to_uint8``, ``grid_texture``).
     """
     global _WARM
     if _WARM:
@@ -123,6 +124,8 @@ def warm_kernels() -> None:
         points = np.linspace(-0.5, 0.5, 8)
         _fast_camera.fit_rounds(points, points[::-1].copy(), np.zeros(8), np.zeros(8), np.zeros(3), np.zeros(2),
                                 True, True, 0.01, 1)
+        _fast_camera.to_uint8(np.zeros((32, 32), np.float32), np.empty((32, 32), np.uint8))
+        _fast_camera.grid_texture(np.zeros((32, 32), np.uint8), np.array([8, 16]), np.array([8, 16]))
     _warm_frontend()
     _WARM = True
 

@@ -105,11 +105,16 @@ class CameraMotion:
 
     def shift_px(self, shape: tuple[int, int], focal: float) -> float:
         """The largest image motion (px) the rotation gives at the frame's centre and corners."""
-        h, w = shape
-        pts = np.array([[0.0, 0.0, 1.0], [w - 1.0, 0.0, 1.0], [0.0, h - 1.0, 1.0], [w - 1.0, h - 1.0, 1.0],
-                        [(w - 1) / 2.0, (h - 1) / 2.0, 1.0]]).T
-        q = self.homography(shape, focal) @ pts
-        return float(np.max(np.hypot(q[0] / q[2] - pts[0], q[1] / q[2] - pts[1])))
+        return _shift_px(self.homography(shape, focal), shape)
+
+
+def _shift_px(homography: np.ndarray, shape: tuple[int, int]) -> float:
+    """The largest image motion (px) ``homography`` gives at the frame's centre and corners."""
+    h, w = shape
+    pts = np.array([[0.0, 0.0, 1.0], [w - 1.0, 0.0, 1.0], [0.0, h - 1.0, 1.0], [w - 1.0, h - 1.0, 1.0],
+                    [(w - 1) / 2.0, (h - 1) / 2.0, 1.0]]).T
+    q = homography @ pts
+    return float(np.max(np.hypot(q[0] / q[2] - pts[0], q[1] / q[2] - pts[1])))
 
 
 def compensation(motion: CameraMotion, shape: tuple[int, int], focal: float) -> np.ndarray | None:
@@ -118,9 +123,10 @@ def compensation(motion: CameraMotion, shape: tuple[int, int], focal: float) -> 
     estimated one with a confidence below :data:`MIN_ROTATION_CONFIDENCE` (a given one, a gyro's, is
     always trusted: :attr:`CameraMotion.trusted`) or a shift below :data:`STILL_PX` (a still camera
     is never resampled). The one test of every model that stabilises."""
-    if not motion.trusted or motion.shift_px(shape, focal) < STILL_PX:
+    if not motion.trusted:
         return None
-    return motion.homography(shape, focal)
+    hom = motion.homography(shape, focal)                  # once: CameraMotion.shift_px's own
+    return None if _shift_px(hom, shape) < STILL_PX else hom
 
 
 def rotation_matrix(omega) -> np.ndarray:
@@ -197,7 +203,14 @@ class MotionEstimator:
 
     def _reduce(self, gray: np.ndarray) -> tuple[np.ndarray, float]:
         h, w = gray.shape
-        img = gray if gray.dtype == np.uint8 else np.clip(gray, 0, 255).astype(np.uint8)
+        fast = _fast_camera()
+        if gray.dtype == np.uint8:
+            img = gray
+        elif fast is not None and gray.ndim == 2:           # one compiled pass, the same values
+            img = np.empty(gray.shape, np.uint8)
+            fast.to_uint8(gray, img)
+        else:
+            img = np.clip(gray, 0, 255).astype(np.uint8)
         scale = 1.0
         while img.shape[1] >= 2 * self.work_width:
             img = cv2.pyrDown(img)
@@ -215,7 +228,10 @@ class MotionEstimator:
             ys = (np.arange(ny) + 0.5) * h / ny
             p0 = np.stack(np.meshgrid(xs, ys), -1).reshape(-1, 1, 2).astype(np.float32)
             p0.setflags(write=False)
-            self._points = (p0, p0[:, 0, 1].astype(int), p0[:, 0, 0].astype(int))
+            rows, cols = p0[:, 0, 1].astype(int), p0[:, 0, 0].astype(int)
+            # the texture test at the points alone (_fast_camera.grid_texture) needs 4 px around each
+            inside = bool(rows.min() >= 4 and rows.max() <= h - 5 and cols.min() >= 4 and cols.max() <= w - 5)
+            self._points = (p0, rows, cols, inside)
             self._points_key = key
         return self._points
 
@@ -223,10 +239,14 @@ class MotionEstimator:
         """Grid points of the previous frame followed into this one (pyramidal Lucas-Kanade on the
         images), kept where the forward-backward error is under 0.5 px and the previous
         frame has texture (a flat patch "tracks" onto itself and says nothing)."""
-        p0, rows, cols = self._grid_points(prev_img.shape)
-        gx = cv2.Sobel(prev_img, cv2.CV_32F, 1, 0, ksize=3)
-        gy = cv2.Sobel(prev_img, cv2.CV_32F, 0, 1, ksize=3)
-        texture = cv2.blur(gx * gx + gy * gy, (7, 7))[rows, cols]
+        p0, rows, cols, inside = self._grid_points(prev_img.shape)
+        fast = _fast_camera()
+        if fast is not None and inside:                     # at the points only: the same values
+            texture = fast.grid_texture(prev_img, rows, cols)
+        else:
+            gx = cv2.Sobel(prev_img, cv2.CV_32F, 1, 0, ksize=3)
+            gy = cv2.Sobel(prev_img, cv2.CV_32F, 0, 1, ksize=3)
+            texture = cv2.blur(gx * gx + gy * gy, (7, 7))[rows, cols]
         p0 = p0[texture > _MIN_TEXTURE]
         if len(p0) < 8:
             return np.empty((0, 2)), np.empty((0, 2))
@@ -368,15 +388,21 @@ def _fit_result(w_est, e, scale, err, s, rr, sigma, min_share):
 _FAST: list = []
 
 
-def _fast_rounds():
-    """The compiled rounds of the fit (:mod:`mlplc2._fast_camera`), or None without Numba."""
+def _fast_camera():
+    """The compiled kernels of the estimate (:mod:`mlplc2._fast_camera`), or None without Numba."""
     if not _FAST:
         try:
-            from . import _fast_camera
-            _FAST.append(_fast_camera.fit_rounds)
+            from . import _fast_camera as module
+            _FAST.append(module)
         except Exception:  # noqa: BLE001 - ImportError, or Numba failing to initialise: NumPy then
             _FAST.append(None)
     return _FAST[0]
+
+
+def _fast_rounds():
+    """The compiled rounds of the fit (:mod:`mlplc2._fast_camera`), or None without Numba."""
+    fast = _fast_camera()
+    return None if fast is None else fast.fit_rounds
 
 
 def warp(image: np.ndarray, homography: np.ndarray, *, fill: np.ndarray | float = 0.0,
