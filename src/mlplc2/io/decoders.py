@@ -43,6 +43,8 @@ class Decoder:
     #: Frames skipped just before the frame :meth:`read` returned last: damaged ones (a packet
     #: that could not be decoded) and those predicted from them, up to the next key frame (PyAV).
     gap: int = 0
+    #: Whether a damaged frame is skipped (PyAV) rather than the end of the video (OpenCV).
+    skips_damaged: bool = False
 
     fps: float | None = None
     size: tuple[int, int] = (0, 0)
@@ -111,6 +113,8 @@ class _OpenCVDecoder(Decoder):
 
 class _PyAVDecoder(Decoder):
     """A video file, a URL (``stream=True``) or a binary file object (stdin) decoded by PyAV."""
+
+    skips_damaged = True
 
     #: Seconds PyAV waits to open a URL or for its next packet before the stream counts as dropped.
     TIMEOUT_S = 10.0

@@ -14,7 +14,7 @@ from collections.abc import Iterator
 import numpy as np
 
 from .._validation import InputValueError, check_fps
-from .decoders import Decoder, _PyAVDecoder, open_decoder
+from .decoders import Decoder, open_decoder
 from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
 _QUEUE_SIZE = 4
@@ -236,9 +236,10 @@ class FrameSource:
                     break
                 frame = None if self._drained_to_end else dec.read()
                 t, decoded = dec.time_s, time.perf_counter()
-                if frame is not None and dec.gap:    # damaged frames skipped: the index counts them
-                    self.damaged.extend(range(index, index + dec.gap))
-                    index += dec.gap
+                gap = getattr(dec, "gap", 0)        # damaged frames skipped: the index counts them
+                if frame is not None and gap:
+                    self.damaged.extend(range(index, index + gap))
+                    index += gap
                     if self.end is not None and index >= self.end:
                         break
             self._put(("end", index, None, 0.0, 0))
@@ -301,7 +302,7 @@ class FrameSource:
             self.truncated, self.truncated_at = True, index
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
                             "(file truncated or damaged); results cover frames before it"
-                            + ("" if isinstance(self._dec, _PyAVDecoder) else
+                            + ("" if getattr(self._dec, "skips_damaged", False) else
                                " (--decoder pyav skips a damaged frame and goes on)"))
 
     def close(self) -> None:
