@@ -85,7 +85,9 @@ class TargetParams(ParameterSet):
                              the others wait: when there are more, candidates of a field in collision
                              alarm come first (always tried, beside the budget), then those whose place (within ``claim``)
                              was tried least recently, so that each is tried within a few frames.
-                             0 = every candidate every frame (docs/model.md, "session 12").""",
+                             0 = every candidate every frame, the default: 2 cost the standard suite a
+                             collision warned and raised its false warnings (docs/model.md, "The seeding
+                             frames' cost").""",
                              unit="candidates", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
     patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",

@@ -222,10 +222,11 @@ class Track:
 class Turn:
     """One turn of the camera (``homography``: previous frame -> this one, level-0 pixels; ``now``:
     this frame's pyramid, which fills what the turn uncovers), shared by every kept pyramid
-    (:class:`Carried`): the homography in a level's pixels and the mask of the pixels the turn
-    uncovers there are made once, at the first kept level of that size it carries, and reused for
-    the others (the mask is where the resampling reaches beyond the image: the same for every
-    finite image of that size; the grey frames are finite, :mod:`mlplc2._validation`)."""
+    (:class:`Carried`): the homography in a level's pixels and the pixels the turn uncovers there
+    (their flat indices) are found once, at the first kept level of that size it carries, and
+    reused for the others (they are where the resampling reaches beyond the image: the same for
+    every finite image of that size; the grey frames are finite, :mod:`mlplc2._validation`); only
+    they are filled from this frame (a strip, not a pass over the level)."""
 
     __slots__ = ("homography", "now", "_levels")
 
