@@ -186,3 +186,76 @@ def test_targets_agree_with_the_reference_backend(seed, background, duration):
                 assert ta.ttc_s == pytest.approx(tb.ttc_s, abs=1e-3), f"frame {i}"
             assert ta.warning == tb.warning
     assert estimates >= 10
+
+
+# --- the change box's compiled last steps (mlplc2.targets._fast_change) ---------------------------
+def _change_scene(rng):
+    """Two frames with a turn of a few px, blobs and rings drawn in one and noise added: regions of
+    every shape, often several near a seed, some equally near."""
+    prev = cv2.GaussianBlur((rng.random((120, 160)) * 255).astype(np.float32), (0, 0), rng.uniform(0.5, 4))
+    cur = np.roll(prev, (int(rng.integers(-3, 4)), int(rng.integers(-3, 4))), axis=(0, 1)).copy()
+    for _ in range(int(rng.integers(1, 6))):
+        x, y, r = (int(v) for v in (rng.integers(0, 160), rng.integers(0, 120), rng.integers(2, 25)))
+        target = cur if rng.random() < 0.5 else prev
+        cv2.circle(target, (x, y), r, float(rng.uniform(0, 255)), int(rng.choice([-1, 1, 2, 3])))
+    cur += (rng.random(cur.shape) * rng.uniform(0, 8)).astype(np.float32)
+    return prev, cur
+
+
+def test_change_kernel_gives_the_boxes_of_opencv():
+    """The kernel's box is the OpenCV path's in every case (the NumPy / OpenCV ``change_box`` is the
+    oracle), equally near regions with different boxes included (the kernel then defers to
+    OpenCV's label order; at least a few such seeds occur here)."""
+    from mlplc2.targets import _fast_change
+
+    calls = {0: 0, 1: 0, 2: 0}
+
+    def counted(*args):
+        out = _fast_change.nearest_change(*args)
+        calls[out[0]] += 1
+        return out
+
+    rng = np.random.default_rng(3)
+    boxes = 0
+    for _ in range(60):
+        prev, cur = _change_scene(rng)
+        for _ in range(5):
+            x, y = int(rng.integers(-5, 165)), int(rng.integers(-5, 125))
+            radius = int(rng.choice([40, 20, 12, 6]))
+            kw = dict(min_change=float(rng.choice([3.0, 0.5, 10.0])), rel=float(rng.choice([0.2, 0.05, 0.5])))
+            ref = T.change_box(prev, cur, x, y, radius, **kw)
+            assert T.change_box(prev, cur, x, y, radius, kernel=counted, **kw) == ref, (x, y, radius, kw)
+            boxes += ref is not None
+    assert boxes >= 100 and calls[1] >= 100 and calls[2] >= 3, (boxes, calls)
+
+
+def test_change_kernel_reports_equally_near_regions():
+    """Two changed squares on either side of the seed, equally far from it: the kernel does not pick
+    one by its own labelling but says TIE; a third region nearer wins outright."""
+    from mlplc2.targets import _fast_change
+
+    a = np.zeros((40, 40), np.float32)
+    b = a.copy()
+    b[18:22, 5:9] = 100.0                 # 11 px left of the seed (20, 20), dilated
+    b[18:22, 32:36] = 100.0               # 11 px right of it (the dilation adds a pixel)
+    scratch = (np.empty((40, 40), np.float32), np.empty((40, 40), np.uint8), np.empty((40, 40), np.int32),
+               np.empty(3200, np.int32))
+    out = _fast_change.nearest_change(a, b, 0, 3.0, 0.2, 20, 20, *scratch)
+    assert out[0] == _fast_change.TIE and out[1] == 100.0
+    b[19:21, 14:16] = 100.0               # 4 px left of it
+    status, top, bx, by, bw, bh, dx, dy = _fast_change.nearest_change(a, b, 0, 3.0, 0.2, 20, 20, *scratch)
+    assert (status, bx, by, bw, bh, dx, dy) == (_fast_change.FOUND, 13, 18, 4, 4, 4, 0)   # the dilation's pixel
+    assert _fast_change.nearest_change(a, a, 0, 3.0, 0.2, 20, 20, *scratch)[0] == _fast_change.NONE
+
+
+def test_change_kernel_dispatch():
+    from mlplc2.targets import _fast_change
+
+    assert resolve("numba").change_kernel is _fast_change.nearest_change
+    assert resolve("reference").change_kernel is None
+    models = [(mlplc2.MLPLC2(fps=30.0, backend="numba"), _fast_change.nearest_change),
+              (mlplc2.MLPLC2(fps=30.0, backend="reference"), None),
+              (mlplc2.get_model("flow")(fps=30.0), _fast_change.nearest_change)]   # the flow baseline: always compiled
+    for model, kernel in models:
+        model.step(np.zeros((48, 64), np.uint8))
+        assert model._layer.change_kernel is kernel

@@ -153,14 +153,15 @@ def test_change_box_does_not_depend_on_phase_correlate_windowing_its_inputs(monk
     b[89:93, 60:160] = 40.0
     real = cv2.phaseCorrelate
 
-    def in_place(p, q, win):                     # OpenCV <= 5.0's side effect
+    def in_place(p, q, win=None):                # OpenCV <= 5.0's side effect (with a window)
         out = real(p, q, win)
-        p *= win
-        q *= win
+        if win is not None:
+            p *= win
+            q *= win
         return out
 
     boxes = {}
-    for name, pc in (("5.0", in_place), ("5.1", lambda p, q, win: real(p.copy(), q.copy(), win))):
+    for name, pc in (("5.0", in_place), ("5.1", lambda p, q, win=None: real(p.copy(), q.copy(), win))):
         monkeypatch.setattr(change_module.cv2, "phaseCorrelate", pc)
         boxes[name] = [change_box(a, b, x, y, radius) for x, y in ((72, 50), (62, 90)) for radius in (30, 40)]
     assert boxes["5.0"] == boxes["5.1"], boxes
@@ -809,3 +810,45 @@ def test_no_target_before_growth_can_be_seen(noise):
     for k in range(12):
         g = np.clip(img + rng.uniform(-noise, noise, img.shape), 0, 255).astype(np.float32)
         assert layer.step(g, lm, [f] if k else [], k) == (), k
+
+
+def test_seed_budget_tries_candidates_in_turn(monkeypatch):
+    """``TargetParams.seed_budget``: with five attention fields seeding (none becomes a target) and a
+    budget of 2, each frame tries exactly 2 candidates, the least recently tried first, so every
+    field is tried within 3 frames (5 / 2 rounded up) and none twice before all were; a field in
+    collision alarm is tried every frame on top; without a budget every field every frame."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets.layer import TargetLayer
+
+    tried: list = []
+
+    def boxes(self, lm, gray, x, y, field=None, alarm=False, every=False):
+        tried[-1].append((x, y))
+        return iter(())                          # no box: the candidate never becomes a target
+
+    monkeypatch.setattr(TargetLayer, "_boxes", boxes)
+    gray = np.zeros((240, 320), np.float32)
+    places = [(40, 40), (160, 40), (280, 40), (40, 200), (280, 200)]
+
+    def run(budget, alarm_at=None, frames=6):
+        layer = TargetLayer(TargetParams(seed_budget=budget), FPS)
+        fields = [SimpleNamespace(id=k, x=float(x), y=float(y), radius=40.0, response=1.0,
+                                  collision=(k == alarm_at)) for k, (x, y) in enumerate(places)]
+        tried.clear()
+        for i in range(frames):
+            tried.append([])
+            layer.step(gray, None, fields, i)
+        return tried
+
+    every = run(0)
+    assert all(sorted(frame) == sorted(places) for frame in every)
+    two = run(2)
+    assert all(len(frame) == 2 for frame in two)
+    assert sorted(two[0] + two[1] + two[2][:1]) == sorted(places)       # each once before any twice
+    for i in range(len(two) - 2):                                       # ... and within every 3 frames
+        assert set(two[i] + two[i + 1] + two[i + 2]) == set(places), i
+    alarm = run(2, alarm_at=3)
+    assert all(frame[0] == places[3] and len(frame) == 3 for frame in alarm)   # first, beside the budget's 2
+    others = [p for frame in alarm for p in frame[1:]]
+    assert set(others[:4]) == set(places) - {places[3]}

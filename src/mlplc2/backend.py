@@ -36,7 +36,7 @@ def fast_available() -> bool:
     global _FAST_ERROR
     try:
         from .neuropils import _fast_attention, _fast_frontend  # noqa: F401
-        from .targets import _fast_align, _fast_extent  # noqa: F401
+        from .targets import _fast_align, _fast_change, _fast_extent  # noqa: F401
     except Exception as exc:  # noqa: BLE001 - ImportError, or numba failing to initialise
         _FAST_ERROR = f"{type(exc).__name__}: {exc}"
         return False
@@ -52,6 +52,7 @@ class Backend:
     quadrant_sums: Callable
     edge_kernel: Callable | None
     align_kernel: Callable | None
+    change_kernel: Callable | None = None
 
     def frontend(self, params, fps: float):
         """A new front end (Eq. 1-12) for ``params`` at ``fps`` (its kernels loaded for these
@@ -69,11 +70,11 @@ def resolve(backend: str = "auto") -> Backend:
     if backend != "reference":
         if fast_available():
             from .neuropils import _fast_attention, _fast_frontend
-            from .targets import _fast_align, _fast_extent
+            from .targets import _fast_align, _fast_change, _fast_extent
 
             warm_kernels()
             return Backend("numba", _fast_frontend.FastFrontEnd, _fast_attention.quadrant_sums, _fast_extent.edges4,
-                           _fast_align.align_patch)
+                           _fast_align.align_patch, _fast_change.nearest_change)
         if backend == "numba":
             raise ImportError(f"the numba backend is unavailable ({_FAST_ERROR})")
         if not _WARNED:
@@ -105,8 +106,9 @@ def warm_kernels() -> None:
 
     from .neuropils import _fast_attention
     from .neuropils.lobula_plate import LocalMotion
-    from .targets import _fast_align, _fast_extent
+    from .targets import _fast_align, _fast_change, _fast_extent
     from .targets.alignment import align, pyramid
+    from .targets.change import change_box
     from .targets.extent import measure_extent
 
     maps = np.zeros((5, 32, 32), np.float32)
@@ -116,6 +118,7 @@ def warm_kernels() -> None:
     measure_extent(lm, 16, 16, kernel=_fast_extent.edges4)
     levels = pyramid(np.zeros((32, 32), np.float32))
     align(levels, levels, 16.0, 16.0, 8.0, (4.0, 4.0), kernel=_fast_align.align_patch)
+    change_box(levels[0], levels[0] + np.eye(32, dtype=np.float32) * 50, 16, 16, 12, kernel=_fast_change.nearest_change)
     try:   # as mlplc2.camera does: without a usable Numba cache or kernel, the fit runs in NumPy
         from . import _fast_camera
     except Exception:  # noqa: BLE001

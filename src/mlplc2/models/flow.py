@@ -322,6 +322,7 @@ class FlowTTC(Model):
         self.target_params = target_params
         impl = resolve("auto")
         self._align_kernel = impl.align_kernel
+        self._change_kernel = impl.change_kernel
         self._camera = MotionEstimator(hfov_deg=hfov_deg)
         self._reset()
 
@@ -396,7 +397,7 @@ class FlowTTC(Model):
         there is one near it: an object's whole outline, tight on a small object (its cells are
         whole 8-px cells) and not one edge of a larger one; else its cells (a background that
         changes everywhere, e.g. the ground of a forward drive, has no compact changed region)."""
-        box = change_box(past, cur, region.x, region.y, int(self.target_params.max_shift))
+        box = change_box(past, cur, region.x, region.y, int(self.target_params.max_shift), kernel=self._change_kernel)
         if box is None or max(abs(box[0] - region.x), abs(box[1] - region.y)) > self.target_params.max_shift:
             return region
         return replace(region, box=box)
@@ -415,7 +416,7 @@ class FlowTTC(Model):
             tp = self.target_params
             if tp.heading is not None:                     # the heading in working pixels
                 tp = tp.replace(heading=self._work_point(tp.heading))
-            self._layer = TargetLayer(tp, self.fps, align_kernel=self._align_kernel,
+            self._layer = TargetLayer(tp, self.fps, align_kernel=self._align_kernel, change_kernel=self._change_kernel,
                                       focal=focal_length(w, self.hfov_deg), measure=self._measure)
         self._stabilise(gray, cur)
         found: list[Region] = []

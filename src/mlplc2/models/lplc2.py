@@ -49,6 +49,7 @@ class _LPLC2Family(Model):
         self._quadrant_sums = impl.quadrant_sums
         self._edge_kernel = impl.edge_kernel
         self._align_kernel = impl.align_kernel
+        self._change_kernel = impl.change_kernel
         self._fields: list[AttentionField] = []
         self._next_id = 1                                  # id of the next field (1, 2, ...)
         self.maps: LocalMotion | None = None
@@ -138,6 +139,7 @@ class _LPLC2Family(Model):
             if tp.heading is not None:                     # the heading in working pixels
                 tp = tp.replace(heading=self._work_point(tp.heading))
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
+                                      change_kernel=self._change_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))
         targets = self._layer.step(gray, self.maps, self._fields, index, self.clock)
         fields = tuple(f.snapshot() for f in self._fields)

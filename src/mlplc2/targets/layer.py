@@ -45,6 +45,8 @@ class TargetLayer:
         Compiled edge scan for :func:`measure_extent` (:mod:`mlplc2.backend`); None = NumPy.
     align_kernel : callable, optional
         Compiled image alignment for :func:`align` (:mod:`mlplc2.backend`); None = NumPy.
+    change_kernel : callable, optional
+        Compiled last steps of :func:`change_box` (:mod:`mlplc2.backend`, the same boxes); None = OpenCV.
     focal : float, optional
         Focal length in px (from the camera's field of view): targets then carry bearings.
     measure : callable, optional
@@ -56,12 +58,13 @@ class TargetLayer:
     """
 
     def __init__(self, params: TargetParams | None = None, fps: float = 30.0, *, kernel=None,
-                 align_kernel=None, focal: float | None = None, measure=None):
+                 align_kernel=None, focal: float | None = None, measure=None, change_kernel=None):
         self.measure = measure
         self.params = TargetParams() if params is None else params
         self.fps = float(fps)
         self.kernel = kernel
         self.align_kernel = align_kernel
+        self.change_kernel = change_kernel
         self.focal = focal
         self.reset()
 
@@ -70,6 +73,7 @@ class TargetLayer:
         self._hot: tuple[list[int], list[int]] = ([], [])   # levels read last frame: of the last and the oldest frame
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
+        self._tried: list[tuple[int, int, float]] = []   # (x, y, clock) of the candidates tried lately (:meth:`_in_turn`)
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
@@ -190,12 +194,24 @@ class TargetLayer:
                     break
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
+        budget = None
+        if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
+            span = p.span(p.change_frames, self.fps) + _EPS
+            self._tried = [e for e in self._tried if now - e[2] <= span]
+            if len(seeds) > p.seed_budget:
+                budget, seeds = p.seed_budget, self._in_turn(seeds)
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
             if any(self._holds(t, x, y, now) for t in self._tracks):
                 continue
             alarm = self._alarming(f)
+            if budget is not None and not alarm:  # a field in alarm is tried beside the budget
+                if budget <= 0:                   # it waits for a later frame
+                    continue
+                budget -= 1
+            if p.seed_budget > 0:
+                self._tried.append((x, y, now))
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
@@ -237,6 +253,20 @@ class TargetLayer:
         self._settle()
         keep = {t.id for t in self._tracks}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+
+    def _in_turn(self, seeds: list) -> list:
+        """``seeds`` in the order ``TargetParams.seed_budget`` tries them when there are more than it
+        allows: a field in collision alarm first, then by when a candidate within ``claim`` px of the
+        seed was last tried (never first; those tried more than ``change_frames`` ago are
+        forgotten), else in their order."""
+        p = self.params
+
+        def last(seed):
+            x, y, _ = seed
+            return max((c for tx, ty, c in self._tried if abs(tx - x) <= p.claim and abs(ty - y) <= p.claim),
+                       default=-math.inf)
+
+        return sorted(seeds, key=lambda s: (not self._alarming(s[2]), last(s)))
 
     def _keep_past(self, clock: float) -> None:
         """Forget the kept frames older than needed: the newest frame at least ``change_frames``
@@ -446,7 +476,7 @@ class TargetLayer:
         def change():
             if not self._past:
                 return None
-            return change_box(self._past[0][0], gray, x, y, int(p.max_shift))
+            return change_box(self._past[0][0], gray, x, y, int(p.max_shift), kernel=self.change_kernel)
 
         found = False
         for find in ((edges, change) if field is not None else (change, edges)):

@@ -79,6 +79,16 @@ class TargetParams(ParameterSet):
                           valid=Valid.boolean())
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
+    seed_budget: int = param(0, """At most this many candidates have their box found and its growth tested
+                             per frame (a frame's latency: each costs a change box or the edges and an
+                             alignment, ~0.2-0.4 ms, and a frame of many seeds was the tail of issue 23);
+                             the others wait: when there are more, candidates of a field in collision
+                             alarm come first (always tried, beside the budget), then those whose place (within ``claim``)
+                             was tried least recently, so that each is tried within a few frames.
+                             0 = every candidate every frame, the default: 2 cost the standard suite a
+                             collision warned and raised its false warnings (docs/model.md, "The seeding
+                             frames' cost").""",
+                             unit="candidates", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
     patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",
                        unit="samples", valid=Valid.integer(8, 256))

@@ -223,16 +223,17 @@ class Track:
 class Turn:
     """One turn of the camera (``homography``: previous frame -> this one, level-0 pixels; ``now``:
     this frame's pyramid, which fills what the turn uncovers), shared by every kept pyramid
-    (:class:`Carried`): the homography in a level's pixels and the mask of the pixels the turn
-    uncovers there are made once, at the first kept level of that size it carries, and reused for
-    the others (the mask is where the resampling reaches beyond the image: the same for every
-    finite image of that size; the grey frames are finite, :mod:`mlplc2._validation`)."""
+    (:class:`Carried`): the homography in a level's pixels and the pixels the turn uncovers there
+    (their flat indices) are found once, at the first kept level of that size it carries, and
+    reused for the others (they are where the resampling reaches beyond the image: the same for
+    every finite image of that size; the grey frames are finite, :mod:`mlplc2._validation`); only
+    they are filled from this frame (a strip, not a pass over the level)."""
 
     __slots__ = ("homography", "now", "_levels")
 
     def __init__(self, homography: np.ndarray, now) -> None:
         self.homography, self.now = homography, now
-        self._levels: dict = {}            # (level, shape, level-0 width) -> (homography there, uncovered mask)
+        self._levels: dict = {}            # (level, shape, level-0 width) -> (homography there, uncovered pixels' flat indices)
 
     def apply(self, img: np.ndarray, k: int, w0: int) -> np.ndarray:
         """``img`` (level ``k`` of a pyramid whose level 0 is ``w0`` px wide) carried through this turn:
@@ -250,9 +251,10 @@ class Turn:
             sm_inv = np.array([[1.0 / s, 0.0, -o / s], [0.0, 1.0 / s, -o / s], [0.0, 0.0, 1.0]])
             known = (sm @ self.homography @ sm_inv, None)
         out = warp(img, known[0], fill=math.nan)            # NaN where the turn uncovers
-        if known[1] is None:
-            known = self._levels[key] = (known[0], np.isnan(out))
-        np.copyto(out, now[k], where=known[1])              # as warp(img, ..., fill=now[k])
+        if known[1] is None:                                # the uncovered pixels, by flat index
+            known = self._levels[key] = (known[0], np.flatnonzero(np.isnan(out)))
+        if known[1].size:                                   # as warp(img, ..., fill=now[k]); a turn uncovers
+            out.ravel()[known[1]] = np.ravel(now[k])[known[1]]   # a strip: no pass over the whole level
         return out
 
 
