@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_keeps_bearing, drift, exits, holds, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -55,7 +55,7 @@ def test_a_box_cut_by_the_border_gives_no_course_and_never_warns():
     # and width are not the object's, so there is no course (before: a made-up miss of 0 and a warning)
     t = _looming(6.0)
     assert all(q.cut for q in t.history)
-    out = estimate(t, TargetParams(), FPS, 12, SHAPE)
+    out = estimate(t, TargetParams(cut_course=False), FPS, 12, SHAPE)   # (cut_course: a box that keeps its bearing)
     assert out.ttc_s is not None                          # the growth is still measured ...
     assert out.miss is None and out.miss_xy is None and not out.warning    # ... but not the course
 
@@ -99,6 +99,41 @@ def test_a_cut_box_that_keeps_its_bearing_may_begin_a_warning_near_contact():
     assert not cut_keeps_bearing(hit, p.replace(cut_drift=0.0), 0.4, heading)     # off
     out = estimate(hit, p, FPS, 12, SHAPE)
     assert out.ttc_s < p.cut_onset_s and out.warning
+
+
+def test_a_box_cut_all_along_that_keeps_its_bearing_warns_with_cut_course():
+    # an object whose box reaches past the left border from its first frame (no frame in view: no
+    # course) on a collision course keeps its bearing while it grows (drift 0): with cut_course it
+    # warns on its fit's time to contact (issue 22: drone_0_h1's collider at the border, session 12);
+    # the static world there, expanding about the heading (the principal point), drifts as the static
+    # world does (1) and does not; off neither warns
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    on = TargetParams()
+    assert on.cut_course
+    hit, side = _looming(30.0, width=60.0), _looming(30.0, width=60.0, static=True)
+    assert all(q.cut for q in hit.history) and all(q.cut for q in side.history)
+    assert drift(hit, heading) == pytest.approx(0.0, abs=1e-6)
+    assert drift(side, heading) == pytest.approx(1.0, rel=1e-6)
+    assert cut_course(hit, on, 0.9, heading, SHAPE) and not cut_course(side, on, 0.9, heading, SHAPE)
+    assert not cut_course(hit, on.replace(cut_course=False), 0.9, heading, SHAPE)          # off
+    assert not cut_course(hit, on.replace(cut_course_drift=-0.1), 0.9, heading, SHAPE)     # drift 0 > -0.1
+    out = estimate(hit, on, FPS, 12, SHAPE)
+    assert out.miss is None and out.warning
+    assert out.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6)
+    assert not estimate(_looming(30.0, width=60.0, static=True), on, FPS, 12, SHAPE).warning
+    assert not estimate(_looming(30.0, width=60.0), on.replace(cut_course=False), FPS, 12, SHAPE).warning
+
+
+def test_the_alarm_alone_does_not_begin_a_warning_behind_a_passed_target():
+    # a young box on the path (3 frames: no fit yet, no course) that owns a field in collision alarm
+    # warns on the alarm alone; born inside the box of a target whose contact had passed (Track.behind,
+    # free_passed), it does not: the alarm there after a contact is the collider's own (issue 22,
+    # session 12: texture_pan_3_h1's collider filling the view), its own fit may begin it
+    for behind in (False, True):
+        t = _looming(80.0, 3)
+        t.last_alarm, t.alarm_run, t.behind = 3, 3, behind
+        out = estimate(t, TargetParams(), FPS, 3, SHAPE)
+        assert out.ttc_s is None and out.warning != behind
 
 
 def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():

@@ -780,6 +780,33 @@ def test_a_target_whose_contact_has_passed_is_dropped(drop_passed):
     assert layer._tracks == [refound]
 
 
+def test_a_target_whose_contact_has_passed_frees_the_seeds_inside_its_box():
+    """``free_passed`` (off by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
+    contact at clock 25) and whose box spans the view has run out is freed at clock 26, for good (a later
+    fit of its box, grown over the view, notwithstanding; a passed box that does not span the view, an
+    object that passed beside the camera, is not): it claims no seed zone, counts against no ``max_targets``, hosts no new
+    box inside it (an object behind the one that hit, issue 22: ``texture_static_4_h1``'s second disc);
+    before its contact, or with the option off, it does all of these."""
+    from mlplc2.targets import TargetLayer, Track
+
+    assert not TargetParams().free_passed
+    for on in (True, False):
+        layer = TargetLayer(TargetParams(free_passed=on), FPS)
+        layer._size = (320, 240)                              # the frame (w, h) the layer last saw
+        beside = Track(3, 0, 300.0, 120.0, 100.0, 180.0)      # passed beside the camera: not over the view
+        beside.held = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0))
+        assert not layer._freed(beside, 26.0)
+        big = Track(1, 0, 160.0, 120.0, 400.0, 300.0)
+        big.held, big.last_estimate, big.last_answer = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0)), 10.0, 26.0
+        small = Track(2, 0, 100.0, 170.0, 10.0, 10.0, birth=26.0)
+        layer._tracks = [big]
+        assert not layer._freed(big, 24.0) and layer._hosts(big, small, 24.0)     # before its contact
+        assert layer._freed(big, 26.0) == on and layer._hosts(big, small, 26.0) != on
+        assert layer._count(26.0) == (0 if on else 1)
+        big.held = (27.0, 0.05, 0.01, 0.2, (0.2, 0.0))        # a fit after contact: the view's growth
+        assert layer._freed(big, 28.0) == on
+
+
 def test_time_to_contact_counts_down_through_a_failed_alignment():
     """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
     is the fit's contact less the frames since its newest point (else it stands still)."""

@@ -81,6 +81,7 @@ class TargetLayer:
         self._past: deque = deque()        # pyramids of the last frames (:meth:`_keep_past`)
         self._past_t: deque = deque()      # ... and their clocks
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
+        self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
@@ -160,6 +161,7 @@ class TargetLayer:
         clock = index if clock is None else clock
         levels = self._pyramid(gray)
         h, w = gray.shape
+        self._size = (w, h)
         self._keep_past(clock)
         last, oldest = self._prev, (self._past[0] if self._past else None)
         if self._prev is not None:
@@ -172,19 +174,20 @@ class TargetLayer:
         self._merge(now)
         seeds = []
         for f in fields:
-            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))]
+            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))
+                      and not self._freed(t, now)]
             if owners:
                 self._own(min(owners, key=lambda t: t.size), f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
-        if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+        if lm is not None and p.seed_lm > 0 and self._count(now) + len(seeds) < p.max_targets:
             from ..neuropils.attention import argmax_outside
 
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             zones = [(int(round(t.cx)), int(round(t.cy)),
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
-                     for t in self._tracks]
+                     for t in self._tracks if not self._freed(t, now)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             for _ in range(self._seeds(interval)):
                 cand = argmax_outside(lm.magnitude, zones)
@@ -201,9 +204,9 @@ class TargetLayer:
             if len(seeds) > p.seed_budget:
                 budget, seeds = p.seed_budget, self._in_turn(seeds)
         for x, y, f in seeds:
-            if len(self._tracks) >= p.max_targets:
+            if self._count(now) >= p.max_targets:
                 break
-            if any(self._holds(t, x, y, now) for t in self._tracks):
+            if any(self._holds(t, x, y, now) for t in self._tracks if not self._freed(t, now)):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -227,6 +230,7 @@ class TargetLayer:
                 continue
             if t is None:
                 continue
+            t.behind = any(self._freed(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             if not self._refind(t, now):
@@ -340,6 +344,8 @@ class TargetLayer:
         """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other,
         and, when ``o`` measures no approach (:meth:`_measuring`), ``t``'s centre lies near ``o``'s
         (:meth:`_holds`)."""
+        if self._freed(o, index):                # its contact passed (free_passed): an object behind it is its own
+            return False
         return o.overlap(t) >= 0.5 and (self._measuring(o, index) or self._holds(o, t.cx, t.cy, index))
 
     def _own_margin(self, t: Track, f) -> float:
@@ -526,7 +532,33 @@ class TargetLayer:
         box, grown over the view, would own every field and seed inside it (docs/model.md, "Objects
         missed"). Not for a last time to contact taken over from a lost track (:meth:`_refind`): it is
         not the track's own."""
-        if not self.params.drop_passed or t.held is None or t.held[0] < t.birth:    # none of its own
+        return self.params.drop_passed and self._contact_passed(t, now)
+
+    def _count(self, now: float) -> int:
+        """The tracks that count against ``max_targets``: all but those freed (:meth:`_freed`)."""
+        return sum(not self._freed(t, now) for t in self._tracks)
+
+    def _freed(self, t: Track, now: float) -> bool:
+        """``free_passed`` (off by default): whether track ``t`` is freed, for good once its contact has
+        passed (:meth:`_contact_passed`; the fits of a box grown past contact are the view's): kept, but it
+        owns no attention field, claims no seed (no zone), counts against no ``max_targets``
+        (:meth:`_count`) and hosts no new box (:meth:`_hosts`); docs/model.md, "Objects missed"."""
+        if self.params.free_passed and not t.freed and self._contact_passed(t, now) and self._over_view(t):
+            t.freed = True                       # for good: the fits of a box grown past contact are the view's
+        return self.params.free_passed and t.freed
+
+    def _over_view(self, t: Track) -> bool:
+        """Whether the box of track ``t`` spans the whole frame across or down (``free_passed``): an object
+        at its contact fills the view, while one that passes beside the camera leaves it through a side."""
+        if self._size is None:
+            return False
+        return t.w >= self._size[0] or t.h >= self._size[1]
+
+    def _contact_passed(self, t: Track, now: float) -> bool:
+        """Whether the contact of track ``t``'s last time to contact (``Track.held``) has passed with no
+        time to contact since. Not for a last time to contact taken over from a lost track
+        (:meth:`_refind`): it is not the track's own."""
+        if t.held is None or t.held[0] < t.birth:    # none of its own
             return False
         return now - t.held[0] > t.held[1] * self.fps + _EPS
 

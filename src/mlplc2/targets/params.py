@@ -206,6 +206,20 @@ class TargetParams(ParameterSet):
                              near the border keeps its bearing (0) and often shows itself whole only for a
                              few frames. 0 = off (every cut box under ``cut_onset_s`` is held back;
                              docs/model.md, "Objects missed", session 11).""", valid=Valid.real(minimum=0))
+    cut_course: bool = param(True, """A target whose box is cut by the border (``border``) has no course (the
+                             course takes only the boxes wholly inside); with ``cut_course`` such a box that
+                             keeps its bearing while it grows (``cut_course_drift``) stands on a collision course
+                             and may warn from its fit's time to contact (:func:`~mlplc2.targets.warning.cut_course`;
+                             on since session 12: it warned ``drone_0_h1`` and ``drone_4_h3``, no false warning
+                             added on any suite or real clip). False = off (docs/model.md, "Objects missed",
+                             session 12).""",
+                             valid=Valid.boolean())
+    cut_course_drift: float = param(0.0, """... ``cut_course``'s largest drift of the cut box's centre away from the
+                                   heading, as a fraction of the static world's (:func:`~mlplc2.targets.warning.drift`;
+                                   0: it keeps its bearing or comes nearer the heading). Lower than ``cut_drift``:
+                                   the border holds a cut box's centre in view, so the static world's drift is
+                                   measured short there (the ground at a drone's frame foot: 0.15-0.19).""",
+                                   valid=Valid.real())
     onset_miss: float = param(0.8, """A warning that the fit's course begins (no field of the target in collision
                               alarm this frame) begins only on a predicted miss of at most this; once the target
                               has warned, ``max_miss`` (and the field alarm with a course keeps ``max_miss``:
@@ -293,6 +307,16 @@ class TargetParams(ParameterSet):
                               contact passed) with no time to contact since is dropped: its object hit or passed,
                               and its box, grown over the view, would own every attention field and seed inside
                               it (an object behind it goes unseen). False = kept until ``idle_frames``.""",
+                              valid=Valid.boolean())
+    free_passed: bool = param(False, """A target whose last time to contact has run out (its contact passed) with no
+                              time to contact since, and whose box spans the view across or down, is freed, for good: it is kept (its id, for the evaluation)
+                              but owns no attention field, claims no seed, counts against no ``max_targets`` and
+                              no new box is a part of it (:meth:`TargetLayer._freed`); its object hit or passed,
+                              and its box, grown over the view, would else own every field and seed inside it
+                              until ``idle_frames`` (an object behind it goes unseen). A target born inside its
+                              box (``Track.behind``) does not begin a warning on the field alarm alone, without
+                              a course: the alarm there after a contact is the collider's own. False = off
+                              (docs/model.md, "Objects missed", session 12).""",
                               valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))

@@ -147,6 +147,8 @@ class Track:
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
     onset_cut: bool = False            # its warning began on a box cut by the border (``cut_exit``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
+    behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
+    freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin

@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "count_down", "held", "fits", "exits", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -147,6 +147,19 @@ def cut_keeps_bearing(t: Track, p: TargetParams, ttc: float | None, heading: tup
         return False
     ratio = drift(t, heading)
     return ratio is not None and ratio <= p.cut_drift
+
+
+def cut_course(t: Track, p: TargetParams, ttc: float | None, heading: tuple[float, float],
+               shape: tuple[int, int]) -> bool:
+    """``cut_course`` (docs/model.md, "Objects missed", session 12): whether track ``t``, whose box is cut
+    by the border of a frame of ``shape`` (h, w) and so has no course (:func:`course` takes only the
+    boxes wholly inside), stands on a collision course because it keeps its bearing while it grows: a time
+    to contact this frame, and its centre drifted away from ``heading`` (px) by at most ``cut_course_drift``
+    of the static world's drift (:func:`drift`; unknown: no)."""
+    if not p.cut_course or ttc is None or not t.cut(shape, p.border):
+        return False
+    ratio = drift(t, heading)
+    return ratio is not None and ratio <= p.cut_course_drift
 
 
 def holds(t: Track, heading: tuple[float, float]) -> bool:
@@ -304,12 +317,15 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     else:
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index)
-    warning = bool(looming and miss is not None and ttc <= p.horizon_s and miss <= limit
-                   and sigma <= p.max_ttc_sigma * ttc and (t.warned or (ttc >= p.onset_s and not wide(p, miss))))
+    # without a course (its box cut by the border), a cut box that keeps its bearing (cut_course)
+    steady = miss is None and cut_course(t, p, ttc, heading, shape)
+    warning = bool(looming and (miss is not None or steady) and ttc <= p.horizon_s and (steady or miss <= limit)
+                   and sigma <= p.max_ttc_sigma * ttc
+                   and (t.warned or (ttc >= p.onset_s and (steady or not wide(p, miss)))))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
     # and, without a course from a translating camera, once it has lasted (alarm_frames)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
-        warning = t.warned or miss is not None or not fleeting(t, p, measured)
+        warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind)
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
