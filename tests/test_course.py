@@ -392,6 +392,48 @@ def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing(
     assert estimate(_approach(heading[0] + 5.0, heading[0], True), on, FPS, last, SHAPE, heading=heading).warning
 
 
+def _hedge(aspect: float, heading: tuple[float, float], frames=range(10, 20)) -> Track:
+    """A track of 10 frames (contact 0.7 s after its last, ``CONTACT``) of a box ``aspect`` times wider than
+    tall whose left part lies left of ``heading`` (px) and which reaches past it (a roadside object along
+    the path, seen in perspective towards the focus of expansion): it expands about the heading, as the
+    static world ahead of a forward camera does, and its box holds the heading at every frame."""
+    frames = list(frames)
+    ls = [math.log(CONTACT / (CONTACT - k)) for k in frames]
+    h0 = 12.0
+    x0 = heading[0] - 0.3 * aspect * h0                 # its centre 0.3 widths left of the heading
+    xs = [heading[0] + (x0 - heading[0]) * math.exp(v) for v in ls]
+    w, h = aspect * h0 * math.exp(ls[-1]), h0 * math.exp(ls[-1])
+    t = Track(1, frames[0], xs[-1], heading[1], w, h, log_s=ls[-1])
+    t.history = deque(Observation(k, s, x, heading[1], aspect * h0 * math.exp(s), 0.0, height=h0 * math.exp(s))
+                      for k, s, x in zip(frames, ls, xs))
+    t.inside = deque(t.history)
+    t.last_answer = frames[-1]                                       # looming evidence: a field answered
+    return t
+
+
+def test_a_warning_does_not_begin_on_a_flat_box_across_the_path():
+    # flat_onset: a forward camera (heading measured at the principal point) nears a roadside hedge that
+    # runs along the path: seen in perspective, its box reaches across the heading and expands about it,
+    # so its course is short (0.3 widths: within onset_miss) and it warned. Its box is 2.5 times wider than
+    # tall: with flat_onset 1.8 its warning does not begin; a compact box (as wide as tall) at the same
+    # place and with the same expansion warns; so does the flat box without a measured heading (no test),
+    # and a target that has already warned goes on warning whatever its shape
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    off, on = TargetParams(alarm_warns=False, flat_onset=0.0), TargetParams(alarm_warns=False, flat_onset=1.8)
+    last = 19
+    hedge = _hedge(2.5, heading)
+    assert holds(hedge, heading)
+    target = estimate(hedge, off, FPS, last, SHAPE, heading=heading)
+    assert target.warning and target.miss < 0.5                     # the false warning: a short course
+    assert not estimate(_hedge(2.5, heading), on, FPS, last, SHAPE, heading=heading).warning
+    assert estimate(_hedge(1.0, heading), on, FPS, last, SHAPE, heading=heading).warning
+    assert estimate(_hedge(1.7, heading), on, FPS, last, SHAPE, heading=heading).warning
+    assert estimate(_hedge(2.5, heading), on, FPS, last, SHAPE).warning        # no measured heading
+    warned = _hedge(2.5, heading)
+    warned.warned = True
+    assert estimate(warned, on, FPS, last, SHAPE, heading=heading).warning
+
+
 def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     # onset_miss: an object that passes 0.9 of its widths beside a still camera (no measured
     # heading; its image expands about the principal point, so its course is 0.9 on every frame,

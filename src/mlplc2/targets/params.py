@@ -253,6 +253,18 @@ class TargetParams(ParameterSet):
                             clip changed; ``texture_tilt_1``'s collider, warned only by a passing object's box over it,
                             lost; docs/model.md, "A warning that leaves through the border").""",
                             unit="object extents", valid=Valid.real(minimum=0))
+    flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
+                              warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
+                              and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
+                              a target has warned, it warns on whatever its box's shape. A roadside object that runs along
+                              the path (a hedge, a wall, a row of parked cars) is seen in perspective reaching towards the
+                              focus of expansion: its box spans the heading, flat, and expands about the heading as an
+                              object on a collision course does, so its course is short (0.17-0.36 extents); the
+                              colliders' first warnings on boxes that hold the heading are at most 1.70 times wider than
+                              tall (the real clips': 1.65). 0 = off (1.8, the default since session 13: holdout 2's false
+                              episodes per 1000 frames 1.24 -> 0.82 (0.38 -> 0.10 % of frames), holdout 3's 0.82 -> 0.72,
+                              no collision, lead or real clip changed; docs/model.md, "A flat box across the path").""",
+                              valid=Valid.real(minimum=0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning begins without a field of the target in collision alarm only on a box
                               that holds the heading or whose centre keeps its bearing: it drifted away from

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "count_down", "held", "fits", "exits", "MIN_POINTS"]
+           "count_down", "held", "fits", "exits", "flat", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -257,6 +257,17 @@ def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[floa
             and t.cut(shape, p.border) and not holds(t, heading))
 
 
+def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
+    """``flat_onset`` (docs/model.md, "A flat box across the path"): whether a warning that would begin this
+    frame on track ``t`` is a roadside object's that runs along the path, so does not begin: the camera
+    translates (``heading``: the measured heading, px; None: none measured, no test), the box holds the
+    heading (:func:`holds`) and is more than ``flat_onset`` times wider than tall. Seen in perspective, an
+    object along the path reaches towards the focus of expansion, so its box spans the heading and expands
+    about it (a short course), flat; a compact object on a collision course that holds the heading is seen
+    about as wide as tall."""
+    return p.flat_onset > 0 and heading is not None and holds(t, heading) and t.w > p.flat_onset * t.h
+
+
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
     down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
@@ -333,6 +344,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured):
+        warning = False
+    # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
+    if warning and not t.warned and flat(t, p, measured):
         warning = False
     began = t.warned
     if warning and not began:
