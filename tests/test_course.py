@@ -434,6 +434,27 @@ def test_a_warning_does_not_begin_on_a_flat_box_across_the_path():
     assert estimate(warned, on, FPS, last, SHAPE, heading=heading).warning
 
 
+def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
+    # countdown_onset: an object on a collision course, 28 frames (0.93 s) from contact at frame 12, warns
+    # when its time to contact 3 frames before (countdown_frames) was 0.1 s longer, as an approach's is;
+    # when it was shorter (the ground nearing the frame's foot holds a time to contact that does not
+    # fall), the warning does not begin, though it would without countdown_onset; it is held back, not
+    # ended (the target is not spent)
+    p, off = TargetParams(), TargetParams(countdown_onset=False)
+    ttc = (CONTACT - 12) / FPS
+
+    def track(before):
+        t = _looming(80.0)
+        t.ttcs.append((9, before))
+        return t
+
+    assert estimate(track(ttc + 3 / FPS), p, FPS, 12, SHAPE).warning
+    rising = track(ttc - 0.01)
+    assert not estimate(rising, p, FPS, 12, SHAPE).warning
+    assert not rising.spent and not rising.warned
+    assert estimate(track(ttc - 0.01), off, FPS, 12, SHAPE).warning
+
+
 def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     # onset_miss: an object that passes 0.9 of its widths beside a still camera (no measured
     # heading; its image expands about the principal point, so its course is 0.9 on every frame,

@@ -240,6 +240,15 @@ class TargetParams(ParameterSet):
                                   session 11: with ``onset_miss``, false episodes per 1000 frames 1.13 -> 0.93
                                   standard, 1.34 -> 1.13 holdout 1, no collision or lead lost; docs/model.md,
                                   "A course that crosses max_miss").""", unit="frames", valid=Valid.integer(0))
+    countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
+                                  counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
+                                  frames before (by any amount: there is no warning yet to keep through the fit's noise;
+                                  :func:`~mlplc2.targets.warning.rises` without its standard error) does not begin a
+                                  warning; it is held back, not ended.
+                                  The ground beside the path as it nears the frame's foot holds a time to contact near
+                                  ``horizon_s`` that does not fall, while an approach's falls by a frame's time each frame.
+                                  False = off (docs/model.md, "A flat box across the path", session 13).""",
+                                  valid=Valid.boolean())
     cut_exit: float = param(0.5, """Once a target has warned, a frame on which its box is cut by the image's border
                             (``border``) while it does not hold the heading (the measured heading, else ``heading`` or
                             the principal point: :func:`~mlplc2.targets.warning.holds`) and its course misses by more

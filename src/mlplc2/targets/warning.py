@@ -348,6 +348,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
         warning = False
+    # ... and only while its time to contact counts down, to any amount (countdown_onset)
+    if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc):
+        warning = False
     began = t.warned
     if warning and not began:
         t.onset_cut = t.cut(shape, p.border)
