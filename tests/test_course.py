@@ -455,6 +455,33 @@ def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
     assert estimate(track(ttc - 0.01), off, FPS, 12, SHAPE).warning
 
 
+def test_a_lapsed_warning_begins_again_only_on_a_short_course():
+    # reonset_miss: a target that has warned and whose last frame was no warning (its box slid off its
+    # object) over a patch that expands about the principal point 0.83 of its widths right of it (a still
+    # camera: no measured heading) has a course of 0.83, within max_miss: it warned again. With
+    # reonset_miss 0.4 it does not, unless a field of it is in collision alarm this frame; a warning
+    # that goes on (its last frame a warning) keeps max_miss, and an object on a collision course at the
+    # same place (course 0) warns again
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    x0 = heading[0] + 20.0
+    on, off = TargetParams(alarm_warns=False), TargetParams(alarm_warns=False, reonset_miss=0.0)
+    last = 19
+
+    def lapsed(static=True, going=False):
+        t = _approach(x0, heading[0], static)
+        t.warned, t.last_warned = True, going
+        return t
+
+    out = estimate(lapsed(), off, FPS, last, SHAPE)
+    assert out.warning and 0.4 < out.miss <= 1.0                  # the return over the patch
+    assert not estimate(lapsed(), on, FPS, last, SHAPE).warning
+    assert estimate(lapsed(going=True), on, FPS, last, SHAPE).warning
+    assert estimate(lapsed(static=False), on, FPS, last, SHAPE).warning
+    alarmed = lapsed()
+    alarmed.last_alarm = last
+    assert estimate(alarmed, TargetParams(), FPS, last, SHAPE).warning
+
+
 def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     # onset_miss: an object that passes 0.9 of its widths beside a still camera (no measured
     # heading; its image expands about the principal point, so its course is 0.9 on every frame,
@@ -477,7 +504,7 @@ def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     alarmed.last_alarm = last
     assert estimate(alarmed, on, FPS, last, SHAPE).warning
     warned = passing(0.9)
-    warned.warned = True
+    warned.warned = warned.last_warned = True                        # a warning that goes on
     assert estimate(warned, on, FPS, last, SHAPE).warning
     assert not estimate(passing(1.1), off, FPS, last, SHAPE).warning          # beyond max_miss either way
 

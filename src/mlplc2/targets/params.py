@@ -274,6 +274,16 @@ class TargetParams(ParameterSet):
                               episodes per 1000 frames 1.24 -> 0.82 (0.38 -> 0.10 % of frames), holdout 3's 0.82 -> 0.72,
                               no collision, lead or real clip changed; docs/model.md, "A flat box across the path").""",
                               valid=Valid.real(minimum=0))
+    reonset_miss: float = param(0.4, """A target that has warned and whose warning lapsed (its last frame was no warning)
+                                warns again without a field of it in collision alarm this frame only on a course
+                                (``miss``, this frame's or the one held) of at most this: its box has mostly slid off
+                                its object by then (over a neighbour, a passing object or the background), and its
+                                course straddles both; an object on a collision course whose warning lapsed for a
+                                frame or two keeps its short course (the colliders' returns without an alarm: 0.09-0.25
+                                extents, 0.59 and 0.87 on returns of targets that had warned on their collider
+                                already). 0 = off (0.4, the default since session 13: the standard suite's false
+                                episodes per 1000 frames 0.72 -> 0.41; docs/model.md, "A flat box across the path").""",
+                                unit="object extents", valid=Valid.real(minimum=0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning begins without a field of the target in collision alarm only on a box
                               that holds the heading or whose centre keeps its bearing: it drifted away from

@@ -142,6 +142,7 @@ class Track:
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
+    last_warned: bool = False          # its last frame was a warning (``reonset_miss``)
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
     ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None) of its last estimates
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)

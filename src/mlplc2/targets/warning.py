@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "count_down", "held", "fits", "exits", "flat", "MIN_POINTS"]
+           "count_down", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -268,6 +268,16 @@ def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool
     return p.flat_onset > 0 and heading is not None and holds(t, heading) and t.w > p.flat_onset * t.h
 
 
+def relapse(t: Track, p: TargetParams, index: int, miss: float | None) -> bool:
+    """``reonset_miss`` (docs/model.md, "A flat box across the path"): whether the warning of track ``t``, which
+    has warned and whose last frame was no warning, does not begin again this frame (clock ``index``): no field
+    of it is in collision alarm this frame and its course ``miss`` (None: none known, no test) exceeds
+    ``reonset_miss``. A box whose warning lapsed has mostly slid off its object (onto a neighbour, a passing
+    object, the background): its course straddles both and misses; an object on a collision course keeps a
+    short one."""
+    return p.reonset_miss > 0 and t.last_alarm != index and miss is not None and miss > p.reonset_miss
+
+
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
     down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
@@ -363,7 +373,11 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... and goes on only while its time to contact counts down (countdown_frames)
     if warning and began and rises(t, p, fps, index, ttc, sigma):
         t.spent = True
+    # ... and, once lapsed, begins again without the field alarm only on a short course (reonset_miss)
+    if warning and began and not t.last_warned and relapse(t, p, index, miss):
+        warning = False
     warning = warning and not t.spent
+    t.last_warned = warning
     t.ttcs.append((index, ttc))
     az = el = None
     if focal is not None:
