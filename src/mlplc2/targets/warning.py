@@ -293,6 +293,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
+    t.tries += fit is not None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
     # along the motion: none of them is an object approaching, none gets a time to contact
@@ -310,7 +311,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
-        t.streak_since = index if t.streak == 0 else t.streak_since
+        if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
+            t.streak_since = t.birth if p.confirm_birth and t.grown and t.tries == 1 else index
         t.streak += 1
         t.last_estimate = index
         t.held = (index, ttc, sigma, miss, miss_xy)
