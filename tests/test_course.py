@@ -666,3 +666,52 @@ def test_a_box_that_began_at_the_heading_and_moved_away_is_off_the_path():
     jitter = box(1.5)
     assert drift(jitter, heading, away=True) is None
     assert not off_path(jitter, p, 24, heading)
+
+
+def _first_warning(grown: bool, p: TargetParams, contact: int = 30, frames: int = 14) -> int | None:
+    """The first frame on which an approach straight at the camera (as :func:`_looming`, no attention
+    field ever answering: looming evidence only from its own growth) warns, judged every frame from its
+    birth at frame 0 (its time to contact under horizon_s from its first fit); ``grown``: the growth
+    test made it a target (``Track.grown``)."""
+    t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside = deque(t.history)
+    t.grown = grown
+    for k in range(1, frames + 1):
+        s = (contact - (k - 1)) / (contact - k)
+        assert t.follow((0.0, 0.0, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        if estimate(t, p, FPS, k, SHAPE).warning:
+            return k
+    return None
+
+
+def test_the_growth_test_at_birth_counts_toward_confirm_frames():
+    # a target that no attention field answers on has looming evidence once its growth has been
+    # significant for confirm_frames (6) frames in a row. Its first fit comes min_frames - 1 = 4 frames
+    # after its birth; counted from there it warns at 4 + 5 = 9. With confirm_birth the growth test that
+    # made it a target (significant growth over the change_frames before its birth) and its fits on
+    # every frame since are one streak, counted from its birth: it warns at 5 (issue 22, session 13:
+    # ground_forward_4_h3's and drive_3_h2's colliders, lost before 9). A target born on a field alarm
+    # (no growth test) counts from its first fit as before.
+    p = TargetParams()
+    assert p.confirm_birth and p.confirm_frames == 6 and p.min_frames == 5
+    assert _first_warning(True, p) == 5
+    assert _first_warning(False, p) == 9
+    assert _first_warning(True, p.replace(confirm_birth=False)) == 9
+
+
+def test_a_fit_that_failed_after_birth_breaks_the_birth_streak():
+    # the streak counts from the birth only if the fit gave a time to contact on the first frame it
+    # could: a target whose first fit found none (tries > 1 at its first time to contact) counts
+    # from that first time to contact, as before
+    p = TargetParams()
+    t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside, t.grown = deque(t.history), True
+    t.tries = 1                                          # a fit was tried before and gave nothing
+    for k in range(1, 15):
+        s = (30 - (k - 1)) / (30 - k)
+        assert t.follow((0.0, 0.0, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        if estimate(t, p, FPS, k, SHAPE).warning:
+            break
+    assert k == 9
