@@ -732,3 +732,24 @@ def test_a_fit_that_failed_after_birth_breaks_the_birth_streak():
         if estimate(t, p, FPS, k, SHAPE).warning:
             break
     assert k == 9
+
+
+def test_a_refound_track_counts_down_from_its_own_time_to_contact():
+    # a track refound after a gap takes over the lost one's id, warning and last time to contact
+    # (Track.held, reported counted down until its own fit). countdown_frames ends a warning whose time
+    # to contact rises; the held one is the lost box's, not this one's: compared with it, the new box's
+    # first fits (0.83 s against a held 0.03 s) would end its warning for good (issue 22, session 13:
+    # drive_4_h2's lead vehicle, refound at 136, its warning from 141 lost so with confirm_birth)
+    p = TargetParams()
+    t = Track(11, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside, t.grown, t.warned = deque(t.history), True, True
+    t.held = (-3.0, 0.2, 0.01, 0.1, (0.1, 0.0))         # the lost track's, 3 frames before this one's birth
+    outs = []
+    for k in range(1, 9):
+        s = (30 - (k - 1)) / (30 - k)
+        assert t.follow((0.0, 0.0, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    assert outs[1].ttc_s == pytest.approx(0.2 - 5 / FPS)  # frame 2: the held one, counted down
+    assert outs[3].ttc_s == pytest.approx(26 / FPS)     # frame 4: its own first fit
+    assert [o.warning for o in outs] == [False] * 4 + [True] * 4 and not t.spent

@@ -358,7 +358,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and began and rises(t, p, fps, index, ttc, sigma):
         t.spent = True
     warning = warning and not t.spent
-    t.ttcs.append((index, ttc))
+    # (the time to contact a refound track took over from the lost one, Track.held, is not its own:
+    # its countdown starts from its own fit)
+    t.ttcs.append((index, ttc if t.held is None or t.held[0] >= t.birth else None))
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
