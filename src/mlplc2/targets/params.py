@@ -173,7 +173,7 @@ class TargetParams(ParameterSet):
                                        else the principal point) or whose centre drifted away from it by at most this
                                        fraction of the static world's drift (:func:`~mlplc2.targets.warning.drift`; as
                                        ``cut_drift``): the ground at the view's foot grows from its birth too, drifting
-                                       as the static world does.""", valid=Valid.real())
+                                       as the static world does.""", valid=Valid.real(minimum=0))
     alarm_warns: bool = param(True, """... or (True, the default since session 8: the real clips' warnings
                               3/9 -> 6/9, the suite's 41/45 -> 43/45, at 2.57 -> 3.09 false episodes per
                               1000 frames; docs/model.md) one of its attention fields is in collision alarm (the paper's
