@@ -756,3 +756,90 @@ def test_a_box_that_began_at_the_heading_and_moved_away_is_off_the_path():
     jitter = box(1.5)
     assert drift(jitter, heading, away=True) is None
     assert not off_path(jitter, p, 24, heading)
+
+
+
+def _first(grown: bool, p: TargetParams, *, cx: float = 80.0, static: bool = False, contact: int = 30,
+           frames: int = 14) -> tuple[int | None, int | None]:
+    """The first frames on which an approach (as :func:`_looming`: straight at the camera, or with
+    ``static`` the static world expanding about the principal point) with no attention field ever
+    answering (looming evidence only from its own growth) shows looming evidence and warns, judged every
+    frame from its birth at frame 0 (its time to contact under horizon_s from its first fit), its box
+    centred at ``cx``; ``grown``: the growth test made it a target (``Track.grown``)."""
+    t = Track(1, 0, cx, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside, t.grown = deque(t.history), grown
+    looming = warning = None
+    for k in range(1, frames + 1):
+        s = (contact - (k - 1)) / (contact - k)
+        dx = (t.cx - (SHAPE[1] - 1) / 2.0) * (s - 1) if static else 0.0
+        dy = (t.cy - (SHAPE[0] - 1) / 2.0) * (s - 1) if static else 0.0
+        assert t.follow((dx, dy, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        out = estimate(t, p, FPS, k, SHAPE)
+        looming = looming or (k if out.looming else None)
+        warning = warning or (k if out.warning else None)
+    return looming, warning
+
+
+def test_the_growth_test_at_birth_counts_toward_confirm_frames():
+    # a target that no attention field answers on has looming evidence once its growth has been
+    # significant for confirm_frames (6) frames in a row. Its first fit comes min_frames - 1 = 4 frames
+    # after its birth; counted from there it warns at 4 + 5 = 9. With confirm_birth the growth test that
+    # made it a target (significant growth over the change_frames before its birth) and its fits on
+    # every frame since are one streak, counted from its birth: it warns at 5 (issue 22, session 13:
+    # ground_forward_4_h3's and drive_3_h2's colliders, lost before 9). A target born on a field alarm
+    # (no growth test) counts from its first fit as before.
+    p = TargetParams()
+    assert p.confirm_birth and p.confirm_frames == 6 and p.min_frames == 5
+    assert _first(True, p) == (5, 5)
+    assert _first(False, p) == (9, 9)
+    assert _first(True, p.replace(confirm_birth=False)) == (9, 9)
+
+
+def test_the_birth_streak_needs_a_box_on_the_heading_or_keeping_its_bearing():
+    # confirm_birth_drift: an object off the heading on a collision course keeps its bearing (drift 0)
+    # and gets the streak from its birth; the static world there (the ground at the view's foot:
+    # drive_4's false episode, session 13) expands about the heading (drift 1) and does not: its
+    # looming evidence comes from its first fit + confirm_frames - 1, as before
+    p = TargetParams()
+    assert _first(True, p, cx=50.0)[0] == 5
+    assert _first(True, p, cx=50.0, static=True)[0] == 9
+    assert _first(True, p.replace(confirm_birth_drift=1.0), cx=50.0, static=True)[0] == 5
+
+
+def test_a_fit_that_failed_after_birth_breaks_the_birth_streak():
+    # the streak counts from the birth only if the fit gave a time to contact on the first frame it
+    # could: a target whose first fit found none (tries > 1 at its first time to contact) counts
+    # from that first time to contact, as before
+    p = TargetParams()
+    t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside, t.grown = deque(t.history), True
+    t.tries = 1                                          # a fit was tried before and gave nothing
+    for k in range(1, 15):
+        s = (30 - (k - 1)) / (30 - k)
+        assert t.follow((0.0, 0.0, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        if estimate(t, p, FPS, k, SHAPE).warning:
+            break
+    assert k == 9
+
+
+def test_a_refound_track_counts_down_from_its_own_time_to_contact():
+    # a track refound after a gap takes over the lost one's id, warning and last time to contact
+    # (Track.held, reported counted down until its own fit). countdown_frames ends a warning whose time
+    # to contact rises; the held one is the lost box's, not this one's: compared with it, the new box's
+    # first fits (0.83 s against a held 0.03 s) would end its warning for good (issue 22, session 13:
+    # drive_4_h2's lead vehicle, refound at 136, its warning from 141 lost so with confirm_birth)
+    p = TargetParams()
+    t = Track(11, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.history.append(Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h))
+    t.inside, t.grown, t.warned = deque(t.history), True, True
+    t.held = (-3.0, 0.2, 0.01, 0.1, (0.1, 0.0))         # the lost track's, 3 frames before this one's birth
+    outs = []
+    for k in range(1, 9):
+        s = (30 - (k - 1)) / (30 - k)
+        assert t.follow((0.0, 0.0, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    assert outs[1].ttc_s == pytest.approx(0.2 - 5 / FPS)  # frame 2: the held one, counted down
+    assert outs[3].ttc_s == pytest.approx(26 / FPS)     # frame 4: its own first fit
+    assert [o.warning for o in outs] == [False] * 4 + [True] * 4 and not t.spent

@@ -230,6 +230,7 @@ class TargetLayer:
                 continue
             if t is None:
                 continue
+            t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any(self._freed(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)

@@ -163,6 +163,17 @@ class TargetParams(ParameterSet):
                                  answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
     confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
                                 unit="frames", valid=Valid.integer(0))
+    confirm_birth: bool = param(True, """... counted from the target's birth when the growth test made it a target
+                                (``min_growth`` over ``change_frames``, not a field alarm) and its fit has given a
+                                time to contact on every frame since the first it could (``min_frames``): the
+                                growth seen before its birth and every fit since are one streak. False = from its
+                                first time to contact (docs/model.md, "Objects missed", session 13).""",
+                                valid=Valid.boolean())
+    confirm_birth_drift: float = param(0.2, """... ``confirm_birth`` only for a box that holds the heading (the measured one,
+                                       else the principal point) or whose centre drifted away from it by at most this
+                                       fraction of the static world's drift (:func:`~mlplc2.targets.warning.drift`; as
+                                       ``cut_drift``): the ground at the view's foot grows from its birth too, drifting
+                                       as the static world does.""", valid=Valid.real(minimum=0))
     alarm_warns: bool = param(True, """... or (True, the default since session 8: the real clips' warnings
                               3/9 -> 6/9, the suite's 41/45 -> 43/45, at 2.57 -> 3.09 false episodes per
                               1000 frames; docs/model.md) one of its attention fields is in collision alarm (the paper's

@@ -148,6 +148,9 @@ class Track:
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
     onset_cut: bool = False            # its warning began on a box cut by the border (``cut_exit``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
+    grown: bool = False                # made a target by the growth test, not a field alarm (``confirm_birth``)
+    early: bool = False                # its streak began on its first fit after a growth test (``confirm_birth``)
+    tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
     behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
 

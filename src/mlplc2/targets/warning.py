@@ -288,13 +288,22 @@ def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
 
 
-def _evident(t: Track, p: TargetParams, fps: float, now: float) -> bool:
+def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[float, float] | None = None) -> bool:
     """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
     or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
-    ``nominal_fps``: :meth:`TargetParams.span`)."""
+    ``nominal_fps``: :meth:`TargetParams.span`), counted from its birth (``confirm_birth``) when its streak
+    began on its first fit after the growth test and its box holds ``heading`` (px) or drifted away
+    from it by at most ``confirm_birth_drift`` of the static world's drift."""
     if now - t.last_answer <= p.span(p.evidence_frames, fps) + _EPS:
         return True
-    return p.confirm_frames == 0 or (t.streak > 0 and now - t.streak_since >= p.span(p.confirm_frames - 1, fps) - _EPS)
+    if p.confirm_frames == 0:
+        return True
+    since = t.streak_since
+    if t.early and heading is not None:
+        ratio = drift(t, heading)
+        if holds(t, heading) or (ratio is not None and ratio <= p.confirm_birth_drift):
+            since = min(since, t.birth)
+    return t.streak > 0 and now - since >= p.span(p.confirm_frames - 1, fps) - _EPS
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
@@ -314,6 +323,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
+    t.tries += fit is not None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
     # along the motion: none of them is an object approaching, none gets a time to contact
@@ -331,13 +341,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
-        t.streak_since = index if t.streak == 0 else t.streak_since
+        if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
+            t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
         t.streak += 1
         t.last_estimate = index
         t.held = (index, ttc, sigma, miss, miss_xy)
     else:
         t.streak = 0
-    looming = ttc is not None and _evident(t, p, fps, index)
+    looming = ttc is not None and _evident(t, p, fps, index, heading)
     # without a course (its box cut by the border), a cut box that keeps its bearing (cut_course)
     steady = miss is None and cut_course(t, p, ttc, heading, shape)
     warning = bool(looming and (miss is not None or steady) and ttc <= p.horizon_s and (steady or miss <= limit)
@@ -378,7 +389,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     warning = warning and not t.spent
     t.last_warned = warning
-    t.ttcs.append((index, ttc))
+    # (the time to contact a refound track took over from the lost one, Track.held, is not its own:
+    # its countdown starts from its own fit)
+    t.ttcs.append((index, ttc if t.held is None or t.held[0] >= t.birth else None))
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
