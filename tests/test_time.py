@@ -224,3 +224,61 @@ def test_the_helmet_thrown_at_a_slow_camera_gets_a_target(real_dir):
     x, y, w = track[25]
     on = [r for r in rows if r["frame"] == 25 and math.hypot(r["x"] - x, r["y"] - y) <= w]
     assert any(r["ttc_s"] is not None and 0 < r["ttc_s"] < 1.0 for r in on), on
+    # ... and that first time to contact, the last frame before contact, begins the warning, on the helmet
+    # (``slow_evidence``, ``slow_onset``: docs/model.md, "A slow camera's first estimate")
+    warned = [r for r in rows if r["warning"]]
+    assert warned and min(r["frame"] for r in warned) < truth["contact_frame"], warned[:1]
+    first = [r for r in warned if r["frame"] == min(q["frame"] for q in warned)]
+    assert any(math.hypot(r["x"] - x, r["y"] - y) <= w for r in first), first
+
+
+def _square_approach(fps_step, contact, offset=0.0, n=None):
+    """The target layer's first warning (clock, 30 fps intervals) on a textured square coming straight at a
+    camera that shows a frame every ``fps_step`` intervals: its side 20 px x contact / (contact - t), its centre
+    ``offset`` of its sides right of the principal point (the heading), seeded at clock 4 (the first with a
+    frame ``change_frames`` before), up to 3 intervals before ``contact`` (it then fills the view); and every
+    target seen."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    rng = np.random.default_rng(1)
+    texture = cv2.GaussianBlur(rng.uniform(0, 120, (200, 200)).astype(np.float32), (0, 0), 4) * 2
+    layer = TargetLayer(fps=FPS)
+    first, seen = None, []
+    for t in range(0, contact - 2, fps_step):
+        side = 20.0 * contact / (contact - t)
+        cx, cy = 159.5 + offset * side, 119.5
+        seed = SimpleNamespace(id=1, x=cx, y=cy, radius=40, response=0.0, box=(cx, cy, side, side), collision=False)
+        out = layer.step(_textured_square(cx, cy, side, texture), None, [seed] if t == 4 else [], t, t)
+        seen += [(t, o) for o in out]
+        if first is None and any(o.warning for o in out):
+            first = t
+    return first, seen
+
+
+def test_a_slow_camera_warns_from_its_first_time_to_contact():
+    """A square 0.67 s (20 intervals at 30 fps) from contact, straight at the camera: at 30 fps its target warns
+    at clock 13 (first time to contact at 8, a streak of estimates over 5 intervals: ``confirm_frames``); a
+    7.5 fps camera's first time to contact comes at 12 (3 frames, 0.27 s before contact) and a streak would
+    need 2 more of its frames, past contact. Its log-scale rising at every frame over that span is the
+    evidence (``slow_evidence``): it warns at 12, by the first of its frames after the 30 fps warning, before
+    contact (without: no warning before contact)."""
+    fast, _ = _square_approach(1, 20)
+    slow, seen = _square_approach(4, 20)
+    assert fast is not None and fast < 20
+    assert slow is not None and slow < 20 and slow <= fast + 4, (fast, slow)
+    estimates = [t for t, o in seen if o.ttc_s is not None]
+    assert estimates and slow == estimates[0]           # on its first time to contact
+
+
+def test_a_slow_camera_first_course_within_max_miss_begins_a_warning():
+    """The same square 0.9 of its widths right of the heading, keeping that bearing: it passes 0.9 widths
+    from the camera's point, within ``max_miss`` (1.0; the camera's own size). A 7.5 fps camera's first time
+    to contact (clock 12, 0.27 s before contact) measures that course (0.8-1.0) and has no earlier one it could
+    have fallen from (``onset_miss`` holds a passing object's course as it falls through ``max_miss``):
+    ``slow_onset`` lets it begin the warning there, before contact (without: none before contact)."""
+    slow, seen = _square_approach(4, 20, offset=0.9)
+    first = next((t, o) for t, o in seen if o.ttc_s is not None)
+    assert first[0] == 12 and 0.8 < first[1].miss <= 1.0, first
+    assert slow == 12

@@ -247,7 +247,7 @@ class TargetLayer:
         for t in self._tracks:
             t.fields &= alive
             warned = t.warned
-            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading)
+            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
             if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
                 o, t.warned = replace(o, warning=False), warned
             out.append(o)

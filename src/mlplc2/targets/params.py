@@ -174,6 +174,14 @@ class TargetParams(ParameterSet):
                                        fraction of the static world's drift (:func:`~mlplc2.targets.warning.drift`; as
                                        ``cut_drift``): the ground at the view's foot grows from its birth too, drifting
                                        as the static world does.""", valid=Valid.real(minimum=0))
+    slow_evidence: bool = param(True, """... or (on a frame more than one nominal frame after the frame processed
+                                before it: a camera slower than ``nominal_fps``, or a dropped frame; not a gap in
+                                the track's own observations) its log-scale rose at every observation
+                                over the last ``confirm_frames - 1`` frames, from one at or before their start: a
+                                7.5 fps camera's streak of estimates would need 3 of its frames (0.53 s after the
+                                first of the fit), longer in time than at 30 fps (the 7.5 fps helmet clip's first
+                                time to contact comes 4 frames = 0.13 s before contact). False = off (docs/model.md,
+                                "A slow camera's first estimate").""", valid=Valid.boolean())
     alarm_warns: bool = param(True, """... or (True, the default since session 8: the real clips' warnings
                               3/9 -> 6/9, the suite's 41/45 -> 43/45, at 2.57 -> 3.09 false episodes per
                               1000 frames; docs/model.md) one of its attention fields is in collision alarm (the paper's
@@ -241,6 +249,13 @@ class TargetParams(ParameterSet):
                               1000 frames 1.24 -> 1.13 standard, 1.75 -> 1.34 holdout 1, no collision or lead
                               lost; docs/model.md, "A course that crosses max_miss").""",
                               valid=Valid.real(minimum=0))
+    slow_onset: bool = param(True, """``onset_miss`` does not hold a track's first time to contact (no estimate before
+                             it) on a frame more than one nominal frame after the frame processed before it
+                             (a camera slower than ``nominal_fps``, or a dropped frame; the track observed on
+                             it): that course has crossed nothing from above (a passing object's falls
+                             through ``max_miss`` over its estimates), and a slow camera's first fit comes
+                             late (the 7.5 fps helmet's at 4 frames = 0.13 s before contact, course 0.85).
+                             ``max_miss`` holds it. False = off (docs/model.md, "A slow camera's first estimate").""", valid=Valid.boolean())
     countdown_frames: int = param(3, """A target's warning goes on only while its time to contact counts down: once it
                                   has warned, a warning frame whose ``ttc_s`` exceeds the one the target had this
                                   many frames (at ``nominal_fps``) before by more than its standard error

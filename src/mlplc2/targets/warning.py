@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "count_down", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
+           "slow", "rising", "count_down", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -288,32 +288,60 @@ def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
     return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
 
 
-def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[float, float] | None = None) -> bool:
+def slow(t: Track, p: TargetParams, fps: float, index: float, interval: float | None) -> bool:
+    """Whether track ``t`` was observed on this frame (clock ``index``) and the frame processed before it
+    lies ``interval`` clock units back, more than one nominal frame (``nominal_fps``): a camera slower than
+    ``nominal_fps``, or a dropped frame (not a gap in the track's own history, a failed measurement)."""
+    return (interval is not None and interval > p.span(1, fps) + _EPS and len(t.history) >= 2
+            and abs(t.history[-1].frame - index) <= _EPS)
+
+
+def rising(t: Track, since: float) -> bool:
+    """Whether track ``t``'s log-scale rose at every observation after clock ``since``, from an observation
+    at or before it."""
+    h = t.history
+    i = len(h) - 1
+    while i > 0 and h[i].frame > since + _EPS:
+        if not h[i].log_scale > h[i - 1].log_scale:
+            return False
+        i -= 1
+    return h[i].frame <= since + _EPS and i < len(h) - 1
+
+
+def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[float, float] | None = None,
+             interval: float | None = None) -> bool:
     """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
     or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
     ``nominal_fps``: :meth:`TargetParams.span`), counted from its birth (``confirm_birth``) when its streak
     began on its first fit after the growth test and its box holds ``heading`` (px) or drifted away
-    from it by at most ``confirm_birth_drift`` of the static world's drift."""
+    from it by at most ``confirm_birth_drift`` of the static world's drift, or (``slow_evidence``, its
+    newest observation far from the one before, :func:`slow`) its log-scale rose at every observation
+    over that span (:func:`rising`)."""
     if now - t.last_answer <= p.span(p.evidence_frames, fps) + _EPS:
         return True
     if p.confirm_frames == 0:
         return True
+    span = p.span(p.confirm_frames - 1, fps)
     since = t.streak_since
     if t.early and heading is not None:
         ratio = drift(t, heading)
         if holds(t, heading) or (ratio is not None and ratio <= p.confirm_birth_drift):
             since = min(since, t.birth)
-    return t.streak > 0 and now - since >= p.span(p.confirm_frames - 1, fps) - _EPS
+    if t.streak > 0 and now - since >= span - _EPS:
+        return True
+    return p.slow_evidence and slow(t, p, fps, now, interval) and rising(t, now - span)
 
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
-             focal: float | None = None, heading: tuple[float, float] | None = None) -> Target:
+             focal: float | None = None, heading: tuple[float, float] | None = None,
+             interval: float | None = None) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
     frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
     the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
-    :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point."""
+    :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point. ``interval``:
+    clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``)."""
     h, w = shape
     measured = heading
     t.fit_span = p.span(p.min_frames - 1, fps)
@@ -322,6 +350,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     limit = p.max_miss
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
+    first = t.held is None                    # no time to contact before this frame (slow_onset)
     fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
     t.tries += fit is not None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
@@ -348,12 +377,13 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.held = (index, ttc, sigma, miss, miss_xy)
     else:
         t.streak = 0
-    looming = ttc is not None and _evident(t, p, fps, index, heading)
+    looming = ttc is not None and _evident(t, p, fps, index, heading, interval)
     # without a course (its box cut by the border), a cut box that keeps its bearing (cut_course)
     steady = miss is None and cut_course(t, p, ttc, heading, shape)
     warning = bool(looming and (miss is not None or steady) and ttc <= p.horizon_s and (steady or miss <= limit)
                    and sigma <= p.max_ttc_sigma * ttc
-                   and (t.warned or (ttc >= p.onset_s and (steady or not wide(p, miss)))))
+                   and (t.warned or (ttc >= p.onset_s and (steady or not wide(p, miss)
+                                                             or (p.slow_onset and first and slow(t, p, fps, index, interval))))))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
     # and, without a course from a translating camera, once it has lasted (alarm_frames)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
