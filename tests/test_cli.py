@@ -1002,3 +1002,37 @@ def test_batch_and_evaluate_take_the_stabilise_flags_of_run(command, target, fla
     with pytest.raises(_Called):
         main(argv)
     assert seen.get("stabilise") is value
+
+
+# -- a reader of standard output that goes away (`mlplc2 ... | head -1`) ---------------------
+def _with_closed_stdout(args: list[str]) -> subprocess.CompletedProcess:
+    """``python -m mlplc2 ARGS`` whose standard output is a pipe nobody reads: its reader has gone
+    (as ``| head -1`` after its line, or ``| true``)."""
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        return subprocess.run([sys.executable, "-m", "mlplc2", *args], stdout=w, stderr=subprocess.PIPE,
+                              text=True, timeout=300)
+    finally:
+        os.close(w)
+
+
+def test_a_closed_standard_output_is_no_error():
+    """``mlplc2 params | head -1`` with ``head`` gone: the command's own exit code and nothing on
+    stderr (it was ``mlplc2: error: [Errno 32] Broken pipe``, exit 2)."""
+    proc = _with_closed_stdout(["params"])
+    assert (proc.returncode, proc.stderr) == (0, "")
+
+
+def test_a_closed_standard_output_keeps_the_runs_outputs_and_its_warning(data, tmp_path):
+    """The summary of a run on a truncated clip goes to a closed pipe: the outputs are written, the
+    warning line still says where decoding stopped, and the exit code is the truncation's (2), not
+    an error about the pipe."""
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.6)])
+    proc = _with_closed_stdout(["run", str(cut), "-m", "lgmd2", "--out", str(tmp_path / "o")])
+    assert proc.returncode == 2
+    assert "decoding stopped at frame" in proc.stderr and "Broken pipe" not in proc.stderr
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["truncated"] and 0 < summary["n_frames"] < T

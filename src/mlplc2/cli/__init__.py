@@ -26,7 +26,7 @@ from .._signals import interrupts
 from .._validation import InputError
 from . import run, stimulus, studies, tools
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Parser, Subcommand, UsageError,
-                     did_you_mean, number_type, one_line, warn)
+                     did_you_mean, flush_stdout, number_type, one_line, warn)
 from .stimulus import STIMULUS_OWN_OPTIONS
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
@@ -83,7 +83,10 @@ def main(argv: list[str] | None = None) -> int:
     """
     with interrupts(sigterm=True), warnings.catch_warnings():
         warnings.showwarning = _show_warning
-        return _main(argv)
+        try:
+            return _main(argv)
+        finally:
+            flush_stdout()  # a reader that has gone (`| head -1`) is no error (cli.common.out)
 
 
 def _main(argv: list[str] | None) -> int:
