@@ -316,6 +316,17 @@ def test_a_server_that_never_answers_is_one_line_that_says_so(scheme, monkeypatc
     assert err == f"mlplc2: error: {url}: cannot open the stream (no answer within 1 s)"
 
 
+@pytest.mark.parametrize("scheme", ["http", "rtsp"])
+def test_a_host_name_that_does_not_resolve_is_named(scheme, tmp_path, capsys):
+    """A mistyped camera host: one line that names it (FFmpeg's own words were "Input/output
+    error"). ``.invalid`` never resolves (RFC 2606). Nothing is written."""
+    url = f"{scheme}://no-such-camera.invalid/stream1"
+    assert main(["run", url, "-q", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"mlplc2: error: {url}: cannot open the stream (host 'no-such-camera.invalid' not found)"
+    assert not (tmp_path / "o").exists()
+
+
 def test_latency_percentiles():
     lat = Latency()
     for ms in range(1, 201):            # 1 .. 200 ms

@@ -111,6 +111,27 @@ class _OpenCVDecoder(Decoder):
         self.cap.release()
 
 
+def _unknown_host(url) -> str | None:
+    """Why a URL did not open when its host name does not resolve (a typo, no network):
+    ``host 'NAME' not found``; None otherwise. FFmpeg says only "Input/output error" then."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        host = urlsplit(str(url)).hostname
+    except ValueError:
+        return None
+    if not host:
+        return None
+    try:
+        socket.getaddrinfo(host, None)
+    except socket.gaierror:
+        return f"host {host!r} not found"
+    except (OSError, UnicodeError):
+        return None
+    return None
+
+
 class _PyAVDecoder(Decoder):
     """A video file, a URL (``stream=True``) or a binary file object (stdin) decoded by PyAV."""
 
@@ -144,7 +165,7 @@ class _PyAVDecoder(Decoder):
                 # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
                 # FFmpeg's own words, without PyAV's "[Errno -875574520] ...: 'URL'" around them
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
-                       else _one_line(getattr(exc, "strerror", None) or str(exc)))
+                       else _unknown_host(path) or _one_line(getattr(exc, "strerror", None) or str(exc)))
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
         if not self.container.streams.video:
