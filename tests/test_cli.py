@@ -1036,3 +1036,51 @@ def test_a_closed_standard_output_keeps_the_runs_outputs_and_its_warning(data, t
     assert "decoding stopped at frame" in proc.stderr and "Broken pipe" not in proc.stderr
     summary = json.loads((tmp_path / "o" / "fields.json").read_text())
     assert summary["truncated"] and 0 < summary["n_frames"] < T
+
+
+# -- a cut file: what the one line says (a new user's session 13) ---------------------------
+def test_a_cut_mp4_whose_index_was_at_its_end_is_named_so(tmp_path, capsys):
+    """An MP4 whose index (moov atom) comes at its end, as OpenCV's ``mp4v`` writer, most cameras
+    and phones write it, cut in half: no decoder can open it. The line says why (it was "not a
+    video file OpenCV can read (unknown format or damaged)"), for either decoder; the whole file,
+    and a file that is no MP4 at all, keep their own outcome."""
+    whole = tmp_path / "whole.mp4"
+    vw = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (64, 48))
+    for i in range(30):
+        vw.write(np.full((48, 64, 3), 8 * i, np.uint8))
+    vw.release()
+    raw = whole.read_bytes()
+    assert raw.rfind(b"moov") > len(raw) // 2            # the index is at the end
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(raw[: len(raw) // 2])
+    text = tmp_path / "text.mp4"
+    text.write_text("hello\n")
+    for decoder in ("opencv", "pyav"):
+        assert main(["run", str(cut), "-q", "-m", "lgmd1", "--decoder", decoder, "--out", str(tmp_path / "o")]) == 2
+        err = _one_error_line(capsys.readouterr().err)
+        assert "without its index (moov atom)" in err and "cut off" in err, err
+        assert main(["run", str(text), "-q", "-m", "lgmd1", "--decoder", decoder]) == 2
+        assert "not a video file" in _one_error_line(capsys.readouterr().err)
+    assert not (tmp_path / "o").exists()
+    assert main(["run", str(whole), "-q", "-m", "lgmd1", "--out", str(tmp_path / "w")]) == 0
+    from mlplc2.io.formats import mp4_without_index
+
+    assert mp4_without_index(cut) and not mp4_without_index(whole) and not mp4_without_index(text)
+
+
+def test_the_pyav_hint_of_a_stop_only_where_frames_decode_after_it(data, tmp_path, capsys):
+    """OpenCV stops at a cut and at a damaged frame alike. Its warning pointed at ``--decoder pyav``
+    ("skips a damaged frame and goes on") for a file cut short too, where PyAV stops at the same
+    frame: the hint now comes only when frames decode after the stop."""
+    from tests.test_io import _damaged_video
+
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.6)])
+    assert main(["run", str(cut), "-q", "-m", "lgmd1", "--out", str(tmp_path / "a")]) == 2
+    err = _one_line(capsys.readouterr().err, "warning")
+    assert "decoding stopped at frame" in err and "--decoder pyav" not in err, err
+    damaged, _, _ = _damaged_video(tmp_path)
+    assert main(["run", str(damaged), "-q", "-m", "lgmd1", "--out", str(tmp_path / "b")]) == 2
+    err = _one_line(capsys.readouterr().err, "warning")
+    assert "decoding stopped at frame 20 of 40" in err and "--decoder pyav skips a damaged frame" in err, err

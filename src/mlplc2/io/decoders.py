@@ -17,7 +17,7 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
-from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url
+from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url, mp4_without_index
 
 log = logging.getLogger(__name__)
 
@@ -78,12 +78,15 @@ class _OpenCVDecoder(Decoder):
         self._camera = camera
         #: Set when a camera stops delivering frames (a file simply ends).
         self.error: str | None = None
+        #: After the first failed read of a file: whether frames still decode after it (True: a damaged
+        #: frame in the middle, which --decoder pyav skips; False: the file ends there, cut or not).
+        self.goes_on: bool | None = None
         self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
             if camera:
                 raise InputValueError(f"cannot open camera {target}")
-            raise InputValueError(f"{name}: not a video file OpenCV can read (unknown format or damaged)")
+            raise InputValueError(_not_a_video(target, name, "OpenCV"))
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
         count = self.cap.get(cv2.CAP_PROP_FRAME_COUNT)
@@ -100,6 +103,8 @@ class _OpenCVDecoder(Decoder):
         if not ok or frame is None:
             if self._camera:
                 self.error = "the camera delivered no frame"
+            elif self.goes_on is None:   # a damaged frame, or the end (of the file, or of what is left of it)?
+                self.goes_on = any(self.cap.grab() for _ in range(3))
             return None
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
         self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
@@ -109,6 +114,15 @@ class _OpenCVDecoder(Decoder):
 
     def close(self):
         self.cap.release()
+
+
+def _not_a_video(path, name: str, decoder: str) -> str:
+    """The error for a file that ``decoder`` cannot open; it says so when it is an MP4/MOV whose index
+    (moov atom, written at the end) was cut off (:func:`~mlplc2.io.formats.mp4_without_index`)."""
+    if isinstance(path, (str, os.PathLike)) and mp4_without_index(path):
+        return (f"{name}: an MP4/MOV file without its index (moov atom): it was cut off before its end "
+                f"(an unfinished recording or copy), and such a file cannot be decoded at all")
+    return f"{name}: not a video file {decoder} can read (unknown format or damaged)"
 
 
 def _unknown_host(url) -> str | None:
@@ -167,7 +181,7 @@ class _PyAVDecoder(Decoder):
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
                        else _unknown_host(path) or _one_line(getattr(exc, "strerror", None) or str(exc)))
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
-            raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
+            raise InputValueError(_not_a_video(path, name, "PyAV")) from None
         if not self.container.streams.video:
             self.container.close()
             raise InputValueError(f"{name}: has no video stream")
