@@ -1084,3 +1084,23 @@ def test_the_pyav_hint_of_a_stop_only_where_frames_decode_after_it(data, tmp_pat
     assert main(["run", str(damaged), "-q", "-m", "lgmd1", "--out", str(tmp_path / "b")]) == 2
     err = _one_line(capsys.readouterr().err, "warning")
     assert "decoding stopped at frame 20 of 40" in err and "--decoder pyav skips a damaged frame" in err, err
+
+
+def test_an_output_that_is_the_input_video_is_refused_and_the_video_kept(data, tmp_path, capsys):
+    """``--jsonl clip.mp4`` (for ``clip.jsonl``) truncated the input video it was reading, and a run on
+    ``OUT/annotated.mp4`` with ``--out OUT`` deleted it first (a folder never mixes two runs): both
+    are one error line now, before anything is written, and the video is unchanged."""
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(data["mp4"].read_bytes())
+    before = video.read_bytes()
+    assert main(["run", str(video), "-q", "-m", "lgmd1", "--jsonl", str(video), "--out", str(tmp_path / "o")]) == 2
+    assert "is the input video" in _one_line(capsys.readouterr().err)
+    assert video.read_bytes() == before and not (tmp_path / "o").exists()
+    out = tmp_path / "out"
+    out.mkdir()
+    again = out / "annotated.mp4"
+    again.write_bytes(before)
+    assert main(["run", str(again), "-q", "-m", "lgmd1", "--out", str(out)]) == 2
+    assert "choose another --out" in _one_line(capsys.readouterr().err)
+    assert again.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["annotated.mp4"]
+    assert main(["run", str(again), "-q", "-m", "lgmd1", "--out", str(tmp_path / "elsewhere")]) == 0

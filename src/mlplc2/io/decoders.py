@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
-from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url, mp4_without_index
+from .formats import (IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url, mp4_without_index,
+                      without_password)
 
 log = logging.getLogger(__name__)
 
@@ -226,7 +227,8 @@ class _PyAVDecoder(Decoder):
             return None
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
-            self.error = _one_line(str(exc))
+            # FFmpeg's own words, without PyAV's "[Errno 5] ...: 'URL'" around them (the URL, its password too)
+            self.error = _one_line(getattr(exc, "strerror", None) or str(exc))
             if not self._decoded and "mp4" in self.container.format.name:
                 if self._pipe:
                     self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
@@ -360,7 +362,7 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
             raise InputValueError("stdin: standard input is empty: no video was piped in")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
-        return _PyAVDecoder(source, source, stream=True), "stream"
+        return _PyAVDecoder(source, without_password(source), stream=True), "stream"
     if isinstance(source, os.PathLike):
         source = os.fspath(source)
     if not isinstance(source, str):

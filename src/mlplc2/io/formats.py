@@ -140,6 +140,20 @@ def is_url(source) -> bool:
             and not os.path.exists(source))
 
 
+def without_password(source):
+    """``source`` as messages and ``fields.json`` name it: a URL's password replaced by ``***``
+    (``rtsp://admin:secret@cam/s`` -> ``rtsp://admin:***@cam/s``; the decoder is given the URL as is),
+    anything else unchanged."""
+    if not is_url(source):
+        return source
+    scheme, rest = source.split("://", 1)
+    netloc = re.split(r"[/?#]", rest, maxsplit=1)[0]
+    if "@" not in netloc or ":" not in netloc.rsplit("@", 1)[0]:
+        return source
+    userinfo, host = netloc.rsplit("@", 1)
+    return f"{scheme}://{userinfo.split(':', 1)[0]}:***@{host}{rest[len(netloc):]}"
+
+
 def is_live(source) -> bool:
     """Whether ``source`` is live by default: a camera or a URL of :data:`LIVE_SCHEMES`."""
     return is_camera(source) or (is_url(source) and source.split(":", 1)[0].lower() in LIVE_SCHEMES)

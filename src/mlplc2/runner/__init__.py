@@ -52,14 +52,14 @@ from .._files import write_json
 from ..backend import one_fewer, threads
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from ..io.gyro import Gyro
-from ..io.formats import STDIN
+from ..io.formats import STDIN, without_password
 from ..models.base import (Model, available_models, check_repeat_threshold, frame_change, get_model,
                           looks_duplicated, resolve_names)
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
 from ..evaluation.record import Recorder, response_rows
-from .folders import default_out_dir, prepare_out_dir
+from .folders import default_out_dir, is_the_input, prepare_out_dir
 from .live import CsvFile, JsonLines, Latency, frame_record
 from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
@@ -410,6 +410,9 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
     jsonl = options.jsonl
     if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and Path(jsonl).is_dir():
         raise InputValueError(f"{jsonl}: is a folder; jsonl takes a file or -")
+    if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and is_the_input(source, jsonl):
+        raise InputValueError(f"{jsonl}: is the input video, which the JSON lines would overwrite: write them to "
+                              f"another file (e.g. {Path(jsonl).with_suffix('.jsonl').name})")
     if isinstance(source, FrameSource):
         src = source
     else:
@@ -420,7 +423,7 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
     except BaseException:
         src.close()
         raise
-    result = RunResult(source=str(src.name if isinstance(source, FrameSource) else source),
+    result = RunResult(source=str(src.name if isinstance(source, FrameSource) else without_password(source)),
                        models=[m.name for m in built], fps=src.fps, size=src.size,
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        repeated={m.name: 0 for m in built},
