@@ -1104,3 +1104,19 @@ def test_an_output_that_is_the_input_video_is_refused_and_the_video_kept(data, t
     assert "choose another --out" in _one_line(capsys.readouterr().err)
     assert again.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["annotated.mp4"]
     assert main(["run", str(again), "-q", "-m", "lgmd1", "--out", str(tmp_path / "elsewhere")]) == 0
+
+
+def test_a_json_lines_path_that_cannot_be_written_leaves_no_output_folder(data, tmp_path, capsys):
+    """``--jsonl`` into a place that cannot hold it: one error line and nothing written (the empty
+    output folder was left behind: the folder was made before the JSON lines were opened)."""
+    blocker = tmp_path / "notes.txt"
+    blocker.write_text("a file, not a folder\n")
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl", str(blocker / "x.jsonl"),
+                 "--out", str(out)]) == 2
+    assert str(blocker) in _one_line(capsys.readouterr().err)
+    assert not out.exists() and blocker.read_text() == "a file, not a folder\n"
+    # and a JSON lines file made for a run whose output folder then fails is not left behind
+    lines = tmp_path / "run.jsonl"
+    assert main(["run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl", str(lines), "--out", str(blocker)]) == 2
+    assert "expected a folder" in _one_line(capsys.readouterr().err) and not lines.exists()

@@ -417,11 +417,20 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
         src = source
     else:
         src = open_source(source, keep_original=options.video, **options.source_options())
+    made_lines = None
     try:
         built, duplicated = _prepare_models(source, models, src, options)
+        if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN:
+            # opened once before the output folder is made, so that a path that cannot be written
+            # (a folder without permission, a read-only disk) leaves no empty output folder behind
+            made_lines = None if Path(jsonl).exists() else Path(jsonl)
+            Path(jsonl).parent.mkdir(parents=True, exist_ok=True)
+            open(jsonl, "a", encoding="utf-8").close()
         out_dir = None if out is False else prepare_out_dir(source, src, out)
     except BaseException:
         src.close()
+        if made_lines is not None and made_lines.is_file() and made_lines.stat().st_size == 0:
+            made_lines.unlink()
         raise
     result = RunResult(source=str(src.name if isinstance(source, FrameSource) else without_password(source)),
                        models=[m.name for m in built], fps=src.fps, size=src.size,
