@@ -634,8 +634,11 @@ def test_a_one_frame_video_says_that_no_model_could_respond(tmp_path, capsys, n)
     would read as "nothing approaches": a note says that one frame shows no motion."""
     p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 0
-    notes = [line for line in capsys.readouterr().err.splitlines() if "note: one frame only" in line]
+    captured = capsys.readouterr()
+    notes = [line for line in captured.err.splitlines() if "note: one frame only" in line]
     assert len(notes) == (n == 1)
+    # the summary's first line counts in words: "1 frame of", "2 frames of" (it said "1 frames of")
+    assert captured.out.startswith(f"{n} frame{'s' if n > 1 else ''} of "), captured.out
 
 
 @pytest.mark.parametrize("n", [1, 2])
