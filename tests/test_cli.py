@@ -1123,3 +1123,27 @@ def test_a_json_lines_path_that_cannot_be_written_leaves_no_output_folder(data, 
     lines = tmp_path / "run.jsonl"
     assert main(["run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl", str(lines), "--out", str(blocker)]) == 2
     assert "expected a folder" in _one_line(capsys.readouterr().err) and not lines.exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes")
+def test_json_lines_to_a_named_pipe_reach_its_reader_whole(data, tmp_path):
+    """``--jsonl FIFO`` (a robot stack reading a named pipe): the pipe is opened once, so its reader
+    gets every line and then its end (a check that opened it before the run would hand the reader
+    an empty stream and leave the run waiting for another)."""
+    import threading
+
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    got = []
+
+    def read():
+        with open(fifo, encoding="utf-8") as f:
+            got.extend(f.read().splitlines())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl",
+                           str(fifo), "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    reader.join(timeout=30)
+    assert proc.returncode == 0, proc.stderr
+    assert [json.loads(line)["frame"] for line in got] == list(range(T))

@@ -420,7 +420,8 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
     made_lines = None
     try:
         built, duplicated = _prepare_models(source, models, src, options)
-        if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN:
+        if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN \
+                and (not Path(jsonl).exists() or Path(jsonl).is_file()):   # never a named pipe: its reader would see an end
             # opened once before the output folder is made, so that a path that cannot be written
             # (a folder without permission, a read-only disk) leaves no empty output folder behind
             made_lines = None if Path(jsonl).exists() else Path(jsonl)
