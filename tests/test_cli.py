@@ -1147,3 +1147,29 @@ def test_json_lines_to_a_named_pipe_reach_its_reader_whole(data, tmp_path):
     reader.join(timeout=30)
     assert proc.returncode == 0, proc.stderr
     assert [json.loads(line)["frame"] for line in got] == list(range(T))
+
+
+@pytest.mark.parametrize("stop", ["end", "max_frames"])
+def test_ctrl_c_during_the_last_frame_is_the_runs_interrupt(stop, data, tmp_path, monkeypatch, capsys):
+    """Ctrl-C that arrives during the last frame of a run (deferred to the frame's end), here the
+    video's last or the one ``--max-frames`` stops after: the run is interrupted, with the frames
+    done. (It was raised only after the summaries: fields.json said ``"complete": true``, and the
+    line was a bare ``mlplc2: interrupted``. In a shell, Ctrl-C also ends the reader of
+    ``--jsonl -``, which stops the loop the same way.)"""
+    import signal
+
+    last = T - 1 if stop == "end" else 19
+    original = mlplc2.LGMD1.step
+
+    def step(self, frame, *args, **kwargs):
+        if self.frame_index == last:
+            os.kill(os.getpid(), signal.SIGINT)   # deferred by the run: the frame is finished first
+        return original(self, frame, *args, **kwargs)
+
+    monkeypatch.setattr(mlplc2.LGMD1, "step", step)
+    out = tmp_path / "out"
+    argv = ["run", str(data["avi"]), "-m", "lgmd1", "--out", str(out), "-q"]
+    assert main(argv + (["--max-frames", str(last + 1)] if stop == "max_frames" else [])) == 130
+    assert f"interrupted after {last + 1} frames" in capsys.readouterr().err
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["interrupted"] and not summary["complete"] and summary["n_frames"] == last + 1

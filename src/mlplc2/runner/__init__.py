@@ -636,6 +636,10 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                     bar.update()
                 if options.done(result.n_frames, time.perf_counter() - t0) or (frames.lines and frames.lines.gone):
                     break
+            # A signal during the last frame (or the one the loop stopped after: Ctrl-C in a shell also
+            # ends the reader of the JSON lines) is the run's interrupt, not one after its summaries:
+            # fields.json said "complete" and the exit was a bare "interrupted".
+            stop.check()
         except KeyboardInterrupt:
             interrupted = True
         except _OutputFailed as exc:
