@@ -1020,6 +1020,28 @@ def _with_closed_stdout(args: list[str]) -> subprocess.CompletedProcess:
         os.close(w)
 
 
+@pytest.mark.parametrize("cut", [False, True])
+def test_a_closed_standard_error_does_not_stop_the_run(cut, data, tmp_path):
+    """``mlplc2 run clip.avi 2>&1 | head -1``: the progress bar, the summary and the warning meet a
+    pipe whose reader has gone. The run goes on to its end and writes its summaries, with its own
+    exit code (the progress bar's ``BrokenPipeError`` stopped it: exit 1, no fields.json)."""
+    clip = data["avi"]
+    if cut:
+        clip = tmp_path / "cut.avi"
+        raw = data["avi"].read_bytes()
+        clip.write_bytes(raw[: int(len(raw) * 0.6)])
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", str(clip), "-m", "lgmd1", "--out",
+                               str(tmp_path / "o")], stdout=w, stderr=w, timeout=300)
+    finally:
+        os.close(w)
+    assert proc.returncode == (2 if cut else 0)
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["truncated"] == cut and (summary["n_frames"] < T if cut else summary["complete"])
+
+
 def test_a_closed_standard_output_is_no_error():
     """``mlplc2 params | head -1`` with ``head`` gone: the command's own exit code and nothing on
     stderr (it was ``mlplc2: error: [Errno 32] Broken pipe``, exit 2)."""

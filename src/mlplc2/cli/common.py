@@ -92,6 +92,37 @@ def flush_stdout() -> None:
         pass
 
 
+class QuietStderr:
+    """``sys.stderr`` for a command: its messages and progress bars, except that a reader that has
+    gone (``mlplc2 run clip.mp4 2>&1 | head -3``) makes them go nowhere instead of raising
+    ``BrokenPipeError`` into the run (which stopped it there, without its summaries, exit 1)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._gone()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._gone()
+
+    def _gone(self) -> None:
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+        except (OSError, ValueError, AttributeError):  # pragma: no cover - a stream without a file descriptor
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
 def stdout_gone() -> None:
     """Standard output's reader has gone: point its file descriptor at ``os.devnull``, so that what is
     still buffered, and the interpreter's last flush, go nowhere instead of failing again."""
