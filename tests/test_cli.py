@@ -634,8 +634,11 @@ def test_a_one_frame_video_says_that_no_model_could_respond(tmp_path, capsys, n)
     would read as "nothing approaches": a note says that one frame shows no motion."""
     p = write_video(tmp_path / f"short{n}.avi", noise_frames(n), 30.0)
     assert main(["run", str(p), "--out", str(tmp_path / "o")]) == 0
-    notes = [line for line in capsys.readouterr().err.splitlines() if "note: one frame only" in line]
+    captured = capsys.readouterr()
+    notes = [line for line in captured.err.splitlines() if "note: one frame only" in line]
     assert len(notes) == (n == 1)
+    # the summary's first line counts in words: "1 frame of", "2 frames of" (it said "1 frames of")
+    assert captured.out.startswith(f"{n} frame{'s' if n > 1 else ''} of "), captured.out
 
 
 @pytest.mark.parametrize("n", [1, 2])
@@ -1002,3 +1005,193 @@ def test_batch_and_evaluate_take_the_stabilise_flags_of_run(command, target, fla
     with pytest.raises(_Called):
         main(argv)
     assert seen.get("stabilise") is value
+
+
+# -- a reader of standard output that goes away (`mlplc2 ... | head -1`) ---------------------
+def _with_closed_stdout(args: list[str]) -> subprocess.CompletedProcess:
+    """``python -m mlplc2 ARGS`` whose standard output is a pipe nobody reads: its reader has gone
+    (as ``| head -1`` after its line, or ``| true``)."""
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        return subprocess.run([sys.executable, "-m", "mlplc2", *args], stdout=w, stderr=subprocess.PIPE,
+                              text=True, timeout=300)
+    finally:
+        os.close(w)
+
+
+@pytest.mark.parametrize("cut", [False, True])
+def test_a_closed_standard_error_does_not_stop_the_run(cut, data, tmp_path):
+    """``mlplc2 run clip.avi 2>&1 | head -1``: the progress bar, the summary and the warning meet a
+    pipe whose reader has gone. The run goes on to its end and writes its summaries, with its own
+    exit code (the progress bar's ``BrokenPipeError`` stopped it: exit 1, no fields.json)."""
+    clip = data["avi"]
+    if cut:
+        clip = tmp_path / "cut.avi"
+        raw = data["avi"].read_bytes()
+        clip.write_bytes(raw[: int(len(raw) * 0.6)])
+    r, w = os.pipe()
+    os.close(r)
+    try:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", str(clip), "-m", "lgmd1", "--out",
+                               str(tmp_path / "o")], stdout=w, stderr=w, timeout=300)
+    finally:
+        os.close(w)
+    assert proc.returncode == (2 if cut else 0)
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["truncated"] == cut and (summary["n_frames"] < T if cut else summary["complete"])
+
+
+def test_a_closed_standard_output_is_no_error():
+    """``mlplc2 params | head -1`` with ``head`` gone: the command's own exit code and nothing on
+    stderr (it was ``mlplc2: error: [Errno 32] Broken pipe``, exit 2)."""
+    proc = _with_closed_stdout(["params"])
+    assert (proc.returncode, proc.stderr) == (0, "")
+
+
+def test_a_closed_standard_output_keeps_the_runs_outputs_and_its_warning(data, tmp_path):
+    """The summary of a run on a truncated clip goes to a closed pipe: the outputs are written, the
+    warning line still says where decoding stopped, and the exit code is the truncation's (2), not
+    an error about the pipe."""
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.6)])
+    proc = _with_closed_stdout(["run", str(cut), "-m", "lgmd2", "--out", str(tmp_path / "o")])
+    assert proc.returncode == 2
+    assert "decoding stopped at frame" in proc.stderr and "Broken pipe" not in proc.stderr
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["truncated"] and 0 < summary["n_frames"] < T
+
+
+# -- a cut file: what the one line says (a new user's session 13) ---------------------------
+def test_a_cut_mp4_whose_index_was_at_its_end_is_named_so(tmp_path, capsys):
+    """An MP4 whose index (moov atom) comes at its end, as OpenCV's ``mp4v`` writer, most cameras
+    and phones write it, cut in half: no decoder can open it. The line says why (it was "not a
+    video file OpenCV can read (unknown format or damaged)"), for either decoder; the whole file,
+    and a file that is no MP4 at all, keep their own outcome."""
+    whole = tmp_path / "whole.mp4"
+    vw = cv2.VideoWriter(str(whole), cv2.VideoWriter_fourcc(*"mp4v"), 30.0, (64, 48))
+    for i in range(30):
+        vw.write(np.full((48, 64, 3), 8 * i, np.uint8))
+    vw.release()
+    raw = whole.read_bytes()
+    assert raw.rfind(b"moov") > len(raw) // 2            # the index is at the end
+    cut = tmp_path / "cut.mp4"
+    cut.write_bytes(raw[: len(raw) // 2])
+    text = tmp_path / "text.mp4"
+    text.write_text("hello\n")
+    for decoder in ("opencv", "pyav"):
+        assert main(["run", str(cut), "-q", "-m", "lgmd1", "--decoder", decoder, "--out", str(tmp_path / "o")]) == 2
+        err = _one_error_line(capsys.readouterr().err)
+        assert "without its index (moov atom)" in err and "cut off" in err, err
+        assert main(["run", str(text), "-q", "-m", "lgmd1", "--decoder", decoder]) == 2
+        assert "not a video file" in _one_error_line(capsys.readouterr().err)
+    assert not (tmp_path / "o").exists()
+    assert main(["run", str(whole), "-q", "-m", "lgmd1", "--out", str(tmp_path / "w")]) == 0
+    from mlplc2.io.formats import mp4_without_index
+
+    assert mp4_without_index(cut) and not mp4_without_index(whole) and not mp4_without_index(text)
+
+
+def test_the_pyav_hint_of_a_stop_only_where_frames_decode_after_it(data, tmp_path, capsys):
+    """OpenCV stops at a cut and at a damaged frame alike. Its warning pointed at ``--decoder pyav``
+    ("skips a damaged frame and goes on") for a file cut short too, where PyAV stops at the same
+    frame: the hint now comes only when frames decode after the stop."""
+    from tests.test_io import _damaged_video
+
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.6)])
+    assert main(["run", str(cut), "-q", "-m", "lgmd1", "--out", str(tmp_path / "a")]) == 2
+    err = _one_line(capsys.readouterr().err, "warning")
+    assert "decoding stopped at frame" in err and "--decoder pyav" not in err, err
+    damaged, _, _ = _damaged_video(tmp_path)
+    assert main(["run", str(damaged), "-q", "-m", "lgmd1", "--out", str(tmp_path / "b")]) == 2
+    err = _one_line(capsys.readouterr().err, "warning")
+    assert "decoding stopped at frame 20 of 40" in err and "--decoder pyav skips a damaged frame" in err, err
+
+
+def test_an_output_that_is_the_input_video_is_refused_and_the_video_kept(data, tmp_path, capsys):
+    """``--jsonl clip.mp4`` (for ``clip.jsonl``) truncated the input video it was reading, and a run on
+    ``OUT/annotated.mp4`` with ``--out OUT`` deleted it first (a folder never mixes two runs): both
+    are one error line now, before anything is written, and the video is unchanged."""
+    video = tmp_path / "clip.mp4"
+    video.write_bytes(data["mp4"].read_bytes())
+    before = video.read_bytes()
+    assert main(["run", str(video), "-q", "-m", "lgmd1", "--jsonl", str(video), "--out", str(tmp_path / "o")]) == 2
+    assert "is the input video" in _one_line(capsys.readouterr().err)
+    assert video.read_bytes() == before and not (tmp_path / "o").exists()
+    out = tmp_path / "out"
+    out.mkdir()
+    again = out / "annotated.mp4"
+    again.write_bytes(before)
+    assert main(["run", str(again), "-q", "-m", "lgmd1", "--out", str(out)]) == 2
+    assert "choose another --out" in _one_line(capsys.readouterr().err)
+    assert again.read_bytes() == before and sorted(p.name for p in out.iterdir()) == ["annotated.mp4"]
+    assert main(["run", str(again), "-q", "-m", "lgmd1", "--out", str(tmp_path / "elsewhere")]) == 0
+
+
+def test_a_json_lines_path_that_cannot_be_written_leaves_no_output_folder(data, tmp_path, capsys):
+    """``--jsonl`` into a place that cannot hold it: one error line and nothing written (the empty
+    output folder was left behind: the folder was made before the JSON lines were opened)."""
+    blocker = tmp_path / "notes.txt"
+    blocker.write_text("a file, not a folder\n")
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl", str(blocker / "x.jsonl"),
+                 "--out", str(out)]) == 2
+    assert str(blocker) in _one_line(capsys.readouterr().err)
+    assert not out.exists() and blocker.read_text() == "a file, not a folder\n"
+    # and a JSON lines file made for a run whose output folder then fails is not left behind
+    lines = tmp_path / "run.jsonl"
+    assert main(["run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl", str(lines), "--out", str(blocker)]) == 2
+    assert "expected a folder" in _one_line(capsys.readouterr().err) and not lines.exists()
+
+
+@pytest.mark.skipif(not hasattr(os, "mkfifo"), reason="named pipes")
+def test_json_lines_to_a_named_pipe_reach_its_reader_whole(data, tmp_path):
+    """``--jsonl FIFO`` (a robot stack reading a named pipe): the pipe is opened once, so its reader
+    gets every line and then its end (a check that opened it before the run would hand the reader
+    an empty stream and leave the run waiting for another)."""
+    import threading
+
+    fifo = tmp_path / "lines"
+    os.mkfifo(fifo)
+    got = []
+
+    def read():
+        with open(fifo, encoding="utf-8") as f:
+            got.extend(f.read().splitlines())
+
+    reader = threading.Thread(target=read, daemon=True)
+    reader.start()
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", str(data["avi"]), "-q", "-m", "lgmd1", "--jsonl",
+                           str(fifo), "--out", str(tmp_path / "o")], capture_output=True, text=True, timeout=120)
+    reader.join(timeout=30)
+    assert proc.returncode == 0, proc.stderr
+    assert [json.loads(line)["frame"] for line in got] == list(range(T))
+
+
+@pytest.mark.parametrize("stop", ["end", "max_frames"])
+def test_ctrl_c_during_the_last_frame_is_the_runs_interrupt(stop, data, tmp_path, monkeypatch, capsys):
+    """Ctrl-C that arrives during the last frame of a run (deferred to the frame's end), here the
+    video's last or the one ``--max-frames`` stops after: the run is interrupted, with the frames
+    done. (It was raised only after the summaries: fields.json said ``"complete": true``, and the
+    line was a bare ``mlplc2: interrupted``. In a shell, Ctrl-C also ends the reader of
+    ``--jsonl -``, which stops the loop the same way.)"""
+    import signal
+
+    last = T - 1 if stop == "end" else 19
+    original = mlplc2.LGMD1.step
+
+    def step(self, frame, *args, **kwargs):
+        if self.frame_index == last:
+            os.kill(os.getpid(), signal.SIGINT)   # deferred by the run: the frame is finished first
+        return original(self, frame, *args, **kwargs)
+
+    monkeypatch.setattr(mlplc2.LGMD1, "step", step)
+    out = tmp_path / "out"
+    argv = ["run", str(data["avi"]), "-m", "lgmd1", "--out", str(out), "-q"]
+    assert main(argv + (["--max-frames", str(last + 1)] if stop == "max_frames" else [])) == 130
+    assert f"interrupted after {last + 1} frames" in capsys.readouterr().err
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["interrupted"] and not summary["complete"] and summary["n_frames"] == last + 1

@@ -129,3 +129,20 @@ def test_the_readme_python_example_runs_and_names_real_attributes():
             assert names and out.fields and all(hasattr(out.fields[0], n) for n in names), names
         elif code.strip() == "model.maps":
             assert names and all(hasattr(model.maps, n) for n in names), names
+
+
+def test_the_bench_synopsis_shows_the_defaults_of_the_parser():
+    """benchmarks/README.md's synopsis of ``mlplc2 bench`` shows defaults as values (``[--frames 100]``):
+    each number there is the option's default (the ``--latency`` line said ``[--frames 140]`` where
+    the default is 100, so that its tables of 110 frames read as a mistake)."""
+    import re
+
+    parser = cli.build_parser()
+    bench = next(a for a in parser._subparsers._group_actions[0].choices.items() if a[0] == "bench")[1]
+    defaults = {o: a.default for a in bench._actions for o in a.option_strings}
+    readme = (Path(__file__).resolve().parents[1] / "benchmarks" / "README.md").read_text()
+    synopsis = readme.split("```\n", 2)[1].split("```")[0]
+    shown = re.findall(r"\[(--[a-z-]+) (\d+)\]", synopsis)
+    assert len(shown) >= 3, synopsis
+    for option, value in shown:
+        assert defaults[option] == int(value), (option, value, defaults[option])

@@ -269,6 +269,33 @@ def test_a_dropped_stream_ends_cleanly_keeping_what_was_written(data, tmp_path, 
     assert len(_lines(tmp_path / "o.jsonl")) == n
 
 
+def test_a_urls_password_is_in_no_message_file_or_folder_name(data, tmp_path, monkeypatch, capsys):
+    """``rtsp://user:password@HOST/PATH`` goes to FFmpeg as is (docs/robot.md); the error lines, the
+    summary, ``fields.json`` and the default folder's name show ``user:***@`` (they showed the
+    password, and a URL without a path named the folder after ``user_password_host``)."""
+    handler = type("H", (_DroppingHandler,), {"payload": data["avi"].read_bytes()})
+    server = http.server.HTTPServer(("127.0.0.1", 0), handler)
+    threading.Thread(target=server.serve_forever, daemon=True).start()
+    monkeypatch.chdir(tmp_path)
+    try:
+        url = f"http://robot:s3cret@127.0.0.1:{server.server_address[1]}"
+        code = main(["run", url, "--jsonl", str(tmp_path / "o.jsonl")])
+    finally:
+        server.shutdown()
+        server.server_close()
+    captured = capsys.readouterr()
+    assert code == 0 and "the stream stopped after" in captured.err
+    shown = f"http://robot:***@127.0.0.1:{server.server_address[1]}"
+    assert f"{shown}: the stream stopped" in captured.err and f"of {shown} " in captured.out
+    folders = [p.name for p in tmp_path.iterdir() if p.is_dir()]
+    assert folders == ["127.0.0_mlplc2"], folders      # the host's name (its port dropped as a suffix)
+    assert json.loads((tmp_path / folders[0] / "fields.json").read_text())["video"] == shown
+    assert main(["run", "rtsp://robot:s3cret@no-such-camera.invalid/s", "-q"]) == 2
+    everything = captured.out + captured.err + capsys.readouterr().err
+    everything += "".join(p.read_text() for p in (tmp_path / folders[0]).glob("*.*") if p.suffix in (".json", ".csv"))
+    assert "s3cret" not in everything
+
+
 @pytest.mark.parametrize("source", ["rtsp://127.0.0.1:9/none", "http://127.0.0.1:9/none.mp4"])
 def test_an_unreachable_stream_is_one_line(source, capsys):
     assert main(["run", source, "-q"]) == 2
@@ -314,6 +341,17 @@ def test_a_server_that_never_answers_is_one_line_that_says_so(scheme, monkeypatc
         assert main(["run", url, "-q"]) == 2
     err = capsys.readouterr().err.strip()
     assert err == f"mlplc2: error: {url}: cannot open the stream (no answer within 1 s)"
+
+
+@pytest.mark.parametrize("scheme", ["http", "rtsp"])
+def test_a_host_name_that_does_not_resolve_is_named(scheme, tmp_path, capsys):
+    """A mistyped camera host: one line that names it (FFmpeg's own words were "Input/output
+    error"). ``.invalid`` never resolves (RFC 2606). Nothing is written."""
+    url = f"{scheme}://no-such-camera.invalid/stream1"
+    assert main(["run", url, "-q", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == f"mlplc2: error: {url}: cannot open the stream (host 'no-such-camera.invalid' not found)"
+    assert not (tmp_path / "o").exists()
 
 
 def test_latency_percentiles():

@@ -254,3 +254,59 @@ def test_a_file_reduced_in_the_decoding_thread_leaves_it_a_core(data):
             assert set(seen) == {(1, 1) if key == "spare" else (2, 2)}, key
             assert (numba.get_num_threads(), cv2.getNumThreads()) == (2, 2)
     assert results["spare"].targets == results["all"].targets and results["spare"].rows == results["all"].rows
+
+
+@pytest.mark.parametrize("failing", ["responses.csv", "targets.csv", "jsonl"])
+def test_full_disk_on_a_csv_or_the_json_lines_names_it_and_keeps_the_rest(failing, data, tmp_path, monkeypatch,
+                                                                          capsys):
+    """A per-frame output other than the video hits a full disk at frame K: as for annotated.mp4,
+    one error naming that file (it was ``[Errno 28] No space left on device``, no path, and no
+    fields.json), the run stops there and fields.json says so for the K frames before."""
+    import errno
+
+    from mlplc2.cli import main
+    from mlplc2.runner import live
+
+    k = 15
+    csv_write, line_write = live.CsvFile.write, live.JsonLines.write
+    done = {}
+
+    def full_csv(self, rows):
+        if self.path.name == failing and done.setdefault(self.path.name, 0) > k:  # the header, then k frames
+            raise OSError(errno.ENOSPC, "No space left on device")
+        done[self.path.name] = done.get(self.path.name, 0) + 1
+        csv_write(self, rows)
+
+    def full_lines(self, record):
+        if failing == "jsonl" and record["frame"] >= k:
+            raise OSError(errno.ENOSPC, "No space left on device")
+        return line_write(self, record)
+
+    monkeypatch.setattr(live.CsvFile, "write", full_csv)
+    monkeypatch.setattr(live.JsonLines, "write", full_lines)
+    out = tmp_path / "out"
+    jsonl = tmp_path / "lines.jsonl"
+    path = str(jsonl) if failing == "jsonl" else str(out / failing)
+    with pytest.raises(OSError, match="No space left on device") as info:
+        run(str(data["avi"]), ["mlplc2"], out=out, quiet=True, jsonl=jsonl)
+    assert info.value.errno == errno.ENOSPC and info.value.filename == path
+    summary = json.loads((out / "fields.json").read_text())
+    name = path if failing == "jsonl" else failing
+    assert summary["complete"] is False and summary["error"] == f"{name}: No space left on device"
+    frames = [json.loads(line)["frame"] for line in jsonl.read_text().splitlines()]
+    n = summary["n_frames"]
+    assert f"{n} frames before" in str(info.value) and frames == list(range(len(frames)))
+    if failing == "jsonl":
+        assert n == k == len(frames)
+    if failing == "responses.csv":
+        assert n == k and {int(line.split(",")[0]) for line in (out / "responses.csv").read_text().splitlines()[1:]} \
+            == set(range(k))
+    # through the CLI: one line on stderr, naming the file
+    done.clear()
+    capsys.readouterr()
+    assert main(["run", str(data["avi"]), "-q", "--out", str(tmp_path / "cli"), "--jsonl", str(jsonl)]) == 2
+    err = capsys.readouterr().err
+    cli_path = path if failing == "jsonl" else str(tmp_path / "cli" / failing)
+    assert err.strip().splitlines() == [f"mlplc2: error: {cli_path}: No space left on device; the other outputs "
+                                        f"cover the {json.loads((tmp_path / 'cli' / 'fields.json').read_text())['n_frames']}"
+                                        f" frames before"], err

@@ -25,8 +25,8 @@ import warnings
 from .._signals import interrupts
 from .._validation import InputError
 from . import run, stimulus, studies, tools
-from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Parser, Subcommand, UsageError,
-                     did_you_mean, number_type, one_line, warn)
+from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Parser, QuietStderr, Subcommand,
+                     UsageError, did_you_mean, flush_stdout, number_type, one_line, warn)
 from .stimulus import STIMULUS_OWN_OPTIONS
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
@@ -81,9 +81,16 @@ def main(argv: list[str] | None = None) -> int:
     outputs of the frames done are written and the exit code is 130 (``mlplc2._signals``).
     Warnings are printed as one line each, ``mlplc2: warning: ...``.
     """
+    stderr = sys.stderr
     with interrupts(sigterm=True), warnings.catch_warnings():
         warnings.showwarning = _show_warning
-        return _main(argv)
+        sys.stderr = QuietStderr(stderr)    # a reader of stderr that has gone is no error either
+        try:
+            return _main(argv)
+        finally:
+            flush_stdout()  # a reader that has gone (`| head -1`) is no error (cli.common.out)
+            sys.stderr.flush()
+            sys.stderr = stderr
 
 
 def _main(argv: list[str] | None) -> int:

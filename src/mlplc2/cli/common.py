@@ -11,6 +11,7 @@ import difflib
 import importlib.util
 import inspect
 import math
+import os
 import re
 import sys
 import threading
@@ -68,7 +69,67 @@ class Subcommand:
 def say(args, *lines: str) -> None:
     if not getattr(args, "quiet", False):
         for line in lines:
-            print(line)
+            out(line)
+
+
+def out(text: str, end: str = "\n") -> None:
+    """Print ``text`` to standard output, flushed. When its reader has gone (``mlplc2 params | head -1``:
+    a closed pipe) the rest of the output goes nowhere, and the command goes on: its files are written
+    and its exit code is its own, as if the reader had read everything (no ``[Errno 32] Broken pipe``)."""
+    try:
+        print(text, end=end, flush=True)
+    except BrokenPipeError:
+        stdout_gone()
+
+
+def flush_stdout() -> None:
+    """Flush standard output at the end of a command (:func:`out`'s rule for a reader that has gone)."""
+    try:
+        sys.stdout.flush()
+    except BrokenPipeError:
+        stdout_gone()
+    except (OSError, ValueError):  # a closed or odd stdout: nothing more to say there
+        pass
+
+
+class QuietStderr:
+    """``sys.stderr`` for a command: its messages and progress bars, except that a reader that has
+    gone (``mlplc2 run clip.mp4 2>&1 | head -3``) makes them go nowhere instead of raising
+    ``BrokenPipeError`` into the run (which stopped it there, without its summaries, exit 1)."""
+
+    def __init__(self, stream):
+        self._stream = stream
+
+    def write(self, text):
+        try:
+            return self._stream.write(text)
+        except BrokenPipeError:
+            self._gone()
+            return len(text)
+
+    def flush(self):
+        try:
+            self._stream.flush()
+        except BrokenPipeError:
+            self._gone()
+
+    def _gone(self) -> None:
+        try:
+            os.dup2(os.open(os.devnull, os.O_WRONLY), self._stream.fileno())
+        except (OSError, ValueError, AttributeError):  # pragma: no cover - a stream without a file descriptor
+            pass
+
+    def __getattr__(self, name):
+        return getattr(self._stream, name)
+
+
+def stdout_gone() -> None:
+    """Standard output's reader has gone: point its file descriptor at ``os.devnull``, so that what is
+    still buffered, and the interpreter's last flush, go nowhere instead of failing again."""
+    try:
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+    except (OSError, ValueError, AttributeError):  # pragma: no cover - a stdout without a file descriptor
+        pass
 
 
 def warn(message: str) -> None:

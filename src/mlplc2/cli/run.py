@@ -154,7 +154,8 @@ def _print_run_summary(args, result) -> None:
     mw, mh = result.model_size
     size = f"{w}x{h}" + (f" -> {mw}x{mh}" if (mw, mh) != (w, h) else "")
     source = "stdin" if result.source == STDIN else result.source   # as the progress bar says
-    lines = [f"{result.n_frames} frames of {source} ({size}, {result.fps:g} fps) {_timing(result)}"]
+    frames = f"{result.n_frames} frame{'' if result.n_frames == 1 else 's'}"
+    lines = [f"{frames} of {source} ({size}, {result.fps:g} fps) {_timing(result)}"]
     for name in result.models:
         fields = result.fields.get(name, [])
         if fields:

@@ -9,7 +9,7 @@ import sys
 
 from .._validation import InputValueError
 from ..models.base import available_models, resolve_names
-from .common import EXIT_OK, Subcommand, pos_int
+from .common import EXIT_OK, Subcommand, out, pos_int
 
 
 # ---------------------------------------------------------------------------
@@ -31,7 +31,7 @@ def _cmd_params(args) -> int:
     from ..targets import TargetParams
 
     cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else Params
-    print(parameter_table(cls, markdown=args.markdown), end="")
+    out(parameter_table(cls, markdown=args.markdown), end="")
     return EXIT_OK
 
 
@@ -79,7 +79,7 @@ def _cmd_bench(args) -> int:
 
         rows = [time_latency(w, h, frames=args.frames + 10, model=name)
                 for w, h in parse_sizes(args.sizes or LATENCY_SIZES) for name in names]
-        print(format_latency(rows))
+        out(format_latency(rows))
         return EXIT_OK
     sizes = parse_sizes(args.sizes or DEFAULT_SIZES)
 
@@ -90,11 +90,11 @@ def _cmd_bench(args) -> int:
     rows = run_bench(sizes, names, threads=args.threads, frames=args.frames, ref_frames=args.ref_frames,
                      reference=not args.no_reference, rounds=args.rounds, progress=progress,
                      pipeline=not args.no_pipeline)
-    print(format_table(rows))
+    out(format_table(rows))
     if not args.no_pipeline:
-        print("\n" + format_pipeline(rows))
+        out("\n" + format_pipeline(rows))
     if not args.quiet:
-        print("\n" + describe(args.frames, args.rounds))
+        out("\n" + describe(args.frames, args.rounds))
     return EXIT_OK
 
 

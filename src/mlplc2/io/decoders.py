@@ -17,7 +17,8 @@ from pathlib import Path
 import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
-from .formats import IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url
+from .formats import (IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url, mp4_without_index,
+                      without_password)
 
 log = logging.getLogger(__name__)
 
@@ -78,12 +79,15 @@ class _OpenCVDecoder(Decoder):
         self._camera = camera
         #: Set when a camera stops delivering frames (a file simply ends).
         self.error: str | None = None
+        #: After the first failed read of a file: whether frames still decode after it (True: a damaged
+        #: frame in the middle, which --decoder pyav skips; False: the file ends there, cut or not).
+        self.goes_on: bool | None = None
         self.cap = cv2.VideoCapture(target)
         if not self.cap.isOpened():
             self.cap.release()
             if camera:
                 raise InputValueError(f"cannot open camera {target}")
-            raise InputValueError(f"{name}: not a video file OpenCV can read (unknown format or damaged)")
+            raise InputValueError(_not_a_video(target, name, "OpenCV"))
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
         count = self.cap.get(cv2.CAP_PROP_FRAME_COUNT)
@@ -100,6 +104,8 @@ class _OpenCVDecoder(Decoder):
         if not ok or frame is None:
             if self._camera:
                 self.error = "the camera delivered no frame"
+            elif self.goes_on is None:   # a damaged frame, or the end (of the file, or of what is left of it)?
+                self.goes_on = any(self.cap.grab() for _ in range(3))
             return None
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
         self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
@@ -109,6 +115,36 @@ class _OpenCVDecoder(Decoder):
 
     def close(self):
         self.cap.release()
+
+
+def _not_a_video(path, name: str, decoder: str) -> str:
+    """The error for a file that ``decoder`` cannot open; it says so when it is an MP4/MOV whose index
+    (moov atom, written at the end) was cut off (:func:`~mlplc2.io.formats.mp4_without_index`)."""
+    if isinstance(path, (str, os.PathLike)) and mp4_without_index(path):
+        return (f"{name}: an MP4/MOV file without its index (moov atom): it was cut off before its end "
+                f"(an unfinished recording or copy), and such a file cannot be decoded at all")
+    return f"{name}: not a video file {decoder} can read (unknown format or damaged)"
+
+
+def _unknown_host(url) -> str | None:
+    """Why a URL did not open when its host name does not resolve (a typo, no network):
+    ``host 'NAME' not found``; None otherwise. FFmpeg says only "Input/output error" then."""
+    import socket
+    from urllib.parse import urlsplit
+
+    try:
+        host = urlsplit(str(url)).hostname
+    except ValueError:
+        return None
+    if not host:
+        return None
+    try:
+        socket.getaddrinfo(host, None)
+    except socket.gaierror:
+        return f"host {host!r} not found"
+    except (OSError, UnicodeError):
+        return None
+    return None
 
 
 class _PyAVDecoder(Decoder):
@@ -144,9 +180,9 @@ class _PyAVDecoder(Decoder):
                 # FFmpeg names a server that never answers "Immediate exit requested" or "Invalid data"
                 # FFmpeg's own words, without PyAV's "[Errno -875574520] ...: 'URL'" around them
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
-                       else _one_line(getattr(exc, "strerror", None) or str(exc)))
+                       else _unknown_host(path) or _one_line(getattr(exc, "strerror", None) or str(exc)))
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
-            raise InputValueError(f"{name}: not a video file PyAV can read (unknown format or damaged)") from None
+            raise InputValueError(_not_a_video(path, name, "PyAV")) from None
         if not self.container.streams.video:
             self.container.close()
             raise InputValueError(f"{name}: has no video stream")
@@ -191,7 +227,8 @@ class _PyAVDecoder(Decoder):
             return None
         except (self._av.error.FFmpegError, OSError) as exc:
             log.debug("PyAV stopped decoding %s: %s", self.name, exc)
-            self.error = _one_line(str(exc))
+            # FFmpeg's own words, without PyAV's "[Errno 5] ...: 'URL'" around them (the URL, its password too)
+            self.error = _one_line(getattr(exc, "strerror", None) or str(exc))
             if not self._decoded and "mp4" in self.container.format.name:
                 if self._pipe:
                     self.error = ("an MP4/MOV file whose index (moov atom) is at its end cannot be read from a "
@@ -325,7 +362,7 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
             raise InputValueError("stdin: standard input is empty: no video was piped in")
         return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
     if is_url(source):
-        return _PyAVDecoder(source, source, stream=True), "stream"
+        return _PyAVDecoder(source, without_password(source), stream=True), "stream"
     if isinstance(source, os.PathLike):
         source = os.fspath(source)
     if not isinstance(source, str):

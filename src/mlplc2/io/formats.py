@@ -22,6 +22,35 @@ VIDEO_EXTENSIONS = (".mp4", ".m4v", ".mov", ".avi", ".mkv")
 #: Frame rate assumed for image sequences and for videos that do not state one.
 DEFAULT_FPS = 30.0
 
+def mp4_without_index(path) -> bool:
+    """Whether ``path`` is an MP4/MOV file (an ``ftyp`` box first) whose top-level boxes hold no
+    ``moov``, the index: a file whose index was to come at its end, cut off before it (a copy or a
+    recording that stopped). FFmpeg and OpenCV cannot open such a file at all. False for anything
+    else, and for a file that cannot be read."""
+    try:
+        with open(path, "rb") as f:
+            size = os.fstat(f.fileno()).st_size
+            at, first = 0, True
+            while at + 8 <= size:
+                f.seek(at)
+                head = f.read(16)
+                box, kind = int.from_bytes(head[:4], "big"), head[4:8]
+                if first and kind != b"ftyp":
+                    return False
+                if kind == b"moov":
+                    return False
+                if box == 1 and len(head) == 16:     # a 64-bit size
+                    box = int.from_bytes(head[8:16], "big")
+                elif box == 0:                       # to the end of the file
+                    box = size - at
+                if box < 8:
+                    return not first                 # not a box: past the boxes an ftyp began
+                at, first = at + box, False
+            return not first
+    except (OSError, TypeError, ValueError):
+        return False
+
+
 class TruncatedInputWarning(UserWarning):
     """The input stopped decoding before its stated end; results cover the frames before."""
 
@@ -109,6 +138,20 @@ def is_url(source) -> bool:
     """Whether ``source`` is a URL (``scheme://...``, e.g. ``rtsp://``, ``http://``) and not an existing path."""
     return (isinstance(source, str) and re.match(r"[A-Za-z][A-Za-z0-9+.-]*://", source) is not None
             and not os.path.exists(source))
+
+
+def without_password(source):
+    """``source`` as messages and ``fields.json`` name it: a URL's password replaced by ``***``
+    (``rtsp://admin:secret@cam/s`` -> ``rtsp://admin:***@cam/s``; the decoder is given the URL as is),
+    anything else unchanged."""
+    if not is_url(source):
+        return source
+    scheme, rest = source.split("://", 1)
+    netloc = re.split(r"[/?#]", rest, maxsplit=1)[0]
+    if "@" not in netloc or ":" not in netloc.rsplit("@", 1)[0]:
+        return source
+    userinfo, host = netloc.rsplit("@", 1)
+    return f"{scheme}://{userinfo.split(':', 1)[0]}:***@{host}{rest[len(netloc):]}"
 
 
 def is_live(source) -> bool:

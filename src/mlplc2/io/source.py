@@ -300,10 +300,11 @@ class FrameSource:
         elif (self.kind == "video" or (self.kind == "stream" and not self.live)) and expected is not None \
                 and index < expected:  # a file, or one read whole from a pipe or HTTP that states its count
             self.truncated, self.truncated_at = True, index
+            # the hint only where frames decode after the stop (OpenCV's probe): for a cut file it cannot help
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
                             "(file truncated or damaged); results cover frames before it"
-                            + ("" if getattr(self._dec, "skips_damaged", False) else
-                               " (--decoder pyav skips a damaged frame and goes on)"))
+                            + (" (frames decode after it: --decoder pyav skips a damaged frame and goes on)"
+                               if getattr(self._dec, "goes_on", None) else ""))
 
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""

@@ -52,14 +52,14 @@ from .._files import write_json
 from ..backend import one_fewer, threads
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from ..io.gyro import Gyro
-from ..io.formats import STDIN
+from ..io.formats import STDIN, without_password
 from ..models.base import (Model, available_models, check_repeat_threshold, frame_change, get_model,
                           looks_duplicated, resolve_names)
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
 from ..evaluation.record import Recorder, response_rows
-from .folders import default_out_dir, prepare_out_dir
+from .folders import default_out_dir, is_the_input, prepare_out_dir
 from .live import CsvFile, JsonLines, Latency, frame_record
 from .result import COLUMNS, TARGET_COLUMNS, RunInterrupted, RunResult
 
@@ -410,17 +410,30 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
     jsonl = options.jsonl
     if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and Path(jsonl).is_dir():
         raise InputValueError(f"{jsonl}: is a folder; jsonl takes a file or -")
+    if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and is_the_input(source, jsonl):
+        raise InputValueError(f"{jsonl}: is the input video, which the JSON lines would overwrite: write them to "
+                              f"another file (e.g. {Path(jsonl).with_suffix('.jsonl').name})")
     if isinstance(source, FrameSource):
         src = source
     else:
         src = open_source(source, keep_original=options.video, **options.source_options())
+    made_lines = None
     try:
         built, duplicated = _prepare_models(source, models, src, options)
+        if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN \
+                and (not Path(jsonl).exists() or Path(jsonl).is_file()):   # never a named pipe: its reader would see an end
+            # opened once before the output folder is made, so that a path that cannot be written
+            # (a folder without permission, a read-only disk) leaves no empty output folder behind
+            made_lines = None if Path(jsonl).exists() else Path(jsonl)
+            Path(jsonl).parent.mkdir(parents=True, exist_ok=True)
+            open(jsonl, "a", encoding="utf-8").close()
         out_dir = None if out is False else prepare_out_dir(source, src, out)
     except BaseException:
         src.close()
+        if made_lines is not None and made_lines.is_file() and made_lines.stat().st_size == 0:
+            made_lines.unlink()
         raise
-    result = RunResult(source=str(src.name if isinstance(source, FrameSource) else source),
+    result = RunResult(source=str(src.name if isinstance(source, FrameSource) else without_password(source)),
                        models=[m.name for m in built], fps=src.fps, size=src.size,
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        repeated={m.name: 0 for m in built},
@@ -467,9 +480,16 @@ def _prescan_changes(source, auto: list[Model], src: FrameSource, options: RunOp
 
 
 
-class _VideoFailed(Exception):
-    """Writing ``annotated.mp4`` failed (an OSError such as a full disk): the run stops before the
-    frame, and :func:`_loop` still writes the summaries of the frames done."""
+class _OutputFailed(Exception):
+    """Writing one of the per-frame outputs failed (an OSError: a full disk, a device that refuses):
+    the run stops at that frame, and :func:`_loop` still writes the summaries of the frames done.
+    ``name`` is the output as ``fields.json``'s ``"error"`` names it (``annotated.mp4``,
+    ``responses.csv``, ``targets.csv``, the JSON lines' path or ``stdout``), ``path`` the file's path
+    for the one-line error; the OSError is its ``__cause__``."""
+
+    def __init__(self, name: str, path: str):
+        super().__init__(name)
+        self.name, self.path = name, path
 
 
 class _Frames:
@@ -519,7 +539,7 @@ class _Frames:
             try:
                 self.vw.write(img)
             except OSError as exc:  # a full disk: this frame goes nowhere, the others' outputs are kept
-                raise _VideoFailed(exc) from exc
+                raise _OutputFailed("annotated.mp4", str(self.vw.path)) from exc
         # The frame's share of every output, together: the JSON line first (its latency ends there), the CSV rows after.
         target_rows = []
         for name, out in zip(names, outputs):
@@ -528,36 +548,51 @@ class _Frames:
             target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                for t in self.recorder.update(index, name, out))
         record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
-        if self.lines is not None and not self.lines.write(record) and self.result.message is None:
-            self.result.message = f"the reader of the JSON lines went away (frame {index} not delivered); stopped there"
-        result.n_frames += 1
-        if result.n_frames > 1:  # the first frame's step builds the models' state (and compiles): not latency
-            self.latency.add(time.perf_counter() - src.decoded_at)
+        if self.lines is not None:
+            try:
+                delivered = self.lines.write(record)
+            except OSError as exc:  # not a reader that went away (that is False): a full disk, /dev/full
+                raise _OutputFailed(self.lines.name, self.lines.name) from exc
+            if not delivered and self.result.message is None:
+                self.result.message = (f"the reader of the JSON lines went away (frame {index} not delivered); "
+                                       f"stopped there")
+        line_at = time.perf_counter()
         frame_rows = [row for name, out in zip(names, outputs)
                       for row in response_rows(index, time_s, name, out, src.to_input)]
-        if self.targets is not None and target_rows:
-            self.targets.write(target_rows)
-        if self.responses is not None:
-            self.responses.write(frame_rows)
+        for csv_file, rows in ((self.targets, target_rows), (self.responses, frame_rows)):
+            if csv_file is not None and (rows or csv_file is self.responses):
+                try:
+                    csv_file.write(rows)
+                except OSError as exc:
+                    raise _OutputFailed(csv_file.path.name, str(csv_file.path)) from exc
+        result.n_frames += 1
+        if result.n_frames > 1:  # the first frame's step builds the models' state (and compiles): not latency
+            self.latency.add(line_at - src.decoded_at)
         if self.options.keep_rows:
             result.targets.extend(target_rows)
             result.rows.extend(frame_rows)
         result.skipped += src.skipped
         return record
 
-    def close_csv(self) -> None:
-        for f in (self.responses, self.targets):
-            if f is not None:
-                f.file.close()
-        if self.lines is not None:
-            self.lines.close()
+    def close_csv(self, failed: bool = False) -> None:
+        """Close the CSV files and the JSON lines; after a failed write (``failed``) closing the file
+        that failed would fail again (its unwritten rest): that is not a second error."""
+        closes = [f.file.close for f in (self.responses, self.targets) if f is not None]
+        closes += [self.lines.close] if self.lines is not None else []
+        for close in closes:
+            try:
+                close()
+            except OSError:
+                if not failed:
+                    raise
 
-    def summarise(self, interrupted: bool, video_error: OSError | None = None) -> None:
+    def summarise(self, interrupted: bool, failed: _OutputFailed | None = None) -> None:
         """The run's end state and the summaries of its fields and targets into ``result``."""
         result, recorder, names = self.result, self.recorder, self.names
         result.interrupted = interrupted
-        if video_error is not None:
-            result.error = f"annotated.mp4: {video_error.strerror or video_error}"
+        if failed is not None:
+            cause = failed.__cause__
+            result.error = f"{failed.name}: {getattr(cause, 'strerror', None) or cause}"
         result.truncated = self.src.truncated
         result.dropped, result.damaged = self.src.dropped, self.src.damaged
         result.message = self.src.message or result.message
@@ -580,7 +615,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
 
     frames = _Frames(src, built, result, options)
     interrupted = False
-    video_error: OSError | None = None
+    failed: _OutputFailed | None = None
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
@@ -601,12 +636,17 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                     bar.update()
                 if options.done(result.n_frames, time.perf_counter() - t0) or (frames.lines and frames.lines.gone):
                     break
+            # A signal during the last frame (or the one the loop stopped after: Ctrl-C in a shell also
+            # ends the reader of the JSON lines) is the run's interrupt, not one after its summaries:
+            # fields.json said "complete" and the exit was a bare "interrupted".
+            stop.check()
         except KeyboardInterrupt:
             interrupted = True
-        except _VideoFailed as exc:
-            video_error = exc.__cause__
-            frames.vw.abort()
-            frames.vw = None
+        except _OutputFailed as exc:
+            failed = exc
+            if frames.vw is not None and exc.name == "annotated.mp4":
+                frames.vw.abort()
+                frames.vw = None
         except BaseException:
             if frames.vw is not None:
                 frames.vw.abort()
@@ -615,21 +655,24 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             result.seconds = time.perf_counter() - t0
             if bar is not None:
                 bar.close()
-            frames.close_csv()
+            frames.close_csv(failed is not None)
             src.close()
-        frames.summarise(interrupted, video_error)
+        frames.summarise(interrupted, failed)
         if out_dir is not None:
             try:
                 _finish(result, out_dir, frames.vw, options.plot)
-            except BaseException:
+            except BaseException as exc:
                 if frames.vw is not None:
                     frames.vw.abort()
-                raise
+                if failed is None or not isinstance(exc, OSError):
+                    raise
+                # the summaries failed too (the same full disk): the first failure is the one to name
         if result.truncated:
             warnings.warn(result.message, TruncatedInputWarning, stacklevel=3)
-        if video_error is not None:
-            raise OSError(video_error.errno, f"{video_error.strerror or video_error}; the other outputs cover the "
-                          f"{result.n_frames} frames before", str(out_dir / "annotated.mp4")) from video_error
+        if failed is not None:
+            cause = failed.__cause__
+            raise OSError(getattr(cause, "errno", None), f"{getattr(cause, 'strerror', None) or cause}; the other "
+                          f"outputs cover the {result.n_frames} frames before", failed.path) from cause
         if interrupted:
             raise RunInterrupted(result)
     return result

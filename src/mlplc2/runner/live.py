@@ -74,9 +74,12 @@ class JsonLines:
         self.gone = False
         if target == "-":
             self.file = sys.stdout
+            self.name = "stdout"
         elif hasattr(target, "write"):
             self.file = target
+            self.name = str(getattr(target, "name", "jsonl")).strip("<>")   # sys.stdout: "<stdout>"
         else:
+            self.name = str(target)
             path = Path(target)
             path.parent.mkdir(parents=True, exist_ok=True)
             self.file = open(path, "w", encoding="utf-8")
