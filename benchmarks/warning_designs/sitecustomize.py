@@ -3,7 +3,7 @@ first warning whatever the encoding); a measurement aid, not part of the package
 size", session 13).
 
 Python imports this module at start-up when its folder is on ``PYTHONPATH``; with ``MLPLC2_WARNING_DESIGN`` set
-(a JSON object) it wraps ``mlplc2.targets.warning.alarm_warns`` and ``mlplc2.targets.layer.estimate`` in that
+(a JSON object) it wraps ``mlplc2.targets.warning.alarm_warns``, ``.off_path`` and ``mlplc2.targets.layer.estimate`` in that
 process and in every process it starts with the same environment (the benchmark's workers), so the same design
 runs in ``benchmarks/encoding_invariance.py``, ``mlplc2 run`` and ``mlplc2 benchmark``::
 
@@ -37,7 +37,6 @@ import os
 
 _SPEC = os.environ.get("MLPLC2_WARNING_DESIGN")
 if _SPEC:
-    import math
     from dataclasses import replace
 
     import mlplc2.targets.layer as _layer
