@@ -879,3 +879,36 @@ def test_seed_budget_tries_candidates_in_turn(monkeypatch):
     assert all(frame[0] == places[3] and len(frame) == 3 for frame in alarm)   # first, beside the budget's 2
     others = [p for frame in alarm for p in frame[1:]]
     assert set(others[:4]) == set(places) - {places[3]}
+
+
+@pytest.mark.parametrize("reseat", [1.5, 0.0])
+def test_a_box_grown_beyond_its_object_is_reseated_on_it(reseat):
+    """``reseat``: a disc approaching at constant speed on a plain background (radius 6 -> 10 px over
+    the run) is tracked; its box is then made three times too wide and twice too tall (as a box
+    half on the ground grows, docs/model.md, "Where the time to contact is lost"). With ``reseat``
+    the box is put back on the region that changes around it, the disc (its diameter within 30 %);
+    without, the alignment scales the wrong box on (at least twice the disc's width)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    contact, r0, at = 70, 6.0, (200, 110)
+    layer = TargetLayer(TargetParams(reseat=reseat), FPS)
+    field = SimpleNamespace(id=1, x=at[0], y=at[1], radius=40, response=1.0, collision=False)
+    sizes = []
+    for k in range(40):
+        img = np.full((240, 320), 150, np.uint8)
+        r = r0 * contact / (contact - k)
+        cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
+        out = layer.step(img.astype(np.float32), None, [field] if k < 12 else [], k)
+        if k == 20:
+            (t,) = layer._tracks
+            t.w, t.h = 3.0 * t.w, 2.0 * t.h
+        if k >= 30:
+            (o,) = [o for o in out if abs(o.x - at[0]) < 8 and abs(o.y - at[1]) < 8]
+            sizes.append((o.width / (2 * r), o.height / (2 * r), o.ttc_s, (contact - k) / FPS))
+    if reseat:
+        assert all(0.7 <= w <= 1.3 and 0.7 <= h <= 1.3 for w, h, _, _ in sizes), sizes
+    else:
+        assert all(w >= 2.0 for w, _, _, _ in sizes), sizes
+    assert all(v is not None and abs(v - true) <= 0.15 * true for _, _, v, true in sizes), sizes

@@ -29,6 +29,8 @@ from .warning import estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
+#: :meth:`TargetLayer._reseat`: the smallest region (px across) a box is re-seated on (``TargetParams.reseat``)
+RESEAT_MIN_PX = 6.0
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
 
@@ -188,6 +190,8 @@ class TargetLayer:
             zones = [(int(round(t.cx)), int(round(t.cy)),
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks if not self._freed(t, now)]
+            zones += [(int(round(t.cx + t.kept[0])), int(round(t.cy + t.kept[1])), int(max(t.kept[2], t.kept[3]) / 2.0))
+                      for t in self._tracks if t.kept is not None and self._measuring(t, now) and not self._freed(t, now)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             for _ in range(self._seeds(interval)):
                 cand = argmax_outside(lm.magnitude, zones)
@@ -337,7 +341,7 @@ class TargetLayer:
         ahead, a wall: growth without a time to contact) then does not swallow the fields and seeds
         of an object that approaches inside it."""
         if self._measuring(t, index):
-            return t.contains(x, y, margin)
+            return t.within(x, y, margin)
         return abs(x - t.cx) <= t.w / 4.0 and abs(y - t.cy) <= t.h / 4.0
 
     def _hosts(self, o: Track, t: Track, index: int) -> bool:
@@ -510,10 +514,34 @@ class TargetLayer:
                 if move is None and gray is not None:
                     move = self._remeasure(lm, gray, t, interval)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
+                if move is not None and gray is not None:
+                    self._reseat(t, gray)
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _reseat(self, t: Track, gray: np.ndarray) -> None:
+        """``TargetParams.reseat``: a followed box much larger than the region that changed around its
+        centre over the last ``change_frames`` frames (:func:`change_box` against the oldest frame
+        kept, within ``max_shift`` px) is put on that region (:meth:`Track.reseat`): the object
+        measured afresh, a restoring force the alignment's product of scales lacks. Only a region
+        whose centre lies inside the box and which is at least ``min_size`` px across; with
+        ``reseat_shape``, only for a box whose aspect moved by more than that factor since it was seeded."""
+        p = self.params
+        if t.aspect is None:
+            t.aspect = t.h / max(t.w, 1e-9)
+        if p.reseat <= 0 or not self._past:
+            return
+        if p.reseat_shape > 0 and max(t.h / t.w / t.aspect, t.aspect * t.w / t.h) <= p.reseat_shape:
+            return
+        box = change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
+                         kernel=self.change_kernel)
+        if box is None or min(box[2], box[3]) < RESEAT_MIN_PX or not t.contains(box[0], box[1]):
+            return
+        if t.w * t.h >= p.reseat * box[2] * box[3]:
+            size = (min(box[2], t.w), min(box[3], t.h)) if p.reseat_size else (t.w, t.h)
+            t.reseat((box[0], box[1], *size), keep=p.reseat_keep)
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

@@ -318,6 +318,27 @@ class TargetParams(ParameterSet):
                               a course: the alarm there after a contact is the collider's own. False = off
                               (docs/model.md, "Objects missed", session 12).""",
                               valid=Valid.boolean())
+    reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
+                          around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
+                          afresh each frame; its centre inside the box) is re-seated on that region (shrinking
+                          only): the alignment scales the box by the growth of all it holds, so a box half on the
+                          ground or the road grows faster than its object and slides off it (docs/model.md,
+                          "Where the time to contact is lost", session 12). The track's history is carried
+                          with it (its positions moved and its sizes scaled alike), so the course sees no
+                          jump; the log-scale stays the alignment's. 0 = off.""",
+                          valid=Valid.real(minimum=0))
+    reseat_shape: float = param(0.0, """``reseat`` only for a box whose aspect (height / width) moved by more than
+                                this factor from the one it was seeded (or last re-seated) with: a tall strip
+                                or a flat one. 0 = every followed box (with ``reseat`` on).""",
+                                valid=Valid.real(minimum=0))
+    reseat_size: bool = param(True, """``reseat`` takes the region's size as well as its centre; False: only its
+                              centre (the box keeps its size, and so the fields and seeds it holds).""",
+                              valid=Valid.boolean())
+    reseat_keep: bool = param(False, """A box re-seated (``reseat``) still holds the area it held before (followed as
+                              the box would have been): the attention fields there are its own and seed no target,
+                              as they were before the re-seat; only its measurement (the alignment, the fits)
+                              and the box it reports move to the object. False = the re-seated box alone.""",
+                              valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 
