@@ -190,8 +190,6 @@ class TargetLayer:
             zones = [(int(round(t.cx)), int(round(t.cy)),
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks if not self._freed(t, now)]
-            zones += [(int(round(t.cx + t.kept[0])), int(round(t.cy + t.kept[1])), int(max(t.kept[2], t.kept[3]) / 2.0))
-                      for t in self._tracks if t.kept is not None and self._measuring(t, now) and not self._freed(t, now)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             for _ in range(self._seeds(interval)):
                 cand = argmax_outside(lm.magnitude, zones)
@@ -341,7 +339,7 @@ class TargetLayer:
         ahead, a wall: growth without a time to contact) then does not swallow the fields and seeds
         of an object that approaches inside it."""
         if self._measuring(t, index):
-            return t.within(x, y, margin)
+            return t.contains(x, y, margin)
         return abs(x - t.cx) <= t.w / 4.0 and abs(y - t.cy) <= t.h / 4.0
 
     def _hosts(self, o: Track, t: Track, index: int) -> bool:
@@ -515,13 +513,13 @@ class TargetLayer:
                     move = self._remeasure(lm, gray, t, interval)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
-                    self._reseat(t, gray)
+                    self._reseat(t, gray, clock)
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
 
-    def _reseat(self, t: Track, gray: np.ndarray) -> None:
+    def _reseat(self, t: Track, gray: np.ndarray, clock: float) -> None:
         """``TargetParams.reseat``: a followed box much larger than the region that changed around its
         centre over the last ``change_frames`` frames (:func:`change_box` against the oldest frame
         kept, within ``max_shift`` px) is put on that region (:meth:`Track.reseat`): the object
@@ -531,7 +529,7 @@ class TargetLayer:
         p = self.params
         if t.aspect is None:
             t.aspect = t.h / max(t.w, 1e-9)
-        if p.reseat <= 0 or not self._past:
+        if p.reseat <= 0 or not self._past or clock - t.birth < p.span(p.reseat_after, self.fps) - _EPS:
             return
         if p.reseat_shape > 0 and max(t.h / t.w / t.aspect, t.aspect * t.w / t.h) <= p.reseat_shape:
             return
@@ -539,9 +537,10 @@ class TargetLayer:
                          kernel=self.change_kernel)
         if box is None or min(box[2], box[3]) < RESEAT_MIN_PX or not t.contains(box[0], box[1]):
             return
+        if max(box[2] / t.w, box[3] / t.h) < p.reseat_part:    # a part of the object (a light, a wheel), not it
+            return
         if t.w * t.h >= p.reseat * box[2] * box[3]:
-            size = (min(box[2], t.w), min(box[3], t.h)) if p.reseat_size else (t.w, t.h)
-            t.reseat((box[0], box[1], *size), keep=p.reseat_keep)
+            t.reseat((box[0], box[1], min(box[2], t.w), min(box[3], t.h)))
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

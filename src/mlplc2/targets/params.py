@@ -327,18 +327,18 @@ class TargetParams(ParameterSet):
                           with it (its positions moved and its sizes scaled alike), so the course sees no
                           jump; the log-scale stays the alignment's. 0 = off.""",
                           valid=Valid.real(minimum=0))
+    reseat_after: int = param(0, """``reseat`` only for a track at least this many frames old: its seeded box is itself
+                              a fresh measurement, and a box drifts off its object over frames. 0 = any age.""",
+                              unit="frames", valid=Valid.integer(0))
+    reseat_part: float = param(0.0, """``reseat`` only on a region that spans at least this fraction of the box's width
+                               or of its height: a box drifted off its object is too tall or too wide, or blown up
+                               a few times, while a region much smaller on both axes is a part of the object (a
+                               light, a wheel of a car) or of the background. 0 = any region.""",
+                               valid=Valid.real(minimum=0))
     reseat_shape: float = param(0.0, """``reseat`` only for a box whose aspect (height / width) moved by more than
                                 this factor from the one it was seeded (or last re-seated) with: a tall strip
                                 or a flat one. 0 = every followed box (with ``reseat`` on).""",
                                 valid=Valid.real(minimum=0))
-    reseat_size: bool = param(True, """``reseat`` takes the region's size as well as its centre; False: only its
-                              centre (the box keeps its size, and so the fields and seeds it holds).""",
-                              valid=Valid.boolean())
-    reseat_keep: bool = param(False, """A box re-seated (``reseat``) still holds the area it held before (followed as
-                              the box would have been): the attention fields there are its own and seed no target,
-                              as they were before the re-seat; only its measurement (the alignment, the fits)
-                              and the box it reports move to the object. False = the re-seated box alone.""",
-                              valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

@@ -150,7 +150,6 @@ class Track:
     behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
     aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
-    kept: tuple | None = None          # (dx from cx, dy from cy, w, h): the area it held before re-seated (``reseat_keep``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
@@ -174,30 +173,13 @@ class Track:
             return 0.0
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
 
-    def within(self, x: float, y: float, margin: float = 0.0) -> bool:
-        """Whether (x, y) lies in the box (plus ``margin``) or in the area it held before it was re-seated
-        (``kept``, followed as the box would have been: ``TargetParams.reseat_keep``)."""
-        if self.contains(x, y, margin):
-            return True
-        if self.kept is None:
-            return False
-        kx, ky, kw, kh = self.kept
-        return abs(x - self.cx - kx) <= kw / 2.0 + margin and abs(y - self.cy - ky) <= kh / 2.0 + margin
-
-    def reseat(self, box: tuple[float, float, float, float], keep: bool = False) -> None:
+    def reseat(self, box: tuple[float, float, float, float]) -> None:
         """Put the box on ``box`` (cx, cy, w, h: the object measured afresh, ``TargetParams.reseat``), its
         history carried with it: every observation's position moved by the same shift and its sizes
         scaled by the same factors, so the course's lines (positions in box sizes) see no jump; the
         log-scale, the growth, stays the alignment's."""
         dx, dy = box[0] - self.cx, box[1] - self.cy
         fx, fy = max(box[2], 1.0) / self.w, max(box[3], 1.0) / self.h
-        if keep:                         # the union of the box and the area kept so far, from the new centre
-            x0, x1, y0, y1 = self.cx - self.w / 2.0, self.cx + self.w / 2.0, self.cy - self.h / 2.0, self.cy + self.h / 2.0
-            if self.kept is not None:
-                kx, ky, kw, kh = self.kept
-                x0, x1 = min(x0, self.cx + kx - kw / 2.0), max(x1, self.cx + kx + kw / 2.0)
-                y0, y1 = min(y0, self.cy + ky - kh / 2.0), max(y1, self.cy + ky + kh / 2.0)
-            self.kept = ((x0 + x1) / 2.0 - box[0], (y0 + y1) / 2.0 - box[1], x1 - x0, y1 - y0)
 
         def moved(q: Observation) -> Observation:
             return q._replace(x=q.x + dx, y=q.y + dy, width=q.width * fx,
@@ -234,9 +216,6 @@ class Track:
         self.cy += dy
         self.w *= fx
         self.h *= fy
-        if self.kept is not None:        # the area held before a re-seat, scaled as the box
-            kx, ky, kw, kh = self.kept
-            self.kept = (kx * fx, ky * fy, kw * fx, kh * fy)
         if box is not None and refit > 0:
             self.cx += refit * (box[0] - self.cx)
             self.cy += refit * (box[1] - self.cy)
