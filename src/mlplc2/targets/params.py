@@ -325,7 +325,9 @@ class TargetParams(ParameterSet):
                           ground or the road grows faster than its object and slides off it (docs/model.md,
                           "Where the time to contact is lost", session 12). The track's history is carried
                           with it (its positions moved and its sizes scaled alike), so the course sees no
-                          jump; the log-scale stays the alignment's. 0 = off.""",
+                          jump; the log-scale stays the alignment's. 0 = off (the default: measured on the four seed sets, it
+                          moves the TTC coverage both ways and loses a real clip; docs/model.md, "The box re-seated
+                          on its change region").""",
                           valid=Valid.real(minimum=0))
     reseat_after: int = param(0, """``reseat`` only for a track at least this many frames old: its seeded box is itself
                               a fresh measurement, and a box drifts off its object over frames. 0 = any age.""",
