@@ -879,3 +879,57 @@ def test_seed_budget_tries_candidates_in_turn(monkeypatch):
     assert all(frame[0] == places[3] and len(frame) == 3 for frame in alarm)   # first, beside the budget's 2
     others = [p for frame in alarm for p in frame[1:]]
     assert set(others[:4]) == set(places) - {places[3]}
+
+
+@pytest.mark.parametrize("reseat", [{"reseat": 1.5}, {"reseat": 3.0, "reseat_after": 12, "reseat_part": 0.5,
+                                                     "reseat_shape": 1.5}, {"reseat": 0.0}])
+def test_a_box_grown_beyond_its_object_is_reseated_on_it(reseat):
+    """``reseat``: a disc approaching at constant speed on a plain background (radius 6 -> 10 px over
+    the run) is tracked; 16 frames after its birth its box is made four times too wide and twice
+    too tall (as a box half on the ground grows, docs/model.md, "Where the time to contact is
+    lost"). With ``reseat`` (alone, or with the guards of session 13: the box old enough, its aspect
+    changed, the region not a small part of it) the box is put back on the region that changes
+    around it, the disc (its diameter within 30 %); without, the alignment scales the wrong box on
+    (at least twice the disc's width)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    contact, r0, at = 70, 6.0, (200, 110)
+    layer = TargetLayer(TargetParams(**reseat), FPS)
+    field = SimpleNamespace(id=1, x=at[0], y=at[1], radius=40, response=1.0, collision=False)
+    sizes = []
+    for k in range(40):
+        img = np.full((240, 320), 150, np.uint8)
+        r = r0 * contact / (contact - k)
+        cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
+        out = layer.step(img.astype(np.float32), None, [field] if k < 12 else [], k)
+        if k == 20:
+            (t,) = layer._tracks
+            t.w, t.h = 4.0 * t.w, 2.0 * t.h
+        if k >= 30:
+            (o,) = [o for o in out if abs(o.x - at[0]) < 8 and abs(o.y - at[1]) < 8]
+            sizes.append((o.width / (2 * r), o.height / (2 * r), o.ttc_s, (contact - k) / FPS))
+    if reseat["reseat"]:
+        assert all(0.7 <= w <= 1.3 and 0.7 <= h <= 1.3 for w, h, _, _ in sizes), sizes
+    else:
+        assert all(w >= 2.0 for w, _, _, _ in sizes), sizes
+    assert all(v is not None and abs(v - true) <= 0.15 * true for _, _, v, true in sizes), sizes
+
+
+def test_a_reseated_track_carries_its_history_with_its_box():
+    """``Track.reseat``: the box moves to the region measured afresh and its history moves with it (the
+    same shift, sizes scaled alike), so the course's lines keep their slope (an object moving 2 px a
+    frame still moves 2 px a frame), and the log-scale (the growth) is untouched."""
+    t = Track(1, 0, 100.0, 80.0, 60.0, 90.0)
+    t.history = deque(Observation(k, 0.01 * k, 100.0 + 2 * k, 80.0, 60.0, 0.0, height=90.0) for k in range(5))
+    t.inside = deque(t.history)
+    t.cx = 108.0
+    t.reseat((120.0, 90.0, 20.0, 30.0))
+    xs = [q.x for q in t.history]
+    assert np.diff(xs) == pytest.approx([2.0] * 4)
+    assert (t.history[-1].x, t.history[-1].y) == pytest.approx((120.0, 90.0))
+    assert [q.width for q in t.history] == pytest.approx([20.0] * 5)
+    assert [q.height for q in t.history] == pytest.approx([30.0] * 5)
+    assert [q.log_scale for q in t.history] == pytest.approx([0.01 * k for k in range(5)])
+    assert (t.cx, t.cy, t.w, t.h) == (120.0, 90.0, 20.0, 30.0) and list(t.inside) == list(t.history)

@@ -29,6 +29,8 @@ from .warning import estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
+#: :meth:`TargetLayer._reseat`: the smallest region (px across) a box is re-seated on (``TargetParams.reseat``)
+RESEAT_MIN_PX = 6.0
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
 
@@ -511,10 +513,35 @@ class TargetLayer:
                 if move is None and gray is not None:
                     move = self._remeasure(lm, gray, t, interval)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
+                if move is not None and gray is not None:
+                    self._reseat(t, gray, clock)
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _reseat(self, t: Track, gray: np.ndarray, clock: float) -> None:
+        """``TargetParams.reseat``: a followed box much larger than the region that changed around its
+        centre over the last ``change_frames`` frames (:func:`change_box` against the oldest frame
+        kept, within ``max_shift`` px) is put on that region (:meth:`Track.reseat`): the object
+        measured afresh, a restoring force the alignment's product of scales lacks. Only a region
+        whose centre lies inside the box and which is at least ``min_size`` px across; with
+        ``reseat_shape``, only for a box whose aspect moved by more than that factor since it was seeded."""
+        p = self.params
+        if t.aspect is None:
+            t.aspect = t.h / max(t.w, 1e-9)
+        if p.reseat <= 0 or not self._past or clock - t.birth < p.span(p.reseat_after, self.fps) - _EPS:
+            return
+        if p.reseat_shape > 0 and max(t.h / t.w / t.aspect, t.aspect * t.w / t.h) <= p.reseat_shape:
+            return
+        box = change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
+                         kernel=self.change_kernel)
+        if box is None or min(box[2], box[3]) < RESEAT_MIN_PX or not t.contains(box[0], box[1]):
+            return
+        if max(box[2] / t.w, box[3] / t.h) < p.reseat_part:    # a part of the object (a light, a wheel), not it
+            return
+        if t.w * t.h >= p.reseat * box[2] * box[3]:
+            t.reseat((box[0], box[1], min(box[2], t.w), min(box[3], t.h)))
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

@@ -379,6 +379,29 @@ class TargetParams(ParameterSet):
                               a course: the alarm there after a contact is the collider's own. False = off
                               (docs/model.md, "Objects missed", session 12).""",
                               valid=Valid.boolean())
+    reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
+                          around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
+                          afresh each frame; its centre inside the box) is re-seated on that region (shrinking
+                          only): the alignment scales the box by the growth of all it holds, so a box half on the
+                          ground or the road grows faster than its object and slides off it (docs/model.md,
+                          "Where the time to contact is lost", session 12). The track's history is carried
+                          with it (its positions moved and its sizes scaled alike), so the course sees no
+                          jump; the log-scale stays the alignment's. 0 = off (the default: measured on the four seed sets, it
+                          moves the TTC coverage both ways and loses a real clip; docs/model.md, "The box re-seated
+                          on its change region").""",
+                          valid=Valid.real(minimum=0))
+    reseat_after: int = param(0, """``reseat`` only for a track at least this many frames old: its seeded box is itself
+                              a fresh measurement, and a box drifts off its object over frames. 0 = any age.""",
+                              unit="frames", valid=Valid.integer(0))
+    reseat_part: float = param(0.0, """``reseat`` only on a region that spans at least this fraction of the box's width
+                               or of its height: a box drifted off its object is too tall or too wide, or blown up
+                               a few times, while a region much smaller on both axes is a part of the object (a
+                               light, a wheel of a car) or of the background. 0 = any region.""",
+                               valid=Valid.real(minimum=0))
+    reseat_shape: float = param(0.0, """``reseat`` only for a box whose aspect (height / width) moved by more than
+                                this factor from the one it was seeded (or last re-seated) with: a tall strip
+                                or a flat one. 0 = every followed box (with ``reseat`` on).""",
+                                valid=Valid.real(minimum=0))
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

@@ -153,6 +153,7 @@ class Track:
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
     behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
+    aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
@@ -175,6 +176,23 @@ class Track:
         if ix <= 0 or iy <= 0:
             return 0.0
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
+
+    def reseat(self, box: tuple[float, float, float, float]) -> None:
+        """Put the box on ``box`` (cx, cy, w, h: the object measured afresh, ``TargetParams.reseat``), its
+        history carried with it: every observation's position moved by the same shift and its sizes
+        scaled by the same factors, so the course's lines (positions in box sizes) see no jump; the
+        log-scale, the growth, stays the alignment's."""
+        dx, dy = box[0] - self.cx, box[1] - self.cy
+        fx, fy = max(box[2], 1.0) / self.w, max(box[3], 1.0) / self.h
+
+        def moved(q: Observation) -> Observation:
+            return q._replace(x=q.x + dx, y=q.y + dy, width=q.width * fx,
+                              height=None if q.height is None else q.height * fy)
+
+        self.history = deque(moved(q) for q in self.history)
+        self.inside = deque(moved(q) for q in self.inside)
+        self.cx, self.cy, self.w, self.h = box[0], box[1], max(box[2], 1.0), max(box[3], 1.0)
+        self.aspect = self.h / self.w
 
     def _trim(self, obs: deque) -> None:
         """Drop the observations older than the window (``span`` clock units before the newest),
