@@ -65,6 +65,19 @@ def clips(data: Path) -> list[tuple[Path, str]]:
     return out
 
 
+def measured(data: Path, names: list[str]):
+    """(video, key, truth, native, size) of each clip of :func:`clips` whose name holds one of ``names``
+    (all when empty): its labels (None without), the size its labels are in (its own without) and its own size."""
+    real = load(data / "real" / "ground_truth.json")
+    for video, key in clips(data):
+        if names and not any(c in video.name for c in names):
+            continue
+        truth = real.get(key)
+        with av.open(str(video)) as c:
+            size = (c.streams.video[0].width, c.streams.video[0].height)
+        yield video, key, truth, (tuple(truth.size) if truth is not None and truth.size else size), size
+
+
 def sha256(path: Path) -> str:
     """The file's SHA-256, hex."""
     h = hashlib.sha256()
@@ -206,15 +219,8 @@ def main(argv=None) -> int:
     args = ap.parse_args(argv)
     models = args.model or ["mlplc2", "flow"]
     copies = args.copy or list(COPIES)
-    real = load(args.data / "real" / "ground_truth.json")
     table = {}
-    for video, key in clips(args.data):
-        if args.clip and not any(c in video.name for c in args.clip):
-            continue
-        truth = real.get(key)
-        with av.open(str(video)) as c:
-            size = (c.streams.video[0].width, c.streams.video[0].height)
-        native = tuple(truth.size) if truth is not None and truth.size else size
+    for video, key, truth, native, size in measured(args.data, args.clip):
         src_sha = sha256(video)
         rows = {}
         for copy in copies:

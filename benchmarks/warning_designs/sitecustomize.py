@@ -74,10 +74,10 @@ if _SPEC:
                 ttc = p.horizon_s
         return _alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
 
-    def estimate(t, p, fps, index, shape, focal=None, heading=None):
+    def estimate(t, p, fps, index, shape, focal=None, heading=None, **kw):
         _FPS["fps"], _FPS["shape"] = fps, shape
         before = t.warned
-        o = _estimate(t, p, fps, index, shape, focal, heading=heading)
+        o = _estimate(t, p, fps, index, shape, focal, heading=heading, **kw)
         if not o.warning or before or t.last_alarm == index or not KINDS & {"sustain", "contact"}:
             return o
         s = D.get("s", 0.1 if "sustain" in KINDS else 0.2) * fps

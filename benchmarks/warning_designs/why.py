@@ -22,13 +22,11 @@ import json
 import sys
 from pathlib import Path
 
-import av
 
 import mlplc2
 import mlplc2.targets.layer as _layer
 import mlplc2.targets.warning as _warning
 from mlplc2.evaluation.match import on_object
-from mlplc2.evaluation.truth import load
 from mlplc2.targets.contact import fit_contact
 
 sys.path.insert(0, str(Path(__file__).resolve().parents[1]))
@@ -77,11 +75,11 @@ def cut_course(*a, **k):
     return r
 
 
-def estimate(t, p, fps, index, shape, focal=None, heading=None):
+def estimate(t, p, fps, index, shape, focal=None, heading=None, **kw):
     CUR.clear()
     CUR["fps"] = fps
     before = t.warned
-    o = _estimate(t, p, fps, index, shape, focal, heading=heading)
+    o = _estimate(t, p, fps, index, shape, focal, heading=heading, **kw)
     if o.warning and not before:
         rule = CUR.get("rule") or ("fit+cut_course" if CUR.get("cut_course") else "fit")
         EVENTS.append(dict(frame=index, id=t.id, born=t.born, ttc=o.ttc_s, miss=o.miss, rule=rule))
@@ -116,15 +114,8 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path)
     ap.add_argument("--vetoes", type=int, default=6, help="field alarms held back to print per copy")
     args = ap.parse_args(argv)
-    real = load(args.data / "real" / "ground_truth.json")
     table = {}
-    for video, key in E.clips(args.data):
-        if args.clip and not any(c in video.name for c in args.clip):
-            continue
-        truth = real.get(key)
-        with av.open(str(video)) as c:
-            size = (c.streams.video[0].width, c.streams.video[0].height)
-        native = tuple(truth.size) if truth is not None and truth.size else size
+    for video, key, truth, native, _ in E.measured(args.data, args.clip):
         for copy in E.COPIES:
             paths = [video] if copy == "orig" else sorted(args.cache.glob(f"{video.stem}_{copy}_*.mp4"))
             if not paths:
