@@ -933,3 +933,43 @@ def test_a_reseated_track_carries_its_history_with_its_box():
     assert [q.height for q in t.history] == pytest.approx([30.0] * 5)
     assert [q.log_scale for q in t.history] == pytest.approx([0.01 * k for k in range(5)])
     assert (t.cx, t.cy, t.w, t.h) == (120.0, 90.0, 20.0, 30.0) and list(t.inside) == list(t.history)
+
+
+def test_a_refound_track_carries_on_the_lost_ones_running_warning():
+    """A track refound where a track that was warning was lost (``refind_frames``) is the same object: it takes
+    over the lost one's warning state whole, so a warning that ran on its last frame runs on (``Track.warned``
+    and ``Track.last_warned``: no ``reonset_miss`` test of a lapsed warning, no onset-only rule such as
+    ``cut_onset_s``) and one that began on a cut box stays one (``Track.onset_cut``, ``cut_exit``); a lost track
+    whose warning had lapsed hands that on too, and one that never warned hands on no warning."""
+    from mlplc2.targets import TargetLayer, Track
+
+    for warned, last, cut in ((True, True, True), (True, False, False), (False, False, False)):
+        layer = TargetLayer(TargetParams(), FPS)
+        lost = Track(4, 0, 160.0, 120.0, 40.0, 40.0)
+        lost.warned, lost.last_warned, lost.onset_cut = warned, last, cut
+        lost.held = (10.0, 0.6, 0.05, 0.1, (0.1, 0.0))
+        layer._lose(lost, 12.0)
+        new = Track(9, 0, 163.0, 118.0, 44.0, 44.0, birth=15.0)
+        assert layer._refind(new, 15.0)
+        assert (new.id, new.warned, new.last_warned, new.onset_cut) == (4, warned, last, cut)
+
+
+def test_the_slant_veto_leaves_a_track_whose_last_frame_was_no_warning():
+    """A warning held back by the slant veto (``max_slant``; here every box is judged slanted) is no warning on
+    that frame: the track has not warned (``Track.warned``) and its last frame was no warning
+    (``Track.last_warned``), so a later warning of it is an onset, not a running one. The approaching disc of
+    :func:`_disc_with_gap` (no gap) warns from frame 41 without the veto."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    frames = _disc_with_gap(gap=(0, 0))
+    for veto in (False, True):
+        layer = TargetLayer(TargetParams(), FPS)
+        if veto:
+            layer._slanted = lambda t, levels: True
+        field = SimpleNamespace(id=1, x=200, y=110, radius=40, response=1.0, collision=False)
+        outs = [layer.step(g, None, [field], k) for k, g in enumerate(frames)]
+        warns = [k for k, o in enumerate(outs) if any(t.warning for t in o)]
+        assert bool(warns) != veto and (not warns or min(warns) >= 35)
+        assert all(t.warned == t.last_warned == (not veto) for t in layer._tracks)

@@ -250,8 +250,9 @@ class TargetLayer:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
-            if o.warning and self._slanted(t, levels):    # the static world's surface, not an object
-                o, t.warned = replace(o, warning=False), warned
+            # the static world's surface, not an object: no warning this frame, so none last frame either
+            if o.warning and self._slanted(t, levels):
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
         self._drop_idle(now)
         self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
@@ -602,16 +603,20 @@ class TargetLayer:
         centre lies in the lost one's last box plus a quarter of its size (as a field it would own,
         :meth:`_own_margin`) and its size is within a factor of 3 of that box's (a factor of 2 and
         the box alone: 0.07 more targets per collision object, docs/model.md).
-        It then takes over the lost track's id, frame of birth and last time to contact
-        (``Track.held``, ``hold_frames``), not its history (the new box is measured afresh: its
-        size against the old box's would be a jump in the log-scale fit); the newest such wins."""
+        It then takes over the lost track's id, frame of birth, last time to contact
+        (``Track.held``, ``hold_frames``) and warning state whole (``Track.warned``,
+        ``Track.last_warned``, ``Track.onset_cut``: the same object, so a warning that ran on the lost
+        track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
+        bookkeeping"), not its history (the new box is measured afresh: its size against the old
+        box's would be a jump in the log-scale fit); the newest such wins."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
             if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
                     and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
-                t.id, t.born, t.held, t.warned = o.id, o.born, o.held, o.warned
+                t.id, t.born, t.held = o.id, o.born, o.held
+                t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
                 return True
         return False
 
