@@ -359,7 +359,9 @@ class TargetParams(ParameterSet):
                              unit="frames", valid=Valid.integer(0))
     refind_frames: int = param(15, """A new target whose centre lies in the last box (plus a quarter of its
                                size) of a target lost (dropped or merged) at most this many frames before,
-                               and of a size within a factor of 3 of it, takes over its id, its last time to contact (``hold_frames``) and its warning state (``warned``, a running or lapsed warning):
+                               and of a size within a factor of 3 of it, takes over its id, its last time to
+                               contact (``hold_frames``) and its warning state (``warned``, a running or lapsed
+                               warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
