@@ -70,10 +70,7 @@ if _SPEC:
                 self._new_field(cand[0], cand[1], index, p.r_af).birth_lm = cand[2]
         for f in self._fields:
             self._integrate(f, lm)
-        keep = [f for f in self._fields if not (index - f.born >= p.grace and sum(list(f.history)[-p.d:]) < p.t_d)]
-        if not keep and self._fields:
-            keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
-        self._fields = keep
+        self._fields = self._survivors(index)
         self._design_prev = m.copy()
         return self._output(gray, index)
 

@@ -132,6 +132,15 @@ class _LPLC2Family(Model):
         recent = list(f.history)[-p.alarm_window:]
         f.collision = sum(recent) >= p.alarm_threshold
 
+    def _survivors(self, index: int) -> list[AttentionField]:
+        """Eq. 16: the fields kept at frame ``index``; a field past its ``grace`` frames whose responses
+        over the last ``d`` frames sum under ``t_d`` is removed, but never the last field."""
+        p = self.params
+        keep = [f for f in self._fields if not (index - f.born >= p.grace and sum(list(f.history)[-p.d:]) < p.t_d)]
+        if not keep and self._fields:
+            keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
+        return keep
+
     def _output(self, gray, index: int) -> Output:
         """This frame's fields, and the targets the target layer makes of them."""
         if self._layer is None:
@@ -196,10 +205,7 @@ class MLPLC2(_LPLC2Family):
         # Eq. 14-15 for every field, then Eq. 16 removal (never the last field).
         for f in self._fields:
             self._integrate(f, lm)
-        keep = [f for f in self._fields if not (index - f.born >= p.grace and sum(list(f.history)[-p.d:]) < p.t_d)]
-        if not keep and self._fields:
-            keep = [max(self._fields, key=lambda f: (sum(f.history), -f.born))]
-        self._fields = keep
+        self._fields = self._survivors(index)
         return self._output(gray, index)
 
 
