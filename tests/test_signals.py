@@ -266,3 +266,27 @@ def test_real_signal_leaves_valid_outputs(tmp_path, sig):
     # the three outputs agree: no frame in responses.csv or targets.csv at or past n_frames
     assert check_outputs_agree(out, ["mlplc2", "lgmd2"]) == k
     assert not [q for q in out.iterdir() if q.name.startswith(".")]
+
+
+# Imports the console script's way (`from mlplc2.cli import main`) after a hook that turns the first
+# import of MODULE into a Ctrl-C: the signal arriving while the command's modules load.
+_CTRL_C_AT_IMPORT = """
+import sys
+class CtrlC:
+    def find_spec(self, name, path=None, target=None):
+        if name == sys.argv[1]:
+            raise KeyboardInterrupt
+sys.meta_path.insert(0, CtrlC())
+from mlplc2.cli import main
+sys.exit(main(sys.argv[2:]))
+"""
+
+
+@pytest.mark.parametrize("module, argv", [("numpy", ["--help"]), ("cv2", ["run", "clip.avi"]),
+                                          ("mlplc2.runner", ["run", "clip.avi"])])
+def test_ctrl_c_while_the_modules_load_is_one_line_and_130(module, argv):
+    """Ctrl-C in the first few tenths of a second of any command (NumPy, OpenCV, Numba loading)
+    is no traceback: the command's modules load under its signal handling."""
+    done = subprocess.run([sys.executable, "-c", _CTRL_C_AT_IMPORT, module, *argv], capture_output=True,
+                          text=True, timeout=120)
+    assert (done.returncode, done.stderr) == (130, "mlplc2: interrupted\n"), done.stderr

@@ -6,8 +6,12 @@ function (:func:`mlplc2.run`, :func:`mlplc2.stimuli.write`,
 table; adding one is one :class:`Subcommand` entry (its options and its handler, which
 calls the public function of the module that implements it), in the module of its group:
 :mod:`.run` (run, demo), :mod:`.stimulus`, :mod:`.studies` (evaluate, batch, benchmark,
-reproduce), :mod:`.tools` (params, bench); :mod:`.common` holds what they share.
-The package is the only place with argparse, printing and exit codes.
+reproduce), :mod:`.tools` (params, bench); :mod:`.common` holds what they share and
+:mod:`.app` the parser. The package is the only place with argparse, printing and exit codes.
+
+This module imports nothing heavy: :func:`main` loads the rest (NumPy, OpenCV, Numba: a few
+tenths of a second) with its signal handling already in place, so that Ctrl-C at any moment
+ends the command with one line and exit code 130, never a traceback.
 
 Exit codes: 0 success; 2 bad input (one line ``mlplc2: error: ...`` on
 stderr, no traceback) and also a truncated or damaged video (after writing
@@ -17,61 +21,20 @@ the frames done are written).
 
 from __future__ import annotations
 
-import argparse
-import os
 import sys
-import warnings
 
 from .._signals import interrupts
-from .._validation import InputError
-from . import run, stimulus, studies, tools
-from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Parser, QuietStderr, Subcommand,
-                     UsageError, did_you_mean, flush_stdout, number_type, one_line, warn)
-from .stimulus import STIMULUS_OWN_OPTIONS
 
 __all__ = ["main", "build_parser", "Subcommand", "SUBCOMMANDS",
            "EXIT_OK", "EXIT_INPUT", "EXIT_TRUNCATED", "EXIT_INTERRUPTED"]
 
-#: Subcommands in help order. Add one entry per new subcommand.
-SUBCOMMANDS: list[Subcommand] = [run.RUN, stimulus.STIMULUS, run.DEMO, studies.EVALUATE, studies.BATCH,
-                                 studies.BENCHMARK, studies.REPRODUCE, tools.PARAMS, tools.BENCH]
+EXIT_OK = 0
+EXIT_INPUT = 2
+#: A truncated/damaged input still gives outputs but exits non-zero (same code as bad input).
+EXIT_TRUNCATED = 2
+EXIT_INTERRUPTED = 130
 
-
-def build_parser() -> argparse.ArgumentParser:
-    from .. import __version__
-
-    parser = Parser(prog=PROG, description="mLPLC2 looming detection: run models on videos, "
-                                            "make stimuli, see a demo.")
-    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
-    for cmd in SUBCOMMANDS:
-        p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
-        cmd.add_arguments(p)
-        p.set_defaults(_handler=cmd.handler, _parser=p)
-    return parser
-
-
-def one_line(text: str) -> str:
-    return " ".join(text.split()) or "unknown error"
-
-
-def _quiet_decoders() -> None:
-    """Keep FFmpeg's and OpenCV's own log lines off stderr: errors are reported
-    as one ``mlplc2: error:`` line instead. Set ``OPENCV_FFMPEG_LOGLEVEL`` /
-    ``OPENCV_LOG_LEVEL`` to see them (FFmpeg reads its level once per process)."""
-    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
-    if "OPENCV_LOG_LEVEL" not in os.environ:
-        try:
-            import cv2
-
-            cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
-        except (ImportError, AttributeError):  # pragma: no cover - old or absent OpenCV
-            pass
-
-
-def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG001
-    """``warnings.showwarning`` of the CLI: one line, ``mlplc2: warning: ...``."""
-    warn(one_line(str(message)))
+PROG = "mlplc2"
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -79,44 +42,23 @@ def main(argv: list[str] | None = None) -> int:
 
     SIGTERM (what batch schedulers and ``timeout`` send) is handled like Ctrl-C: the
     outputs of the frames done are written and the exit code is 130 (``mlplc2._signals``).
-    Warnings are printed as one line each, ``mlplc2: warning: ...``.
+    Either signal at any moment, while the modules load too, gives one ``mlplc2: interrupted``
+    line. Warnings are printed as one line each, ``mlplc2: warning: ...``.
     """
-    stderr = sys.stderr
-    with interrupts(sigterm=True), warnings.catch_warnings():
-        warnings.showwarning = _show_warning
-        sys.stderr = QuietStderr(stderr)    # a reader of stderr that has gone is no error either
-        try:
-            return _main(argv)
-        finally:
-            flush_stdout()  # a reader that has gone (`| head -1`) is no error (cli.common.out)
-            sys.stderr.flush()
-            sys.stderr = stderr
-
-
-def _main(argv: list[str] | None) -> int:
-    _quiet_decoders()
-    parser = build_parser()
     try:
-        args, extra = parser.parse_known_args(argv)
-        if extra:  # pointing at the subcommand's help, not the top level's
-            options = [o for a in args._parser._actions for o in a.option_strings]
-            hint = did_you_mean(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""
-            raise UsageError(f"unrecognized arguments: {' '.join(extra)}{hint} (see '{PROG} {args.command} --help')")
-    except UsageError as exc:
-        print(f"{PROG}: error: {exc}", file=sys.stderr)
-        return EXIT_INPUT
-    except SystemExit as exc:  # --help / --version
-        return int(exc.code or 0)
-    try:
-        return int(args._handler(args))
-    except InputError as exc:
-        print(f"{PROG}: error: {one_line(str(exc))}", file=sys.stderr)
-        return EXIT_INPUT
-    except OSError as exc:
-        line = f"{exc.filename}: {exc.strerror}" if exc.strerror and exc.filename else str(exc) or type(exc).__name__
-        print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
-        return EXIT_INPUT
+        with interrupts(sigterm=True):
+            from .app import run_command   # the parser and the subcommands' modules
+
+            return run_command(argv)
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)
         return EXIT_INTERRUPTED
 
+
+def __getattr__(name: str):
+    """The parser's names (:data:`SUBCOMMANDS`, :func:`build_parser`, ...), from :mod:`.app` when first used."""
+    if name in ("build_parser", "Subcommand", "SUBCOMMANDS", "STIMULUS_OWN_OPTIONS"):
+        from . import app
+
+        return getattr(app, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")

@@ -22,14 +22,7 @@ from dataclasses import dataclass
 from .._validation import InputValueError
 from ..io import parse_resize
 from ..models.base import REGISTRY, REPEAT_THRESHOLD
-
-EXIT_OK = 0
-EXIT_INPUT = 2
-#: A truncated/damaged input still gives outputs but exits non-zero (same code as bad input).
-EXIT_TRUNCATED = 2
-EXIT_INTERRUPTED = 130
-
-PROG = "mlplc2"
+from . import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG  # noqa: F401 - the subcommands' import
 
 
 class UsageError(Exception):

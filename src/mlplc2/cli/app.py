@@ -1,0 +1,99 @@
+"""The ``mlplc2`` command line proper (:func:`mlplc2.cli.main` imports it when it runs): the
+parser built from :data:`SUBCOMMANDS`, the exit codes of errors (the package docstring).
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import warnings
+
+from .._validation import InputError
+from . import run, stimulus, studies, tools
+from .common import (EXIT_INPUT, EXIT_INTERRUPTED, PROG, Parser, QuietStderr, Subcommand, UsageError, did_you_mean,
+                     flush_stdout, one_line, warn)
+from .stimulus import STIMULUS_OWN_OPTIONS
+
+__all__ = ["run_command", "build_parser", "Subcommand", "SUBCOMMANDS", "STIMULUS_OWN_OPTIONS"]
+
+#: Subcommands in help order. Add one entry per new subcommand.
+SUBCOMMANDS: list[Subcommand] = [run.RUN, stimulus.STIMULUS, run.DEMO, studies.EVALUATE, studies.BATCH,
+                                 studies.BENCHMARK, studies.REPRODUCE, tools.PARAMS, tools.BENCH]
+
+
+def build_parser() -> argparse.ArgumentParser:
+    from .. import __version__
+
+    parser = Parser(prog=PROG, description="mLPLC2 looming detection: run models on videos, "
+                                            "make stimuli, see a demo.")
+    parser.add_argument("--version", action="version", version=f"%(prog)s {__version__}")
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", required=True, parser_class=Parser)
+    for cmd in SUBCOMMANDS:
+        p = sub.add_parser(cmd.name, help=cmd.help, description=cmd.help)
+        cmd.add_arguments(p)
+        p.set_defaults(_handler=cmd.handler, _parser=p)
+    return parser
+
+
+def _quiet_decoders() -> None:
+    """Keep FFmpeg's and OpenCV's own log lines off stderr: errors are reported
+    as one ``mlplc2: error:`` line instead. Set ``OPENCV_FFMPEG_LOGLEVEL`` /
+    ``OPENCV_LOG_LEVEL`` to see them (FFmpeg reads its level once per process)."""
+    os.environ.setdefault("OPENCV_FFMPEG_LOGLEVEL", "-8")
+    if "OPENCV_LOG_LEVEL" not in os.environ:
+        try:
+            import cv2
+
+            cv2.utils.logging.setLogLevel(cv2.utils.logging.LOG_LEVEL_ERROR)
+        except (ImportError, AttributeError):  # pragma: no cover - old or absent OpenCV
+            pass
+
+
+def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG001
+    """``warnings.showwarning`` of the CLI: one line, ``mlplc2: warning: ...``."""
+    warn(one_line(str(message)))
+
+
+def run_command(argv: list[str] | None = None) -> int:
+    """:func:`mlplc2.cli.main` once its modules are loaded (it holds the signal handling): the
+    exit code. Warnings are printed as one line each, ``mlplc2: warning: ...``."""
+    stderr = sys.stderr
+    with warnings.catch_warnings():
+        warnings.showwarning = _show_warning
+        sys.stderr = QuietStderr(stderr)    # a reader of stderr that has gone is no error either
+        try:
+            return _main(argv)
+        finally:
+            flush_stdout()  # a reader that has gone (`| head -1`) is no error (cli.common.out)
+            sys.stderr.flush()
+            sys.stderr = stderr
+
+
+def _main(argv: list[str] | None) -> int:
+    _quiet_decoders()
+    parser = build_parser()
+    try:
+        args, extra = parser.parse_known_args(argv)
+        if extra:  # pointing at the subcommand's help, not the top level's
+            options = [o for a in args._parser._actions for o in a.option_strings]
+            hint = did_you_mean(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""
+            raise UsageError(f"unrecognized arguments: {' '.join(extra)}{hint} (see '{PROG} {args.command} --help')")
+    except UsageError as exc:
+        print(f"{PROG}: error: {exc}", file=sys.stderr)
+        return EXIT_INPUT
+    except SystemExit as exc:  # --help / --version
+        return int(exc.code or 0)
+    try:
+        return int(args._handler(args))
+    except InputError as exc:
+        print(f"{PROG}: error: {one_line(str(exc))}", file=sys.stderr)
+        return EXIT_INPUT
+    except OSError as exc:
+        line = f"{exc.filename}: {exc.strerror}" if exc.strerror and exc.filename else str(exc) or type(exc).__name__
+        print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
+        return EXIT_INPUT
+    except KeyboardInterrupt:
+        print(f"{PROG}: interrupted", file=sys.stderr)
+        return EXIT_INTERRUPTED
+
