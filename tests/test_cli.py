@@ -737,6 +737,7 @@ def test_cli_only_undecodable_images(tmp_path, capsys):
     (["--scale", "0"], "argument --scale: expected a positive number, got '0'"),
     (["--start", "-1"], "argument --start: expected an integer >= 0, got '-1'"),
     (["--start", "99"], "start frame 99 is past the end (4 frames)"),
+    (["--start", "4"], "start frame 4 is past the end (4 frames)"),   # one past the last: nothing to process
     (["--end", "0"], "--end (0) must be larger than --start (0)"),
     (["--resize", "320x"], "argument --resize: expected WxH with positive integers, e.g. 320x240, got '320x' "
                            "(see 'mlplc2 run --help')"),
@@ -748,6 +749,18 @@ def test_cli_more_bad_options(tmp_path, capsys, argv, expect):
     assert main(["run", str(p), *argv, "--out", str(out), "--quiet"]) == 2
     assert expect in _one_line(capsys.readouterr().err)
     assert _written(out) == []
+
+
+@pytest.mark.filterwarnings("default::mlplc2.InputWarning")
+@pytest.mark.parametrize("argv, frames", [(["--end", "9"], 4), (["--start", "2", "--end", "9"], 2)])
+def test_an_end_past_the_clip_says_how_many_frames_it_has(tmp_path, capsys, argv, frames):
+    p = write_video(tmp_path / "v.avi", noise_frames(4), 30.0)
+    assert main(["run", str(p), *argv, "--out", str(tmp_path / "o"), "--quiet"]) == 0
+    assert capsys.readouterr().err == (f"mlplc2: warning: {p} has 4 frames: end frame 9 is past its end; "
+                                       "the run went to its last frame\n")
+    assert json.loads((tmp_path / "o" / "fields.json").read_text())["n_frames"] == frames
+    assert main(["run", str(p), "--end", "4", "--out", str(tmp_path / "e"), "--quiet"]) == 0   # its end: no note
+    assert capsys.readouterr().err == ""
 
 
 @pytest.mark.parametrize("command", ["run", "evaluate", "batch"])

@@ -13,7 +13,7 @@ from collections.abc import Iterator
 
 import numpy as np
 
-from .._validation import InputValueError, check_fps
+from .._validation import InputValueError, InputWarning, check_fps
 from .decoders import Decoder, open_decoder
 from .formats import DEFAULT_FPS, TruncatedInputWarning, is_camera, is_live, output_size, parse_resize
 
@@ -104,16 +104,13 @@ class FrameSource:
         # First frame read now, in the caller's thread, so that empty or
         # undecodable inputs fail at open time with a clear message.
         skipped = decoder.skip(self.start) if self.start else 0
-        if skipped < self.start:
-            decoder.close()
-            raise InputValueError(f"{self.name}: start frame {self.start} is past the end ({skipped} frames)")
-        first = decoder.read() if (self.end is None or self.end > self.start) else None
+        first = decoder.read() if skipped == self.start and (self.end is None or self.end > self.start) else None
         if first is None:
             decoder.close()
             if self.end is not None and self.end <= self.start:
                 raise InputValueError(f"end ({self.end}) must be larger than start ({self.start})")
-            if self.start:
-                raise InputValueError(f"{self.name}: no frame at or after start frame {self.start}")
+            if self.start:   # nothing to process; the start frame one past the last included
+                raise InputValueError(f"{self.name}: start frame {self.start} is past the end ({skipped} frames)")
             why = getattr(decoder, "error", None)
             raise InputValueError(f"{self.name}: video has no frames (empty or undecodable)" + (f": {why}" if why else ""))
         h, w = first.shape[:2]
@@ -305,6 +302,9 @@ class FrameSource:
                             "(file truncated or damaged); results cover frames before it"
                             + (" (frames decode after it: --decoder pyav skips a damaged frame and goes on)"
                                if getattr(self._dec, "goes_on", None) else ""))
+        elif self.end is not None and index < self.end:   # a clip shorter than the end asked for: ran to its end
+            warnings.warn(f"{self.name} has {index} frames: end frame {self.end} is past its end; "
+                          f"the run went to its last frame", InputWarning, stacklevel=2)
 
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""
