@@ -7,6 +7,7 @@ rendered camera's, not output of the code under test.
 """
 
 import math
+from fractions import Fraction
 
 import cv2
 import numpy as np
@@ -204,3 +205,25 @@ def test_a_given_rotation_is_compensated_whatever_the_images_say():
     assert CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=0.0, given=True).trusted
     assert not CameraMotion(omega=(0.0, 0.01, 0.0), rotation_confidence=0.0).trusted
     assert not CameraMotion(rotation_confidence=1.0, given=True).trusted      # no rotation: nothing to do
+
+
+def test_a_gyro_short_of_the_frames_timestamps_is_refused_before_the_run(tmp_path, capsys):
+    """A clip whose timestamps start at 2 s (frames 2 to 3.97 s, PyAV's clock) and a gyro of 0 to 2 s:
+    refused before any output, not at the first frame past 2 s (the check used index / fps)."""
+    av = pytest.importorskip("av")
+    clip = tmp_path / "late.mp4"
+    with av.open(str(clip), "w") as c:
+        s = c.add_stream("mpeg4", rate=30)
+        s.width, s.height, s.pix_fmt = 160, 120, "yuv420p"
+        for k, f in enumerate(np.random.default_rng(0).integers(0, 256, (60, 120, 160, 3), dtype=np.uint8)):
+            frame = av.VideoFrame.from_ndarray(f, format="rgb24")
+            frame.pts, frame.time_base = 60 + k, Fraction(1, 30)
+            c.mux(s.encode(frame))
+        c.mux(s.encode())
+    gyro = _csv(tmp_path / "g.csv", "t,wx,wy,wz\n0,0,0.2,0\n2,0,0.2,0\n")
+    out = tmp_path / "o"
+    assert main(["run", str(clip), "--decoder", "pyav", "--hfov", "60", "--gyro", str(gyro), "--out", str(out),
+                 "-q"]) == 2
+    assert capsys.readouterr().err.startswith(f"mlplc2: error: {gyro}: the gyro covers t = 0 to 2 s but the run's "
+                                              "frames are at 2 to 3.96667 s")
+    assert not out.exists()

@@ -155,6 +155,13 @@ class FrameSource:
         self.scale_y = self.size[1] / self.out_size[1]
         self._centres = True
 
+    def span_s(self) -> tuple[float, float | None]:
+        """The times (s) the first and the last frame will have, on the clock of :attr:`time_s` (its
+        container timestamps from the first frame's on, else frame index / fps); the last is None
+        when :attr:`total` is unknown (a stream, a camera) and estimated at the frame rate."""
+        first = self._first_time if self._timed and self._first_time is not None else self.start / self.fps
+        return first, None if not self.total else first + (self.total - 1) / self.fps
+
     # -- mapping --------------------------------------------------------------
     @property
     def resized(self) -> bool:

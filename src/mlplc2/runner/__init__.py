@@ -310,8 +310,7 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     if options.gyro is not None and None not in refusals:   # no model takes it: the first one says why
         raise InputValueError(f"{options.gyro.name}: {refusals[0]}")
     if options.gyro is not None:                            # it spans the frames (when their number is known)
-        last = None if not src.total else (src.start + src.total - 1) / src.fps
-        options.gyro.check_covers(src.start / src.fps, last, src.fps)
+        options.gyro.check_covers(*src.span_s(), src.fps)  # on the clock of the frames' times (their timestamps)
     widths = {m.work_width for m in built}
     w, h = src.size
     if len(widths) == 1 and None not in widths and not src.resized and w > (work := widths.pop()):
