@@ -11,7 +11,6 @@ and Numba load (``mlplc2.cli.main``: one ``interrupted`` line, never a traceback
 from __future__ import annotations
 
 import importlib
-import importlib.util
 
 #: Each public name and the submodule that defines it.
 _PUBLIC = {"Params": "params", "MLPLC2": "models", "SLPLC2": "models", "LPLC2": "models", "LGMD2": "models",
@@ -24,6 +23,8 @@ __version__ = "0.1.0"
 
 
 def __getattr__(name: str):
+    import importlib.util   # here: the module itself loads nothing the command does not need first
+
     if name in _PUBLIC:
         value = getattr(importlib.import_module(f".{_PUBLIC[name]}", __name__), name)
     elif not name.startswith("__") and importlib.util.find_spec(f"{__name__}.{name}") is not None:

@@ -27,11 +27,8 @@ from __future__ import annotations
 import signal
 import threading
 from collections.abc import Iterable, Iterator
-from typing import TypeVar
 
 __all__ = ["interrupts"]
-
-T = TypeVar("T")
 
 _MARK = "_mlplc2_interrupts"  # attribute set on the handlers installed here that interrupt
 
@@ -131,7 +128,7 @@ class interrupts:  # noqa: N801 - used like contextlib.suppress / warnings.catch
             self._raised = True
             raise KeyboardInterrupt
 
-    def between(self, items: Iterable[T]) -> Iterator[T]:
+    def between(self, items: Iterable) -> Iterator:   # no typing.TypeVar: mlplc2.cli loads this first
         """Yield ``items`` one at a time, with the safe points between them.
 
         An interrupt that arrives while the caller works on an item is raised (as
