@@ -896,6 +896,20 @@ def test_fragmentation_counts_distinct_targets_while_the_object_covers_at_most_h
     assert warn_summary(ev)["fragmentation"] == pytest.approx(1.5)
 
 
+
+def test_a_target_on_a_neighbour_is_the_neighbours_not_a_fragment_of_the_collision_object():
+    """A target counts for the one object it lies nearest: the target on a passing car 15 px beside
+    the collision object's box is the car's (within the match radius of both boxes), so the
+    collision object keeps one target, and that target's time to contact is not the collider's."""
+    passing = obj(2, "pass", range(20), 90, 50, 20)                 # box x 80-100; the collider's 42-64
+    gt = {"videos": {"a.mp4": video_truth([colliding(), passing], frames=22)}}
+    targets = ([T(f, 1, 50, 50, ttc=(20 - f) / WARN_FPS) for f in range(5, 12)]
+               + [T(f, 2, 75, 50, ttc=0.1) for f in range(5, 18)])   # 5 px from the car, 12-18 px from the collider
+    ev = evaluate(result("a.mp4", 22, targets=targets), gt)
+    o = wobj(ev, oid=1)
+    assert o["targets"] == 1
+    assert o["ttc_errors"] and all(est == pytest.approx(true, rel=1e-3) for true, est in o["ttc_errors"])
+
 # ---------------------------------------------------------------------------
 # labelled clips
 # ---------------------------------------------------------------------------

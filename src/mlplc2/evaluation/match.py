@@ -6,7 +6,9 @@ matching
     lies within :data:`DEFAULT_MATCH_RADIUS` of the object's centre; :func:`fields_near`,
     :func:`first_field`, :func:`match_fields`) and :func:`box_distance` (the warning metrics: a
     target is on an object when its centre lies within the match radius of the object's box,
-    so large objects are matched anywhere on them; :func:`on_object`).
+    so large objects are matched anywhere on them; :func:`on_object`; :func:`nearest_object`: the
+    one object a target stands for in a frame, for the targets on an object and their times to
+    contact).
 false alarms (the paper's metrics)
     :func:`alarm_explained`: an alarm is explained when it lies within the match radius of an
     object that approaches, up to :data:`DEFAULT_TAIL` frames after its approach (a global
@@ -28,7 +30,8 @@ from collections.abc import Iterable, Sequence
 from .record import FieldHistory, Record
 from .truth import ObjectTruth, VideoTruth, load
 
-__all__ = ["centre_distance", "fields_near", "first_field", "box_distance", "on_object", "alarm_explained",
+__all__ = ["centre_distance", "fields_near", "first_field", "box_distance", "on_object", "nearest_object",
+           "alarm_explained",
            "false_alarms", "warning_cause", "episodes", "match_fields", "DEFAULT_MATCH_RADIUS", "DEFAULT_TAIL",
            "CAUSES"]
 
@@ -88,6 +91,23 @@ def box_distance(x: float, y: float, obj: ObjectTruth, frame: int) -> float:
 def on_object(x: float, y: float, obj: ObjectTruth, frame: int, radius: float = DEFAULT_MATCH_RADIUS) -> bool:
     """Whether (x, y) is on ``obj`` at ``frame``: within ``radius`` of its box (:func:`box_distance`)."""
     return box_distance(x, y, obj, frame) <= radius
+
+
+def nearest_object(x: float, y: float, frame: int, truth: VideoTruth,
+                   radius: float = DEFAULT_MATCH_RADIUS) -> ObjectTruth | None:
+    """The one object a target at (x, y) stands for at ``frame``: of the objects in view then
+    (the clip's collider always), the one whose box lies nearest (:func:`box_distance`, within
+    ``radius``; among equals the nearer centre, then the first); None when none is that near.
+    A target between two objects counts for one of them only: beside a passing car, the target
+    on the car is not a second target of the collision object next to it (fragmentation)."""
+    best, key = None, None
+    for o in list(truth.objects) + ([truth.collider] if truth.collider is not None else []):
+        if not (_present(o, frame) or o is truth.collider):
+            continue
+        d = box_distance(x, y, o, frame)
+        if d <= radius and (key is None or (d, centre_distance(x, y, o, frame)) < key):
+            best, key = o, (d, centre_distance(x, y, o, frame))
+    return best
 
 
 # ---------------------------------------------------------------------------

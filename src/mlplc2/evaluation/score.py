@@ -29,7 +29,7 @@ import statistics
 from dataclasses import dataclass, field, replace
 from typing import Any
 
-from .match import CAUSES, alarm_explained, centre_distance, episodes, on_object, warning_cause
+from .match import CAUSES, alarm_explained, centre_distance, episodes, nearest_object, on_object, warning_cause
 from .record import TargetRow
 from .truth import ObjectTruth, VideoTruth
 
@@ -478,7 +478,9 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
         # before contact every box at its edges lies on it (FRAGMENT_SHARE)
         fits = width is None or truth.size is None or width <= FRAGMENT_SHARE * max(truth.size)
         if run.has_targets:
-            on = [t for t in run.frame_targets.get(f, ()) if on_object(t.x, t.y, o, f, radius)]
+            # the targets this object stands for: each target counts for the one object it lies
+            # nearest (a target on a neighbour within the radius is the neighbour's, not a fragment)
+            on = [t for t in run.frame_targets.get(f, ()) if nearest_object(t.x, t.y, f, truth, radius) is o]
             if fits:
                 ids.update(t.id for t in on)
             true = o.ttc_at(f, fps)
@@ -492,7 +494,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                     rec["ttc_estimated"] += 1
                     rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
         elif run.localises and fits:
-            ids.update(fid for fid, x, y, _ in run.fields_at(f) if on_object(x, y, o, f, radius))
+            ids.update(fid for fid, x, y, _ in run.fields_at(f) if nearest_object(x, y, f, truth, radius) is o)
     rec["targets"] = len(ids) if (run.has_targets or run.localises) else None
     return rec
 
