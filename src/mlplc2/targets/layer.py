@@ -191,20 +191,14 @@ class TargetLayer:
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks if not self._freed(t, now)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
-            changed = False                      # a change seed taken this frame
             for _ in range(self._seeds(interval)):
                 cand = argmax_outside(lm.magnitude, zones)
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-                    cand, changed = self._change_seed(levels, zones), True
+                    cand = self._change_seed(levels, zones)
                 if cand is None:
                     break
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
-            if p.change_seed_every and not changed:   # TargetParams.change_seed_every
-                cand = self._change_seed(levels, zones)
-                if cand is not None:
-                    seeds.append((cand[0], cand[1], None))
-                    zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
         budget = None
         if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
             span = p.span(p.change_frames, self.fps) + _EPS
@@ -453,13 +447,11 @@ class TargetLayer:
         frame (``TargetParams.nominal_fps``) the interval since the last frame stands for, at most
         ``change_frames`` (the growth test's span); one at the first frame or at the nominal rate. A
         camera at 7.5 fps thus seeds as often in time as one at 30 fps: between distant frames a fast
-        object is often not the strongest LM (issue 23: the thrown helmet, the thrower's body). Each counts
-        ``TargetParams.lm_seeds`` times."""
-        k = self.params.lm_seeds                 # TargetParams.lm_seeds per nominal frame
+        object is often not the strongest LM (issue 23: the thrown helmet, the thrower's body)."""
         if interval is None:
-            return k
+            return 1
         n = int(round(interval / self.params.span(1, self.fps)))
-        return k * max(1, min(n, self.params.change_frames))
+        return max(1, min(n, self.params.change_frames))
 
     def _far(self, interval: float) -> bool:
         """Whether frames ``interval`` clock units apart are more than one nominal frame apart (a

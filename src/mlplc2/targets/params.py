@@ -61,17 +61,6 @@ class TargetParams(ParameterSet):
                                candidate (:meth:`TargetLayer._change_seed`) when it is at least this
                                much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
                                unit="grey levels", valid=Valid.real(minimum=0))
-    lm_seeds: int = param(1, """LM seeds (``seed_lm``, else ``seed_change``) per nominal frame interval: the strongest
-                          point outside every target, field and seed tried before it (``claim``), that many
-                          times. 1 = the strongest only (the default: 3 measured, not adopted,
-                          docs/model.md, "Where TTC coverage is lost").""", unit="seeds",
-                          valid=Valid.integer(1))
-    change_seed_every: bool = param(False, """The ``seed_change`` candidate is tried on every frame beside the LM
-                                    seed, not only when no local motion stands out: under a camera that moves
-                                    forward the strongest LM lies on the static world, while a small object
-                                    that grows straight at the camera makes almost none (off by default:
-                                    measured, not adopted, docs/model.md, "Where TTC coverage is lost").""",
-                                    valid=Valid.boolean())
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
