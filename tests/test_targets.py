@@ -808,7 +808,7 @@ def test_a_target_whose_contact_has_passed_frees_the_seeds_inside_its_box():
 
 
 def test_a_target_whose_contact_has_passed_opens_its_box_to_seeds():
-    """``passed_seeds`` (off by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
+    """``passed_seeds`` (on by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
     contact at clock 25) has run out and whose box spans the view opens its box to seeds at clock 26, for
     good (a later fit of the box grown over the view notwithstanding; a passed box beside the camera does not):
     a target born inside it (``behind``) is not merged into it; unlike ``free_passed`` it still counts
@@ -816,7 +816,7 @@ def test_a_target_whose_contact_has_passed_opens_its_box_to_seeds():
     second disc, behind the first one's box)."""
     from mlplc2.targets import TargetLayer, Track
 
-    assert not TargetParams().passed_seeds
+    assert TargetParams().passed_seeds
     for on in (True, False):
         layer = TargetLayer(TargetParams(passed_seeds=on), FPS)
         layer._size = (320, 240)                              # the frame (w, h) the layer last saw

@@ -580,7 +580,7 @@ class TargetLayer:
         return self.params.free_passed and t.freed
 
     def _opened(self, t: Track, now: float) -> bool:
-        """``passed_seeds`` (off by default): whether the box of track ``t`` no longer claims the LM and change
+        """``passed_seeds`` (on by default): whether the box of track ``t`` no longer claims the LM and change
         seeds inside it, for good once its contact has passed and it spans the view (:meth:`_contact_passed`,
         :meth:`_over_view`): no seed zone, and a box seeded there is not a part of it, then or later
         (:meth:`_merge`); unlike ``free_passed``
