@@ -581,12 +581,12 @@ class TargetLayer:
 
     def _opened(self, t: Track, now: float) -> bool:
         """``passed_seeds`` (on by default): whether the box of track ``t`` no longer claims the LM and change
-        seeds inside it, for good once its contact has passed and it spans the view (:meth:`_contact_passed`,
-        :meth:`_over_view`): no seed zone, and a box seeded there is not a part of it, then or later
-        (:meth:`_merge`); unlike ``free_passed``
-        it keeps the attention fields it owns (after a contact they are the collider's own) and counts
-        against ``max_targets``. docs/model.md, "Objects missed", session 14."""
-        if self.params.passed_seeds and not t.opened and self._contact_passed(t, now) and self._over_view(t):
+        seeds inside it, for good once its contact has passed (:meth:`_contact_passed`), whether or not it
+        spans the view (a passing object's box, grown over a collider beside it, too): no seed zone, and a box
+        seeded there is not a part of it, then or later (:meth:`_merge`); unlike ``free_passed`` it keeps the
+        attention fields it owns (after a contact they are the collider's own) and counts against
+        ``max_targets``. docs/model.md, "Objects missed", session 14."""
+        if self.params.passed_seeds and not t.opened and self._contact_passed(t, now):
             t.opened = True
         return self.params.passed_seeds and t.opened
 
