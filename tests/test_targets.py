@@ -807,6 +807,37 @@ def test_a_target_whose_contact_has_passed_frees_the_seeds_inside_its_box():
         assert layer._freed(big, 28.0) == on
 
 
+def test_a_target_whose_contact_has_passed_opens_its_box_to_seeds():
+    """``passed_seeds`` (on by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
+    contact at clock 25) has run out opens its box to seeds at clock 26, for good (a later fit of the box
+    grown over the view notwithstanding), whether its box spans the view or not (one beside the camera):
+    a target born inside it (``behind``) is not merged into it; unlike ``free_passed`` it still counts
+    against ``max_targets`` and merges a box that is not ``behind`` (issue 22: ``texture_static_4_h1``'s
+    second disc, behind the first one's box)."""
+    from mlplc2.targets import TargetLayer, Track
+
+    assert TargetParams().passed_seeds
+    for on in (True, False):
+        layer = TargetLayer(TargetParams(passed_seeds=on), FPS)
+        layer._size = (320, 240)                              # the frame (w, h) the layer last saw
+        beside = Track(3, 0, 300.0, 120.0, 100.0, 180.0)      # passed beside the camera: not over the view
+        beside.held = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0))
+        assert not layer._opened(beside, 24.0) and layer._opened(beside, 26.0) == on
+        big = Track(1, 0, 160.0, 120.0, 400.0, 300.0)
+        big.held, big.last_estimate, big.last_answer = (10.0, 0.5, 0.05, 0.2, (0.2, 0.0)), 10.0, 26.0
+        assert not layer._opened(big, 24.0)                   # before its contact
+        assert layer._opened(big, 26.0) == on
+        big.held = (27.0, 0.05, 0.01, 0.2, (0.2, 0.0))        # a fit after contact: the view's growth
+        assert layer._opened(big, 28.0) == on
+        behind = Track(2, 0, 100.0, 170.0, 10.0, 10.0, birth=26.0)
+        behind.behind = on
+        other = Track(4, 0, 200.0, 60.0, 10.0, 10.0, birth=26.0)
+        layer._tracks = [big, behind, other]
+        assert layer._count(28.0) == 3
+        layer._merge(28.0)
+        assert [t.id for t in layer._tracks] == ([1, 2] if on else [1])
+
+
 def test_time_to_contact_counts_down_through_a_failed_alignment():
     """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
     is the fit's contact less the frames since its newest point (else it stands still)."""

@@ -189,7 +189,7 @@ class TargetLayer:
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             zones = [(int(round(t.cx)), int(round(t.cy)),
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
-                     for t in self._tracks if not self._freed(t, now)]
+                     for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             for _ in range(self._seeds(interval)):
                 cand = argmax_outside(lm.magnitude, zones)
@@ -208,7 +208,8 @@ class TargetLayer:
         for x, y, f in seeds:
             if self._count(now) >= p.max_targets:
                 break
-            if any(self._holds(t, x, y, now) for t in self._tracks if not self._freed(t, now)):
+            if any(self._holds(t, x, y, now) for t in self._tracks
+                   if not (self._freed(t, now) or (f is None and self._opened(t, now)))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -220,7 +221,8 @@ class TargetLayer:
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-                host = next((o for o in self._tracks if self._hosts(o, t, now)), None)
+                host = next((o for o in self._tracks if self._hosts(o, t, now)
+                             and not (f is None and self._opened(o, now))), None)
                 if host is not None or self._grows(levels, t, alarm=alarm):
                     if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
                         t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
@@ -233,7 +235,8 @@ class TargetLayer:
             if t is None:
                 continue
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
-            t.behind = any(self._freed(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
+            t.behind = any((self._freed(o, now) or self._opened(o, now)) and o.contains(t.cx, t.cy)
+                           for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             if not self._refind(t, now):
@@ -576,6 +579,17 @@ class TargetLayer:
             t.freed = True                       # for good: the fits of a box grown past contact are the view's
         return self.params.free_passed and t.freed
 
+    def _opened(self, t: Track, now: float) -> bool:
+        """``passed_seeds`` (on by default): whether the box of track ``t`` no longer claims the LM and change
+        seeds inside it, for good once its contact has passed (:meth:`_contact_passed`), whether or not it
+        spans the view (a passing object's box, grown over a collider beside it, too): no seed zone, and a box
+        seeded there is not a part of it, then or later (:meth:`_merge`); unlike ``free_passed`` it keeps the
+        attention fields it owns (after a contact they are the collider's own) and counts against
+        ``max_targets``. docs/model.md, "Objects missed", session 14."""
+        if self.params.passed_seeds and not t.opened and self._contact_passed(t, now):
+            t.opened = True
+        return self.params.passed_seeds and t.opened
+
     def _over_view(self, t: Track) -> bool:
         """Whether the box of track ``t`` spans the whole frame across or down (``free_passed``): an object
         at its contact fills the view, while one that passes beside the camera leaves it through a side."""
@@ -673,7 +687,8 @@ class TargetLayer:
         tracks = sorted(self._tracks, key=lambda t: t.id)
         out: list[Track] = []
         for t in tracks:
-            host = next((o for o in out if self._hosts(o, t, index)), None)
+            host = next((o for o in out if self._hosts(o, t, index)
+                         and not (t.behind and self._opened(o, index))), None)
             if host is None:
                 out.append(t)
             else:

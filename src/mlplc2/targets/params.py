@@ -381,6 +381,17 @@ class TargetParams(ParameterSet):
                               a course: the alarm there after a contact is the collider's own. False = off
                               (docs/model.md, "Objects missed", session 12).""",
                               valid=Valid.boolean())
+    passed_seeds: bool = param(True, """A target whose last time to contact has run out (its contact passed) with no
+                               time to contact since no longer claims the LM and change seeds inside its box, for
+                               good, its box spanning the view or not: no seed zone, and a box seeded there is not a
+                               part of it (:meth:`TargetLayer._opened`). Narrower than ``free_passed``: it keeps the
+                               attention fields it owns (after a contact they are the collider's own) and counts
+                               against ``max_targets``; a target born inside it (``Track.behind``) does not begin a
+                               warning on the field alarm alone, without a course. On: two more collisions warned
+                               (the standard suite, holdout 1), no false frame added on the four seed sets (only for
+                               a box over the view: the same, with later leads). False = off (docs/model.md,
+                               "Objects missed", session 14).""",
+                               valid=Valid.boolean())
     reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
                           around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
                           afresh each frame; its centre inside the box) is re-seated on that region (shrinking

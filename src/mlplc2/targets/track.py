@@ -153,6 +153,7 @@ class Track:
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
     behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
+    opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
