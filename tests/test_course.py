@@ -847,7 +847,7 @@ def test_a_refound_track_counts_down_from_its_own_time_to_contact():
 
 def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_warning():
     # alarm_isotropic: from a translating camera the field alarm without a course begins no warning on
-    # a seed whose own alignment grew unlike in both directions (the ground: twice as fast vertically,
+    # a seed whose own alignment (or a young track's history) grew unlike in both directions (the ground: twice as fast vertically,
     # log-anisotropy 0.69 of a log-scale of 1) or did not grow (under min_growth); an approaching object
     # grows alike and warns as before; with the rule off the alarm warns on both
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
@@ -871,3 +871,14 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
     # a seed 0.9 widths beside the heading (on the path, not holding it) that did not grow
     assert estimate(seed(0.0, growth=0.001, u0=0.9), off, FPS, 4, SHAPE, heading=heading).warning
     assert not estimate(seed(0.0, growth=0.001, u0=0.9), on, FPS, 4, SHAPE, heading=heading).warning
+    # a track born before its alarm (no seed alignment) is judged on its own history
+    def young(skew):
+        t = _crossing(heading, 2.0, 0.5, width=14.0, contact=20)
+        q0, q1 = t.history[0], t.history[-1]
+        t.history[-1] = q1._replace(anisotropy=skew * (q1.log_scale - q0.log_scale))
+        t.alarm_run = 2
+        return t
+
+    assert estimate(young(0.0), on, FPS, 2, SHAPE, heading=heading).warning
+    assert not estimate(young(math.log(2.0)), on, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(young(math.log(2.0)), off, FPS, 2, SHAPE, heading=heading).warning

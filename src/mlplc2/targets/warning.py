@@ -229,12 +229,18 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
     px; None: no test), the box does not hold the heading (:func:`holds`), and the seed grew by less than
     ``min_growth`` or unlike in both directions. The ground, a wall along the path or the edge where the
     static world's surfaces meet alarm as the camera moves forward, and grow unlike in both directions; an
-    approaching object grows alike. Without the seed's alignment: no test."""
-    if not p.alarm_isotropic or heading is None or t.seed_move is None or t.seed_skew is None \
-            or holds(t, heading):
+    approaching object grows alike. A track without its seed's alignment (born before its alarm) is judged
+    on its own history (its first and newest observations); one observation and no alignment: no test."""
+    if not p.alarm_isotropic or heading is None or holds(t, heading):
         return False
-    growth = t.seed_move[2]
-    return growth < p.min_growth or abs(t.seed_skew) > p.max_anisotropy * growth
+    if t.seed_move is not None and t.seed_skew is not None:
+        growth, skew = t.seed_move[2], t.seed_skew
+    elif len(t.history) >= 2:                # a track born before its alarm: its own history
+        q0, q1 = t.history[0], t.history[-1]
+        growth, skew = q1.log_scale - q0.log_scale, q1.anisotropy - q0.anisotropy
+    else:
+        return False
+    return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
 
 
 def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] | None:
