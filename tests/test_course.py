@@ -843,3 +843,42 @@ def test_a_refound_track_counts_down_from_its_own_time_to_contact():
     assert outs[1].ttc_s == pytest.approx(0.2 - 5 / FPS)  # frame 2: the held one, counted down
     assert outs[3].ttc_s == pytest.approx(26 / FPS)     # frame 4: its own first fit
     assert [o.warning for o in outs] == [False] * 4 + [True] * 4 and not t.spent
+
+
+def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_warning():
+    # alarm_isotropic: from a translating camera the field alarm without a course begins no warning on
+    # a seed whose own alignment (or a young track's history) grew unlike in both directions (the ground: twice as fast vertically,
+    # log-anisotropy 0.69 of a log-scale of 1) or did not grow (under min_growth); an approaching object
+    # grows alike and warns as before; with the rule off the alarm warns on both
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    on = TargetParams(alarm_warns=True, alarm_frames=2)
+    assert on.alarm_isotropic                                       # the default
+    off = TargetParams(alarm_warns=True, alarm_frames=2, alarm_isotropic=False)
+
+    def seed(skew, growth=None, u0=2.0):
+        s = _seed(_crossing(heading, u0, 0.5, frames=(0, 4), width=14.0, contact=20))
+        if growth is not None:
+            s.seed_move = (*s.seed_move[:2], growth)
+        s.seed_skew = skew * s.seed_move[2]
+        s.alarm_run = 2                                             # its second frame: no alarm_course needed
+        return s
+
+    assert estimate(seed(0.0), on, FPS, 4, SHAPE, heading=heading).warning
+    assert estimate(seed(0.2), on, FPS, 4, SHAPE, heading=heading).warning
+    assert not estimate(seed(math.log(2.0)), on, FPS, 4, SHAPE, heading=heading).warning
+    assert estimate(seed(math.log(2.0)), off, FPS, 4, SHAPE, heading=heading).warning
+    assert not estimate(seed(-math.log(2.0)), on, FPS, 4, SHAPE, heading=heading).warning   # a wall beside the path
+    # a seed 0.9 widths beside the heading (on the path, not holding it) that did not grow
+    assert estimate(seed(0.0, growth=0.001, u0=0.9), off, FPS, 4, SHAPE, heading=heading).warning
+    assert not estimate(seed(0.0, growth=0.001, u0=0.9), on, FPS, 4, SHAPE, heading=heading).warning
+    # a track born before its alarm (no seed alignment) is judged on its own history
+    def young(skew):
+        t = _crossing(heading, 2.0, 0.5, width=14.0, contact=20)
+        q0, q1 = t.history[0], t.history[-1]
+        t.history[-1] = q1._replace(anisotropy=skew * (q1.log_scale - q0.log_scale))
+        t.alarm_run = 2
+        return t
+
+    assert estimate(young(0.0), on, FPS, 2, SHAPE, heading=heading).warning
+    assert not estimate(young(math.log(2.0)), on, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(young(math.log(2.0)), off, FPS, 2, SHAPE, heading=heading).warning

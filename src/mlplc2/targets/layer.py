@@ -309,12 +309,14 @@ class TargetLayer:
                 t.alarm_run = t.alarm_run + 1 if follows else 1
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
-                t.seed_move = self._seed_move(t)
+                move = self._seed_move(t)
+                if move is not None:
+                    t.seed_move, t.seed_skew = move[:3], move[3]
 
-    def _seed_move(self, t: Track) -> tuple[float, float, float] | None:
-        """The shift (px) and log-scale gained by the box of ``t`` since the oldest frame kept
-        (``change_frames`` before, :meth:`_reference`; the image alignment of :meth:`_grows`), so
-        that :func:`keeps_bearing` can answer on a target's first frame; None when there is no such
+    def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
+        """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest
+        frame kept (``change_frames`` before, :meth:`_reference`; the image alignment of :meth:`_grows`),
+        so that :func:`keeps_bearing` can answer on a target's first frame; None when there is no such
         frame or the alignment fails."""
         p = self.params
         ref = self._reference()
@@ -323,12 +325,12 @@ class TargetLayer:
         half = p.margin * t.size / 2.0 + 3.0
         if self.measure is not None:
             move = self.measure(ref[0], self._now[1], t, half, float(ref[1]))
-            return None if move is None else (float(move[0]), float(move[1]), float(move[4]))
+            return None if move is None else (float(move[0]), float(move[1]), float(move[4]), float(move[5]))
         al = align(ref[0], self._now[1], t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual or al.scale <= 0:
             return None
-        return float(al.dx), float(al.dy), math.log(al.scale)
+        return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
 
     def _measuring(self, t: Track, index: int) -> bool:
         """Whether track ``t`` measures an approach: it had a time to contact within the last

@@ -139,6 +139,7 @@ class Track:
     fields: set = field(default_factory=set)
     rate: float | None = None
     seed_move: tuple | None = None     # (dx, dy, log-scale) of an alarm's seed since ``change_frames`` before (TargetLayer._seed_move)
+    seed_skew: float | None = None     # and its log-anisotropy (``alarm_isotropic``)
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``onset_s``)

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -221,6 +221,28 @@ def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> 
     return True
 
 
+def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
+    """``alarm_isotropic`` (docs/model.md, "The field alarm's seed that does not loom"): whether the field alarm
+    without a course of track ``t`` does not begin a warning because its seed's own alignment over
+    ``change_frames`` (``Track.seed_move``, ``Track.seed_skew``) fails the growth test every other seed
+    passes (``min_growth``, ``max_anisotropy``): the camera translates (``heading``: the measured heading,
+    px; None: no test), the box does not hold the heading (:func:`holds`), and the seed grew by less than
+    ``min_growth`` or unlike in both directions. The ground, a wall along the path or the edge where the
+    static world's surfaces meet alarm as the camera moves forward, and grow unlike in both directions; an
+    approaching object grows alike. A track without its seed's alignment (born before its alarm) is judged
+    on its own history (its first and newest observations); one observation and no alignment: no test."""
+    if not p.alarm_isotropic or heading is None or holds(t, heading):
+        return False
+    if t.seed_move is not None and t.seed_skew is not None:
+        growth, skew = t.seed_move[2], t.seed_skew
+    elif len(t.history) >= 2:                # a track born before its alarm: its own history
+        q0, q1 = t.history[0], t.history[-1]
+        growth, skew = q1.log_scale - q0.log_scale, q1.anisotropy - q0.anisotropy
+    else:
+        return False
+    return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
+
+
 def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] | None:
     """``alarm_course``: the course of an alarm seed on its first frame (one observation) from its own
     alignment over ``change_frames`` (``Track.seed_move``): where its centre passes the camera plane
@@ -385,9 +407,11 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
                    and (t.warned or (ttc >= p.onset_s and (steady or not wide(p, miss)
                                                              or (p.slow_onset and first and slow(t, p, fps, index, interval))))))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
-    # and, without a course from a translating camera, once it has lasted (alarm_frames)
+    # and, without a course from a translating camera, once it has lasted (alarm_frames) and on a seed
+    # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
-        warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind)
+        warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
+                                                       or anisotropic(t, p, measured))
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
