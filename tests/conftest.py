@@ -32,6 +32,21 @@ def read_gray(path: Path) -> list[np.ndarray]:
     return frames
 
 
+def _listing(root: Path) -> set[str]:
+    return {str(p.relative_to(root)) for p in root.rglob("*")} if root.is_dir() else set()
+
+
+@pytest.fixture(scope="session", autouse=True)
+def shared_data_untouched():
+    """``../shared/data`` is read-only input: no test may write into it (a run's default output
+    folder lies next to its input; a test of a clip there passes ``out=False`` or a tmp folder)."""
+    root = PAPER.parent
+    before = _listing(root)
+    yield
+    added = sorted(_listing(root) - before)
+    assert not added, f"tests wrote into {root}: {added[:5]}"
+
+
 @pytest.fixture(scope="session")
 def paper_dir() -> Path:
     if not (PAPER / "ground_truth.json").exists():

@@ -213,7 +213,7 @@ def test_the_helmet_thrown_at_a_slow_camera_gets_a_target(real_dir):
 
     truth = json.loads((real_dir / "ground_truth.json").read_text())["clips"]["helmet_attack.avi"]
     track = {f: (x, y, w) for f, x, y, w in truth["track"]}
-    rows = mlplc2.run(real_dir / "helmet_attack.avi", ["mlplc2"], progress=False).targets
+    rows = mlplc2.run(real_dir / "helmet_attack.avi", ["mlplc2"], out=False, progress=False).targets
     for frame in (17, 21):
         x, y, w = track[frame]
         here = [r for r in rows if r["frame"] == frame]
