@@ -278,6 +278,10 @@ def test_console_script_help():
     assert proc.returncode == 0, proc.stderr
     for word in ("run", "stimulus", "demo"):
         assert word in proc.stdout
+    # run's line names every kind of source, streams and stdin included (until session 14: "a video,
+    # image folder or camera", which sent a new user with an RTSP camera elsewhere)
+    run_help = " ".join(proc.stdout.split("    run ", 1)[1].split("stimulus", 1)[0].split())
+    assert "stream URL or stdin (-)" in run_help and "--jsonl" in run_help, run_help
 
 
 def test_python_dash_m_mlplc2():
