@@ -335,7 +335,9 @@ def _image_files(source: str) -> tuple[list[str], str]:
         raise InputValueError(f"{source}: no files match this pattern")
     images = [f for f in files if Path(f).suffix.lower() in IMAGE_EXTENSIONS]
     if not images:
-        raise InputValueError(f"{source}: the files matching this pattern are not images")
+        videos = any(Path(f).suffix.lower() in VIDEO_EXTENSIONS for f in files)
+        hint = " (they are videos: run them all with `mlplc2 batch`, or one at a time)" if videos else ""
+        raise InputValueError(f"{source}: the files matching this pattern are not images{hint}")
     return sorted(images, key=_natural_key), source
 
 
