@@ -278,6 +278,10 @@ def test_console_script_help():
     assert proc.returncode == 0, proc.stderr
     for word in ("run", "stimulus", "demo"):
         assert word in proc.stdout
+    # run's line names every kind of source, streams and stdin included (until session 14: "a video,
+    # image folder or camera", which sent a new user with an RTSP camera elsewhere)
+    run_help = " ".join(proc.stdout.split("    run ", 1)[1].split("stimulus", 1)[0].split())
+    assert "stream URL or stdin (-)" in run_help and "--jsonl" in run_help, run_help
 
 
 def test_python_dash_m_mlplc2():
@@ -855,6 +859,14 @@ def test_default_output_folders_are_ignored_by_git():
     parser = cli.build_parser()
     outs = [parser.parse_args(["demo"]).out, parser.parse_args(["reproduce"]).out, "clip_mlplc2", "bench",
             "six.mp4", "six_gt.json"]
+    # and every --out / --gt / --jsonl of the commands shown in README.md and docs/robot.md (until session 14 the
+    # README's "--gt six.json" and robot.md's "--out run0" were left untracked)
+    import re
+
+    for doc in (root / "README.md", root / "docs" / "robot.md"):
+        for block in re.findall(r"```bash\n(.*?)```", doc.read_text(encoding="utf-8"), re.S):
+            outs += [v for v in re.findall(r"--(?:out|gt|jsonl)\s+(\S+)", block) if v != "-" and not v.isupper()]
+    assert len(outs) > 8, outs   # the blocks were found
     for out in outs:
         probe = f"{out}/x.csv" if "." not in out else out
         assert subprocess.run(["git", "check-ignore", "-q", probe], cwd=root).returncode == 0, out

@@ -385,6 +385,23 @@ def test_overlapping_inputs_are_scored_once(scene, tmp_path):
         assert ev.models["mlplc2"]["videos"] == 1 and ev.models["mlplc2"]["objects"] == 2
 
 
+def test_results_folder_with_other_videos_warns(scene, tmp_path):
+    """A folder that holds results is read as results: a video beside them that has none (such as
+    the shared clips' folder after one `mlplc2 run clip.mp4` wrote clip_mlplc2/ there) is named in a
+    warning instead of being left out silently; a video whose results are there is not."""
+    shutil.copytree(scene["dir"] / "two_out", tmp_path / "two_out")
+    shutil.copy(scene["video"], tmp_path / "two.avi")
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EvaluationWarning)
+        ev = evaluate(tmp_path, scene["gt"])
+    assert ev.warnings == [] and ev.models["mlplc2"]["videos"] == 1
+    shutil.copy(scene["video"], tmp_path / "other.avi")
+    with pytest.warns(EvaluationWarning, match=r"read as results \(1 result folder\(s\) in it\), so its 1 "
+                                               r"video\(s\) without results there are not run or scored: other.avi;"):
+        ev = evaluate(tmp_path, scene["gt"])
+    assert len(ev.warnings) == 1 and ev.models["mlplc2"]["videos"] == 1
+
+
 def test_two_result_folders_for_one_video_are_an_error(scene, tmp_path):
     shutil.copytree(scene["dir"] / "two_out", tmp_path / "copy")
     with pytest.raises(InputValueError, match="two_out and .*copy both hold mlplc2 results for .*two.avi"):

@@ -146,6 +146,20 @@ def test_glob_without_match(tmp_path):
         open_source(str(tmp_path / "*.png"))
 
 
+def test_glob_of_videos_points_at_batch(tmp_path):
+    """A pattern that matches videos (``'clips/*.mp4'``) is not an image sequence: the error says so and
+    names `mlplc2 batch`, as for a folder of videos (until session 14 it said only "are not images")."""
+    for name in ("a.mp4", "b.mp4"):
+        (tmp_path / name).write_bytes(b"x")
+    (tmp_path / "n.txt").write_text("x")
+    with pytest.raises(InputValueError, match=r"are not images \(they are videos: run them all with `mlplc2 batch`"):
+        open_source(str(tmp_path / "*.mp4"))
+    with pytest.raises(InputValueError, match=r"are not images$"):
+        open_source(str(tmp_path / "*.txt"))
+    with pytest.raises(InputValueError, match="it holds videos: run them all with `mlplc2 batch`"):
+        open_source(tmp_path)
+
+
 def test_text_file_named_mp4(tmp_path):
     p = tmp_path / "fake.mp4"
     p.write_text("this is not a video\n" * 10)

@@ -88,6 +88,18 @@ def test_an_mp4_with_its_index_at_the_end_over_http_without_ranges_says_why(tmp_
     assert not (tmp_path / "h").exists()
 
 
+def test_a_text_file_over_http_is_not_a_video(tmp_path, http_dir, capsys):
+    """What the server sends decodes as no video: the error line says so in words (until session 14 only
+    FFmpeg's "Invalid data found when processing input")."""
+    root, base = http_dir
+    (root / "notes.txt").write_text("not a video\n" * 20)
+    assert main(["run", f"{base}/notes.txt", "-q", "--out", str(tmp_path / "o")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err == (f"mlplc2: error: {base}/notes.txt: cannot open the stream (Invalid data found when processing "
+                   f"input: what came is not a video FFmpeg can read)")
+    assert not (tmp_path / "o").exists()
+
+
 def test_http_and_stdin_give_the_results_of_the_file(data, tmp_path, http_dir, capsys):
     clip = data["avi"]
     root, base = http_dir

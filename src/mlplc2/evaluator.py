@@ -207,6 +207,23 @@ def _path_key(path) -> str:
     return os.path.normcase(os.path.realpath(os.fspath(path)))
 
 
+def _videos_without_results(folder: Path, found: list) -> list[str]:
+    """Names of the video files directly in ``folder`` that none of the result folders ``found``
+    (their ``fields.json`` ``"video"``) was made from."""
+    from .io.formats import VIDEO_EXTENSIONS
+
+    videos = sorted(q.name for q in folder.iterdir() if q.is_file() and q.suffix.lower() in VIDEO_EXTENSIONS)
+    if not videos:
+        return []
+    done = set()
+    for f in found:
+        try:
+            done.add(Path(str(json.loads((Path(f) / "fields.json").read_text()).get("video") or "")).name)
+        except (OSError, ValueError, AttributeError):
+            pass
+    return [v for v in videos if v not in done]
+
+
 def _expand_inputs(results, notes: list[str]) -> list:
     """The inputs, with folders holding results replaced by the result folders they
     contain, and other folders by the videos in them (:func:`mlplc2.io.expand_inputs`:
@@ -228,6 +245,12 @@ def _expand_inputs(results, notes: list[str]) -> list:
                 found = sorted(q.parent for q in p.rglob("responses.csv"))
                 if found:
                     cands = found
+                    left = _videos_without_results(p, found)
+                    if left:  # such as clip_mlplc2/, the default output of `mlplc2 run clip.mp4`, beside other clips
+                        notes.append(f"{r}: read as results ({len(found)} result folder(s) in it), so its "
+                                     f"{len(left)} video(s) without results there are not run or scored: "
+                                     f"{', '.join(left[:5])}{', ...' if len(left) > 5 else ''}; give the videos "
+                                     f"by name to run the models on them")
                 else:  # no results: its videos (or the folder, of images), as mlplc2 batch reads it
                     from .io import expand_inputs
 

@@ -238,7 +238,8 @@ def _cmd_demo(args) -> int:
     return EXIT_OK
 
 
-RUN = Subcommand("run", "run models on a video, image folder or camera; write CSV, JSON, PNG (and MP4)",
+RUN = Subcommand("run", "run models on a video, image folder, camera, stream URL or stdin (-); write CSV, "
+                 "JSON, PNG (and MP4; --jsonl: a JSON line per frame)",
                  _add_run, _cmd_run)
 DEMO = Subcommand("demo", "generate a multi-object scene, run the models on it, compare with the truth",
                   _add_demo, _cmd_demo)

@@ -181,6 +181,8 @@ class _PyAVDecoder(Decoder):
                 # FFmpeg's own words, without PyAV's "[Errno -875574520] ...: 'URL'" around them
                 why = (f"no answer within {self.TIMEOUT_S:g} s" if time.monotonic() - began >= self.TIMEOUT_S
                        else _unknown_host(path) or _one_line(getattr(exc, "strerror", None) or str(exc)))
+                if why.startswith("Invalid data found"):   # an answer, but not a video (a text file, a web page)
+                    why += ": what came is not a video FFmpeg can read"
                 raise InputValueError(f"{name}: cannot open the stream ({why})") from None
             raise InputValueError(_not_a_video(path, name, "PyAV")) from None
         if not self.container.streams.video:
@@ -335,7 +337,9 @@ def _image_files(source: str) -> tuple[list[str], str]:
         raise InputValueError(f"{source}: no files match this pattern")
     images = [f for f in files if Path(f).suffix.lower() in IMAGE_EXTENSIONS]
     if not images:
-        raise InputValueError(f"{source}: the files matching this pattern are not images")
+        videos = any(Path(f).suffix.lower() in VIDEO_EXTENSIONS for f in files)
+        hint = " (they are videos: run them all with `mlplc2 batch`, or one at a time)" if videos else ""
+        raise InputValueError(f"{source}: the files matching this pattern are not images{hint}")
     return sorted(images, key=_natural_key), source
 
 
