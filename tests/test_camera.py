@@ -67,6 +67,25 @@ def test_heading_of_a_camera_driving_forward_is_the_principal_point():
     assert all(max(abs(v) for v in m.omega) < 1e-3 for m in ms)  # no turn
 
 
+def test_the_heading_of_a_slow_forward_drive_is_measured_over_several_frames():
+    """At 2 m/s (the benchmark's ground_forward) the ground moves ~0.6 px a frame at the reduced size: too
+    little for a heading between two frames; over 3 frames (``heading_frames``) it is the principal point."""
+    frames = _frames("forward", 2.0, background="ground", frames=24)
+    alone = _estimates(frames, heading_frames=1)[3:]
+    ms = _estimates(frames, heading_frames=3)[3:]
+    assert sum(m.heading is not None for m in alone) <= 0.5 * len(alone)
+    heads = np.array([m.heading for m in ms if m.heading is not None])
+    assert len(heads) >= 0.8 * len(ms)
+    assert np.median(heads[:, 0]) == pytest.approx(159.5, abs=8)
+    assert np.median(heads[:, 1]) == pytest.approx(119.5, abs=8)
+    assert all(m.heading_confidence > 0.5 and 0 < m.expansion < 0.05 for m in ms if m.heading is not None)
+
+
+@pytest.mark.parametrize("camera, speed", [("static", 0.0), ("pan", 10.0), ("tilt", 6.0)])
+def test_the_heading_over_several_frames_stays_away_from_a_camera_that_does_not_translate(camera, speed):
+    assert all(m.heading is None for m in _estimates(_frames(camera, speed), heading_frames=3))
+
+
 def test_a_given_gyro_rate_agrees_with_the_estimate_of_a_pan():
     frames = _frames("pan", 12.0)
     est = _estimates(frames)
