@@ -167,7 +167,8 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
     return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
 
 
-def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None) -> bool:
+def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
+             shape: tuple[int, int] | None = None) -> bool:
     """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -176,11 +177,27 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     more than ``path_drift`` of the static world's drift (:func:`drift`), or, where the static world
     would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
     world beside the path expands about the heading, while an object on a collision course keeps its
-    bearing."""
-    if p.path_drift <= 0 or heading is None or t.last_alarm == index or holds(t, heading):
+    bearing. The field alarm exempts a box only once it has lasted ``drift_alarm_frames`` frames in a
+    row (``Track.alarm_run``) and, with ``drift_cut``, only a box wholly inside a frame of ``shape``
+    (h, w; None: no test): the static world beside the path sweeps out of view through the border
+    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts")."""
+    if p.path_drift <= 0 or heading is None or holds(t, heading):
+        return False
+    if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
+            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames):
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
+
+
+def _cut_at(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
+    """``drift_cut``: whether track ``t``'s box is cut by the border of a frame of ``shape`` (h, w), with
+    ``drift_side`` only by its left or right border (where the static world beside the path leaves
+    the view)."""
+    if not p.drift_side:
+        return t.cut(shape, p.border)
+    w = shape[1]
+    return t.cx - t.w / 2.0 < p.border or t.cx + t.w / 2.0 > w - 1 - p.border
 
 
 def wide(p: TargetParams, miss: float) -> bool:
@@ -418,7 +435,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured):
+    if warning and not t.warned and off_path(t, p, index, measured, shape):
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
