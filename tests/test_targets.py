@@ -1004,3 +1004,90 @@ def test_the_slant_veto_leaves_a_track_whose_last_frame_was_no_warning():
         warns = [k for k, o in enumerate(outs) if any(t.warning for t in o)]
         assert bool(warns) != veto and (not warns or min(warns) >= 35)
         assert all(t.warned == t.last_warned == (not veto) for t in layer._tracks)
+
+
+def _square_on_texture(side, at=(150, 120), shape=(240, 320), seed=3):
+    """A smooth random texture (grey levels ~40-215) with a black square of ``side`` px centred ``at``."""
+    rng = np.random.default_rng(seed)
+    tex = cv2.GaussianBlur(rng.uniform(0, 255, shape).astype(np.float32), (0, 0), 3)
+    tex = 40 + 175 * (tex - tex.min()) / (tex.max() - tex.min())
+    x0, y0 = at[0] - side // 2, at[1] - side // 2
+    tex[max(y0, 0):y0 + side, max(x0, 0):x0 + side] = 0.0
+    return tex.astype(np.float32), (x0, y0)
+
+
+def test_uniform_box_holds_a_uniform_square_from_a_seed_beside_its_corner():
+    """``uniform_tol``: a seed just outside the corner of a black 90 px square on texture (where its
+    local motion lies) gets the square's whole box (to a pixel); the texture alone, a flat band (the
+    horizon) and a square at the frame's border give none."""
+    from mlplc2.targets.change import uniform_box
+
+    img, (x0, y0) = _square_on_texture(90)
+    box = uniform_box(img, x0 - 3, y0 - 3, 12.0, 4.0)
+    assert box is not None and box == pytest.approx((150 - 0.5, 120 - 0.5, 90.0, 90.0), abs=1.0)
+    assert uniform_box(img, x0 + 45, y0 - 4, 12.0, 4.0) == pytest.approx(box)   # a seed beside its top edge
+    tex, _ = _square_on_texture(0)
+    assert uniform_box(tex, x0 - 3, y0 - 3, 12.0, 4.0) is None
+    band = tex.copy()
+    band[115:125, 40:280] = 128.0
+    assert uniform_box(band, 150, 112, 12.0, 4.0) is None
+    cut, _ = _square_on_texture(90, at=(30, 120))
+    assert uniform_box(cut, 77, 70, 12.0, 4.0) is None
+
+
+def test_uniform_region_takes_the_visible_part_of_a_cut_square():
+    """``uniform_reseat``: the uniform region at a point inside a black square is its box; cut by the
+    frame's border its visible part (``cut``), else none."""
+    from mlplc2.targets.change import uniform_region
+
+    img, _ = _square_on_texture(90)
+    assert uniform_region(img, 150, 120, 4.0) == pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)
+    cut, _ = _square_on_texture(90, at=(30, 120))
+    assert uniform_region(cut, 30, 120, 4.0) == pytest.approx((37.0, 119.5, 75.0, 90.0), abs=1.0)
+    assert uniform_region(cut, 30, 120, 4.0, cut=False) is None
+
+
+@pytest.mark.parametrize("uniform", [{}, {"uniform_tol": 4.0, "uniform_reseat": True, "uniform_growth": True}])
+def test_a_uniform_square_seeded_at_its_corner_is_boxed_whole(uniform):
+    """A black square approaching over a still texture (80 -> ~120 px), its attention field at its
+    corner (where its local motion lies): with ``uniform_tol``, ``uniform_reseat`` and ``uniform_growth``
+    the target's box is the square (within 5 %) and its time to contact within 10 % of the truth;
+    without, the box holds a part of it (the change window, ``max_shift``, is smaller than it)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    contact, s0 = 90, 80.0
+    layer = TargetLayer(TargetParams(**uniform), FPS)
+    got = []
+    for k in range(40):
+        side = s0 * contact / (contact - k)
+        img, (x0, y0) = _square_on_texture(int(round(side)))
+        field = SimpleNamespace(id=1, x=x0 - 2, y=y0 - 2, radius=10, response=1.0, collision=False)
+        out = layer.step(img, None, [field], k)
+        if k >= 30:
+            on = [o for o in out if abs(o.x - 150) < 10 and abs(o.y - 120) < 10]
+            got.append((max((o.width / side for o in on), default=0.0), on[0].ttc_s if on else None,
+                        (contact - k) / FPS))
+    if uniform:
+        assert all(0.95 <= w <= 1.05 for w, _, _ in got), got
+        assert all(t is not None and abs(t / true - 1) < 0.1 for _, t, true in got[-5:]), got
+    else:
+        assert all(w < 0.95 or w > 1.05 for w, _, _ in got), got
+
+
+@pytest.mark.parametrize("lm", [True, False])
+def test_uniform_lm_limits_the_uniform_box_to_field_seeds(lm):
+    """``uniform_lm`` False: only the seed of an attention field gets the uniform region's box first;
+    True: an LM or change seed (no field) too."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    img, (x0, y0) = _square_on_texture(90)
+    layer = TargetLayer(TargetParams(uniform_tol=4.0, uniform_lm=lm), FPS)
+    field = SimpleNamespace(id=1, x=x0 - 3, y=y0 - 3, radius=10, response=1.0, collision=False)
+    first = [b for b, _ in layer._boxes(None, img, x0 - 3, y0 - 3, field)][:1]
+    assert first == [pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)]
+    seeded = [b for b, _ in layer._boxes(None, img, x0 - 3, y0 - 3, None)]
+    assert seeded == ([pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)] if lm else [])

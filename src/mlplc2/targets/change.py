@@ -11,7 +11,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-__all__ = ["change_box", "unswept"]
+__all__ = ["change_box", "unswept", "uniform_box", "uniform_region"]
 
 
 @lru_cache(maxsize=None)
@@ -164,3 +164,69 @@ def unswept(box: tuple[float, float, float, float], dx: float, dy: float, log_sc
     cx, w = axis(cx, w, dx)
     cy, h = axis(cy, h, dy)
     return cx, cy, w, h
+
+
+
+def _flood(img: np.ndarray, mask: np.ndarray, x: int, y: int, tol: float):
+    """The 4-connected pixels within ``tol`` grey levels of the pixel (x, y) (a fixed-range flood fill
+    into ``mask``, cleared first): (count, (bx, by, bw, bh))."""
+    mask[:] = 0
+    flags = 4 | cv2.FLOODFILL_MASK_ONLY | cv2.FLOODFILL_FIXED_RANGE | (1 << 8)
+    n, _, _, rect = cv2.floodFill(img, mask, (int(x), int(y)), 0, tol, tol, flags)
+    return n, rect
+
+
+def _compact(n: int, rect, w: int, h: int, fill: float, aspect: float, min_px: float, cut: bool = False) -> bool:
+    """Whether a region of ``n`` px with bounding box ``rect`` is a compact object in a frame of
+    w x h px: it fills ``fill`` of its box, is at least ``min_px`` across, at most ``aspect``
+    elongated and (unless ``cut``) does not touch the frame's border."""
+    bx, by, bw, bh = rect
+    inside = bx > 0 and by > 0 and bx + bw < w and by + bh < h
+    return (min(bw, bh) >= min_px and max(bw, bh) <= aspect * min(bw, bh) and (cut or inside)
+            and n >= fill * bw * bh)
+
+
+def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: float = 0.85, aspect: float = 2.0,
+                   min_px: float = 8.0, cut: bool = True) -> tuple[float, float, float, float] | None:
+    """Box ``(cx, cy, w, h)`` of the uniform region at the point (x, y) (:func:`uniform_box`'s region
+    from that one start, ``TargetParams.uniform_reseat``), None when it is not a compact object; with
+    ``cut`` a region at the frame's border counts (the visible part of an object leaving the view)."""
+    h, w = gray.shape
+    xi, yi = int(round(x)), int(round(y))
+    if not (0 <= xi < w and 0 <= yi < h):
+        return None
+    mask = np.zeros((h + 2, w + 2), np.uint8)
+    n, rect = _flood(np.ascontiguousarray(gray, dtype=np.float32), mask, xi, yi, tol)
+    if not _compact(n, rect, w, h, fill, aspect, min_px, cut):
+        return None
+    bx, by, bw, bh = rect
+    return bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)
+
+
+def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, fill: float = 0.85,
+                aspect: float = 2.0, min_px: float = 8.0) -> tuple[float, float, float, float] | None:
+    """Box ``(cx, cy, w, h)`` of the uniform region beside the point (x, y), or None
+    (``TargetParams.uniform_tol``): from start points ``reach`` / 3, 2 ``reach`` / 3 and ``reach``
+    px from (x, y) in 8 directions, the 4-connected pixels within ``tol`` grey levels of the start's
+    (a flood fill of fixed range); of the regions that fill at least ``fill`` of their bounding box,
+    are at least ``min_px`` across, at most ``aspect`` elongated and do not touch the frame's border,
+    the largest. A uniform object's seed lies on its outline (its only local motion and change):
+    the region beside it is the object's whole extent."""
+    h, w = gray.shape
+    img = np.ascontiguousarray(gray, dtype=np.float32)
+    done = np.zeros((h + 2, w + 2), np.uint8)
+    best, best_area = None, 0
+    mask = np.zeros((h + 2, w + 2), np.uint8)
+    for k in (1, 2, 3):
+        d = reach * k / 3.0
+        for ux, uy in ((1, 0), (-1, 0), (0, 1), (0, -1), (1, 1), (1, -1), (-1, 1), (-1, -1)):
+            sx, sy = int(round(x + ux * d)), int(round(y + uy * d))
+            if not (0 <= sx < w and 0 <= sy < h) or done[sy + 1, sx + 1]:
+                continue
+            n, rect = _flood(img, mask, sx, sy, tol)
+            done |= mask
+            if not _compact(n, rect, w, h, fill, aspect, min_px) or n <= best_area:
+                continue
+            bx, by, bw, bh = rect
+            best, best_area = (bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)), n
+    return best

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import change_box, unswept
+from .change import change_box, uniform_box, uniform_region, unswept
 from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
@@ -223,6 +223,7 @@ class TargetLayer:
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t, now)
                              and not (f is None and self._opened(o, now))), None)
+                t.uniform = swept is None
                 if host is not None or self._grows(levels, t, alarm=alarm):
                     if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
                         t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
@@ -493,6 +494,10 @@ class TargetLayer:
                 return None
             return change_box(self._past[0][0], gray, x, y, int(p.max_shift), kernel=self.change_kernel)
 
+        if p.uniform_tol > 0 and (p.uniform_lm or field is not None):   # TargetParams.uniform_tol: a uniform object's whole extent
+            box = uniform_box(gray, x, y, p.claim, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect)
+            if box is not None:
+                yield box, None                  # None: a uniform region's box (Track.uniform)
         found = False
         for find in ((edges, change) if field is not None else (change, edges)):
             box = find()
@@ -521,6 +526,7 @@ class TargetLayer:
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
                     self._reseat(t, gray, clock)
+                    self._reseat_uniform(t, gray)
                 kept.append(t)
             else:
                 self._lose(t, clock)
@@ -548,6 +554,36 @@ class TargetLayer:
             return
         if t.w * t.h >= p.reseat * box[2] * box[3]:
             t.reseat((box[0], box[1], min(box[2], t.w), min(box[3], t.h)))
+
+    def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
+        """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform
+        region at its centre (:func:`uniform_region`) when that is a compact object whose centre lies
+        inside the box and whose area is within a factor 2 of the box's (:meth:`Track.reseat`)."""
+        p = self.params
+        if not (p.uniform_reseat and p.uniform_tol > 0 and t.uniform):
+            return
+        box = uniform_region(gray, t.cx, t.cy, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect)
+        if box is None or not t.contains(box[0], box[1]):
+            return
+        if not 0.5 <= box[2] * box[3] / (t.w * t.h) <= 2.0:
+            return
+        t.reseat(box)
+        if not p.uniform_growth or not t.history:
+            return
+        h, w = gray.shape
+        if box[0] - box[2] / 2.0 < 0 or box[1] - box[3] / 2.0 < 0 or box[0] + box[2] / 2.0 > w - 1 \
+                or box[1] + box[3] / 2.0 > h - 1:
+            t.region = None                      # a cut region is not the object's size
+            return
+        if t.region is not None:                 # the region's growth since it was last measured
+            pw, ph, ls, an = t.region
+            t.log_s = ls + 0.5 * math.log(box[2] * box[3] / (pw * ph))
+            t.aniso = an + math.log((box[3] / ph) / (box[2] / pw))
+            last = t.history[-1]._replace(log_scale=t.log_s, anisotropy=t.aniso)
+            if t.inside and abs(t.inside[-1].frame - last.frame) <= _EPS:
+                t.inside[-1] = last
+            t.history[-1] = last
+        t.region = (box[2], box[3], t.log_s, t.aniso)
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

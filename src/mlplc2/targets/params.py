@@ -449,6 +449,41 @@ class TargetParams(ParameterSet):
                                 this factor from the one it was seeded (or last re-seated) with: a tall strip
                                 or a flat one. 0 = every followed box (with ``reseat`` on).""",
                                 valid=Valid.real(minimum=0))
+    uniform_tol: float = param(0.0, """A candidate's first box is the uniform region beside its seed when there is one:
+                               the pixels reached by a flood fill of at most this many grey levels from a start point
+                               ``claim`` / 3, 2 ``claim`` / 3 or ``claim`` px from the seed (8 directions; the largest
+                               region that passes ``uniform_fill``, is at least 8 px across, at most
+                               ``uniform_aspect`` elongated and does not touch the frame's border). A uniform object
+                               (issue 22: the black lead vehicle of the drive scenes) has no texture inside: its
+                               local motion and change lie on its outline only, the seed on an edge or a corner, and
+                               the change window (``max_shift``) is smaller than it, so the other boxes hold a part
+                               of it plus road. The box is tried before the others (which follow when it does not
+                               grow). 0 = off (docs/model.md, "A uniform object's box").""",
+                               unit="grey levels", valid=Valid.real(minimum=0))
+    uniform_fill: float = param(0.85, """``uniform_tol``: the smallest fraction of its bounding box a uniform region fills
+                                (a compact object, not a patch of smooth texture).""",
+                                valid=Valid.real(minimum=0, maximum=1))
+    uniform_aspect: float = param(2.0, """``uniform_tol``: the largest elongation (longer side / shorter side) of a
+                                  uniform region's box (not a band of the horizon or a wall).""",
+                                  valid=Valid.real(minimum=1))
+    uniform_lm: bool = param(True, """``uniform_tol`` for the LM and change seeds too; False = only for the seed of an attention
+                             field (Eq. 13-16: looming evidence of its own).""", valid=Valid.boolean())
+    uniform_reseat: bool = param(False, """A target seeded on a uniform region (``uniform_tol``) is put back on that region each
+                                 frame it is followed (:meth:`Track.reseat`, its history carried): the uniform
+                                 region at its centre, when it is a compact object (``uniform_fill``,
+                                 ``uniform_aspect``; at the frame's border its visible part) whose centre lies inside the box and
+                                 whose area is within a factor 2 of the box's. The alignment's patch holds the
+                                 object's outline and the road around it, which flows faster than the object: the
+                                 box grows taller than its object and slides off it (the drive scenes' lead
+                                 vehicle). False = off (docs/model.md, "A uniform object's box").""",
+                                 valid=Valid.boolean())
+    uniform_growth: bool = param(False, """With ``uniform_reseat``, a re-seated box's growth is its uniform region's: the
+                                 accumulated log-scale and log-anisotropy of the newest observation are those of the
+                                 last region measured (not cut by the border) plus the log of the region's mean
+                                 and relative size change since (the sum telescopes: the object's size to a pixel),
+                                 in place of the image alignment's, whose patch holds road that flows faster than
+                                 the object (a box anisotropic a second before contact). False = off.""",
+                                 valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 

@@ -156,6 +156,8 @@ class Track:
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
+    uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
+    region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
         return abs(x - self.cx) <= self.w / 2.0 + margin and abs(y - self.cy) <= self.h / 2.0 + margin
