@@ -871,7 +871,8 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
     # a seed 0.9 widths beside the heading (on the path, not holding it) that did not grow
     assert estimate(seed(0.0, growth=0.001, u0=0.9), off, FPS, 4, SHAPE, heading=heading).warning
     assert not estimate(seed(0.0, growth=0.001, u0=0.9), on, FPS, 4, SHAPE, heading=heading).warning
-    # a track born before its alarm (no seed alignment) is judged on its own history
+    # a track born before its alarm (no seed alignment) is not tested: its own box's history is no evidence
+    # (a real clip's scaled copy warned 3 frames after its alarm with it, docs/model.md)
     def young(skew):
         t = _crossing(heading, 2.0, 0.5, width=14.0, contact=20)
         q0, q1 = t.history[0], t.history[-1]
@@ -880,8 +881,7 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
         return t
 
     assert estimate(young(0.0), on, FPS, 2, SHAPE, heading=heading).warning
-    assert not estimate(young(math.log(2.0)), on, FPS, 2, SHAPE, heading=heading).warning
-    assert estimate(young(math.log(2.0)), off, FPS, 2, SHAPE, heading=heading).warning
+    assert estimate(young(math.log(2.0)), on, FPS, 2, SHAPE, heading=heading).warning
 
 
 def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_drift():
