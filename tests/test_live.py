@@ -426,6 +426,7 @@ def test_a_reader_that_goes_away_stops_the_run_keeping_its_outputs(data, tmp_pat
     assert err.count("\n") == 1 and "the reader of the JSON lines went away" in err and "Traceback" not in err
     summary = json.loads((tmp_path / "o" / "fields.json").read_text())
     assert 1 <= summary["n_frames"] < 60
+    assert summary["reader_gone"] and not summary["complete"]       # the clip was not read to its end
 
 
 def test_a_live_url_is_decoded_with_the_newest_frame_taken(data, tmp_path):

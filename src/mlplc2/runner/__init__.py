@@ -552,6 +552,8 @@ class _Frames:
                 delivered = self.lines.write(record)
             except OSError as exc:  # not a reader that went away (that is False): a full disk, /dev/full
                 raise _OutputFailed(self.lines.name, self.lines.name) from exc
+            if not delivered:
+                self.result.reader_gone = True
             if not delivered and self.result.message is None:
                 self.result.message = (f"the reader of the JSON lines went away (frame {index} not delivered); "
                                        f"stopped there")

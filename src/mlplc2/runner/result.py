@@ -97,6 +97,9 @@ class RunResult:
     """Frames of the input that could not be decoded (a damaged packet), skipped: decoding went on after them."""
     dropped: bool = False
     """A stream or camera stopped with an error (``message`` says which); the results cover the frames before."""
+    reader_gone: bool = False
+    """The reader of the JSON lines went away (a closed pipe): the run stopped at the first frame it could not
+    deliver, whose rows the CSV files still hold (``n_frames`` counts it); not :attr:`complete`."""
     latency: dict[str, float] = field(default_factory=dict)
     """From a frame's decoding to the end of its outputs (its JSON line): ``median_ms``, ``p99_ms``, ``max_ms``."""
     duplicated: bool | None = False
@@ -129,7 +132,7 @@ class RunResult:
             "start": self.start,
             "n_frames": self.n_frames,
             "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted or self.error or self.dropped),
+            "complete": not (self.truncated or self.interrupted or self.error or self.dropped or self.reader_gone),
             "truncated": self.truncated,
             "interrupted": self.interrupted,
             "error": self.error,
@@ -141,5 +144,6 @@ class RunResult:
             "frames_skipped": self.skipped,
             "frames_damaged": self.damaged,
             "dropped": self.dropped,
+            "reader_gone": self.reader_gone,
             "latency_ms": self.latency,
         }
