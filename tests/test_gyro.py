@@ -227,3 +227,35 @@ def test_a_gyro_short_of_the_frames_timestamps_is_refused_before_the_run(tmp_pat
     assert capsys.readouterr().err.startswith(f"mlplc2: error: {gyro}: the gyro covers t = 0 to 2 s but the run's "
                                               "frames are at 2 to 3.96667 s")
     assert not out.exists()
+
+
+def test_a_gyro_that_ends_on_a_source_of_unknown_length_stops_the_run_keeping_its_outputs(tmp_path):
+    """A Matroska clip piped to stdin (its length unknown until its end, so the gyro's span cannot be checked
+    before the run) and a gyro of 0 to 1 s: the run stops at the first frame past the gyro (1 s plus
+    :data:`~mlplc2.io.gyro.SLACK` of a frame: frame 32 at 1.067 s), with one line naming the gyro, and
+    ``fields.json`` written for the 32 frames done (not complete), as a reader that goes away leaves it."""
+    av = pytest.importorskip("av")
+    import json
+    import subprocess
+    import sys
+
+    clip = tmp_path / "clip.mkv"
+    with av.open(str(clip), "w") as c:
+        s = c.add_stream("ffv1", rate=30)
+        s.width, s.height, s.pix_fmt = 160, 120, "yuv420p"
+        for f in np.random.default_rng(0).integers(0, 256, (60, 120, 160, 3), dtype=np.uint8):
+            c.mux(s.encode(av.VideoFrame.from_ndarray(f, format="rgb24")))
+        c.mux(s.encode())
+    gyro = _csv(tmp_path / "g.csv", "t,wx,wy,wz\n0,0,0.2,0\n1,0,0.2,0\n")
+    out = tmp_path / "o"
+    with open(clip, "rb") as stdin:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "--hfov", "60", "--gyro", str(gyro),
+                               "-o", str(out), "-q"], stdin=stdin, capture_output=True, text=True, timeout=300)
+    assert proc.returncode == 2, proc.stderr
+    assert proc.stderr.count("\n") == 1 and "Traceback" not in proc.stderr
+    assert proc.stderr.startswith(f"mlplc2: error: {gyro}: the gyro covers t = 0 to 1 s but a frame is at 1.067 s")
+    assert proc.stderr.rstrip().endswith("the outputs cover the 32 frames before")
+    summary = json.loads((out / "fields.json").read_text())
+    assert summary["n_frames"] == 32 and not summary["complete"] and str(gyro) in summary["error"]
+    frames = {line.split(",")[0] for line in (out / "responses.csv").read_text().splitlines()[1:]}
+    assert frames == {str(k) for k in range(32)}          # every frame done is in the CSV, and none after

@@ -355,7 +355,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
     Raises
     ------
     InputError
-        Bad input (missing file, not a video, unknown model, bad resize, ...).
+        Bad input (missing file, not a video, unknown model, bad resize, ...); or a gyro whose
+        samples end before a frame of a source of unknown length (a stream), after writing the
+        outputs of the frames done (``fields.json``: ``error``, not complete).
     RunInterrupted
         On Ctrl-C, after writing the outputs of the frames done
         (``fields.json`` then says ``"interrupted": true``). A Ctrl-C during a frame
@@ -491,6 +493,13 @@ class _OutputFailed(Exception):
         self.name, self.path = name, path
 
 
+class _GyroEnded(Exception):
+    """The gyro's samples end before a frame's time (a source of unknown length, e.g. stdin, whose
+    span could not be checked before the run): the run stops before that frame, :func:`_loop` writes
+    the summaries of the frames done (``error``: the message; not complete), then raises it as an
+    :class:`~mlplc2.InputError`."""
+
+
 class _Frames:
     """The per-frame work of :func:`run`: step every model, record, write each output's share."""
 
@@ -526,7 +535,10 @@ class _Frames:
         index, frame = item[0], item[1]
         names, result, src = self.names, self.result, self.src
         time_s = round(index / src.fps if src.time_s is None else src.time_s, 6)
-        rate = None if self.options.gyro is None else self.options.gyro.at(time_s, src.fps)
+        try:
+            rate = None if self.options.gyro is None else self.options.gyro.at(time_s, src.fps)
+        except InputValueError as exc:  # a source of unknown length outran the gyro: stop, keep the frames done
+            raise _GyroEnded(str(exc)) from None
         # the gyro only to the models that take it (a model of the user's may not know the keyword)
         outputs = [m.step(frame, src.time_s) if rate is None or m.gyro_refusal() else
                    m.step(frame, src.time_s, gyro=rate) for m in self.built]
@@ -617,6 +629,7 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
     frames = _Frames(src, built, result, options)
     interrupted = False
     failed: _OutputFailed | None = None
+    gyro_ended: _GyroEnded | None = None
     bar = None
     # Ctrl-C / SIGTERM while a frame is in progress is deferred to the end of that frame
     # (stop.between): responses.csv, targets.csv and fields.json always cover the same frames.
@@ -643,6 +656,8 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             stop.check()
         except KeyboardInterrupt:
             interrupted = True
+        except _GyroEnded as exc:
+            gyro_ended = exc
         except _OutputFailed as exc:
             failed = exc
             if frames.vw is not None and exc.name == "annotated.mp4":
@@ -659,6 +674,8 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             frames.close_csv(failed is not None)
             src.close()
         frames.summarise(interrupted, failed)
+        if gyro_ended is not None:
+            result.error = str(gyro_ended)
         if out_dir is not None:
             try:
                 _finish(result, out_dir, frames.vw, options.plot)
@@ -674,6 +691,8 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
             cause = failed.__cause__
             raise OSError(getattr(cause, "errno", None), f"{getattr(cause, 'strerror', None) or cause}; the other "
                           f"outputs cover the {result.n_frames} frames before", failed.path) from cause
+        if gyro_ended is not None:
+            raise InputValueError(f"{gyro_ended}; the outputs cover the {result.n_frames} frames before")
         if interrupted:
             raise RunInterrupted(result)
     return result

@@ -58,7 +58,9 @@ class RunResult:
         The run was stopped by Ctrl-C (or SIGTERM under ``mlplc2 run``).
     error : str, optional
         Why an output stopped the run (``annotated.mp4`` on a full disk): the other outputs
-        were written for the frames done, then :func:`run` raised the OSError.
+        were written for the frames done, then :func:`run` raised the OSError. Or why the gyro
+        stopped it (its samples ended before a frame of a source of unknown length): the
+        outputs were written for the frames done, then :func:`run` raised an InputError.
     seconds : float
         Wall time of the frame loop (decoding, models, writing the per-frame outputs),
         in seconds; ``n_frames / seconds`` is the processing rate.
