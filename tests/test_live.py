@@ -463,3 +463,51 @@ def test_a_misspelt_keyword_names_the_function_and_the_likely_one():
     with pytest.raises(TypeError, match=r"^run\(\) got an unexpected keyword argument 'nonsense' \(the keywords "
                                         r"are mlplc2.runner.RunOptions' fields\)$"):
         mlplc2.run("clip.mp4", nonsense=1)
+
+
+_WORKERS = r"""
+import sys, threading
+import mlplc2
+from mlplc2 import stimuli
+from mlplc2.io import write_video
+
+st = stimuli.approach([], size=(320, 240), fps=30.0, frames=20, background="texture",
+                      camera=stimuli.CameraPath(yaw_rate_dps=10.0), noise_std=2.0, seed=1)
+clip = str(write_video(sys.argv[1], st.frames, 30.0))
+
+
+def ours():
+    return sorted({t.name.split("_")[0] for t in threading.enumerate() if t.name.startswith("mlplc2")})
+
+
+gen = mlplc2.stream(clip, hfov_deg=60.0)       # kept in a name: the loop's break does not close it
+for k, line in enumerate(gen):
+    if k == 8:
+        print("during", ours())
+        break
+gen.close()
+print("closed", ours())
+for k, line in enumerate(mlplc2.stream(clip, hfov_deg=60.0)):
+    if k == 8:
+        break                                   # the generator is dropped: CPython closes it at once
+print("dropped", ours())
+mlplc2.run(clip, out=False, hfov_deg=60.0, quiet=True)
+print("run", ours())
+"""
+
+
+def test_closing_a_stream_stops_and_joins_its_worker_threads(tmp_path):
+    """A panning camera on 4 Numba threads: the model runs the decoding thread, the front end's band
+    pool and the target layer's carry thread; closing the generator after a ``break`` (or dropping it)
+    stops and joins every one of them, and so does the end of a run (until session 15 the band pool
+    and the carry thread outlived both)."""
+    import os
+
+    script = tmp_path / "workers.py"
+    script.write_text(_WORKERS)
+    proc = subprocess.run([sys.executable, str(script), str(tmp_path / "pan.avi")], capture_output=True, text=True,
+                          timeout=240, env=dict(os.environ, NUMBA_NUM_THREADS="4"))
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    lines = dict(line.split(" ", 1) for line in proc.stdout.splitlines())
+    assert lines["during"] == "['mlplc2-band', 'mlplc2-carry', 'mlplc2-decode']"   # the threads to stop are there
+    assert lines["closed"] == lines["dropped"] == lines["run"] == "[]"

@@ -12,13 +12,15 @@ to ~1e-6, the edge scans bit for bit, the alignments to ~1e-12.
 from __future__ import annotations
 
 import logging
+import sys
+import threading
 from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
 from ._validation import InputValueError
 
-__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels", "threads", "one_fewer"]
+__all__ = ["BACKENDS", "Backend", "resolve", "make_frontend", "fast_available", "warm_kernels", "threads", "one_fewer", "workers"]
 
 #: "auto" (compiled when Numba imports, else reference, with a logged warning), "numba"
 #: (compiled, ImportError without Numba) and "reference" (plain NumPy/OpenCV, the oracle).
@@ -195,3 +197,32 @@ def one_fewer() -> int | None:
     docs/model.md, "Decoding beside the model"); None (as they are) on one thread or without Numba."""
     with threads(None) as n:
         return n - 1 if n > 1 else None
+
+
+_RUNS = 0
+_RUNS_LOCK = threading.Lock()
+
+
+@contextmanager
+def workers() -> Iterator[None]:
+    """Around a run or a stream (:func:`mlplc2.run`, :func:`mlplc2.stream`): when the last one going
+    ends (returns, fails, or its generator is closed), the worker threads its models started are
+    stopped and joined: the front end's band pool (:func:`mlplc2.neuropils._fast.release_pool`) and
+    the target layer's carry thread (:func:`mlplc2.targets.track.release_carry`). A model's next
+    frame starts them anew (a few threads, well under a millisecond)."""
+    global _RUNS
+    with _RUNS_LOCK:
+        _RUNS += 1
+    try:
+        yield
+    finally:
+        with _RUNS_LOCK:
+            _RUNS -= 1
+            last = _RUNS == 0
+        if last:
+            from .targets.track import release_carry
+
+            release_carry()
+            fast = sys.modules.get("mlplc2.neuropils._fast")   # never imported (no Numba): no pool
+            if fast is not None:
+                fast.release_pool()

@@ -29,7 +29,7 @@ import numpy as np
 
 from .._validation import check_int
 
-__all__ = ["jit", "KERNELS", "pool", "BANDS_LOCK", "DONE", "spin_ok", "spin_wait", "set_threads", "copy_chain"]
+__all__ = ["jit", "KERNELS", "pool", "release_pool", "BANDS_LOCK", "DONE", "spin_ok", "spin_wait", "set_threads", "copy_chain"]
 
 
 #: Every dispatcher :func:`jit` made, in definition order (for ``stats`` and the tests).
@@ -84,6 +84,16 @@ def pool(n: int) -> ThreadPoolExecutor:
             if old is not None:
                 old.shutdown(wait=False)
         return _POOL
+
+
+def release_pool() -> None:
+    """Stop and join the pool's threads (none running: every frame waits for its bands under
+    :data:`BANDS_LOCK`); the next frame with bands starts a new pool."""
+    global _POOL, _POOL_SIZE
+    with BANDS_LOCK, _POOL_LOCK:
+        old, _POOL, _POOL_SIZE = _POOL, None, 0
+    if old is not None:
+        old.shutdown(wait=True)
 
 
 def _copy_slice(stack: np.ndarray, lo: int, hi: int) -> None:

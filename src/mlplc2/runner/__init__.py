@@ -49,7 +49,7 @@ from typing import Any
 from .._signals import interrupts
 from .._validation import InputTypeError, InputValueError, as_gray
 from .._files import write_json
-from ..backend import one_fewer, threads
+from ..backend import one_fewer, threads, workers
 from ..io import FrameSource, TruncatedInputWarning, VideoWriter, open_source
 from ..io.gyro import Gyro
 from ..io.formats import STDIN, without_password
@@ -370,8 +370,9 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         and ``result.truncated`` is True.
     """
     options = _run_options(options, keywords)
-    src, built, result = _open(source, models, options, out)
-    return _loop(src, built, result, result.out, options)
+    with workers():
+        src, built, result = _open(source, models, options, out)
+        return _loop(src, built, result, result.out, options)
 
 
 def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, options: RunOptions | None = None,
@@ -382,23 +383,26 @@ def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, opt
     line (schema 1, docs/robot.md: ``frame``, ``time_s``, ``skipped``, ``warning``, ``models``,
     ``targets``). ``source``, ``model`` and the keywords are those of :func:`run` (``source`` may
     also be an opened :class:`~mlplc2.io.FrameSource`); nothing is written. Stop by breaking out
-    of the loop (or ``max_frames`` / ``duration_s``); the source is then closed.
+    of the loop (or ``max_frames`` / ``duration_s``): closing the generator (a ``for`` loop over
+    ``stream(...)`` drops it at the ``break``; one kept in a name: its ``close()``) closes the
+    source and stops and joins the worker threads (:func:`mlplc2.backend.workers`).
 
     >>> for line in mlplc2.stream("rtsp://camera/stream", hfov_deg=90):   # doctest: +SKIP
     ...     if line["warning"]:
     ...         brake()
     """
     options = replace(_run_options(options, keywords, "stream"), video=False, keep_rows=False)
-    src, built, result = _open(source, model, options, False)
-    frames = _Frames(src, built, result, options)
-    t0 = time.perf_counter()
-    try:
-        for item in src:
-            yield frames.step(item)
-            if options.done(result.n_frames, time.perf_counter() - t0):
-                break
-    finally:
-        src.close()
+    with workers():
+        src, built, result = _open(source, model, options, False)
+        frames = _Frames(src, built, result, options)
+        t0 = time.perf_counter()
+        try:
+            for item in src:
+                yield frames.step(item)
+                if options.done(result.n_frames, time.perf_counter() - t0):
+                    break
+        finally:
+            src.close()
 
 
 def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[Model], RunResult]:

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..camera import warp
 
-__all__ = ["Target", "Observation", "Track", "Carried", "Turn", "carry_ahead", "MIN_POINTS", "EPS"]
+__all__ = ["Target", "Observation", "Track", "Carried", "Turn", "carry_ahead", "release_carry", "MIN_POINTS", "EPS"]
 
 #: Fewest observations of a fit (:func:`fit_contact` needs 3): the floor of ``TargetParams.min_frames``
 #: for a camera slower than ``TargetParams.nominal_fps``.
@@ -331,6 +331,7 @@ class Carried:
 
 
 _AHEAD: list = []
+_AHEAD_LOCK = threading.Lock()
 os.register_at_fork(after_in_child=_AHEAD.clear)   # a forked child has no such thread: it starts its own
 
 
@@ -339,8 +340,6 @@ def carry_ahead(jobs: list[tuple[Carried, int]]) -> Future:
     own, in order, while the caller goes on; reading such a level (``Carried[k]``) waits for it. The
     values are those of carrying them when read; which thread carries a level depends on ``jobs``
     alone, never on timing. The caller waits for the returned future before the next turn."""
-    if not _AHEAD:
-        _AHEAD.append(ThreadPoolExecutor(1, thread_name_prefix="mlplc2-carry"))
     events = [threading.Event() for _ in jobs]
     for (c, k), event in zip(jobs, events):
         c._ahead[k] = event
@@ -354,4 +353,15 @@ def carry_ahead(jobs: list[tuple[Carried, int]]) -> Future:
             for event in events:
                 event.set()
 
-    return _AHEAD[0].submit(work)
+    with _AHEAD_LOCK:
+        if not _AHEAD:
+            _AHEAD.append(ThreadPoolExecutor(1, thread_name_prefix="mlplc2-carry"))
+        return _AHEAD[0].submit(work)
+
+
+def release_carry() -> None:
+    """Stop and join :func:`carry_ahead`'s thread once its jobs are done; the next job starts a new one."""
+    with _AHEAD_LOCK:
+        ahead = _AHEAD.pop() if _AHEAD else None
+    if ahead is not None:
+        ahead.shutdown(wait=True)
