@@ -98,6 +98,47 @@ def test_stream_early_close_stops_thread(videos):
     assert src._queue.maxsize <= 8  # bounded: memory independent of length
 
 
+def test_frames_read_ahead_are_given_again_with_their_own_times(videos):
+    """``FrameSource.peek``: the first frames read before iterating (the repeat scan of a stream read
+    once) are yielded again, each with the index, frame, time and count it has without peeking."""
+    paths, _ = videos
+
+    def seen(src):
+        return [(i, f.tobytes(), src.time_s, src.n_read, src.skipped) for i, f in src]
+
+    plain = seen(open_source(paths["avi"], decoder="pyav", start=2))
+    src = open_source(paths["avi"], decoder="pyav", start=2)
+    ahead = src.peek(5)
+    assert [i for i, _ in ahead] == [2, 3, 4, 5, 6] and src.n_read == 5
+    assert seen(src) == plain and len(plain) == T - 2 and plain[1][2] == pytest.approx(3 / 25)
+    short = open_source(paths["avi"], end=3)
+    assert len(short.peek(10)) == 3 and [i for i, _ in short] == [0, 1, 2]   # the source ended first
+    with open_source(paths["avi"], live=True) as live, pytest.raises(RuntimeError, match="not live"):
+        live.peek(3)                                   # a live source would skip frames meanwhile
+
+
+
+def test_an_error_while_reading_ahead_comes_after_the_frames_before_it():
+    from mlplc2.io.decoders import Decoder
+
+    class Failing(Decoder):
+        name, fps, n = "failing", 30.0, 0
+
+        def read(self):
+            self.n += 1
+            if self.n > 3:
+                raise OSError("the device went away")
+            return np.full((H, W, 3), self.n, np.uint8)
+
+    src = FrameSource(Failing(), "stream")
+    assert len(src.peek(10)) == 3
+    got = []
+    with pytest.raises(OSError, match="went away"):
+        for i, f in src:
+            got.append((i, int(f[0, 0, 0])))
+    assert got == [(0, 1), (1, 2), (2, 3)]
+
+
 def test_fps_override(videos):
     paths, _ = videos
     with open_source(paths["avi"], fps=12.5) as src:

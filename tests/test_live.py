@@ -160,8 +160,19 @@ def test_a_truncated_video_on_stdin_is_reported_as_from_a_file(data, tmp_path):
 
 
 def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
-    """The first line is read while the process still runs: its stdin (the clip) is not closed yet."""
-    clip = data["avi"].read_bytes()
+    """The first line is read while the process still runs: its stdin (the clip) is not closed yet.
+    The clip is a stream as a camera tool sends it, Matroska without a frame count (an AVI states
+    its count: a file, read 60 frames ahead for its repeat check first, docs/cli.md "Live sources")."""
+    av = pytest.importorskip("av")
+    from mlplc2.io import read_video
+
+    with av.open(str(tmp_path / "clip.mkv"), "w") as out:
+        stream = out.add_stream("ffv1", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 320, 240, "yuv420p"
+        for f in read_video(data["avi"])[0]:
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(f, format="rgb24")))
+        out.mux(stream.encode(None))
+    clip = (tmp_path / "clip.mkv").read_bytes()
     with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
                           stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
         try:
@@ -511,3 +522,37 @@ def test_closing_a_stream_stops_and_joins_its_worker_threads(tmp_path):
     lines = dict(line.split(" ", 1) for line in proc.stdout.splitlines())
     assert lines["during"] == "['mlplc2-band', 'mlplc2-carry', 'mlplc2-decode']"   # the threads to stop are there
     assert lines["closed"] == lines["dropped"] == lines["run"] == "[]"
+
+
+def test_a_duplicated_clip_on_stdin_and_over_http_holds_its_copies_as_the_file_does(tmp_path, http_dir):
+    """A clip whose every third frame is repeated twice (a frame-rate conversion): the file is scanned
+    for copies before the run and its copies are held from the first one; stdin and HTTP, read once,
+    read their first frames ahead on the source itself (``FrameSource.peek``) and give the file's JSON
+    lines and held frames (until session 15 they found the copies only after 12 frames: the
+    real helmet_attack.avi then warned at frame 43, after contact, instead of 25)."""
+    from mlplc2 import stimuli
+    from mlplc2.io import write_video
+
+    from .helpers import duplicated
+
+    frames, origin = duplicated(stimuli.four_phase(seed=0).frames[:20])
+    clip = write_video(tmp_path / "dup.avi", np.stack(frames), 30.0)
+    root, base = http_dir
+    (root / "dup.avi").write_bytes(clip.read_bytes())
+    assert main(["run", str(clip), "-o", str(tmp_path / "f"), "--jsonl", str(tmp_path / "f.jsonl"), "-q"]) == 0
+    assert main(["run", f"{base}/dup.avi", "-o", str(tmp_path / "h"), "--jsonl", str(tmp_path / "h.jsonl"),
+                 "-q"]) == 0
+    with open(clip, "rb") as stdin:
+        proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", "-", "-o", str(tmp_path / "s"), "--jsonl", "-",
+                               "-q"], stdin=stdin, capture_output=True, timeout=120)
+    assert proc.returncode == 0, proc.stderr
+    copies = sum(a == b for a, b in zip(origin, origin[1:]))
+    held = json.loads((tmp_path / "f" / "fields.json").read_text())["frames_held"]["mlplc2"]
+    assert held == copies == 14                       # the file holds every copy, the first ones too
+    from_file = _lines(tmp_path / "f.jsonl")
+    assert _lines(tmp_path / "h.jsonl") == from_file
+    assert [json.loads(line) for line in proc.stdout.decode().splitlines()] == from_file
+    for out in ("h", "s"):
+        summary = json.loads((tmp_path / out / "fields.json").read_text())
+        assert summary["frames_held"]["mlplc2"] == held and summary["duplicated"] and summary["complete"]
+        assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()

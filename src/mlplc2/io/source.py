@@ -135,6 +135,9 @@ class FrameSource:
         self._stop = threading.Event()
         self._thread: threading.Thread | None = None
         self._iterated = False
+        self._items: Iterator[tuple] | None = None   # the decoding thread's frames, once started
+        self._ahead: list[tuple] = []                # frames read ahead (peek), with their state
+        self._ahead_error: BaseException | None = None
         # Live: the source runs on while the caller builds its models; until iteration begins a
         # thread reads on and keeps only the newest frame (the others count as skipped), so that
         # the first frames given are not the ones buffered meanwhile (seconds old).
@@ -148,8 +151,8 @@ class FrameSource:
     def reduce_to(self, size: tuple[int, int]) -> None:
         """Yield frames at ``size`` ``(W, H)`` from now on, reduced in the decoding thread (before
         iterating; :func:`mlplc2.run` gives the models' working size here)."""
-        if self._iterated:
-            raise RuntimeError("reduce_to must be called before iterating")
+        if self._iterated or self._items is not None:
+            raise RuntimeError("reduce_to must be called before iterating (and before peek)")
         self.out_size = (int(size[0]), int(size[1]))
         self.scale_x = self.size[0] / self.out_size[0]
         self.scale_y = self.size[1] / self.out_size[1]
@@ -252,10 +255,44 @@ class FrameSource:
         finally:
             dec.close()
 
+    def peek(self, n: int) -> list[tuple]:
+        """The first ``n`` items iterating will yield (fewer when the source ends first), read ahead
+        now, before iterating (a source that is not live: a live one would skip frames meanwhile);
+        iterating yields them again first, each with its own :attr:`time_s`, :attr:`decoded_at`
+        and :attr:`skipped`, then the others. An error of the source while reading ahead is raised
+        after the items before it, as it would have been."""
+        if self.live or self._iterated:
+            raise RuntimeError("peek needs a source that is not live, before iterating it")
+        self._items = self._frames()
+        while len(self._ahead) < n:
+            try:
+                item = next(self._items)
+            except StopIteration:
+                break
+            except Exception as exc:  # noqa: BLE001 - the source's own error, raised in its place
+                self._ahead_error = exc
+                break
+            self._ahead.append((item, self.time_s, self.decoded_at, self.skipped, self.n_read, self.n_skipped))
+        return [a[0] for a in self._ahead]
+
     def __iter__(self) -> Iterator[tuple]:
         if self._iterated:
             raise RuntimeError("a FrameSource can be iterated only once")
         self._iterated = True
+        items, self._items = self._items or self._frames(), None
+        try:
+            while self._ahead:
+                item, self.time_s, self.decoded_at, self.skipped, self.n_read, self.n_skipped = self._ahead.pop(0)
+                yield item
+            if self._ahead_error is not None:
+                raise self._ahead_error
+            yield from items
+        finally:
+            items.close()
+            self.close()
+
+    def _frames(self) -> Iterator[tuple]:
+        """The decoding thread's frames (started here), setting the attributes of each as it is yielded."""
         self._stop_draining()
         self._thread = threading.Thread(target=self._work, name="mlplc2-decode", daemon=True)
         self._thread.start()

@@ -457,19 +457,25 @@ def _prescan_changes(source, auto: list[Model], src: FrameSource, options: RunOp
     (:func:`mlplc2.models.base.frame_change`, at the models' working size). When they look duplicated
     (:func:`mlplc2.models.base.looks_duplicated`) those models are primed with them
     (``Model.prime_repeats``) and hold duplicates from the first copy on instead of finding out
-    after a few frames. A camera and a stream (URL, stdin: read once) are not scanned (no changes):
-    their models find out after a few frames."""
+    after a few frames. A file is opened a second time for it; a source read once (stdin, HTTP, an
+    opened :class:`~mlplc2.io.FrameSource`) that is a file, its frame count stated (an AVI or MP4
+    sent through a pipe), is read ahead on itself (:meth:`~mlplc2.io.FrameSource.peek`: its first
+    line waits for those frames); a camera, a live source and a stream without a stated count (a
+    camera's or an encoder's: Matroska, MPEG-TS, MJPEG), whose first lines would then be seconds
+    old, are not scanned (no changes): their models find out after a few frames (docs/model.md,
+    "Repeated frames")."""
     import cv2
 
-    if not auto or src.kind in ("camera", "stream") or isinstance(source, FrameSource):
+    once = src.kind == "stream" or isinstance(source, FrameSource)
+    if not auto or src.kind == "camera" or (once and (src.live or src.frame_count is None)):
         return []
     width = min((m.work_width for m in auto if m.work_width is not None), default=None)
     # Every one of the first frames, also for a file read --live (a live reader would hand over a
     # sample that depends on the machine's speed, and the decision with it).
-    scan = open_source(source, **{**options.source_options(), "live": False})
+    scan = None if once else open_source(source, **{**options.source_options(), "live": False})
     diffs, prev = [], None
     try:
-        for k, item in enumerate(scan):
+        for k, item in enumerate(src.peek(PRESCAN_FRAMES) if once else scan):
             if k >= PRESCAN_FRAMES:
                 break
             g = as_gray(item[1])
@@ -480,7 +486,8 @@ def _prescan_changes(source, auto: list[Model], src: FrameSource, options: RunOp
                 diffs.append(frame_change(g, prev))
             prev = g
     finally:
-        scan.close()
+        if scan is not None:
+            scan.close()
     return diffs
 
 
