@@ -173,8 +173,12 @@ def test_image_size_mismatch_stops_like_a_damaged_image(tmp_path):
 
 # -- errors ---------------------------------------------------------------------
 def test_missing_file(tmp_path):
-    with pytest.raises(InputValueError, match="no such file"):
+    """A missing file is named; the hint on streams only where the name is not a video's or an image's
+    (a URL without its scheme), not after a mistyped clip's path."""
+    with pytest.raises(InputValueError, match=r"nope.mp4: no such file or directory$"):
         open_source(tmp_path / "nope.mp4")
+    with pytest.raises(InputValueError, match=r"no such file or directory \(a stream: a URL such as rtsp://"):
+        open_source("192.168.1.20:554/stream1")
 
 
 def test_empty_directory(tmp_path):

@@ -389,6 +389,7 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
     if any(ch in source for ch in "*?["):
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"
-    raise InputValueError(f"{source}: no such file or directory (a stream: a URL such as rtsp://HOST/PATH "
-                          f"or http://HOST/PATH, or - for standard input)")
+    named = Path(source).suffix.lower() in VIDEO_EXTENSIONS + IMAGE_EXTENSIONS   # a file's name: no hint on streams
+    raise InputValueError(f"{source}: no such file or directory" + ("" if named else
+                          " (a stream: a URL such as rtsp://HOST/PATH or http://HOST/PATH, or - for standard input)"))
 
