@@ -221,8 +221,16 @@ def test_zero_frame_video(tmp_path):
 
 
 def test_missing_camera():
-    with pytest.raises(InputError, match="cannot open camera 97"):
+    """One line that says what may be wrong, and on Linux which cameras there are."""
+    import glob
+    import sys
+
+    with pytest.raises(InputError, match="cannot open camera 97: none at that index, or another program holds it") \
+            as err:
         open_source(97)
+    if sys.platform.startswith("linux"):
+        found = sorted(glob.glob("/dev/video*"))
+        assert str(err.value).endswith(f"(cameras here: {', '.join(found)})" if found else "(no camera here: no /dev/video*)")
 
 
 @pytest.mark.parametrize("bad", ["abc", "320", "0x240", "320x-2", "x", (0, 3), "3x4x5"])

@@ -86,7 +86,11 @@ class _OpenCVDecoder(Decoder):
         if not self.cap.isOpened():
             self.cap.release()
             if camera:
-                raise InputValueError(f"cannot open camera {target}")
+                found = sorted(_glob.glob("/dev/video*")) if sys.platform.startswith("linux") else None
+                where = ("" if found is None else f" (cameras here: {', '.join(found)})" if found
+                         else " (no camera here: no /dev/video*)")
+                raise InputValueError(f"cannot open camera {target}: none at that index, or another program "
+                                      f"holds it{where}")
             raise InputValueError(_not_a_video(target, name, "OpenCV"))
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
