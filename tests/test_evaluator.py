@@ -689,6 +689,23 @@ def test_a_warning_that_goes_on_into_contact_stays_the_objects():
     assert v["false_episodes"] == 2 and v["false_frames"] == len(set(range(16, 20)) | set(range(10, 15)))
 
 
+def test_a_warning_that_goes_on_through_contact_stays_the_objects_for_late_s():
+    """The same unbroken warning, its centre past the object, goes on after the contact at 20: the
+    object's for LATE_S (frames 20-25: at the contact a 3-D object's projection may have left the
+    view, so its position there cannot place the warning); a warning born there after the contact,
+    and the unbroken one after LATE_S, are false."""
+    gt = {"videos": {"a.mp4": video_truth([colliding()])}}     # contact at 20
+    off = (150, 90)
+    targets = ([T(f, 1, 50, 50, warn=True) for f in range(10, 15)]          # on the object ...
+               + [T(f, 1, *off, warn=True) for f in range(15, 28)]          # ... then past it, through contact
+               + [T(f, 2, *off, warn=True) for f in range(21, 23)])         # born off it after the contact
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    v = wvid(ev, "a.mp4")
+    assert wobj(ev)["warned"] is True
+    assert v["false_frames"] == len({21, 22} | {26, 27})
+    assert v["false_episodes"] == 2
+
+
 def test_lead_time_median_and_10th_percentile_over_objects_and_videos():
     """Six collision objects in two videos, warned 2.0, 1.5, 1.0, 0.5, 0.2 s before contact and never."""
     xs = (30, 80, 130)

@@ -503,8 +503,10 @@ def _false_warnings(run: ModelRun, truth: VideoTruth,
                     rules: _WarningRules) -> tuple[dict[str, set[int]], dict[str, int]]:
     """False warnings: their frames per cause, and their episodes per cause (runs of frames per
     target and cause). A target's warning that was on a collision object and goes on without a
-    break within ``LATE_S`` before that object's contact is the object's wherever its box has
-    grown (past the view, its centre off the object): the mirror of :func:`_just_hit`."""
+    break within ``LATE_S`` before that object's contact, and on within ``LATE_S`` after it, is the
+    object's wherever its box has grown (past the view, its centre off the object): the mirror of
+    :func:`_just_hit`, which places a warning after the contact by the object's position at the
+    contact (where a 3-D object's projection may already have left the view)."""
     false_frames: dict[str, set[int]] = {}
     runs: dict[tuple, list[int]] = {}
     held: dict = {}         # target key -> the collision object its unbroken warning was on
@@ -513,8 +515,8 @@ def _false_warnings(run: ModelRun, truth: VideoTruth,
         for key, x, y in run.warnings_at(f):
             o = held.get(key)
             if o is not None and o.contact_frame is not None \
-                    and o.contact_frame - rules.late <= f < o.contact_frame:
-                now[key] = o                # the warning of the object about to hit, its box past the view
+                    and o.contact_frame - rules.late <= f <= o.contact_frame + rules.late:
+                now[key] = o                # the warning of the object about to hit (or that hit), its box past the view
                 continue
             cause = _false_cause(x, y, f, truth, rules)
             if cause is not None:
