@@ -1091,3 +1091,62 @@ def test_uniform_lm_limits_the_uniform_box_to_field_seeds(lm):
     assert first == [pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)]
     seeded = [b for b, _ in layer._boxes(None, img, x0 - 3, y0 - 3, None)]
     assert seeded == ([pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)] if lm else [])
+
+
+@pytest.mark.parametrize("refind_ttc", [True, False])
+def test_a_lost_target_is_refound_grown_as_its_time_to_contact_predicts(refind_ttc):
+    """``refind_ttc`` (off by default): a track lost at clock 10 with 0.5 s to contact left (30 fps) has grown
+    x3 by clock 20 (0.17 s left): a new box of 130 px where its 40-px box was is the same object (a factor of
+    3.25 against the lost box, beyond ``_refind``'s 3, 1.08 against the grown one); one lost with 1.5 s left
+    may be refound 25 frames later (beyond ``refind_frames``, 15, within twice that and its contact); one
+    without a time to contact is not."""
+    from mlplc2.targets import TargetLayer, Track
+
+    assert not TargetParams().refind_ttc
+    layer = TargetLayer(TargetParams(refind_ttc=refind_ttc), FPS)
+
+    def lost(ttc):
+        o = Track(7, 0, 160.0, 120.0, 40.0, 40.0)
+        o.held = None if ttc is None else (10.0, ttc, 0.05, 0.1, (0.1, 0.0))
+        layer._tracks, layer._lost = [], []
+        layer._lose(o, 10.0)
+
+    lost(0.5)
+    assert layer._refind(Track(9, 0, 162.0, 118.0, 130.0, 130.0, birth=20.0), 20.0) == refind_ttc
+    lost(1.5)
+    assert layer._refind(Track(9, 0, 160.0, 120.0, 80.0, 80.0, birth=35.0), 35.0) == refind_ttc
+    lost(None)
+    assert not layer._refind(Track(9, 0, 160.0, 120.0, 40.0, 40.0, birth=35.0), 35.0)
+    lost(None)
+    assert layer._refind(Track(9, 0, 160.0, 120.0, 40.0, 40.0, birth=20.0), 20.0)
+
+
+@pytest.mark.parametrize("absorb_frames", [5, 0])
+def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
+    """``absorb_frames`` (off by default): a target warning this frame (a 100-px box) takes over a target
+    whose centre lies in its box plus a quarter of its size and that has had no time to contact for 5 frames
+    (the static world's box its object reaches near contact): that one is dropped, its fields go to the
+    warning one, and it is not refound. A young target there (one refound lately too), one with a recent time to contact, and one
+    farther off stay."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer, Track
+
+    assert TargetParams().absorb_frames == 0
+    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames), FPS)
+    warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
+    stale = Track(2, 0, 230.0, 120.0, 30.0, 30.0, birth=10.0)        # 20 px beyond the box, within 29
+    stale.fields = {5}
+    young = Track(3, 0, 100.0, 120.0, 30.0, 30.0, birth=38.0)
+    fitted = Track(4, 0, 160.0, 60.0, 30.0, 30.0, birth=10.0)
+    fitted.last_estimate, fitted.held = 37.0, (37.0, 0.5, 0.05, 0.1, (0.1, 0.0))
+    far = Track(5, 0, 260.0, 120.0, 30.0, 30.0, birth=10.0)          # 50 px beyond the box
+    refound = Track(6, 0, 160.0, 180.0, 30.0, 30.0, birth=38.0)      # refound lately: young in its own measurement
+    refound.held = (20.0, 0.5, 0.05, 0.1, (0.1, 0.0))
+    layer._tracks = [warn, stale, young, fitted, far, refound]
+    layer._absorb([SimpleNamespace(warning=w) for w in (True, False, False, False, False, False)], 40.0)
+    assert (stale in layer._tracks) == (absorb_frames == 0)
+    assert refound in layer._tracks
+    assert young in layer._tracks and fitted in layer._tracks and far in layer._tracks and warn in layer._tracks
+    assert (5 in warn.fields) == (absorb_frames > 0)
+    assert not layer._refind(Track(9, 0, 230.0, 120.0, 30.0, 30.0, birth=41.0), 41.0)
