@@ -1093,34 +1093,6 @@ def test_uniform_lm_limits_the_uniform_box_to_field_seeds(lm):
     assert seeded == ([pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)] if lm else [])
 
 
-@pytest.mark.parametrize("refind_ttc", [True, False])
-def test_a_lost_target_is_refound_grown_as_its_time_to_contact_predicts(refind_ttc):
-    """``refind_ttc`` (off by default): a track lost at clock 10 with 0.5 s to contact left (30 fps) has grown
-    x3 by clock 20 (0.17 s left): a new box of 130 px where its 40-px box was is the same object (a factor of
-    3.25 against the lost box, beyond ``_refind``'s 3, 1.08 against the grown one); one lost with 1.5 s left
-    may be refound 25 frames later (beyond ``refind_frames``, 15, within twice that and its contact); one
-    without a time to contact is not."""
-    from mlplc2.targets import TargetLayer, Track
-
-    assert not TargetParams().refind_ttc
-    layer = TargetLayer(TargetParams(refind_ttc=refind_ttc), FPS)
-
-    def lost(ttc):
-        o = Track(7, 0, 160.0, 120.0, 40.0, 40.0)
-        o.held = None if ttc is None else (10.0, ttc, 0.05, 0.1, (0.1, 0.0))
-        layer._tracks, layer._lost = [], []
-        layer._lose(o, 10.0)
-
-    lost(0.5)
-    assert layer._refind(Track(9, 0, 162.0, 118.0, 130.0, 130.0, birth=20.0), 20.0) == refind_ttc
-    lost(1.5)
-    assert layer._refind(Track(9, 0, 160.0, 120.0, 80.0, 80.0, birth=35.0), 35.0) == refind_ttc
-    lost(None)
-    assert not layer._refind(Track(9, 0, 160.0, 120.0, 40.0, 40.0, birth=35.0), 35.0)
-    lost(None)
-    assert layer._refind(Track(9, 0, 160.0, 120.0, 40.0, 40.0, birth=20.0), 20.0)
-
-
 @pytest.mark.parametrize("absorb_frames", [5, 0])
 def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     """``absorb_frames`` (off by default): a target warning this frame (a 100-px box) takes over a target

@@ -221,7 +221,7 @@ class TargetLayer:
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-                host = next((o for o in self._tracks if self._hosts(o, t, now, p.birth_overlap)
+                host = next((o for o in self._tracks if self._hosts(o, t, now)
                              and not (f is None and self._opened(o, now))), None)
                 t.uniform = swept is None
                 if host is not None or self._grows(levels, t, alarm=alarm):
@@ -351,13 +351,13 @@ class TargetLayer:
             return t.contains(x, y, margin)
         return abs(x - t.cx) <= t.w / 4.0 and abs(y - t.cy) <= t.h / 4.0
 
-    def _hosts(self, o: Track, t: Track, index: int, share: float = 0.5) -> bool:
-        """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other
-        (``share`` of it; a new box: ``birth_overlap``), and, when ``o`` measures no approach
-        (:meth:`_measuring`), ``t``'s centre lies near ``o``'s (:meth:`_holds`)."""
+    def _hosts(self, o: Track, t: Track, index: int) -> bool:
+        """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other,
+        and, when ``o`` measures no approach (:meth:`_measuring`), ``t``'s centre lies near ``o``'s
+        (:meth:`_holds`)."""
         if self._freed(o, index):                # its contact passed (free_passed): an object behind it is its own
             return False
-        return o.overlap(t) >= share and (self._measuring(o, index) or self._holds(o, t.cx, t.cy, index))
+        return o.overlap(t) >= 0.5 and (self._measuring(o, index) or self._holds(o, t.cx, t.cy, index))
 
     def _own_margin(self, t: Track, f) -> float:
         """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
@@ -587,16 +587,18 @@ class TargetLayer:
         t.region = (box[2], box[3], t.log_s, t.aniso)
 
     def _absorb(self, out, now: float) -> None:
-        """``absorb_frames``: drop the targets without a time to contact for that many frames whose centre
-        lies in a warning target's box plus a quarter of its size; the warning target takes their fields."""
+        """``absorb_frames``: drop (not to be refound) the targets without a time to contact for that many
+        frames (since their last one, or their birth) whose centre lies in a warning target's box plus a
+        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
         n = self.params.absorb_frames
         warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
         if not warn:
             return
         span = self.params.span(n, self.fps) + _EPS
+        ids = {t.id for t in warn}
         kept = []
         for t in self._tracks:
-            host = None if t in warn or now - max(t.last_estimate, t.birth) <= span else \
+            host = None if t.id in ids or now - max(t.last_estimate, t.birth) <= span else \
                 next((o for o in warn if o.contains(t.cx, t.cy, 0.25 * o.size + 4.0)), None)
             if host is None:
                 kept.append(t)
@@ -663,44 +665,28 @@ class TargetLayer:
         return now - t.held[0] > t.held[1] * self.fps + _EPS
 
     def _lose(self, t: Track, now: float) -> None:
-        """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`; twice that
-        with ``refind_ttc``)."""
-        p = self.params
-        span = p.span(p.refind_frames, self.fps) * (2 if p.refind_ttc else 1) + _EPS
+        """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
+        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         self._lost = [(c, o) for c, o in self._lost if now - c <= span and o.id != t.id]
-        if p.refind_frames > 0:
+        if self.params.refind_frames > 0:
             self._lost.append((now, t))
-
-    def _growth(self, o: Track, c: float, now: float) -> tuple[float, float]:
-        """``refind_ttc``: (the span in clocks over which track ``o``, lost at clock ``c``, may be refound at
-        most, the factor its size has grown by at ``now`` as its last time to contact predicts, at most 4);
-        (``refind_frames``, 1) without it or without a time to contact left at ``c``."""
-        p = self.params
-        span = p.span(p.refind_frames, self.fps) + _EPS
-        left = None if o.held is None else o.held[1] - (c - o.held[0]) / self.fps
-        if not p.refind_ttc or left is None or left <= 0:
-            return span, 1.0
-        gone = (now - c) / self.fps
-        return max(span, min(left * self.fps, 2 * span)), (4.0 if gone >= left * 0.75 else min(left / (left - gone), 4.0))
 
     def _refind(self, t: Track, now: float) -> bool:
         """Whether new track ``t`` is a track lost lately (``refind_frames``; :meth:`_lose`): its
         centre lies in the lost one's last box plus a quarter of its size (as a field it would own,
         :meth:`_own_margin`) and its size is within a factor of 3 of that box's (a factor of 2 and
-        the box alone: 0.07 more targets per collision object, docs/model.md); with ``refind_ttc``
-        the lost box grown about its centre by what its last time to contact predicts since (:meth:`_growth`).
+        the box alone: 0.07 more targets per collision object, docs/model.md).
         It then takes over the lost track's id, frame of birth, last time to contact
         (``Track.held``, ``hold_frames``) and warning state whole (``Track.warned``,
         ``Track.last_warned``, ``Track.onset_cut``: the same object, so a warning that ran on the lost
         track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
         bookkeeping"), not its history (the new box is measured afresh: its size against the old
         box's would be a jump in the log-scale fit); the newest such wins."""
+        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            span, k = self._growth(o, c, now)
-            size = k * o.size
-            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * size + (k - 1.0) * o.size / 2.0) \
-                    and max(t.size / size, size / t.size) <= 3.0:
+            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
+                    and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held = o.id, o.born, o.held
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut

@@ -398,17 +398,6 @@ class TargetParams(ParameterSet):
                                warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
-    birth_overlap: float = param(0.5, """A new box is a part of a target already tracked (no new target; its field
-                                 goes to that one) when at least this share of the smaller of the two boxes lies in
-                                 the other (:meth:`TargetLayer._hosts`; two tracks merge at 0.5 whatever this is).
-                                 0.5 = as a merge (docs/model.md, "Targets per object, session 15").""",
-                                 valid=Valid.real(positive=True, maximum=1))
-    refind_ttc: bool = param(False, """A target lost with a time to contact left (its own, ``Track.held``) may be
-                             refound (``refind_frames``) until that contact, up to twice ``refind_frames``, in its
-                             last box grown about its centre by the factor that time to contact predicts since (at
-                             most 4): the size test and the box a new target's centre must lie in
-                             (:meth:`TargetLayer._refind`). False = off (docs/model.md, "Targets per object,
-                             session 15").""", valid=Valid.boolean())
     absorb_frames: int = param(0, """A target warning this frame absorbs every other target whose centre lies in
                                its box plus a quarter of its size (as a field it would own) and that has had no
                                time to contact for this many frames (since its last one, or its birth): the
