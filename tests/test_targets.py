@@ -1122,27 +1122,3 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     assert young in layer._tracks and fitted in layer._tracks and far in layer._tracks and warn in layer._tracks
     assert (5 in warn.fields) == (absorb_frames > 0)
     assert not layer._refind(Track(9, 0, 230.0, 120.0, 30.0, 30.0, birth=41.0), 41.0)
-
-
-@pytest.mark.parametrize("handover_frames", [5, 0])
-def test_a_second_box_on_an_object_takes_over_the_first_ones_id(handover_frames):
-    """``handover_frames`` (off by default): a new box that overlaps a target 30 frames old without a time to
-    contact (a second, partial box on one object) takes over its id, frame of birth and fields, and that one is
-    dropped; a target with a recent time to contact, or a young one, keeps its id and the new box gets its own."""
-    from mlplc2.targets import TargetLayer, Track
-
-    assert TargetParams().handover_frames == 0
-    layer = TargetLayer(TargetParams(handover_frames=handover_frames), FPS)
-    old = Track(3, 12, 100.0, 120.0, 40.0, 40.0, birth=10.0)
-    old.fields = {7}
-    layer._tracks = [old]
-    new = Track(9, 40, 125.0, 120.0, 30.0, 30.0, birth=40.0)
-    assert layer._hand_over(new, 40.0) == (handover_frames > 0)
-    assert (new.id, new.born, 7 in new.fields, old in layer._tracks) == \
-        ((3, 12, True, False) if handover_frames else (9, 40, False, True))
-    for fitted, birth in ((37.0, 10.0), (-1e9, 38.0)):
-        other = Track(4, 0, 100.0, 120.0, 40.0, 40.0, birth=birth)
-        other.last_estimate = fitted
-        layer._tracks = [other]
-        new = Track(9, 40, 125.0, 120.0, 30.0, 30.0, birth=40.0)
-        assert not layer._hand_over(new, 40.0) and new.id == 9 and layer._tracks == [other]

@@ -240,7 +240,7 @@ class TargetLayer:
                            for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
-            if not (self._refind(t, now) or self._hand_over(t, now)):
+            if not self._refind(t, now):
                 self._next += 1
             if f is not None:
                 self._own(t, f, now)
@@ -692,22 +692,6 @@ class TargetLayer:
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
                 return True
         return False
-
-    def _hand_over(self, t: Track, now: float) -> bool:
-        """``handover_frames`` N > 0: whether new track ``t`` takes over a live track whose box overlaps its
-        own, at least N frames old and without a time to contact for N frames (the largest overlap): its id,
-        frame of birth, last time to contact, warning state and fields, as :meth:`_refind`; that one is dropped
-        (a second box on one object: the new box is measured afresh where the seed found it)."""
-        n = self.params.handover_frames
-        span = self.params.span(n, self.fps) + _EPS
-        old = [o for o in self._tracks if n > 0 and now - max(o.last_estimate, o.birth) > span and o.overlap(t) > 0]
-        if not old:
-            return False
-        o = max(old, key=lambda o: (o.overlap(t), -o.id))
-        self._tracks.remove(o)
-        t.id, t.born, t.held, t.fields = o.id, o.born, o.held, t.fields | o.fields
-        t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
-        return True
 
     def _align_track(self, levels, t: Track, half: float, interval: float):
         """The alignment of track ``t`` from the last frame to this one (:func:`align`), None when it

@@ -404,11 +404,6 @@ class TargetParams(ParameterSet):
                                static world's box beside an object near contact is the object's (its fields go
                                to it; the absorbed one is not refound). 0 = off (docs/model.md, "Targets per
                                object, session 15").""", unit="frames", valid=Valid.integer(0))
-    handover_frames: int = param(0, """A new target whose box overlaps that of a target at least this many frames old
-                                 and without a time to contact for as many takes over its id, frame of birth, last
-                                 time to contact, warning state and fields; that one is dropped (a second box on one
-                                 object: :meth:`TargetLayer._hand_over`). 0 = off (docs/model.md, "Targets per
-                                 object, session 15").""", unit="frames", valid=Valid.integer(0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
