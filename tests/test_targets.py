@@ -1091,3 +1091,34 @@ def test_uniform_lm_limits_the_uniform_box_to_field_seeds(lm):
     assert first == [pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)]
     seeded = [b for b, _ in layer._boxes(None, img, x0 - 3, y0 - 3, None)]
     assert seeded == ([pytest.approx((149.5, 119.5, 90.0, 90.0), abs=1.0)] if lm else [])
+
+
+@pytest.mark.parametrize("absorb_frames", [5, 0])
+def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
+    """``absorb_frames`` (off by default): a target warning this frame (a 100-px box) takes over a target
+    whose centre lies in its box plus a quarter of its size and that has had no time to contact for 5 frames
+    (the static world's box its object reaches near contact): that one is dropped, its fields go to the
+    warning one, and it is not refound. A young target there (one refound lately too), one with a recent time to contact, and one
+    farther off stay."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer, Track
+
+    assert TargetParams().absorb_frames == 0
+    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames), FPS)
+    warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
+    stale = Track(2, 0, 230.0, 120.0, 30.0, 30.0, birth=10.0)        # 20 px beyond the box, within 29
+    stale.fields = {5}
+    young = Track(3, 0, 100.0, 120.0, 30.0, 30.0, birth=38.0)
+    fitted = Track(4, 0, 160.0, 60.0, 30.0, 30.0, birth=10.0)
+    fitted.last_estimate, fitted.held = 37.0, (37.0, 0.5, 0.05, 0.1, (0.1, 0.0))
+    far = Track(5, 0, 260.0, 120.0, 30.0, 30.0, birth=10.0)          # 50 px beyond the box
+    refound = Track(6, 0, 160.0, 180.0, 30.0, 30.0, birth=38.0)      # refound lately: young in its own measurement
+    refound.held = (20.0, 0.5, 0.05, 0.1, (0.1, 0.0))
+    layer._tracks = [warn, stale, young, fitted, far, refound]
+    layer._absorb([SimpleNamespace(warning=w) for w in (True, False, False, False, False, False)], 40.0)
+    assert (stale in layer._tracks) == (absorb_frames == 0)
+    assert refound in layer._tracks
+    assert young in layer._tracks and fitted in layer._tracks and far in layer._tracks and warn in layer._tracks
+    assert (5 in warn.fields) == (absorb_frames > 0)
+    assert not layer._refind(Track(9, 0, 230.0, 120.0, 30.0, 30.0, birth=41.0), 41.0)

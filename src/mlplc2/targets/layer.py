@@ -258,6 +258,7 @@ class TargetLayer:
             if o.warning and self._slanted(t, levels):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
+        self._absorb(out, now)
         self._drop_idle(now)
         self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
         for c in self._past:
@@ -584,6 +585,26 @@ class TargetLayer:
                 t.inside[-1] = last
             t.history[-1] = last
         t.region = (box[2], box[3], t.log_s, t.aniso)
+
+    def _absorb(self, out, now: float) -> None:
+        """``absorb_frames``: drop (not to be refound) the targets without a time to contact for that many
+        frames (since their last one, or their birth) whose centre lies in a warning target's box plus a
+        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
+        n = self.params.absorb_frames
+        warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
+        if not warn:
+            return
+        span = self.params.span(n, self.fps) + _EPS
+        ids = {t.id for t in warn}
+        kept = []
+        for t in self._tracks:
+            host = None if t.id in ids or now - max(t.last_estimate, t.birth) <= span else \
+                next((o for o in warn if o.contains(t.cx, t.cy, 0.25 * o.size + 4.0)), None)
+            if host is None:
+                kept.append(t)
+            else:
+                host.fields |= t.fields
+        self._tracks = kept
 
     def _drop_idle(self, now: float) -> None:
         """Drop the tracks without a time to contact or an answering field for ``idle_frames``."""

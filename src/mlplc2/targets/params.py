@@ -398,6 +398,12 @@ class TargetParams(ParameterSet):
                                warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
+    absorb_frames: int = param(0, """A target warning this frame absorbs every other target whose centre lies in
+                               its box plus a quarter of its size (as a field it would own) and that has had no
+                               time to contact for this many frames (since its last one, or its birth): the
+                               static world's box beside an object near contact is the object's (its fields go
+                               to it; the absorbed one is not refound). 0 = off (docs/model.md, "Targets per
+                               object, session 15").""", unit="frames", valid=Valid.integer(0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
