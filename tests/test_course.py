@@ -136,6 +136,27 @@ def test_the_alarm_alone_does_not_begin_a_warning_behind_a_passed_target():
         assert out.ttc_s is None and out.warning != behind
 
 
+def test_the_alarm_alone_does_not_begin_a_warning_on_a_track_refound_from_one_that_passed():
+    # refind_drift (issue 22, session 15): a young box (3 frames: no fit, no course) on a collision course
+    # that owns a field in collision alarm warns on the alarm alone; refound from a lost track whose image
+    # expanded about the heading (the static world, a passing car lost at the border: drift 1) it does not
+    # begin one, refound from a lost track that kept its bearing (drift 0) it does; off (0), both warn
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    for gate, static, warns in ((0.4, True, False), (0.4, False, True), (0.0, True, True)):
+        p = TargetParams(refind_drift=gate)
+        layer = TargetLayer(p, FPS)
+        layer.heading = heading
+        lost = _looming(30.0, 8, static=static)
+        layer._lose(lost, 8.0)
+        young = _looming(30.0, 3)
+        young.last_alarm, young.alarm_run = 3, 3
+        assert layer._refind(young, 9.0) and young.id == lost.id
+        if gate:
+            assert young.lost_drift == pytest.approx(1.0 if static else 0.0, abs=0.05)
+        out = estimate(young, p, FPS, 3, SHAPE, heading=heading)
+        assert out.miss is None and out.warning == warns
+
+
 def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():
     # the same approach judged every frame: it warns from its first fit (in view, 0.63 s), and
     # goes on warning down to contact while its box is cut (0.13 s at frame 20)

@@ -426,6 +426,14 @@ class TargetParams(ParameterSet):
                                a box over the view: the same, with later leads). False = off (docs/model.md,
                                "Objects missed", session 14).""",
                                valid=Valid.boolean())
+    refind_drift: float = param(0.0, """A target refound after a gap (``refind_frames``) whose lost track's centre drifted
+                                away from the measured heading by more than this fraction of the static world's drift
+                                (:func:`~mlplc2.targets.warning.drift`; the largest over the tracks it took over from)
+                                does not begin a warning on the field alarm alone, without a course: the lost track
+                                passed beside the path (a passing car leaving the view at the border, lost and found
+                                again there), and the refound track's own history is too short to tell. 0 = off
+                                (docs/model.md, "Objects missed", session 15).""",
+                                valid=Valid.real(minimum=0))
     reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
                           around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
                           afresh each frame; its centre inside the box) is re-seated on that region (shrinking

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -257,6 +257,12 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
     return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
 
 
+def passed_by(t: Track, p: TargetParams) -> bool:
+    """``refind_drift``: whether track ``t``, refound after a gap, took over from a lost track that drifted away
+    from the heading by more than ``refind_drift`` of the static world's drift (``Track.lost_drift``)."""
+    return p.refind_drift > 0 and t.lost_drift is not None and t.lost_drift > p.refind_drift
+
+
 def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] | None:
     """``alarm_course``: the course of an alarm seed on its first frame (one observation) from its own
     alignment over ``change_frames`` (``Track.seed_move``): where its centre passes the camera plane
@@ -425,7 +431,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
-                                                       or anisotropic(t, p, measured))
+                                                       or anisotropic(t, p, measured) or passed_by(t, p))
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
