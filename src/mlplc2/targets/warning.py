@@ -168,7 +168,7 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
 
 
 def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
-             shape: tuple[int, int] | None = None) -> bool:
+             shape: tuple[int, int] | None = None, miss: float | None = None) -> bool:
     """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -180,11 +180,13 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     bearing. The field alarm exempts a box only once it has lasted ``drift_alarm_frames`` frames in a
     row (``Track.alarm_run``) and, with ``drift_cut``, only a box wholly inside a frame of ``shape``
     (h, w; None: no test): the static world beside the path sweeps out of view through the border
-    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts")."""
+    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts"); with
+    ``drift_miss``, only a box whose course ``miss`` (None: none known) is within it."""
     if p.path_drift <= 0 or heading is None or holds(t, heading):
         return False
     if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
-            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames):
+            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames) \
+            and not (p.drift_miss > 0 and miss is not None and miss > p.drift_miss):
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
@@ -438,7 +440,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured, shape):
+    if warning and not t.warned and off_path(t, p, index, measured, shape, miss):
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
