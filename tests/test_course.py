@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -134,6 +134,44 @@ def test_the_alarm_alone_does_not_begin_a_warning_behind_a_passed_target():
         t.last_alarm, t.alarm_run, t.behind = 3, 3, behind
         out = estimate(t, TargetParams(), FPS, 3, SHAPE)
         assert out.ttc_s is None and out.warning != behind
+
+
+def test_the_alarm_alone_does_not_begin_a_warning_on_a_track_refound_from_one_that_passed():
+    # refind_drift (issue 22, session 15): a young box (3 frames: no fit, no course) on a collision course
+    # that owns a field in collision alarm warns on the alarm alone; refound from a lost track whose image
+    # expanded about the heading (the static world, a passing car lost at the border: drift 1) it does not
+    # begin one, refound from a lost track that kept its bearing (drift 0) it does; off (0), both warn
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    for gate, static, warns in ((0.4, True, False), (0.4, False, True), (0.0, True, True)):
+        p = TargetParams(refind_drift=gate)
+        layer = TargetLayer(p, FPS)
+        layer.heading = heading
+        lost = _looming(30.0, 8, static=static)
+        layer._lose(lost, 8.0)
+        young = _looming(30.0, 3)
+        young.last_alarm, young.alarm_run = 3, 3
+        assert layer._refind(young, 9.0) and young.id == lost.id
+        if gate:
+            assert young.lost_drift == pytest.approx(1.0 if static else 0.0, abs=0.05)
+        out = estimate(young, p, FPS, 3, SHAPE, heading=heading)
+        assert out.miss is None and out.warning == warns
+
+
+def test_the_field_alarm_exempts_a_drifting_box_from_path_drift_only_on_a_short_course():
+    # drift_miss (issue 22, session 15): a box in view that expands about the heading (drift 1, the static
+    # world's; path_drift 0.4 holds its warning back) and owns a field in collision alarm is exempted by the
+    # alarm; with drift_miss 0.4 only while its course (if known) misses by at most 0.4: a box over a passing
+    # car and the road beside it (course 0.6-0.9, measured short) is held back, a short course is not
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    t = _looming(30.0, 8, static=True)
+    t.last_alarm, t.alarm_run = 8, 3
+    assert drift(t, heading) == pytest.approx(1.0, abs=0.05) and not t.cut(SHAPE, 2.0)
+    off, on = TargetParams(), TargetParams(drift_miss=0.4)
+    assert not off_path(t, off, 8, heading, SHAPE, 0.7)                  # main: the alarm exempts it
+    assert off_path(t, on, 8, heading, SHAPE, 0.7)                       # a course beyond drift_miss: not
+    assert not off_path(t, on, 8, heading, SHAPE, 0.3)                   # a short course: exempt
+    assert not off_path(t, on, 8, heading, SHAPE, None)                  # no course known: exempt
+    assert off_path(t, on, 9, heading, SHAPE, 0.3)                       # no alarm this frame: path_drift
 
 
 def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():

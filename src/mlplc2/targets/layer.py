@@ -25,7 +25,7 @@ from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import estimate
+from .warning import drift, estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -690,6 +690,9 @@ class TargetLayer:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held = o.id, o.born, o.held
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
+                if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
+                    seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]
+                    t.lost_drift = max(seen) if seen else None
                 return True
         return False
 

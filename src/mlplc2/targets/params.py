@@ -343,6 +343,13 @@ class TargetParams(ParameterSet):
                              low in the view, on the ground ahead, is cut by the bottom border as it nears). False =
                              every cut box loses it (session 14: docs/model.md, "The fit's onset the field alarm
                              exempts").""", valid=Valid.boolean())
+    drift_miss: float = param(0.0, """``path_drift``'s exemption for a target with a field in collision alarm this frame
+                              holds only on a course within this (none known: no test): a box whose centre drifts away
+                              from the heading by more than ``path_drift`` of the static world's drift and whose
+                              course misses by more is the static world's or a passing object's (a box over a passing
+                              car and the road beside it, whose miss is measured short), not a collider's. 0 = off
+                              (docs/model.md, "Objects missed", session 15).""",
+                              valid=Valid.real(minimum=0))
     drift_alarm_frames: int = param(1, """``path_drift``'s exemption for a target with a field in collision alarm this
                                     frame holds only once a field of it has been in collision alarm this many processed
                                     frames in a row (``Track.alarm_run``): the static world's alarms beside the path are
@@ -432,6 +439,14 @@ class TargetParams(ParameterSet):
                                a box over the view: the same, with later leads). False = off (docs/model.md,
                                "Objects missed", session 14).""",
                                valid=Valid.boolean())
+    refind_drift: float = param(0.0, """A target refound after a gap (``refind_frames``) whose lost track's centre drifted
+                                away from the measured heading by more than this fraction of the static world's drift
+                                (:func:`~mlplc2.targets.warning.drift`; the largest over the tracks it took over from)
+                                does not begin a warning on the field alarm alone, without a course: the lost track
+                                passed beside the path (a passing car leaving the view at the border, lost and found
+                                again there), and the refound track's own history is too short to tell. 0 = off
+                                (docs/model.md, "Objects missed", session 15).""",
+                                valid=Valid.real(minimum=0))
     reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
                           around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
                           afresh each frame; its centre inside the box) is re-seated on that region (shrinking

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -168,7 +168,7 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
 
 
 def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
-             shape: tuple[int, int] | None = None) -> bool:
+             shape: tuple[int, int] | None = None, miss: float | None = None) -> bool:
     """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -180,11 +180,13 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     bearing. The field alarm exempts a box only once it has lasted ``drift_alarm_frames`` frames in a
     row (``Track.alarm_run``) and, with ``drift_cut``, only a box wholly inside a frame of ``shape``
     (h, w; None: no test): the static world beside the path sweeps out of view through the border
-    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts")."""
+    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts"); with
+    ``drift_miss``, only a box whose course ``miss`` (None: none known) is within it."""
     if p.path_drift <= 0 or heading is None or holds(t, heading):
         return False
     if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
-            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames):
+            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames) \
+            and not (p.drift_miss > 0 and miss is not None and miss > p.drift_miss):
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
@@ -255,6 +257,12 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
         return False
     growth, skew = t.seed_move[2], t.seed_skew
     return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
+
+
+def passed_by(t: Track, p: TargetParams) -> bool:
+    """``refind_drift``: whether track ``t``, refound after a gap, took over from a lost track that drifted away
+    from the heading by more than ``refind_drift`` of the static world's drift (``Track.lost_drift``)."""
+    return p.refind_drift > 0 and t.lost_drift is not None and t.lost_drift > p.refind_drift
 
 
 def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] | None:
@@ -425,14 +433,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
-                                                       or anisotropic(t, p, measured))
+                                                       or anisotropic(t, p, measured) or passed_by(t, p))
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
             and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured, shape):
+    if warning and not t.warned and off_path(t, p, index, measured, shape, miss):
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
