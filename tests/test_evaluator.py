@@ -706,6 +706,21 @@ def test_a_warning_that_goes_on_through_contact_stays_the_objects_for_late_s():
     assert v["false_episodes"] == 2
 
 
+def test_a_false_warning_that_changes_cause_is_one_episode():
+    """A target's false warning that slides from a passing object onto the background without a
+    break is one episode (the user saw one false warning), counted for the cause of its first
+    frame; a break starts another."""
+    gt = {"videos": {"a.mp4": video_truth([colliding(),
+                                           obj(2, "pass", range(0, 12), 150, 50, 20.0)])}}   # in view in frames 0-11
+    targets = ([T(f, 5, 150, 50, warn=True) for f in range(8, 12)]        # on the passing object: "pass" ...
+               + [T(f, 5, 150, 90, warn=True) for f in range(12, 15)]     # ... on into the background, unbroken
+               + [T(f, 5, 150, 90, warn=True) for f in range(17, 19)])    # a break, then again: a second episode
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    v = wvid(ev, "a.mp4")
+    assert v["false_frames"] == 9
+    assert v["false_episodes"] == 2 and v["false_episodes_by_cause"] == {"pass": 1, "background": 1}
+
+
 def test_lead_time_median_and_10th_percentile_over_objects_and_videos():
     """Six collision objects in two videos, warned 2.0, 1.5, 1.0, 0.5, 0.2 s before contact and never."""
     xs = (30, 80, 130)
@@ -861,7 +876,8 @@ def test_global_alarm_model():
     assert o["warning_distance_px"] is None and o["targets"] is None     # no position, no targets
     v = wvid(ev, "a.mp4", "lgmd2")
     assert v["false_frames_by_cause"] == {"background": 1, "distractor": 1, "pass": 1}
-    assert v["false_episodes_by_cause"] == {"background": 1, "distractor": 1, "pass": 1}
+    # frames 27-29 are one unbroken false alarm: one episode, for the cause of its first frame
+    assert v["false_episodes"] == 1 and v["false_episodes_by_cause"] == {"pass": 1}
     s = warn_summary(ev, "lgmd2")
     assert s["false_frames_per_1000"] == pytest.approx(100.0)
     assert s["ttc_coverage"] is None and s["fragmentation"] is None

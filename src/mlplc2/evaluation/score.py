@@ -501,14 +501,15 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
 
 def _false_warnings(run: ModelRun, truth: VideoTruth,
                     rules: _WarningRules) -> tuple[dict[str, set[int]], dict[str, int]]:
-    """False warnings: their frames per cause, and their episodes per cause (runs of frames per
-    target and cause). A target's warning that was on a collision object and goes on without a
+    """False warnings: their frames per cause, and their episodes per cause (runs of consecutive
+    frames in which one target gives a false warning, each counted once, for the cause of its first
+    frame: a warning that slides from a passing object onto the background is one episode). A target's warning that was on a collision object and goes on without a
     break within ``LATE_S`` before that object's contact, and on within ``LATE_S`` after it, is the
     object's wherever its box has grown (past the view, its centre off the object): the mirror of
     :func:`_just_hit`, which places a warning after the contact by the object's position at the
     contact (where a 3-D object's projection may already have left the view)."""
     false_frames: dict[str, set[int]] = {}
-    runs: dict[tuple, list[int]] = {}
+    runs: dict = {}         # target key -> {frame: cause} of its false warnings
     held: dict = {}         # target key -> the collision object its unbroken warning was on
     for f in range(rules.first, rules.end):
         now = {}
@@ -521,15 +522,17 @@ def _false_warnings(run: ModelRun, truth: VideoTruth,
             cause = _false_cause(x, y, f, truth, rules)
             if cause is not None:
                 false_frames.setdefault(cause, set()).add(f)
-                runs.setdefault((key, cause), []).append(f)
+                runs.setdefault(key, {}).setdefault(f, cause)
             elif x is not None:
                 o = next((c for c in rules.colliders if on_object(x, y, c, f, rules.radius)), None)
                 if o is not None:
                     now[key] = o
         held = now
     episodes_by: dict[str, int] = {}
-    for (key, cause), frames in runs.items():
-        episodes_by[cause] = episodes_by.get(cause, 0) + episodes(frames)
+    for causes in runs.values():
+        for f, cause in causes.items():
+            if f - 1 not in causes:         # an episode's first frame
+                episodes_by[cause] = episodes_by.get(cause, 0) + 1
     return false_frames, episodes_by
 
 
