@@ -96,8 +96,8 @@ def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
 
 
 #: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
-#: world's (0: an object on a collision course, 1: the static world, halfway between; the default of
-#: ``TargetParams.bearing_drift``), and the least drift of the static world (px) that a box's jitter cannot fake
+#: world's (0: an object on a collision course, 1: the static world, halfway between; ``TargetParams.bearing_drift``
+#: is the layer's, 0.4), and the least drift of the static world (px) that a box's jitter cannot fake
 DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
 
 
