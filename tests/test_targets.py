@@ -1122,3 +1122,49 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     assert young in layer._tracks and fitted in layer._tracks and far in layer._tracks and warn in layer._tracks
     assert (5 in warn.fields) == (absorb_frames > 0)
     assert not layer._refind(Track(9, 0, 230.0, 120.0, 30.0, 30.0, birth=41.0), 41.0)
+
+
+def test_the_view_filled_by_a_warned_object_opens_a_window_until_its_contact():
+    """contact_blind (2; docs/model.md, "False warnings, session 15"): a target warning
+    on a box wider or taller than the frame, 0.1 s (3 frames) from contact at frame 50, keeps other warnings
+    from beginning up to frame 53 + contact_blind; a box inside the frame, a target not warning, or the rule
+    off (0) open none, and a later window is kept."""
+    from mlplc2.targets import Target
+    from mlplc2.targets.warning import blind_until
+
+    shape = (240, 320)
+    fills = Target(1, 100.0, 100.0, 400.0, 300.0, ttc_s=0.1, miss=0.1, warning=True)
+    inside = Target(2, 100.0, 100.0, 200.0, 200.0, ttc_s=0.1, miss=0.1, warning=True)
+    quiet = Target(3, 100.0, 100.0, 400.0, 300.0, ttc_s=0.1, miss=0.1, warning=False)
+    tall = Target(4, 100.0, 100.0, 100.0, 260.0, ttc_s=0.2, miss=0.1, warning=True)
+    p = TargetParams(contact_blind=2)
+    assert TargetParams().contact_blind == 2                                 # the default
+    assert blind_until([fills], p, FPS, 50, shape, -math.inf) == pytest.approx(55.0)
+    assert blind_until([tall], p, FPS, 50, shape, -math.inf) == pytest.approx(58.0)
+    assert blind_until([inside, quiet], p, FPS, 50, shape, -math.inf) == -math.inf
+    assert blind_until([fills], TargetParams(contact_blind=0), FPS, 50, shape, -math.inf) == -math.inf
+    assert blind_until([fills], p, FPS, 50, shape, 60.0) == 60.0
+
+
+@pytest.mark.parametrize("until, first", [(-math.inf, 8), (9.0, 10)])
+def test_no_warning_begins_within_the_contact_window(until, first):
+    """The layer holds back a warning that would begin up to the window's end (contact_blind: the collider
+    fills the view; here set by hand) and lets it begin after it: the alarm on a growing disc warns on its
+    alarm's first frame (8) without a window, on the first frame after one that ends at 9."""
+    from types import SimpleNamespace
+
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    frames = _growing_disc(12, start=6)
+    layer = TargetLayer(TargetParams(alarm_warns=True), FPS)
+    layer._blind_until = until
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    warned = []
+    for k, g in enumerate(frames):
+        f = SimpleNamespace(id=1, x=200, y=90, radius=40, response=1.0, collision=True)
+        out = layer.step(g, lm, [f] if k >= 8 else [], k)
+        if any(t.warning for t in out):
+            warned.append(k)
+    assert warned and warned[0] == first

@@ -25,7 +25,7 @@ from .extent import measure_extent
 from .params import TargetParams
 from .slant import slant
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import drift, estimate
+from .warning import blind_until, drift, estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -85,6 +85,7 @@ class TargetLayer:
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
         self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
+        self._blind_until = -math.inf   # contact_blind: no warning begins up to this clock
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
@@ -257,7 +258,11 @@ class TargetLayer:
             # the static world's surface, not an object: no warning this frame, so none last frame either
             if o.warning and self._slanted(t, levels):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+            # the view filled by an object about to hit: no other warning begins (contact_blind)
+            elif o.warning and not warned and now <= self._blind_until + _EPS:
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
+        self._blind_until = blind_until(out, p, self.fps, now, (h, w), self._blind_until)
         self._absorb(out, now)
         self._drop_idle(now)
         self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
@@ -314,6 +319,8 @@ class TargetLayer:
                 move = self._seed_move(t)
                 if move is not None:
                     t.seed_move, t.seed_skew = move[:3], move[3]
+                else:
+                    t.seed_failed = self._reference() is not None and self._now is not None
 
     def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest

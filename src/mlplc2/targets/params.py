@@ -290,6 +290,45 @@ class TargetParams(ParameterSet):
                             clip changed; ``texture_tilt_1``'s collider, warned only by a passing object's box over it,
                             lost; docs/model.md, "A warning that leaves through the border").""",
                             unit="object extents", valid=Valid.real(minimum=0))
+    bearing_drift: float = param(0.4, """The field alarm without a course (a young track, or a seed on its first frame)
+                                 warns on a box off the path only if it keeps its bearing while it grows
+                                 (:func:`~mlplc2.targets.warning.keeps_bearing`): its centre drifted away from the
+                                 heading by at most this fraction of the static world's drift over the same growth
+                                 (0: an object on a collision course, 1: the static world). The real clips' first
+                                 warnings by it drifted 0.03-0.25. 0.4 since session 15 (before: 0.5, halfway, the
+                                 constant ``DRIFT_FRACTION``): holdout 4's false episodes per 1000 frames 0.51 -> 0.41
+                                 (the ground's seed at 0.45 where no heading is measured), ``drive_0_h1``'s wall edge
+                                 (0.45) 3 false frames -> 1, no collision, lead or real clip changed; docs/model.md,
+                                 "False warnings, session 15"; session 10: "A warning that begins off the path",
+                                 (H)).""", valid=Valid.real(minimum=0))
+    alarm_onset_miss: bool = param(True, """The field alarm with a course begins a warning beyond ``onset_miss`` (up to
+                                   ``max_miss``) only on its first frame in a row (``Track.alarm_run``): an alarm that
+                                   lasted while the course said the object passes, and warns once its course falls
+                                   under ``max_miss``, is a passing object's course measured short (as the fit's, which
+                                   ``onset_miss`` holds); the real colliders' alarms with a course began on their first
+                                   frame (``night_rear_end`` 0.88, ``crossing_car_strong_light`` 0.73). A target that
+                                   warned goes on as before. False = off (on since session 15: holdout 1's false
+                                   episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
+                                   parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
+                                   real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+    alarm_unaligned: bool = param(False, """With ``alarm_isotropic``: from a translating camera (a measured heading), the
+                                  field alarm without a course does not begin a warning on a target born on an alarm
+                                  seed whose own alignment over ``change_frames`` was tried and failed (its residual
+                                  over ``max_residual``, no scale): the edge where the static world's surfaces meet, a
+                                  wall's edge or the ground sheared by the camera's motion, which no similarity maps
+                                  onto itself; the alarm of an approaching object's seed aligns. Its later course (the
+                                  fit, ``min_frames``) may still warn. False = off (measured, not adopted: it took two
+                                  holdout 4 collisions, docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+    cut_exit_onset: bool = param(True, """With ``cut_exit``: no warning begins either on a frame on which ``cut_exit``
+                                 would hold one back (the box cut by the border, not holding the heading, its course
+                                 missing by more than ``cut_exit``), whatever began it (the fit, the field alarm with a
+                                 course): the ground leaving the view through the border beside the path, its time to
+                                 contact still ``cut_onset_s`` away (0.87-0.97 s, courses 0.66-0.92). The colliders
+                                 whose warnings began on cut boxes did on courses of 0.09-0.39. False = off (on since
+                                 session 15: false episodes per 1000 frames holdout 1 0.93 -> 0.82, holdout 3 0.51 ->
+                                 0.41 (0.28 -> 0.10 % of frames), holdout 4 0.62 -> 0.51 with ``contact_blind``, no
+                                 collision, lead or real clip changed; docs/model.md, "False warnings, session 15").""",
+                                 valid=Valid.boolean())
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
@@ -314,6 +353,17 @@ class TargetParams(ParameterSet):
                                 ``flat_onset``, no collision, lead or real clip changed; docs/model.md, "A flat box
                                 across the path").""",
                                 unit="object extents", valid=Valid.real(minimum=0))
+    contact_blind: int = param(2, """Once a target warns on a box wider or taller than the frame (the object fills
+                               the view: the camera is about to hit it), no other target begins a warning until
+                               that target's predicted contact (this frame's ``ttc_s``) plus this many frames
+                               (:func:`~mlplc2.targets.warning.blind_until`): the view is the colliding object, and
+                               the seeds found on it then (its texture sweeping past, the target that held it lost)
+                               are the same collision, scored off it (the truth has no box for it at contact). A
+                               target that warned goes on; one that begins after the window is not held back. 0 =
+                               off (2, the default since session 15: false episodes per 1000 frames 0.41 -> 0.31
+                               standard, 0.93 -> 0.62 holdout 4, no collision, lead or real clip changed;
+                               docs/model.md, "False warnings, session 15").""",
+                               unit="frames", valid=Valid.integer(0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning begins without a field of the target in collision alarm only on a box
                               that holds the heading or whose centre keeps its bearing: it drifted away from

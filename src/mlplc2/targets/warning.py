@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -68,7 +68,9 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
     (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
-    that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits."""
+    that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits. With
+    ``alarm_onset_miss``, an alarm past its first frame in a row begins a warning only on a course within
+    ``onset_miss`` (:func:`wide`)."""
     if not p.alarm_warns or t.last_alarm != index:
         return False
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
@@ -78,10 +80,12 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if ttc is not None and ttc > p.horizon_s:
         return False
     if miss is not None:
+        if p.alarm_onset_miss and not t.warned and t.alarm_run > 1 and wide(p, miss):
+            return False
         return miss <= (p.max_miss if limit is None else limit)
     if heading is None or shape is None or t.cut(shape, p.border):
         return False
-    return on_path(t, p, heading) or keeps_bearing(t, heading)
+    return on_path(t, p, heading) or keeps_bearing(t, heading, p.bearing_drift)
 
 
 def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
@@ -92,22 +96,22 @@ def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
 
 
 #: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
-#: world's (0: an object on a collision course, 1: the static world, halfway between), and the
-#: least drift of the static world (px) that a box's jitter cannot fake
+#: world's (0: an object on a collision course, 1: the static world, halfway between; ``TargetParams.bearing_drift``
+#: is the layer's, 0.4), and the least drift of the static world (px) that a box's jitter cannot fake
 DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
 
 
-def keeps_bearing(t: Track, heading: tuple[float, float]) -> bool:
+def keeps_bearing(t: Track, heading: tuple[float, float], fraction: float = DRIFT_FRACTION) -> bool:
     """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
     does, over its history (two observations at least; on its first frame, the alarm seed's
     alignment against the frame ``change_frames`` before, ``Track.seed_move``): the static world (and an object that
     will pass) expands about the heading (the focus of expansion of a camera that does not turn),
     so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
     while the centre of an object on a collision course stays put. True when the static world's
-    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``DRIFT_FRACTION`` of it. The
+    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``fraction`` of it. The
     centres are the observations' (less the camera's turn, :class:`Observation`)."""
     ratio = drift(t, heading)
-    return ratio is not None and ratio <= DRIFT_FRACTION
+    return ratio is not None and ratio <= fraction
 
 
 def drift(t: Track, heading: tuple[float, float], *, away: bool = False) -> float | None:
@@ -250,11 +254,12 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
     static world's surfaces meet alarm as the camera moves forward, and grow unlike in both directions; an
     approaching object grows alike. A track without its seed's alignment (born before its alarm): no test
     (its own box's history was measured too, session 14, and delayed a real clip's warning past its alarm
-    on a scaled copy: docs/model.md)."""
+    on a scaled copy: docs/model.md). With ``alarm_unaligned``, a seed whose alignment was tried and failed
+    (``Track.seed_failed``) does not begin one either."""
     if not p.alarm_isotropic or heading is None or holds(t, heading):
         return False
     if t.seed_move is None or t.seed_skew is None:
-        return False
+        return p.alarm_unaligned and t.seed_failed
     growth, skew = t.seed_move[2], t.seed_skew
     return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
 
@@ -297,7 +302,15 @@ def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[floa
     (None: none known, no test) exceeds ``cut_exit``. What leaves the view through the border beside
     the path (a passing object, the ground, a roadside object) passes; the box of an object on a
     collision course spreads over the view about the path."""
-    return (p.cut_exit > 0 and t.warned and not t.onset_cut and miss is not None and miss > p.cut_exit
+    return t.warned and not t.onset_cut and _leaves(t, p, shape, heading, miss)
+
+
+def _leaves(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
+            miss: float | None) -> bool:
+    """``cut_exit``'s test: track ``t``'s box is cut by the border of a frame of ``shape`` (h, w), does not hold
+    ``heading`` (px) and its course ``miss`` (None: no test) exceeds ``cut_exit``; with ``cut_exit_onset`` no
+    warning begins on such a box either."""
+    return (p.cut_exit > 0 and miss is not None and miss > p.cut_exit
             and t.cut(shape, p.border) and not holds(t, heading))
 
 
@@ -320,6 +333,20 @@ def relapse(t: Track, p: TargetParams, index: int, miss: float | None) -> bool:
     object, the background): its course straddles both and misses; an object on a collision course keeps a
     short one."""
     return p.reonset_miss > 0 and t.last_alarm != index and miss is not None and miss > p.reonset_miss
+
+
+def blind_until(targets, p: TargetParams, fps: float, now: float, shape: tuple[int, int], until: float) -> float:
+    """``contact_blind`` (docs/model.md, "False warnings, session 15"): the clock up to
+    which no other warning begins, given this frame's ``targets`` (clock ``now``) in a frame of ``shape``
+    (h, w): the predicted contact (``ttc_s``) plus ``contact_blind`` frames of each target warning on a box
+    wider or taller than the frame (the object fills the view), or ``until`` (the window so far) if later."""
+    if p.contact_blind <= 0:
+        return until
+    h, w = shape
+    for o in targets:
+        if o.warning and o.ttc_s is not None and (o.width > w or o.height > h):
+            until = max(until, now + o.ttc_s * fps + p.span(p.contact_blind, fps))
+    return until
 
 
 def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
@@ -438,6 +465,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
             and not cut_keeps_bearing(t, p, ttc, heading):
+        warning = False
+    # ... nor on a cut box off the heading whose course misses it (cut_exit_onset)
+    if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured, shape, miss):
