@@ -7,6 +7,7 @@ import contextlib
 import csv
 import io
 import json
+import warnings
 import shutil
 
 import pytest
@@ -110,6 +111,27 @@ def test_failed_tasks_are_listed_and_warned(quick, tmp_path, monkeypatch, capsys
     assert main(["benchmark", "--out", str(out), "--quick", "-m", "lgmd1,lgmd2", "--workers", "0", "-q"]) == 2
     err = capsys.readouterr().err.splitlines()
     assert err == [f"mlplc2: warning: {msg}"]
+
+
+@pytest.mark.filterwarnings("default::mlplc2.benchmark.BenchmarkWarning")   # as outside pytest
+def test_a_benchmark_without_the_real_clips_it_looked_for_says_so(tmp_path, monkeypatch):
+    """The full suite looks for the real clips (``../shared/data/real``): where there are none it says
+    so before it starts (a report without them is not silently the usual one); --no-real is quiet."""
+    import mlplc2.benchmark as bm
+
+    class Stop(Exception):
+        pass
+
+    def stop(*a, **kw):
+        raise Stop
+    monkeypatch.setattr(bm, "default_real_dir", lambda: None)
+    monkeypatch.setattr(bm, "_generate", stop)
+    with pytest.warns(BenchmarkWarning, match="no labelled real clips found"), pytest.raises(Stop):
+        benchmark(tmp_path / "b", models=["lgmd1"], workers=0, progress=False)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", BenchmarkWarning)
+        with pytest.raises(Stop):
+            benchmark(tmp_path / "b", models=["lgmd1"], real=None, workers=0, progress=False)
 
 
 # ---------------------------------------------------------------------------

@@ -449,6 +449,9 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     real_dir = None if quick or real is None else (default_real_dir() if real == "auto" else Path(real))
     if real not in ("auto", None) and not quick and not (Path(real) / "ground_truth.json").is_file():
         raise InputValueError(f"{real}: no ground_truth.json there (the labelled real clips)")
+    if real == "auto" and not quick and real_dir is None:
+        warnings.warn(f"no labelled real clips found ({REAL_DIR} from here, nor beside the checkout): the report "
+                      "has none; --real DIR gives them, --no-real leaves them out", BenchmarkWarning, stacklevel=2)
     scenes = suite(quick, settings=settings, holdout=holdout)
     videos, suite_gt = _generate(scenes, out / "scenes", progress)
     clips, real_gt = _real_inputs(real_dir)
