@@ -73,7 +73,7 @@ class TargetParams(ParameterSet):
                               distance, plus ``focus_slack``) and its box is not cut by the border (``border``):
                               an object on a collision course expands about a point inside itself, the static
                               world seen from a translating camera about the heading, outside a patch beside the
-                              path. 0 = no test (the default; 0.5 with ``lm_seeds`` 3 measured, not adopted:
+                              path. 0 = no test (the default; 0.25-2 with ``lm_seeds`` 3 measured, not adopted:
                               docs/model.md, "A seed's own focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
     focus_slack: float = param(0.25, """The shift beyond its focus (``seed_focus``) a seed's alignment may have: the
                                alignment's own error.""", unit="px", valid=Valid.real(minimum=0))
