@@ -410,8 +410,8 @@ class TargetLayer:
         background that slides with a turning camera, a receding or a static object does not
         become a target. With ``focus`` (an extra LM seed) and ``seed_focus``, it must also have
         grown about a point near its box (:meth:`_focused`). Without that frame yet (the first
-        frames) no growth is seen: only an ``alarm`` makes a target (issue 22 item 7: which candidate the codec's noise picked on a
-        clip's first frames decided its tracks). The seed of a field in
+        frames) no growth is seen: only an ``alarm`` makes a target (issue 22 item 7: which
+        candidate the codec's noise picked on a clip's first frames decided its tracks). The seed of a field in
         collision ``alarm`` (:meth:`_alarming`) only must not be seen not to grow (an alignment
         that fails says nothing): the alarm is the expansion evidence, and its box may hold
         background or be cut by the border."""

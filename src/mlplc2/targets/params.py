@@ -66,15 +66,16 @@ class TargetParams(ParameterSet):
                           times. 1 = the strongest only (the default: 3 without ``seed_focus`` measured, not
                           adopted, docs/model.md, "Where TTC coverage is lost"; with it, "A seed's own focus").""",
                           unit="seeds", valid=Valid.integer(1))
-    seed_focus: float = param(0.0, """An extra LM seed (beyond the first per nominal frame interval: ``lm_seeds`` > 1; with
-                              ``focus_first`` every LM and change seed) becomes a target only when its growth
-                              test's alignment (``change_frames``) expands about a point within this many
-                              half-sizes of its box from its centre (its shift at most the growth times that
-                              distance, plus ``focus_slack``) and its box is not cut by the border (``border``):
-                              an object on a collision course expands about a point inside itself, the static
-                              world seen from a translating camera about the heading, outside a patch beside the
-                              path. 0 = no test (the default; 0.25-2 with ``lm_seeds`` 3 measured, not adopted:
-                              docs/model.md, "A seed's own focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
+    seed_focus: float = param(0.0, """An extra LM seed (beyond the first per nominal frame interval:
+                              ``lm_seeds`` > 1; with ``focus_first`` every LM and change seed) becomes a
+                              target only when its growth test's alignment (``change_frames``) expands about
+                              a point within this many half-sizes of its box from its centre (its shift at
+                              most the growth times that distance, plus ``focus_slack``) and its box is not
+                              cut by the border (``border``): an object on a collision course expands about
+                              a point inside itself, the static world seen from a translating camera about
+                              the heading, outside a patch beside the path. 0 = no test (the default; 0.25-2
+                              with ``lm_seeds`` 3 measured, not adopted: docs/model.md, "A seed's own
+                              focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
     focus_slack: float = param(0.25, """The shift beyond its focus (``seed_focus``) a seed's alignment may have: the
                                alignment's own error.""", unit="px", valid=Valid.real(minimum=0))
     focus_first: bool = param(False, """``seed_focus`` tests the first LM (or change) seed of each nominal frame too,
