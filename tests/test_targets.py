@@ -1168,3 +1168,36 @@ def test_no_warning_begins_within_the_contact_window(until, first):
         if any(t.warning for t in out):
             warned.append(k)
     assert warned and warned[0] == first
+
+
+def _lm_seeded_run(frames, centres, **kw):
+    """TargetLayer on ``frames`` without attention fields, the local motion one peak at each frame's
+    ``centres`` (the pre-attentive LM seed); the targets of every frame."""
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    layer = TargetLayer(TargetParams(**kw), FPS)
+    zero = np.zeros((240, 320), np.float32)
+    outs = []
+    for k, g in enumerate(frames):
+        mag = zero.copy()
+        mag[int(round(centres[k][1])), int(round(centres[k][0]))] = 5.0
+        outs.append(layer.step(g, LocalMotion(zero, zero, zero, zero, mag), [], k))
+    return outs
+
+
+@pytest.mark.parametrize("r0", [60.0, 0.0])
+def test_seed_focus_keeps_the_roadside_out_and_the_object_ahead_in(r0):
+    """An LM seed on a surface that expands about the heading 60 px beside it (the static world of a
+    forward drive) grows as an object does: without ``seed_focus`` it becomes a target, with it (and
+    ``focus_first``: the one seed a frame is tested) not,
+    since the fixed point of its expansion lies far outside its box. The same surface straight ahead
+    (expanding about its own centre) becomes a target either way. Without ``focus_first`` only the
+    extra seeds (``lm_seeds`` > 1) are tested: the one seed a frame becomes a target as before."""
+    frames, centres = _expanding_patch(16, r0)
+    off = _lm_seeded_run(frames, centres)
+    on = _lm_seeded_run(frames, centres, seed_focus=2.0, focus_first=True)
+    first = _lm_seeded_run(frames, centres, seed_focus=2.0)     # the first seed a frame is not tested
+    assert any(out for out in off) and any(out for out in first)
+    assert any(out for out in on) == (r0 == 0.0)
+

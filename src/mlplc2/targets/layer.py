@@ -175,7 +175,7 @@ class TargetLayer:
         self._clock = clock
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
-        seeds = []
+        seeds, focused = [], set()              # focused: the seeds seed_focus tests
         for f in fields:
             owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))
                       and not self._freed(t, now)]
@@ -192,7 +192,8 @@ class TargetLayer:
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
-            for _ in range(self._seeds(interval)):
+            n = self._seeds(interval)
+            for i in range(n):
                 cand = argmax_outside(lm.magnitude, zones)
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                     cand = self._change_seed(levels, zones)
@@ -200,6 +201,8 @@ class TargetLayer:
                     break
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
+                if p.focus_first or i >= n // p.lm_seeds:    # TargetParams.seed_focus: an extra seed
+                    focused.add((cand[0], cand[1]))
         budget = None
         if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
             span = p.span(p.change_frames, self.fps) + _EPS
@@ -225,7 +228,8 @@ class TargetLayer:
                 host = next((o for o in self._tracks if self._hosts(o, t, now)
                              and not (f is None and self._opened(o, now))), None)
                 t.uniform = swept is None
-                if host is not None or self._grows(levels, t, alarm=alarm):
+                focus = f is None and (x, y) in focused
+                if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
                     if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
                         t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
                     break
@@ -408,13 +412,14 @@ class TargetLayer:
             return None
         return 2 * x + 1, 2 * y + 1
 
-    def _grows(self, levels, t: Track, alarm: bool = False) -> bool:
+    def _grows(self, levels, t: Track, alarm: bool = False, focus: bool = False) -> bool:
         """Whether the candidate grew, alike in both directions, over the last ``change_frames``
         frames (the image alignment of :func:`align` against the oldest frame kept): a patch of
         background that slides with a turning camera, a receding or a static object does not
-        become a target. Without that frame yet (the first frames) no growth is seen: only an
-        ``alarm`` makes a target (issue 22 item 7: which candidate the codec's noise picked on a
-        clip's first frames decided its tracks). The seed of a field in
+        become a target. With ``focus`` (an extra LM seed) and ``seed_focus``, it must also have
+        grown about a point near its box (:meth:`_focused`). Without that frame yet (the first
+        frames) no growth is seen: only an ``alarm`` makes a target (issue 22 item 7: which
+        candidate the codec's noise picked on a clip's first frames decided its tracks). The seed of a field in
         collision ``alarm`` (:meth:`_alarming`) only must not be seen not to grow (an alignment
         that fails says nothing): the alarm is the expansion evidence, and its box may hold
         background or be cut by the border."""
@@ -436,7 +441,25 @@ class TargetLayer:
         g = math.log(al.scale)
         if alarm:
             return g > 0
-        return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g
+        return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g \
+            and not (focus and not self._focused(t, al))
+
+    def _focused(self, t: Track, al) -> bool:
+        """``TargetParams.seed_focus``: whether the alignment ``al`` of candidate ``t`` (scale ``s``, shift ``d``
+        of its centre) expands about a point within ``seed_focus`` half-sizes of its box from the centre (the
+        fixed point ``-d / (s - 1)``): ``|d| <= (s - 1) seed_focus w / 2`` (``h / 2``) plus ``focus_slack``.
+        An object on a collision course expands about where it will hit, inside its own image; the static world
+        seen from a translating camera about the heading, outside a patch beside the path; a passing object
+        about a point beside it. A box cut by the border (``TargetParams.border``) has neither the object's
+        centre nor its size: it fails. Always with ``seed_focus`` 0 (off)."""
+        p = self.params
+        if p.seed_focus <= 0:
+            return True
+        if self._size is not None and t.cut((self._size[1], self._size[0]), p.border):
+            return False
+        grow = al.scale - 1.0
+        return abs(al.dx) <= grow * p.seed_focus * t.w / 2.0 + p.focus_slack \
+            and abs(al.dy) <= grow * p.seed_focus * t.h / 2.0 + p.focus_slack
 
     def _slanted(self, t: Track, levels) -> bool:
         """Whether the box of ``t`` is not shown to be one fronto-parallel object: its :func:`slant`
@@ -461,11 +484,13 @@ class TargetLayer:
         frame (``TargetParams.nominal_fps``) the interval since the last frame stands for, at most
         ``change_frames`` (the growth test's span); one at the first frame or at the nominal rate. A
         camera at 7.5 fps thus seeds as often in time as one at 30 fps: between distant frames a fast
-        object is often not the strongest LM (issue 23: the thrown helmet, the thrower's body)."""
+        object is often not the strongest LM (issue 23: the thrown helmet, the thrower's body). Each counts
+        ``TargetParams.lm_seeds`` times."""
+        k = self.params.lm_seeds                 # TargetParams.lm_seeds per nominal frame
         if interval is None:
-            return 1
+            return k
         n = int(round(interval / self.params.span(1, self.fps)))
-        return max(1, min(n, self.params.change_frames))
+        return k * max(1, min(n, self.params.change_frames))
 
     def _far(self, interval: float) -> bool:
         """Whether frames ``interval`` clock units apart are more than one nominal frame apart (a

@@ -61,6 +61,25 @@ class TargetParams(ParameterSet):
                                candidate (:meth:`TargetLayer._change_seed`) when it is at least this
                                much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
                                unit="grey levels", valid=Valid.real(minimum=0))
+    lm_seeds: int = param(1, """LM seeds (``seed_lm``, else ``seed_change``) per nominal frame interval: the strongest
+                          point outside every target, field and seed tried before it (``claim``), that many
+                          times. 1 = the strongest only (the default: 3 without ``seed_focus`` measured, not
+                          adopted, docs/model.md, "Where TTC coverage is lost"; with it, "A seed's own focus").""",
+                          unit="seeds", valid=Valid.integer(1))
+    seed_focus: float = param(0.0, """An extra LM seed (beyond the first per nominal frame interval:
+                              ``lm_seeds`` > 1; with ``focus_first`` every LM and change seed) becomes a
+                              target only when its growth test's alignment (``change_frames``) expands about
+                              a point within this many half-sizes of its box from its centre (its shift at
+                              most the growth times that distance, plus ``focus_slack``) and its box is not
+                              cut by the border (``border``): an object on a collision course expands about
+                              a point inside itself, the static world seen from a translating camera about
+                              the heading, outside a patch beside the path. 0 = no test (the default; 0.25-2
+                              with ``lm_seeds`` 3 measured, not adopted: docs/model.md, "A seed's own
+                              focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
+    focus_slack: float = param(0.25, """The shift beyond its focus (``seed_focus``) a seed's alignment may have: the
+                               alignment's own error.""", unit="px", valid=Valid.real(minimum=0))
+    focus_first: bool = param(False, """``seed_focus`` tests the first LM (or change) seed of each nominal frame too,
+                              not only the extra ones (``lm_seeds``).""", valid=Valid.boolean())
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
