@@ -1047,18 +1047,20 @@ def test_uniform_region_takes_the_visible_part_of_a_cut_square():
     assert uniform_region(cut, 30, 120, 4.0, cut=False) is None
 
 
-@pytest.mark.parametrize("uniform", [{}, {"uniform_tol": 4.0, "uniform_reseat": True, "uniform_growth": True}])
+@pytest.mark.parametrize("uniform", [False, True])
 def test_a_uniform_square_seeded_at_its_corner_is_boxed_whole(uniform):
     """A black square approaching over a still texture (80 -> ~120 px), its attention field at its
     corner (where its local motion lies): with ``uniform_tol``, ``uniform_reseat`` and ``uniform_growth``
-    the target's box is the square (within 5 %) and its time to contact within 10 % of the truth;
-    without, the box holds a part of it (the change window, ``max_shift``, is smaller than it)."""
+    the target's box is the square (within 5 %) and its time to contact within 10 % of the truth (the
+    defaults since session 15); without (``uniform_tol`` 0), the box holds a part of it (the change
+    window, ``max_shift``, is smaller than it)."""
     from types import SimpleNamespace
 
     from mlplc2.targets import TargetLayer
 
     contact, s0 = 90, 80.0
-    layer = TargetLayer(TargetParams(**uniform), FPS)
+    assert (TargetParams().uniform_tol, TargetParams().uniform_reseat, TargetParams().uniform_growth) == (4.0, True, True)
+    layer = TargetLayer(TargetParams() if uniform else TargetParams(uniform_tol=0.0), FPS)
     got = []
     for k in range(40):
         side = s0 * contact / (contact - k)
@@ -1104,7 +1106,7 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
 
     from mlplc2.targets import TargetLayer, Track
 
-    assert TargetParams().absorb_frames == 0
+    assert TargetParams().absorb_frames == 5                              # the default since session 15
     layer = TargetLayer(TargetParams(absorb_frames=absorb_frames), FPS)
     warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
     stale = Track(2, 0, 230.0, 120.0, 30.0, 30.0, birth=10.0)        # 20 px beyond the box, within 29

@@ -474,12 +474,12 @@ class TargetParams(ParameterSet):
                                warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
-    absorb_frames: int = param(0, """A target warning this frame absorbs every other target whose centre lies in
+    absorb_frames: int = param(5, """A target warning this frame absorbs every other target whose centre lies in
                                its box plus a quarter of its size (as a field it would own) and that has had no
                                time to contact for this many frames (since its last one, or its birth): the
                                static world's box beside an object near contact is the object's (its fields go
-                               to it; the absorbed one is not refound). 0 = off (docs/model.md, "Targets per
-                               object, session 15").""", unit="frames", valid=Valid.integer(0))
+                               to it; the absorbed one is not refound). 0 = off; 5 since session 15 (docs/model.md,
+                               "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
@@ -508,13 +508,13 @@ class TargetParams(ParameterSet):
                                a box over the view: the same, with later leads). False = off (docs/model.md,
                                "Objects missed", session 14).""",
                                valid=Valid.boolean())
-    refind_drift: float = param(0.0, """A target refound after a gap (``refind_frames``) whose lost track's centre drifted
+    refind_drift: float = param(0.4, """A target refound after a gap (``refind_frames``) whose lost track's centre drifted
                                 away from the measured heading by more than this fraction of the static world's drift
                                 (:func:`~mlplc2.targets.warning.drift`; the largest over the tracks it took over from)
                                 does not begin a warning on the field alarm alone, without a course: the lost track
                                 passed beside the path (a passing car leaving the view at the border, lost and found
-                                again there), and the refound track's own history is too short to tell. 0 = off
-                                (docs/model.md, "Objects missed", session 15).""",
+                                again there), and the refound track's own history is too short to tell. 0 = off; 0.4
+                                since session 15 (docs/model.md, "Objects missed", session 15).""",
                                 valid=Valid.real(minimum=0))
     reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
                           around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
@@ -539,7 +539,7 @@ class TargetParams(ParameterSet):
                                 this factor from the one it was seeded (or last re-seated) with: a tall strip
                                 or a flat one. 0 = every followed box (with ``reseat`` on).""",
                                 valid=Valid.real(minimum=0))
-    uniform_tol: float = param(0.0, """A candidate's first box is the uniform region beside its seed when there is one:
+    uniform_tol: float = param(4.0, """A candidate's first box is the uniform region beside its seed when there is one:
                                the pixels reached by a flood fill of at most this many grey levels from a start point
                                ``claim`` / 3, 2 ``claim`` / 3 or ``claim`` px from the seed (8 directions; the largest
                                region that passes ``uniform_fill``, is at least 8 px across, at most
@@ -548,7 +548,8 @@ class TargetParams(ParameterSet):
                                local motion and change lie on its outline only, the seed on an edge or a corner, and
                                the change window (``max_shift``) is smaller than it, so the other boxes hold a part
                                of it plus road. The box is tried before the others (which follow when it does not
-                               grow). 0 = off (docs/model.md, "A uniform object's box").""",
+                               grow). 0 = off; 4 since session 15 (docs/model.md, "A uniform object's box", and "Objects missed",
+                               session 15).""",
                                unit="grey levels", valid=Valid.real(minimum=0))
     uniform_fill: float = param(0.85, """``uniform_tol``: the smallest fraction of its bounding box a uniform region fills
                                 (a compact object, not a patch of smooth texture).""",
@@ -558,21 +559,21 @@ class TargetParams(ParameterSet):
                                   valid=Valid.real(minimum=1))
     uniform_lm: bool = param(True, """``uniform_tol`` for the LM and change seeds too; False = only for the seed of an attention
                              field (Eq. 13-16: looming evidence of its own).""", valid=Valid.boolean())
-    uniform_reseat: bool = param(False, """A target seeded on a uniform region (``uniform_tol``) is put back on that region each
+    uniform_reseat: bool = param(True, """A target seeded on a uniform region (``uniform_tol``) is put back on that region each
                                  frame it is followed (:meth:`Track.reseat`, its history carried): the uniform
                                  region at its centre, when it is a compact object (``uniform_fill``,
                                  ``uniform_aspect``; at the frame's border its visible part) whose centre lies inside the box and
                                  whose area is within a factor 2 of the box's. The alignment's patch holds the
                                  object's outline and the road around it, which flows faster than the object: the
                                  box grows taller than its object and slides off it (the drive scenes' lead
-                                 vehicle). False = off (docs/model.md, "A uniform object's box").""",
+                                 vehicle). False = off; on since session 15 (docs/model.md, "A uniform object's box").""",
                                  valid=Valid.boolean())
-    uniform_growth: bool = param(False, """With ``uniform_reseat``, a re-seated box's growth is its uniform region's: the
+    uniform_growth: bool = param(True, """With ``uniform_reseat``, a re-seated box's growth is its uniform region's: the
                                  accumulated log-scale and log-anisotropy of the newest observation are those of the
                                  last region measured (not cut by the border) plus the log of the region's mean
                                  and relative size change since (the sum telescopes: the object's size to a pixel),
                                  in place of the image alignment's, whose patch holds road that flows faster than
-                                 the object (a box anisotropic a second before contact). False = off.""",
+                                 the object (a box anisotropic a second before contact). False = off; on since session 15.""",
                                  valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
