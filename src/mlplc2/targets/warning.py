@@ -95,20 +95,19 @@ def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
     return math.hypot((t.cx - heading[0]) / max(t.w, 1.0), (t.cy - heading[1]) / max(t.h, 1.0)) <= p.max_miss
 
 
-#: :func:`keeps_bearing`: the largest drift away from the heading, as a fraction of the static
-#: world's (0: an object on a collision course, 1: the static world, halfway between; ``TargetParams.bearing_drift``
-#: is the layer's, 0.4), and the least drift of the static world (px) that a box's jitter cannot fake
-DRIFT_FRACTION, MIN_DRIFT_PX = 0.5, 2.0
+#: :func:`keeps_bearing`: the least drift of the static world (px) that a box's jitter cannot fake
+MIN_DRIFT_PX = 2.0
 
 
-def keeps_bearing(t: Track, heading: tuple[float, float], fraction: float = DRIFT_FRACTION) -> bool:
+def keeps_bearing(t: Track, heading: tuple[float, float], fraction: float) -> bool:
     """Whether track ``t`` keeps its bearing while it grows, as an object on a collision course
     does, over its history (two observations at least; on its first frame, the alarm seed's
     alignment against the frame ``change_frames`` before, ``Track.seed_move``): the static world (and an object that
     will pass) expands about the heading (the focus of expansion of a camera that does not turn),
     so its centre drifts away from ``heading`` (px) by its offset times the growth, ``r0 (S - 1)``,
     while the centre of an object on a collision course stays put. True when the static world's
-    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``fraction`` of it. The
+    drift is at least ``MIN_DRIFT_PX`` and the box's is at most ``fraction`` of it (``TargetParams.bearing_drift``:
+    0 an object on a collision course, 1 the static world). The
     centres are the observations' (less the camera's turn, :class:`Observation`)."""
     ratio = drift(t, heading)
     return ratio is not None and ratio <= fraction
