@@ -195,13 +195,16 @@ def test_rerun_skips_finished_tasks(videos, tmp_path):
 def test_the_progress_bar_ends_once(videos, tmp_path, capsys, monkeypatch):
     import tqdm
 
+    from mlplc2 import _progress
+
     class EveryUpdate(tqdm.tqdm):   # every update drawn, however fast the tasks (tqdm reads its TQDM_*
         def __init__(self, *args, **kwargs):   # environment once, at import: no use here)
             super().__init__(*args, **{**kwargs, "mininterval": 0, "miniters": 1})
 
     monkeypatch.setattr(tqdm, "tqdm", EveryUpdate)
+    monkeypatch.setattr(_progress, "on_terminal", lambda stream: True)   # the bar a terminal gets
     batch(videos["paths"][:2], tmp_path / "o", models=["lgmd2"], workers=0, progress=True)
-    err = capsys.readouterr().err   # not a terminal: every redraw stays in the text
+    err = capsys.readouterr().err   # captured: every redraw stays in the text
     assert err.count("1/2") == 1 and err.count("2/2") == 1 and err.endswith("\n"), err
 
 

@@ -135,9 +135,8 @@ def setting_names() -> list[str]:
 def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[list[Path], Path]:
     """Write every scene's video and one ground-truth file; scenes already written with the same
     description are kept."""
-    from tqdm import tqdm
-
     from ._files import write_json
+    from ._progress import bar as progress_bar
     from .io import write_lossless_video
 
     folder.mkdir(parents=True, exist_ok=True)
@@ -149,7 +148,7 @@ def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[li
         except (json.JSONDecodeError, UnicodeDecodeError, AttributeError):
             old = {}
     videos, entries = [], {}
-    for sc in tqdm(scenes, desc="generating scenes", unit="scene", disable=not progress, leave=False):
+    for sc in progress_bar(scenes, desc="generating scenes", unit="scene", disable=not progress, leave=False):
         path = folder / f"{sc.name}.mkv"
         key = path.name
         spec = json.loads(json.dumps(asdict(sc)))      # as stored (tuples become lists)

@@ -535,10 +535,10 @@ def _run_jobs(state: _BatchState, scheduler, workers, client, sequential: bool, 
     jobs = state.jobs()
     tasks, out, rows = state.plan.tasks, state.plan.out, state.rows
     state.t0 = time.perf_counter()
-    from tqdm import tqdm
+    from .._progress import bar as progress_bar
 
-    bar = tqdm(total=len(tasks), initial=len(tasks) - len(jobs), disable=not progress, unit="task",
-               file=sys.stderr, desc="batch", dynamic_ncols=True)
+    bar = progress_bar(total=len(tasks), initial=len(tasks) - len(jobs), disable=not progress, unit="task",
+                       desc="batch")
     prepared = False
     try:
         with contextlib.nullcontext((None, "sync")) if sequential or not jobs else \

@@ -32,7 +32,6 @@ The package: :mod:`.inputs` (the videos or generated stimuli and their objects),
 
 from __future__ import annotations
 
-import sys
 import time
 from pathlib import Path
 
@@ -94,8 +93,7 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
         fields for the LPLC2 family, plus an optional ``{"lgmd2": {...}}`` section. Bad
         parameters raise :class:`~mlplc2.InputError` before anything is read or written.
     """
-    from tqdm import tqdm
-
+    from .._progress import bar as progress_bar
     from ..batch import model_params, param_sets
 
     t_start = time.perf_counter()
@@ -118,7 +116,7 @@ def reproduce(data=None, out="mlplc2_reproduce", *, quick: bool = False, quiet: 
     basic = inputs["basic"]
     total = (sum(s.n for s in basic.values()) * len(MODELS) + inputs["four_phase"].n * len(MODELS)
              + inputs["six_objects"].n + sum(s.n for s in inputs["clips"]))
-    bar = tqdm(total=total, desc="reproduce", unit="frame", file=sys.stderr, disable=quiet, leave=False)
+    bar = progress_bar(total=total, desc="reproduce", unit="frame", disable=quiet, leave=False)
     try:
         basic_traces = {m: {name: run_model(m, sc.frames, sc.fps, bar, model_args[m]) for name, sc in basic.items()}
                         for m in MODELS}

@@ -38,7 +38,6 @@ from __future__ import annotations
 import difflib
 import json
 import logging
-import sys
 import time
 import warnings
 from collections.abc import Iterable, Iterator, Mapping, Sequence
@@ -635,7 +634,7 @@ class _Frames:
 
 
 def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, options: RunOptions) -> RunResult:
-    from tqdm import tqdm
+    from .._progress import bar as progress_bar
 
     frames = _Frames(src, built, result, options)
     interrupted = False
@@ -654,9 +653,9 @@ def _loop(src: FrameSource, built: list[Model], result: RunResult, out_dir, opti
                 if bar is None:
                     # the bar (and its clock) starts after the first frame, which may compile the
                     # kernels (tens of seconds, once per install): its rate and ETA never count it
-                    bar = tqdm(total=src.total, initial=1, disable=not (options.progress and not options.quiet),
-                               unit="frame", file=sys.stderr, desc=Path(src.name).name or src.name,
-                               dynamic_ncols=True, leave=False)
+                    bar = progress_bar(total=src.total, initial=1, unit="frame", leave=False,
+                                       disable=not (options.progress and not options.quiet),
+                                       desc=Path(src.name).name or src.name)
                 else:
                     bar.update()
                 if options.done(result.n_frames, time.perf_counter() - t0) or (frames.lines and frames.lines.gone):
