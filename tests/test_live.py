@@ -6,6 +6,7 @@ bounded and counts the frames it skipped; a dropped stream keeps what was writte
 from __future__ import annotations
 
 import functools
+import io
 import http.server
 import json
 import subprocess
@@ -556,3 +557,63 @@ def test_a_duplicated_clip_on_stdin_and_over_http_holds_its_copies_as_the_file_d
         summary = json.loads((tmp_path / out / "fields.json").read_text())
         assert summary["frames_held"]["mlplc2"] == held and summary["duplicated"] and summary["complete"]
         assert (tmp_path / out / "targets.csv").read_text() == (tmp_path / "f" / "targets.csv").read_text()
+
+
+def _avi_through_a_pipe(frames, fps=30.0) -> bytes:
+    """The bytes FFmpeg's AVI muxer writes to a pipe (``ffmpeg -f v4l2 -i /dev/video0 -f avi -``): it
+    cannot go back to write the frame count, and states 2**30 frames instead."""
+    import os
+
+    av = pytest.importorskip("av")
+    r, w = os.pipe()
+    got: list[bytes] = []
+    def read():
+        with os.fdopen(r, "rb") as f:
+            got.append(f.read())
+
+    reader = threading.Thread(target=read)
+    reader.start()
+    with os.fdopen(w, "wb") as pipe, av.open(pipe, "w", format="avi") as out:
+        stream = out.add_stream("mjpeg", rate=int(fps))
+        stream.width, stream.height, stream.pix_fmt = frames[0].shape[1], frames[0].shape[0], "yuvj420p"
+        for f in frames:
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(f, format="rgb24")))
+        out.mux(stream.encode(None))
+    reader.join()
+    return got[0]
+
+
+def test_an_avi_written_to_a_pipe_is_a_stream_of_unknown_length(data, tmp_path):
+    """A camera piped in as AVI: its placeholder count (2**30) is no count. The first JSON line comes
+    before the 60th frame is sent (the placeholder made it a file, read 60 frames ahead for its
+    repeat check: a live camera's first line waited 2 s), and its end is no truncation (it was
+    "decoding stopped at frame 60 of 1073741824", exit 2)."""
+    import select
+
+    from mlplc2.io import open_source, read_video
+
+    clip = _avi_through_a_pipe(read_video(data["avi"])[0])
+    av = pytest.importorskip("av")
+    with av.open(io.BytesIO(clip)) as c:
+        assert c.streams.video[0].frames == 1 << 30      # what FFmpeg states: the case in point
+    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        try:
+            proc.stdin.write(clip[: len(clip) // 2])      # 30 of the 60 frames
+            proc.stdin.flush()
+            assert select.select([proc.stdout], [], [], 90)[0], "no line before the 60th frame"
+            first = json.loads(proc.stdout.readline())
+            proc.stdin.write(clip[len(clip) // 2:])
+            proc.stdin.close()
+            rest = proc.stdout.read().decode().splitlines()
+            err = proc.stderr.read().decode()
+            assert proc.wait(timeout=120) == 0, err
+        finally:
+            proc.kill()
+    assert first["frame"] == 0 and len(rest) == 59 and "decoding stopped" not in err
+    (tmp_path / "rec.avi").write_bytes(clip)              # saved from the pipe (`... | tee rec.avi`)
+    for decoder in ("opencv", "pyav"):
+        with open_source(str(tmp_path / "rec.avi"), decoder=decoder) as src:
+            assert src.frame_count is None and src.total is None
+    res = mlplc2.run(str(tmp_path / "rec.avi"), ["lgmd1"], out=False, progress=False)
+    assert res.n_frames == 60 and not res.truncated

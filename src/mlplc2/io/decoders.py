@@ -18,7 +18,7 @@ import numpy as np
 
 from .._validation import InputError, InputTypeError, InputValueError
 from .formats import (IMAGE_EXTENSIONS, STDIN, VIDEO_EXTENSIONS, is_camera, is_live, is_url, mp4_without_index,
-                      without_password)
+                      stated_count, without_password)
 
 log = logging.getLogger(__name__)
 
@@ -94,8 +94,7 @@ class _OpenCVDecoder(Decoder):
             raise InputValueError(_not_a_video(target, name, "OpenCV"))
         fps = self.cap.get(cv2.CAP_PROP_FPS)
         self.fps = float(fps) if fps and math.isfinite(fps) and 0 < fps < 1000 else None
-        count = self.cap.get(cv2.CAP_PROP_FRAME_COUNT)
-        self.frame_count = int(count) if not camera and count and count > 0 else None
+        self.frame_count = None if camera else stated_count(self.cap.get(cv2.CAP_PROP_FRAME_COUNT))
         self.size = (int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
 
     def grab(self) -> bool:
@@ -196,7 +195,7 @@ class _PyAVDecoder(Decoder):
         stream.thread_type = "AUTO"
         rate = stream.average_rate or stream.guessed_rate
         self.fps = float(rate) if rate else None
-        self.frame_count = int(stream.frames) or None
+        self.frame_count = stated_count(stream.frames)
         self.size = (int(stream.codec_context.width), int(stream.codec_context.height))
         self._frames = self._decode(stream)
 

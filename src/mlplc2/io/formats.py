@@ -126,6 +126,25 @@ def to_rgb(frame: np.ndarray) -> np.ndarray:
     raise InputValueError(f"frame must be (H, W), (H, W, 3) or (H, W, 4), got shape {frame.shape}")
 
 
+#: The frame count FFmpeg's AVI muxer states when it cannot go back to write the real one: an AVI
+#: written to a pipe (``ffmpeg -f v4l2 -i /dev/video0 -f avi -``, a camera tool's ``--output -``),
+#: or a file saved from one (``... | tee rec.avi``). A count this large or larger (414 days at
+#: 30 frames/s) is no count (:func:`stated_count`): read as one it made a live camera's first
+#: JSON line wait for the read-ahead of the repeated-frame check (``FrameSource.peek``: 60 frames,
+#: 2 s), and its end a "decoding stopped at frame N of 1073741824" truncation (exit 2).
+AVI_UNKNOWN_COUNT = 1 << 30
+
+
+def stated_count(count) -> int | None:
+    """A container's frame count as :attr:`Decoder.frame_count` takes it: None when it states none
+    (0, negative, not a number) or FFmpeg's placeholder for an unknown one (:data:`AVI_UNKNOWN_COUNT`)."""
+    try:
+        n = int(count)
+    except (TypeError, ValueError, OverflowError):
+        return None
+    return n if 0 < n < AVI_UNKNOWN_COUNT else None
+
+
 #: The source that means standard input (``mlplc2 run -``).
 STDIN = "-"
 #: URL schemes of live streams: frames arrive in real time, so a run that falls behind takes the
