@@ -108,6 +108,11 @@ REPEAT_FLOOR = 4.0
 REPEAT_GAP = 1.5
 #: ... and a difference of at least this many grey levels.
 REPEAT_STEP = 3.0
+#: :func:`repeat_split` takes the widest such gap instead of the first when it is at least this many
+#: times as wide (as a ratio's logarithm): copies whose picture changed in part (an encoder's partial
+#: update: block changes of 7-18 among copies of 0-4 and new frames of 187-245 in the helmet clip's
+#: x264 copy) then stay copies, while new frames of two speeds (10-12 after 25-43) keep the first gap.
+REPEAT_WIDEST = 2.0
 #: Fewest frame-to-frame changes :func:`repeat_split` judges (6 let single early frames of 3 of the 46
 #: scenes of the benchmark's suite be held).
 REPEAT_MIN = 12
@@ -137,7 +142,8 @@ def repeat_split(changes) -> float | None:
     The changes (those under :data:`REPEAT_FLOOR` count as it), in size order, split in two
     classes at the first gap (neighbours at least :data:`REPEAT_GAP` times and
     :data:`REPEAT_STEP` grey levels apart) that leaves at least 15 % of them below (copies: a
-    25 fps video shown at 30 fps repeats one frame in 6) and 15 % above (new frames). The video
+    25 fps video shown at 30 fps repeats one frame in 6) and 15 % above (new frames), or at the
+    widest such gap when it is :data:`REPEAT_WIDEST` times as wide (as logarithms). The video
     looks duplicated when there are at least :data:`REPEAT_MIN` changes, there is such a gap,
     and a copy follows a new frame at least once per 8 frames (a smooth video, small changes
     first and large ones later, is not taken for one). The level is the gap's geometric middle:
@@ -153,7 +159,9 @@ def repeat_split(changes) -> float | None:
     wide = np.flatnonzero((hi >= REPEAT_GAP * lo) & (hi - lo >= REPEAT_STEP))
     if wide.size == 0:
         return None
-    level = float(np.sqrt(lo[wide[0]] * hi[wide[0]]))
+    ratio = np.log(hi[wide] / lo[wide])
+    i = wide[np.argmax(ratio)] if ratio.max() >= REPEAT_WIDEST * ratio[0] else wide[0]
+    level = float(np.sqrt(lo[i] * hi[i]))
     starts = np.count_nonzero((d[:-1] > level) & (d[1:] <= level))
     return level if starts >= max(1, n // 8) else None
 
