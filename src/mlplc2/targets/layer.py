@@ -621,21 +621,33 @@ class TargetLayer:
     def _absorb(self, out, now: float) -> None:
         """``absorb_frames``: drop (not to be refound) the targets without a time to contact for that many
         frames (since their last one, or their birth) whose centre lies in a warning target's box plus a
-        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
-        n = self.params.absorb_frames
-        warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
+        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15").
+        ``absorb_behind``: also the targets there that do not warn, whose time to contact is that many times
+        the warning one's and whose course misses (beyond ``max_miss``, or none) (docs/model.md, "Targets per
+        object, session 16")."""
+        n, k = self.params.absorb_frames, self.params.absorb_behind
+        warn = [(t, o) for t, o in zip(self._tracks, out) if o.warning] if n > 0 or k > 0 else []
         if not warn:
             return
         span = self.params.span(n, self.fps) + _EPS
-        ids = {t.id for t in warn}
+        ids = {t.id for t, _ in warn}
+
+        def takes(wo, t, o) -> bool:             # absorb_frames: stale; absorb_behind: farther, off the path
+            return (n > 0 and now - max(t.last_estimate, t.birth) > span) or \
+                (k > 0 and not o.warning and o.ttc_s is not None and wo.ttc_s is not None and o.ttc_s >= k * wo.ttc_s
+                 and (o.miss is None or o.miss > self.params.max_miss))
+
         kept = []
-        for t in self._tracks:
-            host = None if t.id in ids or now - max(t.last_estimate, t.birth) <= span else \
-                next((o for o in warn if o.contains(t.cx, t.cy, 0.25 * o.size + 4.0)), None)
+        for t, o in zip(self._tracks, out):
+            host = None if t.id in ids else \
+                next((w for w, wo in warn if w.contains(t.cx, t.cy, 0.25 * w.size + 4.0) and takes(wo, t, o)), None)
             if host is None:
                 kept.append(t)
             else:
                 host.fields |= t.fields
+                if self.params.refind_late > 0:          # refound late only, by its id (:meth:`_refind`)
+                    t.absorbed = True
+                    self._lose(t, now)
         self._tracks = kept
 
     def _drop_idle(self, now: float) -> None:
@@ -698,9 +710,9 @@ class TargetLayer:
 
     def _lose(self, t: Track, now: float) -> None:
         """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
-        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
+        span = self.params.span(max(self.params.refind_frames, self.params.refind_late), self.fps) + _EPS
         self._lost = [(c, o) for c, o in self._lost if now - c <= span and o.id != t.id]
-        if self.params.refind_frames > 0:
+        if self.params.refind_frames > 0 or self.params.refind_late > 0:
             self._lost.append((now, t))
 
     def _refind(self, t: Track, now: float) -> bool:
@@ -713,11 +725,14 @@ class TargetLayer:
         ``Track.last_warned``, ``Track.onset_cut``: the same object, so a warning that ran on the lost
         track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
         bookkeeping"), not its history (the new box is measured afresh: its size against the old
-        box's would be a jump in the log-scale fit); the newest such wins."""
+        box's would be a jump in the log-scale fit); the newest such wins. ``refind_late``: else a track
+        lost (or absorbed, :meth:`_absorb`) at most that many frames before whose last centre lies in the new
+        box, of a size within a factor of 4, gives it its id and frame of birth only (docs/model.md, "Targets
+        per object, session 16")."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
+            if now - c <= span and o.id not in live and not o.absorbed and o.contains(t.cx, t.cy, 0.25 * o.size) \
                     and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held = o.id, o.born, o.held
@@ -725,6 +740,13 @@ class TargetLayer:
                 if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
                     seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]
                     t.lost_drift = max(seen) if seen else None
+                return True
+        late = self.params.span(self.params.refind_late, self.fps) + _EPS
+        for c, o in reversed(self._lost):            # refind_late: the id only, the object's old centre inside the new box
+            if self.params.refind_late > 0 and now - c <= late and o.id not in live and t.contains(o.cx, o.cy) \
+                    and max(t.size / o.size, o.size / t.size) <= 4.0:
+                self._lost.remove((c, o))
+                t.id, t.born = o.id, o.born
                 return True
         return False
 
