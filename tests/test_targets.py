@@ -758,7 +758,7 @@ def test_brief_occlusion_keeps_one_id_and_its_time_to_contact(hold_frames, refin
 
 @pytest.mark.parametrize("late", [45, 0])
 def test_a_far_object_found_again_late_where_it_was_keeps_its_id_only(late):
-    """``refind_late`` (off by default): a 10-px track lost at clock 10 (a warned one) and a 25-px box found at
+    """``refind_late`` (45 by default): a 10-px track lost at clock 10 (a warned one) and a 25-px box found at
     clock 40 (beyond ``refind_frames``) that holds its last centre: the new box takes its id and frame of birth
     only (its warning state begins afresh); a box beside it (the old centre outside it), one 5 times its size,
     and one found after the 45 frames get new ids."""
@@ -766,7 +766,7 @@ def test_a_far_object_found_again_late_where_it_was_keeps_its_id_only(late):
 
     from mlplc2.targets import TargetLayer, Track
 
-    assert TargetParams().refind_late == 0
+    assert TargetParams().refind_late == 45                             # the default since session 16
     layer = TargetLayer(TargetParams(refind_late=late), FPS)
     old = Track(3, 7, 100.0, 120.0, 10.0, 10.0, birth=7.0)
     old.warned = old.last_warned = True
@@ -776,16 +776,18 @@ def test_a_far_object_found_again_late_where_it_was_keeps_its_id_only(late):
     assert not layer._refind(beside, 40.0) and not layer._refind(big, 40.0)
     new = Track(8, 40, 104.0, 118.0, 25.0, 25.0, birth=40.0)
     assert layer._refind(new, 40.0) == (late > 0)
-    assert (new.id, new.born) == ((3, 7) if late else (8, 40))
+    assert (new.id, new.born, new.order) == ((3, 7, 8) if late else (8, 40, 0))   # order: its own age (_merge)
     assert not new.warned and not new.last_warned and new.birth == 40.0
     layer._lose(Track(4, 0, 200.0, 120.0, 10.0, 10.0), 10.0)
     assert not layer._refind(Track(9, 56, 200.0, 120.0, 20.0, 20.0, birth=56.0), 56.0)
+    layer._lose(Track(5, 0, 250.0, 120.0, 10.0, 10.0), 50.0)          # within refind_frames: refind_frames' own test
+    assert not layer._refind(Track(9, 56, 250.0, 120.0, 35.0, 35.0, birth=56.0), 56.0)
     # a box absorbed by a warning target (absorb_frames) comes back by the late path only: its id, afresh
     layer = TargetLayer(TargetParams(refind_late=late), FPS)
     stale = Track(2, 10, 230.0, 120.0, 30.0, 30.0, birth=10.0)
     stale.warned = True
     layer._tracks = [Track(1, 0, 160.0, 120.0, 100.0, 100.0), stale]
-    layer._absorb([SimpleNamespace(warning=True, ttc_s=0.5, miss=0.1), SimpleNamespace(warning=False, ttc_s=None)], 40.0)
+    layer._absorb([SimpleNamespace(warning=True), SimpleNamespace(warning=False)], 40.0)
     again = Track(9, 41, 230.0, 120.0, 30.0, 30.0, birth=41.0)
     assert layer._refind(again, 41.0) == (late > 0) and again.id == (2 if late else 9) and not again.warned
 
@@ -1141,7 +1143,7 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     from mlplc2.targets import TargetLayer, Track
 
     assert TargetParams().absorb_frames == 5                              # the default since session 15
-    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames), FPS)
+    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames, refind_late=0), FPS)   # refind_late: its id only
     warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
     stale = Track(2, 0, 230.0, 120.0, 30.0, 30.0, birth=10.0)        # 20 px beyond the box, within 29
     stale.fields = {5}
@@ -1158,35 +1160,6 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     assert young in layer._tracks and fitted in layer._tracks and far in layer._tracks and warn in layer._tracks
     assert (5 in warn.fields) == (absorb_frames > 0)
     assert not layer._refind(Track(9, 0, 230.0, 120.0, 30.0, 30.0, birth=41.0), 41.0)
-
-
-@pytest.mark.parametrize("behind", [1.5, 0.0])
-def test_a_warning_target_absorbs_the_boxes_behind_it(behind):
-    """``absorb_behind`` (off by default): a target warning this frame with a time to contact of 0.3 s absorbs
-    a box beside it with a time to contact of its own at least 1.5 times as long and a course that misses (the
-    ground at its foot), not one as near as itself, nor one that warns, nor one farther off than a quarter of its
-    size, nor a farther one on a collision course (a second object that will hit)."""
-    from types import SimpleNamespace
-
-    from mlplc2.targets import TargetLayer, Track
-
-    assert TargetParams().absorb_behind == 0.0
-    layer = TargetLayer(TargetParams(absorb_frames=0, absorb_behind=behind), FPS)
-    warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
-    ground = Track(2, 0, 160.0, 190.0, 40.0, 20.0, birth=30.0)      # 20 px below the box, within 29
-    ground.fields = {7}
-    near = Track(3, 0, 100.0, 120.0, 30.0, 30.0, birth=30.0)
-    warning = Track(4, 0, 220.0, 120.0, 30.0, 30.0, birth=30.0)
-    far = Track(5, 0, 260.0, 120.0, 30.0, 30.0, birth=30.0)         # 50 px beyond the box
-    course = Track(6, 0, 160.0, 50.0, 30.0, 30.0, birth=30.0)      # a farther object on a collision course
-    layer._tracks = [warn, ground, near, warning, far, course]
-    out = [SimpleNamespace(warning=w, ttc_s=s, miss=m) for w, s, m in (
-        (True, 0.3, 0.1), (False, 0.6, 1.4), (False, 0.35, None), (True, 0.9, 0.2), (False, 2.0, None), (False, 2.0, 0.3))]
-    layer._absorb(out, 40.0)
-    assert (ground in layer._tracks) == (behind == 0)
-    assert (7 in warn.fields) == (behind > 0)
-    assert near in layer._tracks and warning in layer._tracks and far in layer._tracks and warn in layer._tracks
-    assert course in layer._tracks
 
 
 def test_the_view_filled_by_a_warned_object_opens_a_window_until_its_contact():

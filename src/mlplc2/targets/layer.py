@@ -619,28 +619,19 @@ class TargetLayer:
         t.region = (box[2], box[3], t.log_s, t.aniso)
 
     def _absorb(self, out, now: float) -> None:
-        """``absorb_frames``: drop (not to be refound) the targets without a time to contact for that many
-        frames (since their last one, or their birth) whose centre lies in a warning target's box plus a
-        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15").
-        ``absorb_behind``: also the targets there that do not warn, whose time to contact is that many times
-        the warning one's and whose course misses (beyond ``max_miss``, or none) (docs/model.md, "Targets per
-        object, session 16")."""
-        n, k = self.params.absorb_frames, self.params.absorb_behind
-        warn = [(t, o) for t, o in zip(self._tracks, out) if o.warning] if n > 0 or k > 0 else []
+        """``absorb_frames``: drop (not to be refound, but by ``refind_late``) the targets without a time to contact
+        for that many frames (since their last one, or their birth) whose centre lies in a warning target's box plus
+        a quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
+        n = self.params.absorb_frames
+        warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
         if not warn:
             return
         span = self.params.span(n, self.fps) + _EPS
-        ids = {t.id for t, _ in warn}
-
-        def takes(wo, t, o) -> bool:             # absorb_frames: stale; absorb_behind: farther, off the path
-            return (n > 0 and now - max(t.last_estimate, t.birth) > span) or \
-                (k > 0 and not o.warning and o.ttc_s is not None and wo.ttc_s is not None and o.ttc_s >= k * wo.ttc_s
-                 and (o.miss is None or o.miss > self.params.max_miss))
-
+        ids = {t.id for t in warn}
         kept = []
-        for t, o in zip(self._tracks, out):
-            host = None if t.id in ids else \
-                next((w for w, wo in warn if w.contains(t.cx, t.cy, 0.25 * w.size + 4.0) and takes(wo, t, o)), None)
+        for t in self._tracks:
+            host = None if t.id in ids or now - max(t.last_estimate, t.birth) <= span else \
+                next((o for o in warn if o.contains(t.cx, t.cy, 0.25 * o.size + 4.0)), None)
             if host is None:
                 kept.append(t)
             else:
@@ -726,16 +717,17 @@ class TargetLayer:
         track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
         bookkeeping"), not its history (the new box is measured afresh: its size against the old
         box's would be a jump in the log-scale fit); the newest such wins. ``refind_late``: else a track
-        lost (or absorbed, :meth:`_absorb`) at most that many frames before whose last centre lies in the new
-        box, of a size within a factor of 4, gives it its id and frame of birth only (docs/model.md, "Targets
-        per object, session 16")."""
+        lost more than ``refind_frames`` (or absorbed, :meth:`_absorb`) and at most that many frames before,
+        whose last centre lies in the new box and of a size within a factor of 4, gives it its id and frame of
+        birth only: labels, nothing the layer does (the new track keeps its own age for :meth:`_merge`,
+        ``Track.order``; docs/model.md, "Targets per object, session 16")."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
             if now - c <= span and o.id not in live and not o.absorbed and o.contains(t.cx, t.cy, 0.25 * o.size) \
                     and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
-                t.id, t.born, t.held = o.id, o.born, o.held
+                t.id, t.born, t.held, t.order = o.id, o.born, o.held, o.order
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
                 if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
                     seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]
@@ -743,10 +735,11 @@ class TargetLayer:
                 return True
         late = self.params.span(self.params.refind_late, self.fps) + _EPS
         for c, o in reversed(self._lost):            # refind_late: the id only, the object's old centre inside the new box
-            if self.params.refind_late > 0 and now - c <= late and o.id not in live and t.contains(o.cx, o.cy) \
-                    and max(t.size / o.size, o.size / t.size) <= 4.0:
+            if self.params.refind_late > 0 and (o.absorbed or now - c > span) and now - c <= late \
+                    and o.id not in live and t.contains(o.cx, o.cy) and max(t.size / o.size, o.size / t.size) <= 4.0:
                 self._lost.remove((c, o))
-                t.id, t.born = o.id, o.born
+                t.order, t.id, t.born = t.id, o.id, o.born
+                self._next += 1                      # its own id number stays used (its age, ``order``)
                 return True
         return False
 
@@ -800,7 +793,7 @@ class TargetLayer:
         keep the older; but an older track that measures no approach merges a newer one only when
         the newer's centre lies near its own: a wide box over the road and an object that approaches
         inside it are two."""
-        tracks = sorted(self._tracks, key=lambda t: t.id)
+        tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t, index)

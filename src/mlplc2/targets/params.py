@@ -474,26 +474,20 @@ class TargetParams(ParameterSet):
                                warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
-    refind_late: int = param(0, """A new target whose box holds the last centre of a target lost (dropped, merged, or
-                             absorbed: ``absorb_frames``) at most this many frames before (and beyond
-                             ``refind_frames``' test), of a size within a
-                             factor of 4 of it, takes over its id and frame of birth only (its warning state, last time
-                             to contact and history begin afresh): a far object lost while it did not grow measurably
-                             and found again, grown, where it was. 0 = off (docs/model.md, "Targets per object,
+    refind_late: int = param(45, """A new target whose box holds the last centre of a target lost (dropped or merged)
+                             more than ``refind_frames`` and at most this many frames before, or absorbed
+                             (``absorb_frames``), of a size within a factor of 4 of it, takes over its id and frame of
+                             birth only (its warning state, last time to contact and history begin afresh; its age in
+                             ``_merge`` stays its own): a far object lost while it did not grow measurably and found
+                             again, grown, where it was. Labels only: every target's box, time to contact and warning
+                             are those without it. 0 = off; 45 since session 16 (docs/model.md, "Targets per object,
                              session 16").""", unit="frames", valid=Valid.integer(0))
     absorb_frames: int = param(5, """A target warning this frame absorbs every other target whose centre lies in
                                its box plus a quarter of its size (as a field it would own) and that has had no
                                time to contact for this many frames (since its last one, or its birth): the
                                static world's box beside an object near contact is the object's (its fields go
-                               to it; the absorbed one is not refound). 0 = off; 5 since session 15 (docs/model.md,
+                               to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
-    absorb_behind: float = param(0.0, """A target warning this frame also absorbs (as ``absorb_frames``) every other
-                                 target whose centre lies in its box plus a quarter of its size, that does not warn,
-                                 whose time to contact (its own or held) is at least this many times the warning
-                                 one's and whose course misses (beyond ``max_miss``, or none): a box behind the nearest
-                                 object (the ground at its foot, a wall it passes in front of), its fields the object's
-                                 (a farther object on a collision course keeps its own). 0 = off (docs/model.md, "Targets per object,
-                                 session 16").""", valid=Valid.real(minimum=0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
