@@ -756,6 +756,42 @@ def test_brief_occlusion_keeps_one_id_and_its_time_to_contact(hold_frames, refin
         assert len(ids) == 2 or None in after
 
 
+@pytest.mark.parametrize("late", [45, 0])
+def test_a_far_object_found_again_late_where_it_was_keeps_its_id_only(late):
+    """``refind_late`` (45 by default): a 10-px track lost at clock 10 (a warned one) and a 25-px box found at
+    clock 40 (beyond ``refind_frames``) that holds its last centre: the new box takes its id and frame of birth
+    only (its warning state begins afresh); a box beside it (the old centre outside it), one 5 times its size,
+    and one found after the 45 frames get new ids."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer, Track
+
+    assert TargetParams().refind_late == 45                             # the default since session 16
+    layer = TargetLayer(TargetParams(refind_late=late), FPS)
+    old = Track(3, 7, 100.0, 120.0, 10.0, 10.0, birth=7.0)
+    old.warned = old.last_warned = True
+    layer._lose(old, 10.0)
+    beside = Track(8, 40, 130.0, 120.0, 25.0, 25.0, birth=40.0)
+    big = Track(8, 40, 100.0, 120.0, 50.0, 50.0, birth=40.0)
+    assert not layer._refind(beside, 40.0) and not layer._refind(big, 40.0)
+    new = Track(8, 40, 104.0, 118.0, 25.0, 25.0, birth=40.0)
+    assert layer._refind(new, 40.0) == (late > 0)
+    assert (new.id, new.born, new.order) == ((3, 7, 8) if late else (8, 40, 0))   # order: its own age (_merge)
+    assert not new.warned and not new.last_warned and new.birth == 40.0
+    layer._lose(Track(4, 0, 200.0, 120.0, 10.0, 10.0), 10.0)
+    assert not layer._refind(Track(9, 56, 200.0, 120.0, 20.0, 20.0, birth=56.0), 56.0)
+    layer._lose(Track(5, 0, 250.0, 120.0, 10.0, 10.0), 50.0)          # within refind_frames: refind_frames' own test
+    assert not layer._refind(Track(9, 56, 250.0, 120.0, 35.0, 35.0, birth=56.0), 56.0)
+    # a box absorbed by a warning target (absorb_frames) comes back by the late path only: its id, afresh
+    layer = TargetLayer(TargetParams(refind_late=late), FPS)
+    stale = Track(2, 10, 230.0, 120.0, 30.0, 30.0, birth=10.0)
+    stale.warned = True
+    layer._tracks = [Track(1, 0, 160.0, 120.0, 100.0, 100.0), stale]
+    layer._absorb([SimpleNamespace(warning=True), SimpleNamespace(warning=False)], 40.0)
+    again = Track(9, 41, 230.0, 120.0, 30.0, 30.0, birth=41.0)
+    assert layer._refind(again, 41.0) == (late > 0) and again.id == (2 if late else 9) and not again.warned
+
+
 @pytest.mark.parametrize("drop_passed", [True, False])
 def test_a_target_whose_contact_has_passed_is_dropped(drop_passed):
     """``drop_passed`` (off by default): a track whose last time to contact (0.5 s at clock 10, 30 fps:
@@ -1107,7 +1143,7 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
     from mlplc2.targets import TargetLayer, Track
 
     assert TargetParams().absorb_frames == 5                              # the default since session 15
-    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames), FPS)
+    layer = TargetLayer(TargetParams(absorb_frames=absorb_frames, refind_late=0), FPS)   # refind_late: its id only
     warn = Track(1, 0, 160.0, 120.0, 100.0, 100.0)
     stale = Track(2, 0, 230.0, 120.0, 30.0, 30.0, birth=10.0)        # 20 px beyond the box, within 29
     stale.fields = {5}

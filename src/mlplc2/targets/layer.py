@@ -619,9 +619,9 @@ class TargetLayer:
         t.region = (box[2], box[3], t.log_s, t.aniso)
 
     def _absorb(self, out, now: float) -> None:
-        """``absorb_frames``: drop (not to be refound) the targets without a time to contact for that many
-        frames (since their last one, or their birth) whose centre lies in a warning target's box plus a
-        quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
+        """``absorb_frames``: drop (not to be refound, but by ``refind_late``) the targets without a time to contact
+        for that many frames (since their last one, or their birth) whose centre lies in a warning target's box plus
+        a quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
         n = self.params.absorb_frames
         warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
         if not warn:
@@ -636,6 +636,9 @@ class TargetLayer:
                 kept.append(t)
             else:
                 host.fields |= t.fields
+                if self.params.refind_late > 0:          # refound late only, by its id (:meth:`_refind`)
+                    t.absorbed = True
+                    self._lose(t, now)
         self._tracks = kept
 
     def _drop_idle(self, now: float) -> None:
@@ -698,9 +701,9 @@ class TargetLayer:
 
     def _lose(self, t: Track, now: float) -> None:
         """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
-        span = self.params.span(self.params.refind_frames, self.fps) + _EPS
+        span = self.params.span(max(self.params.refind_frames, self.params.refind_late), self.fps) + _EPS
         self._lost = [(c, o) for c, o in self._lost if now - c <= span and o.id != t.id]
-        if self.params.refind_frames > 0:
+        if self.params.refind_frames > 0 or self.params.refind_late > 0:
             self._lost.append((now, t))
 
     def _refind(self, t: Track, now: float) -> bool:
@@ -713,18 +716,30 @@ class TargetLayer:
         ``Track.last_warned``, ``Track.onset_cut``: the same object, so a warning that ran on the lost
         track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
         bookkeeping"), not its history (the new box is measured afresh: its size against the old
-        box's would be a jump in the log-scale fit); the newest such wins."""
+        box's would be a jump in the log-scale fit); the newest such wins. ``refind_late``: else a track
+        lost more than ``refind_frames`` (or absorbed, :meth:`_absorb`) and at most that many frames before,
+        whose last centre lies in the new box and of a size within a factor of 4, gives it its id and frame of
+        birth only: labels, nothing the layer does (the new track keeps its own age for :meth:`_merge`,
+        ``Track.order``; docs/model.md, "Targets per object, session 16")."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):
-            if now - c <= span and o.id not in live and o.contains(t.cx, t.cy, 0.25 * o.size) \
+            if now - c <= span and o.id not in live and not o.absorbed and o.contains(t.cx, t.cy, 0.25 * o.size) \
                     and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
-                t.id, t.born, t.held = o.id, o.born, o.held
+                t.id, t.born, t.held, t.order = o.id, o.born, o.held, o.order
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
                 if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
                     seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]
                     t.lost_drift = max(seen) if seen else None
+                return True
+        late = self.params.span(self.params.refind_late, self.fps) + _EPS
+        for c, o in reversed(self._lost):            # refind_late: the id only, the object's old centre inside the new box
+            if self.params.refind_late > 0 and (o.absorbed or now - c > span) and now - c <= late \
+                    and o.id not in live and t.contains(o.cx, o.cy) and max(t.size / o.size, o.size / t.size) <= 4.0:
+                self._lost.remove((c, o))
+                t.order, t.id, t.born = t.id, o.id, o.born
+                self._next += 1                      # its own id number stays used (its age, ``order``)
                 return True
         return False
 
@@ -778,7 +793,7 @@ class TargetLayer:
         keep the older; but an older track that measures no approach merges a newer one only when
         the newer's centre lies near its own: a wide box over the road and an object that approaches
         inside it are two."""
-        tracks = sorted(self._tracks, key=lambda t: t.id)
+        tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t, index)

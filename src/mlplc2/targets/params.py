@@ -474,11 +474,19 @@ class TargetParams(ParameterSet):
                                warning):
                                one object, one id through a gap. 0 = off (``docs/targets.md``, step 8).""",
                                unit="frames", valid=Valid.integer(0))
+    refind_late: int = param(45, """A new target whose box holds the last centre of a target lost (dropped or merged)
+                             more than ``refind_frames`` and at most this many frames before, or absorbed
+                             (``absorb_frames``), of a size within a factor of 4 of it, takes over its id and frame of
+                             birth only (its warning state, last time to contact and history begin afresh; its age in
+                             ``_merge`` stays its own): a far object lost while it did not grow measurably and found
+                             again, grown, where it was. Labels only: every target's box, time to contact and warning
+                             are those without it. 0 = off; 45 since session 16 (docs/model.md, "Targets per object,
+                             session 16").""", unit="frames", valid=Valid.integer(0))
     absorb_frames: int = param(5, """A target warning this frame absorbs every other target whose centre lies in
                                its box plus a quarter of its size (as a field it would own) and that has had no
                                time to contact for this many frames (since its last one, or its birth): the
                                static world's box beside an object near contact is the object's (its fields go
-                               to it; the absorbed one is not refound). 0 = off; 5 since session 15 (docs/model.md,
+                               to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,

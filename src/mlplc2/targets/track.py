@@ -157,6 +157,8 @@ class Track:
     freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
+    absorbed: bool = False             # absorbed by a warning target (``absorb_frames``): refound late only (``refind_late``)
+    order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
     aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
