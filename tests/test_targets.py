@@ -1203,3 +1203,44 @@ def test_seed_focus_keeps_the_roadside_out_and_the_object_ahead_in(r0):
     assert any(out for out in off) and any(out for out in first)
     assert any(out for out in on) == (r0 == 0.0)
 
+
+
+@pytest.mark.parametrize("r0", [0.0, 60.0])
+def test_seed_rest_lets_the_one_seed_move_on_to_a_weaker_object(r0):
+    """A textured patch stretching downwards (the ground ahead) makes the strongest local motion of every
+    frame, an object growing straight at the camera a weaker peak. The one LM seed a frame goes to the
+    patch, which never grows alike in both directions: without ``seed_rest`` the object never becomes a
+    target; with it the patch's place rests after its first failed candidate (with ``rest_measured`` too:
+    its alignment grew unevenly), the next frames' seed reaches the object, and it becomes a target.
+    The same surface 60 px beside the heading (the static world, expanding about it) becomes one too,
+    except with ``rest_focus``: a seed the rest moved must grow about a point near its box."""
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    frames, centres = _expanding_patch(16, r0)
+    rng = np.random.default_rng(7)
+    still = cv2.GaussianBlur(rng.uniform(30, 230, (30, 30)).astype(np.float32), (0, 0), 1.5)
+    for k, g in enumerate(frames):                 # the patch stretches down 5 % a frame (the ground ahead)
+        g[20:20 + int(30 * 1.05 ** k), 20:50] = cv2.resize(still, (30, int(30 * 1.05 ** k)))
+
+    def run(**kw):
+        layer = TargetLayer(TargetParams(**kw), FPS)
+        zero = np.zeros((240, 320), np.float32)
+        outs = []
+        for k, g in enumerate(frames):
+            mag = zero.copy()
+            mag[35, 35] = 5.0                                       # the stretching patch: strongest
+            mag[int(round(centres[k][1])), int(round(centres[k][0]))] = 1.0   # the object: weaker
+            outs.append(layer.step(g, LocalMotion(zero, zero, zero, zero, mag), [], k))
+        return outs
+
+    def on_object(outs):
+        return [k for k, out in enumerate(outs)
+                if any(abs(o.x - centres[k][0]) < 10 and abs(o.y - centres[k][1]) < 10 for o in out)]
+
+    assert on_object(run()) == []
+    for kw in ({}, {"rest_measured": True}):    # the patch grows unevenly: it rests either way
+        found = on_object(run(seed_rest=15, **kw))
+        assert found and found[0] <= 8
+    focus = on_object(run(seed_rest=15, rest_focus=True, seed_focus=0.25, focus_slack=0.25))
+    assert bool(focus) == (r0 == 0.0)
