@@ -76,7 +76,6 @@ class TargetLayer:
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
         self._tried: list[tuple[int, int, float]] = []   # (x, y, clock) of the candidates tried lately (:meth:`_in_turn`)
-        self._rest: list[tuple[int, int, int, float]] = []    # (x, y, half-side, clock) of the LM/change seeds that failed lately (seed_rest)
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
@@ -185,27 +184,25 @@ class TargetLayer:
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and self._count(now) + len(seeds) < p.max_targets:
+            from ..neuropils.attention import argmax_outside
+
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             zones = [(int(round(t.cx)), int(round(t.cy)),
                       int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
                      for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
-            rested = []
-            if p.seed_rest > 0:                  # TargetParams.seed_rest: the places of seeds that failed lately
-                span = p.span(p.seed_rest, self.fps) + _EPS
-                self._rest = [e for e in self._rest if now - e[3] <= span]
-                rested = [(x, y, r) for x, y, r, _ in self._rest]
             n = self._seeds(interval)
             for i in range(n):
-                cand = self._lm_seed(lm, levels, zones + rested)
+                cand = argmax_outside(lm.magnitude, zones)
+                if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
+                    cand = self._change_seed(levels, zones)
                 if cand is None:
                     break
                 seeds.append((cand[0], cand[1], None))
-                if p.focus_first or i >= n // p.lm_seeds \
-                        or (p.rest_focus and rested and cand != self._lm_seed(lm, levels, zones)):
-                    focused.add((cand[0], cand[1]))  # TargetParams.seed_focus: an extra seed, or one rest_focus moved
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
+                if p.focus_first or i >= n // p.lm_seeds:    # TargetParams.seed_focus: an extra seed
+                    focused.add((cand[0], cand[1]))
         budget = None
         if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
             span = p.span(p.change_frames, self.fps) + _EPS
@@ -226,7 +223,6 @@ class TargetLayer:
             if p.seed_budget > 0:
                 self._tried.append((x, y, now))
             t = host = None
-            refuted = False                 # rest_measured: a box tried was measured as no object's
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t, now)
@@ -237,14 +233,12 @@ class TargetLayer:
                     if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
                         t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
                     break
-                refuted, t = refuted or t.refuted, None
+                t = None
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, now)
                 continue
             if t is None:
-                if f is None and p.seed_rest > 0 and not (p.rest_measured and not refuted):
-                    self._rest.append((int(x), int(y), int(p.claim), now))
                 continue
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any((self._freed(o, now) or self._opened(o, now)) and o.contains(t.cx, t.cy)
@@ -397,17 +391,6 @@ class TargetLayer:
         y0, y1 = max(f.y - f.radius, 0.0), min(f.y + f.radius, h - 1.0)
         return (x0 + x1) / 2.0, (y0 + y1) / 2.0, max(x1 - x0, 2.0), max(y1 - y0, 2.0)
 
-    def _lm_seed(self, lm: LocalMotion, levels, zones):
-        """The strongest LM outside ``zones`` when it stands out (``seed_lm``, ``seed_contrast``), else the
-        change seed (:meth:`_change_seed`); (x, y) or None."""
-        p = self.params
-        from ..neuropils.attention import argmax_outside
-
-        cand = argmax_outside(lm.magnitude, zones)
-        if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-            return self._change_seed(levels, zones)
-        return cand[0], cand[1]
-
     def _change_seed(self, levels, zones):
         """A candidate where the image changed most over the last ``change_frames`` frames (at
         half resolution, outside the zones of targets and fields), when that change stands out:
@@ -456,8 +439,6 @@ class TargetLayer:
             return alarm
         t.motion = (al.dx / ref[1], al.dy / ref[1], math.log(al.scale) / ref[1])
         g = math.log(al.scale)
-        # rest_measured: measured as no object's growth: it grew unevenly (the ground flowing past) or shrank
-        t.refuted = (g >= p.min_growth and abs(al.anisotropy) > p.max_anisotropy * g) or g <= -p.min_growth
         if alarm:
             return g > 0
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g \

@@ -66,24 +66,6 @@ class TargetParams(ParameterSet):
                           times. 1 = the strongest only (the default: 3 without ``seed_focus`` measured, not
                           adopted, docs/model.md, "Where TTC coverage is lost"; with it, "A seed's own focus").""",
                           unit="seeds", valid=Valid.integer(1))
-    seed_rest: int = param(0, """An LM or change seed whose candidate did not become a target (no box grew,
-                           none was a part of a track) keeps its place (within ``claim``) from the LM and
-                           change seeds for this many nominal frames (``nominal_fps``): the one seed a frame
-                           then moves down the ranking instead of trying the same patch of the static
-                           world each frame (the near ground that flows fastest), and reaches a small
-                           object whose edges move a fraction of a pixel a frame. Field seeds are not
-                           affected. 0 = off (the default; measured, not adopted: docs/model.md, "A failed
-                           seed's place rests").""", unit="frames", valid=Valid.integer(0))
-    rest_measured: bool = param(False, """With ``seed_rest``: a seed rests only when its growth test measured a box
-                                tried as no object's growth: it grew by at least ``min_growth`` but unevenly
-                                (beyond ``max_anisotropy``: the ground flowing past a driving camera) or shrank by
-                                as much; one without a box, whose alignment failed (a small or uniform object at
-                                its first frames, a shaken view) or that grew too little (a far object, slow at
-                                first) is tried again. False = every failed seed rests.""", valid=Valid.boolean())
-    rest_focus: bool = param(False, """With ``seed_rest`` and ``seed_focus``: a seed that the resting places moved
-                             (not the one the search would give without them) is tested as an extra seed is:
-                             it must grow about a point near its box (:meth:`TargetLayer._focused`). False =
-                             off.""", valid=Valid.boolean())
     seed_focus: float = param(0.0, """An extra LM seed (beyond the first per nominal frame interval:
                               ``lm_seeds`` > 1; with ``focus_first`` every LM and change seed) becomes a
                               target only when its growth test's alignment (``change_frames``) expands about

@@ -159,7 +159,6 @@ class Track:
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
     aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
-    refuted: bool = False              # its growth test measured no object's growth (``TargetParams.rest_measured``)
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
