@@ -1239,3 +1239,73 @@ def test_seed_focus_keeps_the_roadside_out_and_the_object_ahead_in(r0):
     assert any(out for out in off) and any(out for out in first)
     assert any(out for out in on) == (r0 == 0.0)
 
+
+
+def _zero_lm_run(frames, peak=None, track=None, **kw):
+    """TargetLayer on ``frames`` without attention fields; the local motion zero, or one peak at ``peak``
+    (x, y) every frame; ``track`` (cx, cy, w, h): a box tracked from the first frame."""
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.track import Observation
+
+    p = TargetParams(**kw)
+    layer = TargetLayer(p, FPS)
+    if track is not None:
+        t = Track(99, 0, *track, birth=0.0, span=p.span(p.window - 1, FPS), keep=p.window)
+        t.history = deque([Observation(0.0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+        t.inside = deque(t.history)
+        layer._tracks.append(t)
+    zero = np.zeros((240, 320), np.float32)
+    outs = []
+    for k, g in enumerate(frames):
+        mag = zero.copy()
+        if peak is not None:
+            mag[peak[1], peak[0]] = 5.0
+        outs.append(layer.step(g, LocalMotion(zero, zero, zero, zero, mag), [], k))
+    return outs
+
+
+def _first_on(outs, at, tol=5.0):
+    return next((k for k, out in enumerate(outs) if any(abs(t.x - at[0]) < tol and abs(t.y - at[1]) < tol
+                                                        for t in out)), None)
+
+
+def test_change_contrast_seeds_a_disc_whose_change_is_a_few_times_the_frames():
+    """A bright disc that approaches (radius 6 px x 90 / (90 - k)) over a view whose grey levels change
+    everywhere by a few levels a frame (noise of 4 levels: the residual of a stabilised textured view),
+    no local motion: its edge changes by less than 20 times the frame's mean change, so the change seed
+    (``seed_contrast``) never takes it; with ``change_contrast`` 5 it becomes a target, and nothing
+    else does."""
+    rng = np.random.default_rng(2)
+    frames = []
+    for k in range(30):
+        img = np.full((240, 320), 128, np.float32) + rng.normal(0, 4.0, (240, 320)).astype(np.float32)
+        m = np.zeros((240, 320), np.uint8)
+        cv2.circle(m, (200 * 16, 90 * 16), int(round(6.0 * 90 / (90 - k) * 16)), 255, -1, lineType=cv2.LINE_AA, shift=4)
+        img = img * (1 - m / 255.0) + (200 + rng.normal(0, 4.0, (240, 320))) * (m / 255.0)
+        frames.append(np.clip(img, 0, 255).astype(np.float32))
+    assert _first_on(_zero_lm_run(frames), (200, 90)) is None
+    outs = _zero_lm_run(frames, change_contrast=5.0)
+    assert _first_on(outs, (200, 90)) is not None
+    assert all(abs(t.x - 200) < 10 and abs(t.y - 90) < 10 for out in outs for t in out)
+
+
+def test_box_claim_lets_an_object_above_a_wide_box_seed():
+    """A wide still strip tracked at the view's foot (240 x 40 px: the ground ahead) and a disc 80 px
+    above it that approaches, the strongest local motion: the strip's seed zone, a square of its
+    larger side, covers the disc and it never becomes a target; with ``box_claim`` the zone is the
+    strip's box and the disc becomes a target within a few frames."""
+    rng = np.random.default_rng(3)
+    tex = cv2.GaussianBlur(rng.uniform(60, 200, (40, 240)).astype(np.float32), (0, 0), 2.0)
+    frames = []
+    for k in range(20):
+        img = np.full((240, 320), 128, np.float32)
+        img[180:220, 40:280] = tex
+        cv2.circle(img, (160 * 16, 120 * 16), int(round(6.0 * 60 / (60 - k) * 16)), 20, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(img)
+    strip = (160.0, 200.0, 240.0, 40.0)
+    off = _zero_lm_run(frames, peak=(160, 120), track=strip)
+    on = _zero_lm_run(frames, peak=(160, 120), track=strip, box_claim=2.0)
+    assert all(any(t.id == 99 for t in out) for out in off + on)     # the strip is tracked throughout
+    assert _first_on(off, (160, 120)) is None
+    assert _first_on(on, (160, 120)) is not None and _first_on(on, (160, 120)) <= 8

@@ -184,17 +184,13 @@ class TargetLayer:
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and self._count(now) + len(seeds) < p.max_targets:
-            from ..neuropils.attention import argmax_outside
-
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
-            zones = [(int(round(t.cx)), int(round(t.cy)),
-                      int(t.size / 2.0 + p.claim if self._measuring(t, now) else t.size / 4.0))
-                     for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
+            zones = [self._claim(t, now) for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             n = self._seeds(interval)
             for i in range(n):
-                cand = argmax_outside(lm.magnitude, zones)
+                cand = _outside(lm.magnitude, zones)
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                     cand = self._change_seed(levels, zones)
                 if cand is None:
@@ -345,6 +341,18 @@ class TargetLayer:
             return None
         return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
 
+    def _claim(self, t: Track, now: float) -> tuple:
+        """The seed zone of track ``t`` (x, y, half-width[, half-height]): its box and ``claim`` px
+        beyond while it measures an approach (:meth:`_measuring`), else a quarter of its size; a square
+        of its larger side, or with ``TargetParams.box_claim`` for a flat or tall box its box's own shape."""
+        x, y = int(round(t.cx)), int(round(t.cy))
+        if not self._measuring(t, now):
+            return x, y, int(t.size / 4.0)
+        k = self.params.box_claim
+        if k <= 0 or max(t.w, t.h) < k * min(t.w, t.h):
+            return x, y, int(t.size / 2.0 + self.params.claim)
+        return x, y, int(t.w / 2.0 + self.params.claim), int(t.h / 2.0 + self.params.claim)
+
     def _measuring(self, t: Track, index: int) -> bool:
         """Whether track ``t`` measures an approach: it had a time to contact within the last
         ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``); always
@@ -403,12 +411,13 @@ class TargetLayer:
         if p.seed_change <= 0 or ref is None or len(levels) < 2:
             return None
         d = cv2.blur(cv2.absdiff(levels[1], ref[0][1]), (3, 3))
-        for zx, zy, zr in zones:                 # at half resolution
-            x0, x1 = max((zx - zr) // 2, 0), max((zx + zr) // 2 + 1, 0)
-            y0, y1 = max((zy - zr) // 2, 0), max((zy + zr) // 2 + 1, 0)
+        for zx, zy, *zr in zones:                # at half resolution
+            rx, ry = zr[0], zr[-1]
+            x0, x1 = max((zx - rx) // 2, 0), max((zx + rx) // 2 + 1, 0)
+            y0, y1 = max((zy - ry) // 2, 0), max((zy + ry) // 2 + 1, 0)
             d[y0:y1, x0:x1] = 0
         _, top, _, (x, y) = cv2.minMaxLoc(d)
-        if top < max(p.seed_change, p.seed_contrast * float(d.mean())):
+        if top < max(p.seed_change, (p.change_contrast or p.seed_contrast) * float(d.mean())):
             return None
         return 2 * x + 1, 2 * y + 1
 
@@ -807,3 +816,18 @@ class TargetLayer:
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
                     host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
         self._tracks = out
+
+
+def _outside(magnitude: np.ndarray, zones: list):
+    """(x, y, value) of the largest LM outside every zone (None if none is left): ``zones`` of
+    (x, y, r), squares of half-side r (:func:`argmax_outside`), or (x, y, rx, ry), boxes
+    (``TargetParams.box_claim``)."""
+    from ..neuropils.attention import argmax_outside
+
+    if all(len(z) == 3 for z in zones):
+        return argmax_outside(magnitude, zones)
+    masked = magnitude.copy()
+    h, w = masked.shape
+    for x, y, *r in zones:
+        masked[max(y - r[-1], 0):max(min(y + r[-1] + 1, h), 0), max(x - r[0], 0):max(min(x + r[0] + 1, w), 0)] = -np.inf
+    return argmax_outside(masked, [(-10, -10, 0)])

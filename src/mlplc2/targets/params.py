@@ -61,6 +61,19 @@ class TargetParams(ParameterSet):
                                candidate (:meth:`TargetLayer._change_seed`) when it is at least this
                                much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
                                unit="grey levels", valid=Valid.real(minimum=0))
+    change_contrast: float = param(0.0, """The change seed's own contrast: its change must be this many times
+                                   the frame's mean change (instead of ``seed_contrast``). Over a turning
+                                   textured view the stabilised frame changes everywhere by a few grey levels,
+                                   and a far object that grows straight at the camera changes its edges by 3-14
+                                   times that: the largest change outside the targets, under 20 times the mean
+                                   (docs/model.md, "Objects missed", session 16). 0 = ``seed_contrast``
+                                   (the default; 5 and 10 measured, not adopted).""", valid=Valid.real(minimum=0))
+    box_claim: float = param(0.0, """A track whose box is at least this many times wider than tall (or taller than
+                             wide) claims its seeds (``claim``) over its box, ``w / 2 + claim`` across and
+                             ``h / 2 + claim`` down, instead of a square of its larger side: a wide box over
+                             the ground ahead no longer claims the view above it, where an object at the
+                             heading grows (docs/model.md, "Objects missed", session 16). 0 = off (the
+                             default; 1, every box, and 2 measured, not adopted).""", valid=Valid.real(minimum=0))
     lm_seeds: int = param(1, """LM seeds (``seed_lm``, else ``seed_change``) per nominal frame interval: the strongest
                           point outside every target, field and seed tried before it (``claim``), that many
                           times. 1 = the strongest only (the default: 3 without ``seed_focus`` measured, not
