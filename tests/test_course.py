@@ -1107,10 +1107,10 @@ def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_i
 
 
 def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_translate():
-    # still_drift / still_miss (docs/model.md, "False warnings, session 16"): no heading measured (a still or
-    # turning camera); a box 40 px right of the principal point whose centre moves away from it as a point at a
-    # fixed lateral offset does (drift 1: it passes beside the camera at its offset) on a course of 0.7 is held
-    # back with still_drift 0.1; one that converges on its bearing (drift 0), one on a short course (0.3), one
+    # still_drift / still_miss (docs/model.md, "False warnings, session 16"; off by default): no heading measured
+    # (a still or turning camera); a box 40 px right of the principal point whose centre moves away from it as a
+    # point at a fixed lateral offset does (drift 1: it passes beside the camera at its offset) on a course of 0.7
+    # is held back with still_drift 0.1 and 0.2; one that converges on its bearing (drift 0), one on a short course (0.3), one
     # with a field in collision alarm this frame, or with a measured heading (path_drift's case) is not
     pp = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
     g = 0.3
@@ -1123,12 +1123,15 @@ def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_
         return t
 
     passing, steady = box(1.0), box(0.0)
-    off, on = TargetParams(), TargetParams(still_drift=0.1)
-    assert not passes_still(passing, off, 24, None, pp, 0.7)             # main: off
+    off, on = TargetParams(still_drift=0.0), TargetParams(still_drift=0.1)
+    assert not passes_still(passing, off, 24, None, pp, 0.7)             # off
     assert passes_still(passing, on, 24, None, pp, 0.7)                  # drifts at its offset: held back
     assert not passes_still(steady, on, 24, None, pp, 0.7)               # keeps its bearing
     assert not passes_still(passing, on, 24, None, pp, 0.3)              # a short course (still_miss 0.4)
     assert not passes_still(passing, on, 24, None, pp, None)             # no course known
     assert not passes_still(passing, on, 24, pp, pp, 0.7)                # a measured heading: path_drift's
+    assert passes_still(passing, TargetParams(still_drift=0.2), 24, None, pp, 0.7)
+    assert not passes_still(box(0.15), TargetParams(still_drift=0.2), 24, None, pp, 0.7)
+    assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
     passing.last_alarm = 24
     assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame
