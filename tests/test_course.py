@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, passes_still, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -1071,3 +1071,67 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
     assert estimate(alarm(1), off, FPS, 12, SHAPE).warning and estimate(alarm(1), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3), off, FPS, 12, SHAPE).warning and not estimate(alarm(3), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3, warned=True), on, FPS, 12, SHAPE).warning
+
+
+def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_its_side():
+    # path_core (docs/model.md, "False warnings, session 16"): the road below the heading, its box
+    # reaching up past the heading (the heading 0.8 of its half height above its centre) and its centre
+    # drifting away from the heading as the static world's does (drift 1: r0 40 px, grown by e^0.5). With
+    # path_core 1 (main) the box holds the heading and path_drift does not test it; with 0.5 it does, and
+    # holds it back, while a box that keeps its bearing there (drift 0) and one whose middle holds the
+    # heading are not held back
+    heading, shape = (160.0, 120.0), (240, 320)
+    g = 0.5
+
+    def road(drift_frac: float, off: float) -> Track:
+        y0 = heading[1] + off
+        y1 = heading[1] + off * (1.0 + drift_frac * math.expm1(g))
+        h1 = 2.0 * (y1 - heading[1]) / 0.8 if off > 0 else 100.0
+        t = Track(3, 13, heading[0], y1, 100.0, h1, log_s=g)
+        t.history = deque([Observation(13, 0.0, heading[0], y0, 60.0, 0.0),
+                           Observation(24, g, heading[0], y1, 100.0, 0.0)])
+        return t
+
+    static, steady = road(1.0, 40.0), road(0.0, 40.0)
+    assert drift(static, heading) == pytest.approx(1.0) and drift(steady, heading) == pytest.approx(0.0)
+    assert holds(static, heading) and not holds(static, heading, 0.5)
+    main, core = TargetParams(path_drift=0.4), TargetParams(path_drift=0.4, path_core=0.5)
+    assert not off_path(static, main, 24, heading, shape)            # main: it holds the heading, no test
+    assert off_path(static, core, 24, heading, shape)                # path_core 0.5: it drifts, held back
+    assert not off_path(steady, core, 24, heading, shape)            # it keeps its bearing: begins
+    middle = road(1.0, 40.0)
+    middle.h = 4.0 * 40.0 * (1.0 + math.expm1(g))                   # the heading 0.5 of its half height away
+    assert holds(middle, heading, 0.5) and not off_path(middle, core, 24, heading, shape)
+    with pytest.raises(Exception):
+        TargetParams(path_core=1.5)
+
+
+def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_translate():
+    # still_drift / still_miss (docs/model.md, "False warnings, session 16"; off by default): no heading measured
+    # (a still or turning camera); a box 40 px right of the principal point whose centre moves away from it as a
+    # point at a fixed lateral offset does (drift 1: it passes beside the camera at its offset) on a course of 0.7
+    # is held back with still_drift 0.1 and 0.2; one that converges on its bearing (drift 0), one on a short course (0.3), one
+    # with a field in collision alarm this frame, or with a measured heading (path_drift's case) is not
+    pp = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    g = 0.3
+
+    def box(frac: float) -> Track:
+        x0 = pp[0] + 40.0
+        x1 = pp[0] + 40.0 * (1.0 + frac * math.expm1(g))
+        t = Track(2, 13, x1, pp[1], 20.0, 20.0, log_s=g)
+        t.history = deque([Observation(13, 0.0, x0, pp[1], 15.0, 0.0), Observation(24, g, x1, pp[1], 20.0, 0.0)])
+        return t
+
+    passing, steady = box(1.0), box(0.0)
+    off, on = TargetParams(still_drift=0.0), TargetParams(still_drift=0.1)
+    assert not passes_still(passing, off, 24, None, pp, 0.7)             # off
+    assert passes_still(passing, on, 24, None, pp, 0.7)                  # drifts at its offset: held back
+    assert not passes_still(steady, on, 24, None, pp, 0.7)               # keeps its bearing
+    assert not passes_still(passing, on, 24, None, pp, 0.3)              # a short course (still_miss 0.4)
+    assert not passes_still(passing, on, 24, None, pp, None)             # no course known
+    assert not passes_still(passing, on, 24, pp, pp, 0.7)                # a measured heading: path_drift's
+    assert passes_still(passing, TargetParams(still_drift=0.2), 24, None, pp, 0.7)
+    assert not passes_still(box(0.15), TargetParams(still_drift=0.2), 24, None, pp, 0.7)
+    assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
+    passing.last_alarm = 24
+    assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame

@@ -409,6 +409,28 @@ class TargetParams(ParameterSet):
                               1000 frames, holdout 10.19 -> 9.26, no collision or lead lost; docs/model.md,
                               "A warning that begins off the path").""",
                               valid=Valid.real(minimum=0))
+    path_core: float = param(1.0, """``path_drift`` spares a box that holds the heading only when the heading lies
+                             within this fraction of the box's half width and half height of its centre; any other
+                             box is tested by its drift: a box on the road or the ground that reaches the heading
+                             from its side expands about the heading as the static world does (its centre drifts
+                             away), an object on a collision course that holds the heading keeps its bearing.
+                             1 = anywhere in the box (main's; docs/model.md, "False warnings, session 16").""",
+                             valid=Valid.real(minimum=0, maximum=1))
+    still_drift: float = param(0.0, """Where no heading is measured (a camera that stands still or only turns), a
+                               warning begins without a field of the target in collision alarm only on a box that
+                               holds the principal point (``heading``, if given) or whose centre drifted away from it
+                               by at most this fraction of what a point at a fixed lateral offset would drift over the
+                               same growth (:func:`~mlplc2.targets.warning.drift`): an object on a course through the
+                               camera converges on its bearing (0), one that passes beside it at its offset (1); only
+                               on a course beyond ``still_miss``. 0 = off (session 16, measured: 0.2 takes false
+                               episodes per 1000 frames standard 0.41 -> 0.31, holdout 3 0.10 -> 0.00, holdout 5 0.93
+                               -> 0.82 (0.31 -> 0.29 % of frames), holdout 6 0.32 -> 0.29 % of frames, no collision,
+                               lead or real clip changed; 0.1 delays a still camera's collider by 2 frames;
+                               docs/model.md, "False warnings, session 16").""",
+                               valid=Valid.real(minimum=0))
+    still_miss: float = param(0.4, """``still_drift`` holds back only a box whose course (``miss``) misses by more than
+                              this (none known: no test): an object on a collision course whose box jitters about its
+                              bearing has a short one.""", unit="object extents", valid=Valid.real(minimum=0))
     drift_cut: bool = param(True, """``path_drift``'s exemption for a target with a field in collision alarm this
                             frame holds only for a box wholly inside the frame (not cut by the border,
                             ``border``; with ``drift_side``, not cut by its left or right border): a roadside

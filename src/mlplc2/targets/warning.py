@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course, miss_limit
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "passes_still", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -165,9 +165,10 @@ def cut_course(t: Track, p: TargetParams, ttc: float | None, heading: tuple[floa
     return ratio is not None and ratio <= p.cut_course_drift
 
 
-def holds(t: Track, heading: tuple[float, float]) -> bool:
-    """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now."""
-    return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
+def holds(t: Track, heading: tuple[float, float], core: float = 1.0) -> bool:
+    """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now; with ``core`` < 1,
+    through the middle of it (within ``core`` of its half width and half height of its centre)."""
+    return abs(t.cx - heading[0]) <= core * t.w / 2.0 and abs(t.cy - heading[1]) <= core * t.h / 2.0
 
 
 def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
@@ -185,7 +186,7 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     (h, w; None: no test): the static world beside the path sweeps out of view through the border
     and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts"); with
     ``drift_miss``, only a box whose course ``miss`` (None: none known) is within it."""
-    if p.path_drift <= 0 or heading is None or holds(t, heading):
+    if p.path_drift <= 0 or heading is None or holds(t, heading, p.path_core):
         return False
     if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
             and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames) \
@@ -193,6 +194,20 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
+
+
+def passes_still(t: Track, p: TargetParams, index: int, measured: tuple[float, float] | None,
+                 heading: tuple[float, float], miss: float | None) -> bool:
+    """``still_drift``: whether a warning that would begin this frame on track ``t`` is a passing object's, so
+    does not begin: no heading is measured (``measured`` None), no field of ``t`` is in collision alarm this
+    frame, its box does not hold ``heading`` (px: ``TargetParams.heading`` or the principal point) and its
+    centre drifted away from it by more than ``still_drift`` of the drift of a point at a fixed lateral offset
+    (:func:`drift`), on a course ``miss`` beyond ``still_miss`` (None: no test)."""
+    if p.still_drift <= 0 or measured is not None or t.last_alarm == index or holds(t, heading) \
+            or miss is None or miss <= p.still_miss:
+        return False
+    ratio = drift(t, heading)
+    return ratio is not None and ratio > p.still_drift
 
 
 def _cut_at(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
@@ -470,6 +485,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured, shape, miss):
+        warning = False
+    # ... and, where no heading is measured, only on a box that keeps its bearing (still_drift)
+    if warning and not t.warned and passes_still(t, p, index, measured, heading, miss):
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
