@@ -160,6 +160,29 @@ def test_a_truncated_video_on_stdin_is_reported_as_from_a_file(data, tmp_path):
     assert summary["truncated"] and 0 < summary["n_frames"] < 60
 
 
+
+def _piped_in_two(clip: bytes, split: int, out) -> tuple[dict, list[str], str]:
+    """``mlplc2 run - --jsonl -`` fed ``clip[:split]``, then (once its first JSON line has come, the
+    process still running and its stdin still open) the rest: (the first line, the other lines, stderr)."""
+    import select
+
+    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(out)],
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        try:
+            proc.stdin.write(clip[:split])
+            proc.stdin.flush()
+            assert select.select([proc.stdout], [], [], 90)[0], "no line before the rest of the clip was sent"
+            first = json.loads(proc.stdout.readline())
+            assert proc.poll() is None
+            proc.stdin.write(clip[split:])
+            proc.stdin.close()
+            rest = proc.stdout.read().decode().splitlines()
+            err = proc.stderr.read().decode()
+            assert proc.wait(timeout=120) == 0, err
+        finally:
+            proc.kill()
+    return first, rest, err
+
 def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
     """The first line is read while the process still runs: its stdin (the clip) is not closed yet.
     The clip is a stream as a camera tool sends it, Matroska without a frame count (an AVI states
@@ -174,20 +197,7 @@ def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
             out.mux(stream.encode(av.VideoFrame.from_ndarray(f, format="rgb24")))
         out.mux(stream.encode(None))
     clip = (tmp_path / "clip.mkv").read_bytes()
-    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
-                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
-        try:
-            proc.stdin.write(clip[: len(clip) * 3 // 4])
-            proc.stdin.flush()
-            first = json.loads(proc.stdout.readline())
-            assert proc.poll() is None
-            proc.stdin.write(clip[len(clip) * 3 // 4:])
-            proc.stdin.close()
-            rest = proc.stdout.read().decode().splitlines()
-            err = proc.stderr.read().decode()
-            assert proc.wait(timeout=120) == 0, err
-        finally:
-            proc.kill()
+    first, rest, err = _piped_in_two(clip, len(clip) * 3 // 4, tmp_path / "o")
     assert first["schema"] == 1 and first["frame"] == 0 and first["skipped"] == 0
     assert set(first) >= {"time_s", "warning", "targets", "models"}
     assert len(rest) == 59 and all(line.startswith("{") for line in rest)  # stdout: the JSON lines alone
@@ -588,28 +598,13 @@ def test_an_avi_written_to_a_pipe_is_a_stream_of_unknown_length(data, tmp_path):
     before the 60th frame is sent (the placeholder made it a file, read 60 frames ahead for its
     repeat check: a live camera's first line waited 2 s), and its end is no truncation (it was
     "decoding stopped at frame 60 of 1073741824", exit 2)."""
-    import select
-
     from mlplc2.io import open_source, read_video
 
     clip = _avi_through_a_pipe(read_video(data["avi"])[0])
     av = pytest.importorskip("av")
     with av.open(io.BytesIO(clip)) as c:
         assert c.streams.video[0].frames == 1 << 30      # what FFmpeg states: the case in point
-    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
-                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
-        try:
-            proc.stdin.write(clip[: len(clip) // 2])      # 30 of the 60 frames
-            proc.stdin.flush()
-            assert select.select([proc.stdout], [], [], 90)[0], "no line before the 60th frame"
-            first = json.loads(proc.stdout.readline())
-            proc.stdin.write(clip[len(clip) // 2:])
-            proc.stdin.close()
-            rest = proc.stdout.read().decode().splitlines()
-            err = proc.stderr.read().decode()
-            assert proc.wait(timeout=120) == 0, err
-        finally:
-            proc.kill()
+    first, rest, err = _piped_in_two(clip, len(clip) // 2, tmp_path / "o")     # 30 of the 60 frames first
     assert first["frame"] == 0 and len(rest) == 59 and "decoding stopped" not in err
     (tmp_path / "rec.avi").write_bytes(clip)              # saved from the pipe (`... | tee rec.avi`)
     for decoder in ("opencv", "pyav"):
