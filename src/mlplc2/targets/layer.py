@@ -186,11 +186,13 @@ class TargetLayer:
         if lm is not None and p.seed_lm > 0 and self._count(now) + len(seeds) < p.max_targets:
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
+            from ..neuropils.attention import argmax_outside
+
             zones = [self._claim(t, now) for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             n = self._seeds(interval)
             for i in range(n):
-                cand = _outside(lm.magnitude, zones)
+                cand = argmax_outside(lm.magnitude, zones)
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                     cand = self._change_seed(levels, zones)
                 if cand is None:
@@ -817,17 +819,3 @@ class TargetLayer:
                     host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
         self._tracks = out
 
-
-def _outside(magnitude: np.ndarray, zones: list):
-    """(x, y, value) of the largest LM outside every zone (None if none is left): ``zones`` of
-    (x, y, r), squares of half-side r (:func:`argmax_outside`), or (x, y, rx, ry), boxes
-    (``TargetParams.box_claim``)."""
-    from ..neuropils.attention import argmax_outside
-
-    if all(len(z) == 3 for z in zones):
-        return argmax_outside(magnitude, zones)
-    masked = magnitude.copy()
-    h, w = masked.shape
-    for x, y, *r in zones:
-        masked[max(y - r[-1], 0):max(min(y + r[-1] + 1, h), 0), max(x - r[0], 0):max(min(x + r[0] + 1, w), 0)] = -np.inf
-    return argmax_outside(masked, [(-10, -10, 0)])
