@@ -48,7 +48,7 @@ if _SPEC:
     _alarm_warns, _estimate = _warning.alarm_warns, _warning.estimate
     _FPS = {}
 
-    def alarm_warns(t, p, index, ttc, miss, heading=None, shape=None, limit=None):
+    def alarm_warns(t, p, index, ttc, miss, heading=None, shape=None):
         if "alarm_iso" in KINDS and p.alarm_warns and t.last_alarm == index and ttc is None \
                 and _warning.fits(t.history, t.fit_span):
             fit = fit_contact([q.frame for q in t.history], [q.log_scale for q in t.history])
@@ -72,7 +72,7 @@ if _SPEC:
             sigma = t.held[2] if t.held is not None and t.held[0] == index else None
             if sigma is not None and ttc - D.get("k", 1.0) * sigma <= p.horizon_s:
                 ttc = p.horizon_s
-        return _alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
+        return _alarm_warns(t, p, index, ttc, miss, heading, shape)
 
     def estimate(t, p, fps, index, shape, focal=None, heading=None, **kw):
         _FPS["fps"], _FPS["shape"] = fps, shape

@@ -36,7 +36,7 @@ EVENTS, VETOES, CUR = [], [], {}
 _alarm_warns, _cut_course, _estimate = _warning.alarm_warns, _warning.cut_course, _layer.estimate
 
 
-def held_back(t, p, index, ttc, miss, heading, shape, limit) -> str:
+def held_back(t, p, index, ttc, miss, heading, shape) -> str:
     """Why ``alarm_warns`` said no to a track in collision alarm (its tests in order)."""
     if len(t.history) > 1 and t.history[-1].log_scale - t.history[0].log_scale <= 0:
         return "shrunk"
@@ -52,20 +52,20 @@ def held_back(t, p, index, ttc, miss, heading, shape, limit) -> str:
     if ttc is not None and ttc > p.horizon_s:
         return f"ttc {ttc:.2f} > horizon"
     if miss is not None:
-        return f"miss {miss:.2f} > {p.max_miss if limit is None else limit:.2f}"
+        return f"miss {miss:.2f} > {p.max_miss:.2f}"
     if heading is None or shape is None or t.cut(shape, p.border):
         return "cut/no heading"
     return "offpath/drift"
 
 
-def alarm_warns(t, p, index, ttc, miss, heading=None, shape=None, limit=None):
-    r = _alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit)
+def alarm_warns(t, p, index, ttc, miss, heading=None, shape=None):
+    r = _alarm_warns(t, p, index, ttc, miss, heading, shape)
     if r:
         CUR["rule"] = ("alarm+course" if miss is not None else
                        "alarm:on_path" if _warning.on_path(t, p, heading) else "alarm:keeps_bearing")
     elif p.alarm_warns and t.last_alarm == index:
         VETOES.append(dict(frame=index, id=t.id, born=t.born, history=len(t.history),
-                           why=held_back(t, p, index, ttc, miss, heading, shape, limit)))
+                           why=held_back(t, p, index, ttc, miss, heading, shape)))
     return r
 
 

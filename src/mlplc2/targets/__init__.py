@@ -20,8 +20,7 @@ Bearings follow the convention of :mod:`mlplc2.camera`.
 
 The layer's modules, bottom up: :mod:`.params` (:class:`TargetParams`); :mod:`.extent` (the
 edges of the local motion), :mod:`.align` (the image alignment), :mod:`.change` (the changed
-region), :mod:`.contact` (time to contact and course), :mod:`.slant` (the depth coherence of a
-box, an optional veto of the warning); :mod:`.track` (what is kept of each object and frame), :mod:`.layer` (the tracker and the
+region), :mod:`.contact` (time to contact and course); :mod:`.track` (what is kept of each object and frame), :mod:`.layer` (the tracker and the
 warning rule). The compiled kernels, :mod:`._fast_extent` and :mod:`._fast_align`, are chosen
 by :mod:`mlplc2.backend`.
 """

@@ -5,8 +5,7 @@
 :func:`fit_course`: the lines through the centre's offset from the heading point in object
 widths (horizontally) and heights (vertically), evaluated at contact (the miss distance;
 ``docs/targets.md``, steps 5-6);
-:func:`expansion_centre`: the fixed point of the box's scaling, and :func:`miss_limit`, the course
-allowed to a track that expands about the heading as the static world does (step 7).
+:func:`expansion_centre`: the fixed point of the box's scaling.
 """
 
 from __future__ import annotations
@@ -14,7 +13,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 
-__all__ = ["ContactFit", "fit_contact", "fit_course", "expansion_centre", "miss_limit", "STATIC_EXTENTS"]
+__all__ = ["ContactFit", "fit_contact", "fit_course", "expansion_centre"]
 
 
 @dataclass(frozen=True)
@@ -113,28 +112,3 @@ def expansion_centre(xs, ys, log_scale, min_growth: float = 0.05) -> tuple[float
         return qm - sm * sum([d * (float(v) - qm) for d, v in zip(ds, q)]) / sss
 
     return at0(xs), at0(ys)
-
-
-#: :func:`miss_limit`: a track whose own expansion centre lies within this many of its extents of the
-#: heading expands as the static world does
-STATIC_EXTENTS = 0.4
-
-
-def miss_limit(t, p, heading: tuple[float, float]) -> float:
-    """The largest miss at which track ``t`` (a :class:`~mlplc2.targets.track.Track`) warns, under
-    ``p`` (:class:`~mlplc2.targets.params.TargetParams`): ``max_miss``, or ``static_miss`` (> 0) when ``t``'s
-    image expands about the heading (``heading``, px) as the static world's does (its expansion
-    centre, :func:`expansion_centre` over the course's observations, within ``STATIC_EXTENTS`` of its
-    extents of ``heading``): ``max_miss`` above 0.5 is a margin for the camera's own size,
-    and the static world's boxes beside the path (a roadside hedge with the ground up to the path)
-    are measured with courses of 0.5-1 (docs/model.md, "The course against the heading")."""
-    if not 0 < p.static_miss < p.max_miss:
-        return p.max_miss
-    inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]      # the course's points
-    centre = expansion_centre([q.x for q in inside], [q.y for q in inside], [q.log_scale for q in inside])
-    if centre is None:
-        return p.max_miss
-    q = inside[-1]
-    off = math.hypot((centre[0] - heading[0]) / max(q.width, 1.0),
-                     (centre[1] - heading[1]) / max(q.width if q.height is None else q.height, 1.0))
-    return p.static_miss if off <= STATIC_EXTENTS else p.max_miss

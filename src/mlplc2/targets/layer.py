@@ -23,14 +23,11 @@ from .alignment import align, pyramid
 from .change import change_box, uniform_box, uniform_region, unswept
 from .extent import measure_extent
 from .params import TargetParams
-from .slant import slant
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
 from .warning import blind_until, drift, estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
-#: :meth:`TargetLayer._reseat`: the smallest region (px across) a box is re-seated on (``TargetParams.reseat``)
-RESEAT_MIN_PX = 6.0
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
 
@@ -177,18 +174,17 @@ class TargetLayer:
         self._merge(now)
         seeds, focused = [], set()              # focused: the seeds seed_focus tests
         for f in fields:
-            owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))
-                      and not self._freed(t, now)]
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))]
             if owners:
                 self._own(min(owners, key=lambda t: t.size), f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
-        if lm is not None and p.seed_lm > 0 and self._count(now) + len(seeds) < p.max_targets:
+        if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             from ..neuropils.attention import argmax_outside
 
-            zones = [self._claim(t, now) for t in self._tracks if not (self._freed(t, now) or self._opened(t, now))]
+            zones = [self._claim(t) for t in self._tracks if not self._opened(t, now)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             n = self._seeds(interval)
             for i in range(n):
@@ -208,10 +204,9 @@ class TargetLayer:
             if len(seeds) > p.seed_budget:
                 budget, seeds = p.seed_budget, self._in_turn(seeds)
         for x, y, f in seeds:
-            if self._count(now) >= p.max_targets:
+            if len(self._tracks) >= p.max_targets:
                 break
-            if any(self._holds(t, x, y, now) for t in self._tracks
-                   if not (self._freed(t, now) or (f is None and self._opened(t, now)))):
+            if any(t.contains(x, y) for t in self._tracks if not (f is None and self._opened(t, now))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -223,7 +218,7 @@ class TargetLayer:
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-                host = next((o for o in self._tracks if self._hosts(o, t, now)
+                host = next((o for o in self._tracks if self._hosts(o, t)
                              and not (f is None and self._opened(o, now))), None)
                 t.uniform = swept is None
                 focus = f is None and (x, y) in focused
@@ -239,8 +234,7 @@ class TargetLayer:
             if t is None:
                 continue
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
-            t.behind = any((self._freed(o, now) or self._opened(o, now)) and o.contains(t.cx, t.cy)
-                           for o in self._tracks)
+            t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             if not self._refind(t, now):
@@ -257,11 +251,8 @@ class TargetLayer:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
-            # the static world's surface, not an object: no warning this frame, so none last frame either
-            if o.warning and self._slanted(t, levels):
-                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the view filled by an object about to hit: no other warning begins (contact_blind)
-            elif o.warning and not warned and now <= self._blind_until + _EPS:
+            if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
         self._blind_until = blind_until(out, p, self.fps, now, (h, w), self._blind_until)
@@ -343,42 +334,20 @@ class TargetLayer:
             return None
         return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
 
-    def _claim(self, t: Track, now: float) -> tuple:
+    def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-width[, half-height]): its box and ``claim`` px
-        beyond while it measures an approach (:meth:`_measuring`), else a quarter of its size; a square
-        of its larger side, or with ``TargetParams.box_claim`` for a flat or tall box its box's own shape."""
+        beyond, a square of its larger side, or with ``TargetParams.box_claim`` for a flat or tall box
+        its box's own shape."""
         x, y = int(round(t.cx)), int(round(t.cy))
-        if not self._measuring(t, now):
-            return x, y, int(t.size / 4.0)
         k = self.params.box_claim
         if k <= 0 or max(t.w, t.h) < k * min(t.w, t.h):
             return x, y, int(t.size / 2.0 + self.params.claim)
         return x, y, int(t.w / 2.0 + self.params.claim), int(t.h / 2.0 + self.params.claim)
 
-    def _measuring(self, t: Track, index: int) -> bool:
-        """Whether track ``t`` measures an approach: it had a time to contact within the last
-        ``stale_frames`` frames, or is younger than that (its fit needs ``min_frames``); always
-        with ``stale_frames`` = 0 (off)."""
-        n = self.params.stale_frames
-        return n == 0 or index - max(t.last_estimate, t.birth) <= self.params.span(n, self.fps) + _EPS
-
-    def _holds(self, t: Track, x: float, y: float, index: int, margin: float = 0.0) -> bool:
-        """Whether the point (x, y) (a field, a seed, a new box's centre) belongs to track ``t``: it lies
-        in its box (plus ``margin``) while the track measures an approach (:meth:`_measuring`), else
-        only within a quarter of the box's width and height of its centre. A stale box (the road
-        ahead, a wall: growth without a time to contact) then does not swallow the fields and seeds
-        of an object that approaches inside it."""
-        if self._measuring(t, index):
-            return t.contains(x, y, margin)
-        return abs(x - t.cx) <= t.w / 4.0 and abs(y - t.cy) <= t.h / 4.0
-
-    def _hosts(self, o: Track, t: Track, index: int) -> bool:
-        """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other,
-        and, when ``o`` measures no approach (:meth:`_measuring`), ``t``'s centre lies near ``o``'s
-        (:meth:`_holds`)."""
-        if self._freed(o, index):                # its contact passed (free_passed): an object behind it is its own
-            return False
-        return o.overlap(t) >= 0.5 and (self._measuring(o, index) or self._holds(o, t.cx, t.cy, index))
+    @staticmethod
+    def _hosts(o: Track, t: Track) -> bool:
+        """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other."""
+        return o.overlap(t) >= 0.5
 
     def _own_margin(self, t: Track, f) -> float:
         """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
@@ -472,24 +441,6 @@ class TargetLayer:
         return abs(al.dx) <= grow * p.seed_focus * t.w / 2.0 + p.focus_slack \
             and abs(al.dy) <= grow * p.seed_focus * t.h / 2.0 + p.focus_slack
 
-    def _slanted(self, t: Track, levels) -> bool:
-        """Whether the box of ``t`` is not shown to be one fronto-parallel object: its :func:`slant`
-        between the oldest frame kept and this one lies beyond ``max_slant`` across or down (the
-        ground ahead, a wall beside the path, which the static world's expansion about the heading
-        makes look like an object on a collision course), or cannot be measured (the fit fails or
-        the box does not grow on both axes: a box over most of the view as it sweeps out of it).
-        ``docs/targets.md``, step 7."""
-        p = self.params
-        if p.max_slant <= 0 or len(self._past) < 2:     # self._past[-1] is this frame
-            return False
-        q = next((o for o in t.history if abs(o.frame - self._past_t[0]) <= _EPS), None)
-        if q is None:                            # the track is younger than the oldest frame kept
-            return False
-        old = (q.x + t.ox, q.y + t.oy, q.width, q.width if q.height is None else q.height)
-        s = slant(self._past[0], levels, old, (t.cx, t.cy, t.w, t.h), n=p.patch, margin=p.margin,
-                  iterations=p.iterations)
-        return s is None or max(abs(s[0]), abs(s[1])) > p.max_slant
-
     def _seeds(self, interval: float | None) -> int:
         """How many LM seeds (outside every target and field) this frame may give: one per nominal
         frame (``TargetParams.nominal_fps``) the interval since the last frame stands for, at most
@@ -569,35 +520,11 @@ class TargetLayer:
                     move = self._remeasure(lm, gray, t, interval)
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
-                    self._reseat(t, gray, clock)
                     self._reseat_uniform(t, gray)
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
-
-    def _reseat(self, t: Track, gray: np.ndarray, clock: float) -> None:
-        """``TargetParams.reseat``: a followed box much larger than the region that changed around its
-        centre over the last ``change_frames`` frames (:func:`change_box` against the oldest frame
-        kept, within ``max_shift`` px) is put on that region (:meth:`Track.reseat`): the object
-        measured afresh, a restoring force the alignment's product of scales lacks. Only a region
-        whose centre lies inside the box and which is at least ``min_size`` px across; with
-        ``reseat_shape``, only for a box whose aspect moved by more than that factor since it was seeded."""
-        p = self.params
-        if t.aspect is None:
-            t.aspect = t.h / max(t.w, 1e-9)
-        if p.reseat <= 0 or not self._past or clock - t.birth < p.span(p.reseat_after, self.fps) - _EPS:
-            return
-        if p.reseat_shape > 0 and max(t.h / t.w / t.aspect, t.aspect * t.w / t.h) <= p.reseat_shape:
-            return
-        box = change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
-                         kernel=self.change_kernel)
-        if box is None or min(box[2], box[3]) < RESEAT_MIN_PX or not t.contains(box[0], box[1]):
-            return
-        if max(box[2] / t.w, box[3] / t.h) < p.reseat_part:    # a part of the object (a light, a wheel), not it
-            return
-        if t.w * t.h >= p.reseat * box[2] * box[3]:
-            t.reseat((box[0], box[1], min(box[2], t.w), min(box[3], t.h)))
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform
@@ -657,50 +584,22 @@ class TargetLayer:
         idle = self.params.span(self.params.idle_frames, self.fps) + _EPS
         kept = []
         for t in self._tracks:
-            if now - max(t.last_answer, t.last_estimate, t.birth) <= idle and not self._passed(t, now):
+            if now - max(t.last_answer, t.last_estimate, t.birth) <= idle:
                 kept.append(t)
             else:
                 self._lose(t, now)
         self._tracks = kept
 
-    def _passed(self, t: Track, now: float) -> bool:
-        """``drop_passed`` (off by default): whether the contact of track ``t``'s last time to contact
-        (``Track.held``) has passed with no time to contact since: its object has hit or passed, and its
-        box, grown over the view, would own every field and seed inside it (docs/model.md, "Objects
-        missed"). Not for a last time to contact taken over from a lost track (:meth:`_refind`): it is
-        not the track's own."""
-        return self.params.drop_passed and self._contact_passed(t, now)
-
-    def _count(self, now: float) -> int:
-        """The tracks that count against ``max_targets``: all but those freed (:meth:`_freed`)."""
-        return sum(not self._freed(t, now) for t in self._tracks)
-
-    def _freed(self, t: Track, now: float) -> bool:
-        """``free_passed`` (off by default): whether track ``t`` is freed, for good once its contact has
-        passed (:meth:`_contact_passed`; the fits of a box grown past contact are the view's): kept, but it
-        owns no attention field, claims no seed (no zone), counts against no ``max_targets``
-        (:meth:`_count`) and hosts no new box (:meth:`_hosts`); docs/model.md, "Objects missed"."""
-        if self.params.free_passed and not t.freed and self._contact_passed(t, now) and self._over_view(t):
-            t.freed = True                       # for good: the fits of a box grown past contact are the view's
-        return self.params.free_passed and t.freed
-
     def _opened(self, t: Track, now: float) -> bool:
         """``passed_seeds`` (on by default): whether the box of track ``t`` no longer claims the LM and change
         seeds inside it, for good once its contact has passed (:meth:`_contact_passed`), whether or not it
         spans the view (a passing object's box, grown over a collider beside it, too): no seed zone, and a box
-        seeded there is not a part of it, then or later (:meth:`_merge`); unlike ``free_passed`` it keeps the
+        seeded there is not a part of it, then or later (:meth:`_merge`); it keeps the
         attention fields it owns (after a contact they are the collider's own) and counts against
         ``max_targets``. docs/model.md, "Objects missed", session 14."""
         if self.params.passed_seeds and not t.opened and self._contact_passed(t, now):
             t.opened = True
         return self.params.passed_seeds and t.opened
-
-    def _over_view(self, t: Track) -> bool:
-        """Whether the box of track ``t`` spans the whole frame across or down (``free_passed``): an object
-        at its contact fills the view, while one that passes beside the camera leaves it through a side."""
-        if self._size is None:
-            return False
-        return t.w >= self._size[0] or t.h >= self._size[1]
 
     def _contact_passed(self, t: Track, now: float) -> bool:
         """Whether the contact of track ``t``'s last time to contact (``Track.held``) has passed with no
@@ -801,13 +700,11 @@ class TargetLayer:
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
-        keep the older; but an older track that measures no approach merges a newer one only when
-        the newer's centre lies near its own: a wide box over the road and an object that approaches
-        inside it are two."""
+        keep the older."""
         tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
         out: list[Track] = []
         for t in tracks:
-            host = next((o for o in out if self._hosts(o, t, index)
+            host = next((o for o in out if self._hosts(o, t)
                          and not (t.behind and self._opened(o, index))), None)
             if host is None:
                 out.append(t)

@@ -139,7 +139,7 @@ class TargetParams(ParameterSet):
                            unit="frames", valid=Valid.integer(1))
     # --- time to contact and course -------------------------------------------------------
     nominal_fps: float = param(30.0, """The layer's frame counts (``window``, ``min_frames``, ``change_frames``,
-                               ``confirm_frames``, ``evidence_frames``, ``stale_frames``, ``hold_frames``, ``refind_frames``,
+                               ``confirm_frames``, ``evidence_frames``, ``hold_frames``, ``refind_frames``,
                                ``idle_frames``) are
                                spans of time at this rate: n frames = n / ``nominal_fps`` s, whatever the
                                camera's rate, a repeated frame no new observation and a dropped one time gone
@@ -181,14 +181,6 @@ class TargetParams(ParameterSet):
                             offset of its centre from the heading, horizontally in its widths, vertically
                             in its heights) ...""", unit="object extents",
                             valid=Valid.real(minimum=0))
-    static_miss: float = param(0.0, """... or, for a target whose image expands about the heading as the static
-                               world's does (its expansion centre within 0.4 of its extents of the heading:
-                               :func:`~mlplc2.targets.contact.miss_limit`), at most this (> 0 and below
-                               ``max_miss``; 0.5: the camera's own point passes through its box). 0 = off,
-                               ``max_miss`` for every target (the default: 0.5 cut the drive scenes' false
-                               episodes 22 -> 13 and 27 -> 16 but lost 2 of the real clips' 6 warnings,
-                               docs/model.md, "The course against the heading").""", unit="object extents",
-                               valid=Valid.real(minimum=0))
     max_ttc_sigma: float = param(0.3, "... its contact time known to this fraction (standard error / ttc) ...",
                                  valid=Valid.real(minimum=0))
     evidence_frames: int = param(15, """... and it shows looming evidence: one of its attention fields
@@ -226,21 +218,6 @@ class TargetParams(ParameterSet):
                               to a target whose box holds its centre, else it seeds one that needs only
                               some growth, with the field's extent when no box is found.""",
                               valid=Valid.boolean())
-    max_slant: float = param(0.0, """... and (> 0; off by default: it lost 3 of the 9 real clips' warnings) its box is shown to be one fronto-parallel object, not a surface
-                             slanted in depth (a warning frame's veto, :func:`~mlplc2.targets.slant.slant`
-                             over the last ``change_frames`` frames): the horizontal scale rate changes
-                             from the box's centre to its foot, and the vertical one to its side, by at
-                             most this fraction, and the fit succeeds. A fronto-parallel object scales
-                             alike everywhere (0); the ground ahead of a moving camera, in a box reaching
-                             up to the horizon, by 1 (a wall beside the path likewise across). 0 = off;
-                             0.5 halves the drive scenes' false warnings (``docs/targets.md``).""",
-                             valid=Valid.real(minimum=0))
-    onset_s: float = param(0.0, """A warning begins only while ``ttc_s`` is at least this; once a target
-                           has warned, it warns down to contact. The static world close beside the
-                           path (the ground, a roadside wall) first shows a short time to contact as it
-                           sweeps out of view, while an object on a collision course is seen coming.
-                           0 = off (the default: 0.3 s lost a collision whose time to contact was
-                           underestimated, ``docs/targets.md``).""", unit="s", valid=Valid.real(minimum=0))
     cut_onset_s: float = param(0.5, """A warning begins on a box cut by the image's border (``border``) only
                                while ``ttc_s`` is at least this (and with a time to contact); once a target
                                has warned, it warns on while cut. The static world beside the path and the
@@ -491,12 +468,6 @@ class TargetParams(ParameterSet):
                               1000 frames holdout 1 1.24 -> 1.03, holdout 2 0.72 -> 0.51, the standard suite and
                               holdout 3 as before, no collision, lead or real clip changed; docs/model.md, "The
                               field alarm's seed that does not loom").""", valid=Valid.boolean())
-    stale_frames: int = param(0, """A target without a time to contact for this many frames (since its last
-                              one, or its birth) holds no measurable approach: only the middle of its box
-                              (a quarter of its width and height from the centre) owns fields and seeds,
-                              and a new target may lie inside the rest (:meth:`TargetLayer._holds`).
-                              0 = off (the default: 12 lost the helmet clip's warning, docs/model.md).""",
-                              unit="frames", valid=Valid.integer(0))
     hold_frames: int = param(15, """A target whose fit gives no time to contact this frame (the growth not
                              significant, not isotropic, a gap in its measurement) reports its last one
                              counted down for up to this many frames after it (not a warning: a warning
@@ -523,27 +494,10 @@ class TargetParams(ParameterSet):
                                static world's box beside an object near contact is the object's (its fields go
                                to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
-    drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
-                              episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
-                              "Objects missed", session 11) A target whose last time to contact has run out (its
-                              contact passed) with no time to contact since is dropped: its object hit or passed,
-                              and its box, grown over the view, would own every attention field and seed inside
-                              it (an object behind it goes unseen). False = kept until ``idle_frames``.""",
-                              valid=Valid.boolean())
-    free_passed: bool = param(False, """A target whose last time to contact has run out (its contact passed) with no
-                              time to contact since, and whose box spans the view across or down, is freed, for good: it is kept (its id, for the evaluation)
-                              but owns no attention field, claims no seed, counts against no ``max_targets`` and
-                              no new box is a part of it (:meth:`TargetLayer._freed`); its object hit or passed,
-                              and its box, grown over the view, would else own every field and seed inside it
-                              until ``idle_frames`` (an object behind it goes unseen). A target born inside its
-                              box (``Track.behind``) does not begin a warning on the field alarm alone, without
-                              a course: the alarm there after a contact is the collider's own. False = off
-                              (docs/model.md, "Objects missed", session 12).""",
-                              valid=Valid.boolean())
     passed_seeds: bool = param(True, """A target whose last time to contact has run out (its contact passed) with no
                                time to contact since no longer claims the LM and change seeds inside its box, for
                                good, its box spanning the view or not: no seed zone, and a box seeded there is not a
-                               part of it (:meth:`TargetLayer._opened`). Narrower than ``free_passed``: it keeps the
+                               part of it (:meth:`TargetLayer._opened`). It keeps the
                                attention fields it owns (after a contact they are the collider's own) and counts
                                against ``max_targets``; a target born inside it (``Track.behind``) does not begin a
                                warning on the field alarm alone, without a course. On: two more collisions warned
@@ -558,29 +512,6 @@ class TargetParams(ParameterSet):
                                 passed beside the path (a passing car leaving the view at the border, lost and found
                                 again there), and the refound track's own history is too short to tell. 0 = off; 0.4
                                 since session 15 (docs/model.md, "Objects missed", session 15).""",
-                                valid=Valid.real(minimum=0))
-    reseat: float = param(0.0, """A followed box at least this many times the area of the region that changed
-                          around its centre over the last ``change_frames`` frames (:func:`change_box`, measured
-                          afresh each frame; its centre inside the box) is re-seated on that region (shrinking
-                          only): the alignment scales the box by the growth of all it holds, so a box half on the
-                          ground or the road grows faster than its object and slides off it (docs/model.md,
-                          "Where the time to contact is lost", session 12). The track's history is carried
-                          with it (its positions moved and its sizes scaled alike), so the course sees no
-                          jump; the log-scale stays the alignment's. 0 = off (the default: measured on the four seed sets, it
-                          moves the TTC coverage both ways and loses a real clip; docs/model.md, "The box re-seated
-                          on its change region").""",
-                          valid=Valid.real(minimum=0))
-    reseat_after: int = param(0, """``reseat`` only for a track at least this many frames old: its seeded box is itself
-                              a fresh measurement, and a box drifts off its object over frames. 0 = any age.""",
-                              unit="frames", valid=Valid.integer(0))
-    reseat_part: float = param(0.0, """``reseat`` only on a region that spans at least this fraction of the box's width
-                               or of its height: a box drifted off its object is too tall or too wide, or blown up
-                               a few times, while a region much smaller on both axes is a part of the object (a
-                               light, a wheel of a car) or of the background. 0 = any region.""",
-                               valid=Valid.real(minimum=0))
-    reseat_shape: float = param(0.0, """``reseat`` only for a box whose aspect (height / width) moved by more than
-                                this factor from the one it was seeded (or last re-seated) with: a tall strip
-                                or a flat one. 0 = every followed box (with ``reseat`` on).""",
                                 valid=Valid.real(minimum=0))
     uniform_tol: float = param(4.0, """A candidate's first box is the uniform region beside its seed when there is one:
                                the pixels reached by a flood fill of at most this many grey levels from a start point

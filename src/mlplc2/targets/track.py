@@ -143,7 +143,7 @@ class Track:
     seed_failed: bool = False          # the alignment of its seed was tried and failed (``alarm_unaligned``)
     ox: float = 0.0
     oy: float = 0.0
-    warned: bool = False               # it has warned (a warning then holds below ``onset_s``)
+    warned: bool = False               # it has warned (a warning then holds below ``cut_onset_s``)
     last_warned: bool = False          # its last frame was a warning (``reonset_miss``)
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
     ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None) of its last estimates
@@ -153,13 +153,11 @@ class Track:
     grown: bool = False                # made a target by the growth test, not a field alarm (``confirm_birth``)
     early: bool = False                # its streak began on its first fit after a growth test (``confirm_birth``)
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
-    behind: bool = False               # born inside the box of a target whose contact had passed (``free_passed``)
-    freed: bool = False                # its contact passed (``free_passed``): for good, a later fit notwithstanding
+    behind: bool = False               # born inside the box of a target whose contact had passed (``passed_seeds``)
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
     absorbed: bool = False             # absorbed by a warning target (``absorb_frames``): refound late only (``refind_late``)
     order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
-    aspect: float | None = None        # h / w when seeded or last re-seated (``TargetParams.reseat_shape``)
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
 
@@ -186,7 +184,7 @@ class Track:
         return ix * iy / max(min(a.w * a.h, b.w * b.h), 1e-9)
 
     def reseat(self, box: tuple[float, float, float, float]) -> None:
-        """Put the box on ``box`` (cx, cy, w, h: the object measured afresh, ``TargetParams.reseat``), its
+        """Put the box on ``box`` (cx, cy, w, h: the object measured afresh, ``TargetParams.uniform_reseat``), its
         history carried with it: every observation's position moved by the same shift and its sizes
         scaled by the same factors, so the course's lines (positions in box sizes) see no jump; the
         log-scale, the growth, stays the alignment's."""
@@ -200,7 +198,6 @@ class Track:
         self.history = deque(moved(q) for q in self.history)
         self.inside = deque(moved(q) for q in self.inside)
         self.cx, self.cy, self.w, self.h = box[0], box[1], max(box[2], 1.0), max(box[3], 1.0)
-        self.aspect = self.h / self.w
 
     def _trim(self, obs: deque) -> None:
         """Drop the observations older than the window (``span`` clock units before the newest),

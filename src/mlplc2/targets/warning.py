@@ -12,7 +12,7 @@ import math
 from dataclasses import replace
 
 from ..camera import bearing
-from .contact import fit_contact, fit_course, miss_limit
+from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
@@ -55,16 +55,14 @@ def count_down(targets, elapsed: float) -> tuple[Target, ...]:
 
 
 def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: float | None,
-                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None,
-                limit: float | None = None) -> bool:
+                heading: tuple[float, float] | None = None, shape: tuple[int, int] | None = None) -> bool:
     """The field alarm as evidence (``alarm_warns``; docs/targets.md, step 7): a target that owns an
     attention field in collision alarm this frame (the paper's fatal field, ``Params.alarm_threshold``)
     warns, unless its own measurement says otherwise: its box did not grow over its history
     (receding, static), its fit found no time to contact although its history is long enough
     (``min_frames``: no significant or no isotropic growth, as the ground or a wall beside the
     path), or it has a time to contact beyond ``horizon_s`` or a course beyond ``max_miss``
-    (passing; ``limit``: the miss allowed, :func:`~mlplc2.targets.contact.miss_limit`, None:
-    ``max_miss``). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
+    (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
     (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
@@ -82,7 +80,7 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if miss is not None:
         if p.alarm_onset_miss and not t.warned and t.alarm_run > 1 and wide(p, miss):
             return False
-        return miss <= (p.max_miss if limit is None else limit)
+        return miss <= p.max_miss
     if heading is None or shape is None or t.cut(shape, p.border):
         return False
     return on_path(t, p, heading) or keeps_bearing(t, heading, p.bearing_drift)
@@ -432,7 +430,6 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.fit_span = p.span(p.min_frames - 1, fps)
     frames = [q.frame for q in t.history]     # clocks: frame intervals (a fit's ttc / fps is in s)
     ttc = sigma = miss = miss_xy = None
-    limit = p.max_miss
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     first = t.held is None                    # no time to contact before this frame (slow_onset)
@@ -454,7 +451,6 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
-        limit = p.max_miss if miss is None or miss <= p.static_miss else miss_limit(t, p, heading)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
             t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
         t.streak += 1
@@ -465,14 +461,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     looming = ttc is not None and _evident(t, p, fps, index, heading, interval)
     # without a course (its box cut by the border), a cut box that keeps its bearing (cut_course)
     steady = miss is None and cut_course(t, p, ttc, heading, shape)
-    warning = bool(looming and (miss is not None or steady) and ttc <= p.horizon_s and (steady or miss <= limit)
+    warning = bool(looming and (miss is not None or steady) and ttc <= p.horizon_s and (steady or miss <= p.max_miss)
                    and sigma <= p.max_ttc_sigma * ttc
-                   and (t.warned or (ttc >= p.onset_s and (steady or not wide(p, miss)
-                                                             or (p.slow_onset and first and slow(t, p, fps, index, interval))))))
+                   and (t.warned or steady or not wide(p, miss)
+                        or (p.slow_onset and first and slow(t, p, fps, index, interval))))
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
     # and, without a course from a translating camera, once it has lasted (alarm_frames) and on a seed
     # that grows alike in both directions (alarm_isotropic)
-    if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
+    if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
                                                        or anisotropic(t, p, measured) or passed_by(t, p))
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
