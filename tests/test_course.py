@@ -698,9 +698,12 @@ def test_the_layer_counts_the_frames_in_a_row_a_target_is_in_alarm():
                               (8, True, 2), (10, True, 3)]:
         if index != layer._clock:                   # a new processed frame (TargetLayer.step)
             layer._before, layer._clock = layer._clock, index
+        began = index == 7                          # the run that began again
+        t.alarm_courses = 5                         # its frames with a course (alarm_onset_course): a new run has none
         if alarm:
             layer._own(t, _Field(), index)
         assert t.alarm_run == run
+        assert t.alarm_courses == (0 if began else 5)
 
 
 def test_the_layer_smooths_the_measured_heading_by_its_confidence():
@@ -1071,6 +1074,47 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
     assert estimate(alarm(1), off, FPS, 12, SHAPE).warning and estimate(alarm(1), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3), off, FPS, 12, SHAPE).warning and not estimate(alarm(3), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3, warned=True), on, FPS, 12, SHAPE).warning
+
+
+def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_alarm_onset_course():
+    # alarm_onset_course (docs/model.md, "The same warning whatever the encoding, session 17"): the static world
+    # 0.9 of its widths beside the heading (a course of 0.9: within max_miss, beyond onset_miss) whose field alarms
+    # on every frame from its track's first, while its history is too short for a course (the alarm without a
+    # course held back here by a long alarm_frames, as path_drift holds the static world's; its time to contact
+    # within a horizon_s of 2 s). With
+    # alarm_onset_miss alone the course comes on the alarm's 5th frame and begins nothing; with alarm_onset_course
+    # the alarm has not been judged on a course before, so its first course begins a warning, as an alarm whose
+    # first frame had a course does (test above). An alarm that had a course on an earlier frame is held as before
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    base = dict(alarm_warns=True, path_drift=0.0, alarm_frames=20, horizon_s=2.0)
+    off, on = TargetParams(**base), TargetParams(**base, alarm_onset_course=True)
+    assert off.alarm_onset_miss and not off.alarm_onset_course                   # the defaults
+
+    def run(p, alarm_from=1):
+        seen = []
+
+        def each(t, k):
+            if k >= alarm_from:
+                t.last_alarm, t.alarm_run = k, k - alarm_from + 1
+            o = estimate(t, p, FPS, k, SHAPE, heading=heading)
+            seen.append((k, o.miss, o.warning))
+
+        _looming(heading[0] - 18.0, 12, static=True, each=each)
+        return seen
+
+    first = min(k for k, miss, _ in run(off) if miss is not None)
+    assert first > 1 and run(off)[first - 1][1] == pytest.approx(0.9, abs=0.03)
+    assert not any(w for _, _, w in run(off))                  # its course came on the alarm's 5th frame: held
+    assert [k for k, _, w in run(on) if w][:1] == [first]       # judged on its first course
+    # the alarm began on the frame of the first course: its first frame, a warning with either
+    assert [k for k, _, w in run(off, alarm_from=first) if w][:1] == [first]
+    assert run(on, alarm_from=first)[first - 1][2]
+    # on the alarm's 3rd frame in a row: held when its two earlier frames had a course, not when they had none
+    for courses, warns in [(2, False), (0, True)]:
+        t = _looming(heading[0] - 18.0, 12, static=True)
+        t.last_alarm, t.alarm_run, t.alarm_courses = 12, 3, courses
+        assert estimate(t, on, FPS, 12, SHAPE, heading=heading).warning == warns
+        assert t.alarm_courses == courses + 1                   # this frame had a course: counted
 
 
 def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_its_side():

@@ -343,6 +343,26 @@ class TargetParams(ParameterSet):
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
                                    real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+    alarm_fresh: bool = param(False, """A field in collision alarm held by an older track (born before the field) whose fit, long
+                              enough for one, gave no time to contact on its last frame seeds a target of its own, as a
+                              field outside every box, which that track neither hosts nor takes in: the older box (the
+                              road, a wall, a part of the object seen for long, measured since before the field's
+                              object grew in it) would hold the alarm back with a measurement of something else
+                              (``alarm_warns``' "no": its growth anisotropic over its whole history). Whether the
+                              field falls in such a box or beside it is a knife edge (issue 22, item 7: the copies
+                              of ``UAV_outdoor_1.avi``, ``bear_attack.avi``, ``crossing_car_strong_light.mp4``).
+                              False = off (measured in session 17; docs/model.md, "The same warning whatever the
+                              encoding, session 17").""", valid=Valid.boolean())
+    alarm_onset_course: bool = param(False, """With ``alarm_onset_miss``: the frames of the alarm that count are those on which the
+                                     target's fit gave a course (``Track.alarm_courses``): an alarm that lasted while
+                                     the target had no course yet (a young track, its no-course alarm held back by
+                                     ``path_drift`` or ``bearing_drift``) has not been judged on a course, so its first
+                                     course begins a warning up to ``max_miss``, as an alarm on its first frame does.
+                                     Whether the course comes on the alarm's first frame or a frame later is a knife edge
+                                     (issue 22, item 7: ``night_rear_end.mp4``'s van, course 0.88 on the alarm's first
+                                     frame on the clip, 0.82 on its 5th on the 320x240 copy). False = off (measured in
+                                     session 17; docs/model.md, "The same warning whatever the encoding, session 17").""",
+                                     valid=Valid.boolean())
     alarm_unaligned: bool = param(False, """With ``alarm_isotropic``: from a translating camera (a measured heading), the
                                   field alarm without a course does not begin a warning on a target born on an alarm
                                   seed whose own alignment over ``change_frames`` was tried and failed (its residual

@@ -80,7 +80,8 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if ttc is not None and ttc > p.horizon_s:
         return False
     if miss is not None:
-        if p.alarm_onset_miss and not t.warned and t.alarm_run > 1 and wide(p, miss):
+        if p.alarm_onset_miss and not t.warned and wide(p, miss) \
+                and (t.alarm_courses > 0 if p.alarm_onset_course else t.alarm_run > 1):
             return False
         return miss <= (p.max_miss if limit is None else limit)
     if heading is None or shape is None or t.cut(shape, p.border):
@@ -475,6 +476,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape, limit=limit):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
                                                        or anisotropic(t, p, measured) or passed_by(t, p))
+    if t.last_alarm == index and miss is not None:   # an alarm frame judged with a course (alarm_onset_course)
+        t.alarm_courses += 1
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
