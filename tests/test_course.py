@@ -69,6 +69,25 @@ def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
     assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
 
 
+def test_a_course_from_frames_in_view_long_ago_is_none_with_course_stale():
+    # course_stale (docs/model.md, "The same warning whatever the encoding, session 17"): the approach in view for
+    # its first frames, then cut by the border for the rest of its 30 frames. Off (0), its course is carried from
+    # its frames in view however long it has been cut; with course_stale 5 only while its newest frame in view is
+    # at most 5 frames old: later it has no course (the cut-box rules decide)
+    def misses(p):
+        seen = []
+        _looming(14.0, 30, contact=60, each=lambda t, k: seen.append(
+            (k, t.history[-1].frame - t.inside[-1].frame, estimate(t, p, FPS, k, SHAPE).miss)))
+        return seen
+
+    assert TargetParams().course_stale == 0                             # the default: off
+    off, on = misses(TargetParams()), misses(TargetParams(course_stale=5))
+    assert max(age for _, age, _ in off) > 5                            # cut for longer than 5 frames
+    assert all(m is not None for k, age, m in off if age > 5)           # carried from long ago
+    assert all((m is None) == (age > 5) for (k, age, m), (_, _, m0) in zip(on, off) if m0 is not None)
+    assert any(m is not None and age > 0 for _, age, m in on)           # a box cut lately keeps its course
+
+
 def test_a_warning_does_not_begin_on_a_cut_box_near_contact():
     # in view for its first 5 frames (a course of 0: a collision), then its growing box reaches the
     # border; by frame 12 its time to contact is 0.4 s, below cut_onset_s: as the static world
@@ -1067,6 +1086,7 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
     def alarm(run, warned=False):
         t = _looming(heading[0] - 18.0, 12, static=True)
         t.last_alarm, t.alarm_run, t.warned = 12, run, warned
+        t.alarm_courses = run - 1            # its earlier frames in a row had a course (alarm_onset_course)
         return t
 
     assert estimate(alarm(1), off, FPS, 12, SHAPE).miss == pytest.approx(0.9, abs=0.02)

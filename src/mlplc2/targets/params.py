@@ -343,6 +343,16 @@ class TargetParams(ParameterSet):
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
                                    real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+    course_stale: int = param(0, """A target's course (``miss``) is extrapolated from the frames on which its box was
+                              wholly inside the image (a cut box gives neither the object's centre nor its size)
+                              only while the newest of them is at most this many frames (at ``nominal_fps``) old;
+                              a box cut for longer has no course (the cut-box rules decide: ``cut_course``,
+                              ``cut_onset_s``). A course fitted on a box's first frames and carried over a long cut
+                              predicts from where the box was, not from what it has become. Whether a box is cut
+                              a frame earlier or later is a knife edge (issue 22, item 7: ``nc07.mp4``'s x264 copy,
+                              no collision, warned falsely at 84 on a box cut at the frame's top since 70, its course
+                              0.53 from frames 61-69). 0 = off (measured in session 17; docs/model.md, "The same
+                              warning whatever the encoding, session 17").""", unit="frames", valid=Valid.integer(0))
     alarm_fresh: bool = param(False, """A field in collision alarm held by an older track (born before the field) whose fit, long
                               enough for one, gave no time to contact on its last frame seeds a target of its own, as a
                               field outside every box, which that track neither hosts nor takes in: the older box (the
