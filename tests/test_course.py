@@ -1107,8 +1107,8 @@ def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_a
     # first frame had a course does (test above). An alarm that had a course on an earlier frame is held as before
     heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
     base = dict(alarm_warns=True, path_drift=0.0, alarm_frames=20, horizon_s=2.0)
-    off, on = TargetParams(**base), TargetParams(**base, alarm_onset_course=True)
-    assert off.alarm_onset_miss and not off.alarm_onset_course                   # the defaults
+    off, on = TargetParams(**base, alarm_onset_course=False), TargetParams(**base)
+    assert on.alarm_onset_miss and on.alarm_onset_course                         # the defaults
 
     def run(p, alarm_from=1):
         seen = []
