@@ -377,7 +377,7 @@ class TargetParams(ParameterSet):
                                      (issue 22, item 7: ``night_rear_end.mp4``'s van, course 0.88 on the alarm's first
                                      frame on the clip, 0.82 on its 5th on the 320x240 copy). False = off (on since
                                      session 17: that copy warns at 102 on the van as the clip does (none before); the
-                                     standard suite, its real clips and holdouts 1, 2, 3, 6 and 8 unchanged; docs/model.md,
+                                     standard suite, its real clips and holdouts 1-4, 6 and 8 unchanged; docs/model.md,
                                      "The same warning whatever the encoding, session 17").""",
                                      valid=Valid.boolean())
     alarm_unaligned: bool = param(False, """With ``alarm_isotropic``: from a translating camera (a measured heading), the
