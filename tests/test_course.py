@@ -69,6 +69,25 @@ def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
     assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
 
 
+def test_a_course_from_frames_in_view_long_ago_is_none_with_course_stale():
+    # course_stale (docs/model.md, "The same warning whatever the encoding, session 17"): the approach in view for
+    # its first frames, then cut by the border for the rest of its 30 frames. Off (0), its course is carried from
+    # its frames in view however long it has been cut; with course_stale 5 only while its newest frame in view is
+    # at most 5 frames old: later it has no course (the cut-box rules decide)
+    def misses(p):
+        seen = []
+        _looming(14.0, 30, contact=60, each=lambda t, k: seen.append(
+            (k, t.history[-1].frame - t.inside[-1].frame, estimate(t, p, FPS, k, SHAPE).miss)))
+        return seen
+
+    assert TargetParams().course_stale == 0                             # the default: off
+    off, on = misses(TargetParams()), misses(TargetParams(course_stale=5))
+    assert max(age for _, age, _ in off) > 5                            # cut for longer than 5 frames
+    assert all(m is not None for k, age, m in off if age > 5)           # carried from long ago
+    assert all((m is None) == (age > 5) for (k, age, m), (_, _, m0) in zip(on, off) if m0 is not None)
+    assert any(m is not None and age > 0 for _, age, m in on)           # a box cut lately keeps its course
+
+
 def test_a_warning_does_not_begin_on_a_cut_box_near_contact():
     # in view for its first 5 frames (a course of 0: a collision), then its growing box reaches the
     # border; by frame 12 its time to contact is 0.4 s, below cut_onset_s: as the static world
@@ -659,9 +678,12 @@ def test_the_layer_counts_the_frames_in_a_row_a_target_is_in_alarm():
                               (8, True, 2), (10, True, 3)]:
         if index != layer._clock:                   # a new processed frame (TargetLayer.step)
             layer._before, layer._clock = layer._clock, index
+        began = index == 7                          # the run that began again
+        t.alarm_courses = 5                         # its frames with a course (alarm_onset_course): a new run has none
         if alarm:
             layer._own(t, _Field(), index)
         assert t.alarm_run == run
+        assert t.alarm_courses == (0 if began else 5)
 
 
 def test_the_layer_smooths_the_measured_heading_by_its_confidence():
@@ -1024,6 +1046,7 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
     def alarm(run, warned=False):
         t = _looming(heading[0] - 18.0, 12, static=True)
         t.last_alarm, t.alarm_run, t.warned = 12, run, warned
+        t.alarm_courses = run - 1            # its earlier frames in a row had a course (alarm_onset_course)
         return t
 
     assert estimate(alarm(1), off, FPS, 12, SHAPE).miss == pytest.approx(0.9, abs=0.02)
@@ -1031,6 +1054,47 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
     assert estimate(alarm(1), off, FPS, 12, SHAPE).warning and estimate(alarm(1), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3), off, FPS, 12, SHAPE).warning and not estimate(alarm(3), on, FPS, 12, SHAPE).warning
     assert estimate(alarm(3, warned=True), on, FPS, 12, SHAPE).warning
+
+
+def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_alarm_onset_course():
+    # alarm_onset_course (docs/model.md, "The same warning whatever the encoding, session 17"): the static world
+    # 0.9 of its widths beside the heading (a course of 0.9: within max_miss, beyond onset_miss) whose field alarms
+    # on every frame from its track's first, while its history is too short for a course (the alarm without a
+    # course held back here by a long alarm_frames, as path_drift holds the static world's; its time to contact
+    # within a horizon_s of 2 s). With
+    # alarm_onset_miss alone the course comes on the alarm's 5th frame and begins nothing; with alarm_onset_course
+    # the alarm has not been judged on a course before, so its first course begins a warning, as an alarm whose
+    # first frame had a course does (test above). An alarm that had a course on an earlier frame is held as before
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    base = dict(alarm_warns=True, path_drift=0.0, alarm_frames=20, horizon_s=2.0)
+    off, on = TargetParams(**base, alarm_onset_course=False), TargetParams(**base)
+    assert on.alarm_onset_miss and on.alarm_onset_course                         # the defaults
+
+    def run(p, alarm_from=1):
+        seen = []
+
+        def each(t, k):
+            if k >= alarm_from:
+                t.last_alarm, t.alarm_run = k, k - alarm_from + 1
+            o = estimate(t, p, FPS, k, SHAPE, heading=heading)
+            seen.append((k, o.miss, o.warning))
+
+        _looming(heading[0] - 18.0, 12, static=True, each=each)
+        return seen
+
+    first = min(k for k, miss, _ in run(off) if miss is not None)
+    assert first > 1 and run(off)[first - 1][1] == pytest.approx(0.9, abs=0.03)
+    assert not any(w for _, _, w in run(off))                  # its course came on the alarm's 5th frame: held
+    assert [k for k, _, w in run(on) if w][:1] == [first]       # judged on its first course
+    # the alarm began on the frame of the first course: its first frame, a warning with either
+    assert [k for k, _, w in run(off, alarm_from=first) if w][:1] == [first]
+    assert run(on, alarm_from=first)[first - 1][2]
+    # on the alarm's 3rd frame in a row: held when its two earlier frames had a course, not when they had none
+    for courses, warns in [(2, False), (0, True)]:
+        t = _looming(heading[0] - 18.0, 12, static=True)
+        t.last_alarm, t.alarm_run, t.alarm_courses = 12, 3, courses
+        assert estimate(t, on, FPS, 12, SHAPE, heading=heading).warning == warns
+        assert t.alarm_courses == courses + 1                   # this frame had a course: counted
 
 
 def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_its_side():

@@ -24,7 +24,7 @@ from .change import change_box, uniform_box, uniform_region, unswept
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate
+from .warning import blind_until, drift, estimate, fits
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -173,10 +173,16 @@ class TargetLayer:
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
         seeds, focused = [], set()              # focused: the seeds seed_focus tests
+        refuted = {}                            # alarm_fresh: field id -> the older track that refutes its alarm
         for f in fields:
             owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))]
             if owners:
-                self._own(min(owners, key=lambda t: t.size), f, now)
+                o = min(owners, key=lambda t: t.size)
+                if self._refutes(o, f):
+                    refuted[f.id] = o
+                    seeds.append((int(f.x), int(f.y), f))
+                else:
+                    self._own(o, f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
@@ -206,7 +212,8 @@ class TargetLayer:
         for x, y, f in seeds:
             if len(self._tracks) >= p.max_targets:
                 break
-            if any(t.contains(x, y) for t in self._tracks if not (f is None and self._opened(t, now))):
+            apart = None if f is None else refuted.get(f.id)
+            if any(t.contains(x, y) for t in self._tracks if not ((f is None and self._opened(t, now)) or t is apart)):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -219,7 +226,7 @@ class TargetLayer:
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t)
-                             and not (f is None and self._opened(o, now))), None)
+                             and not (f is None and self._opened(o, now)) and o is not apart), None)
                 t.uniform = swept is None
                 focus = f is None and (x, y) in focused
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
@@ -232,7 +239,10 @@ class TargetLayer:
                     self._own(host, f, now)
                 continue
             if t is None:
+                if apart is not None:     # no box of its own: the older track keeps the field
+                    self._own(apart, f, now)
                 continue
+            t.apart = None if apart is None else apart.id
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
@@ -307,6 +317,8 @@ class TargetLayer:
             if t.last_alarm != index:    # the frames in a row are processed ones: a held repeat is no gap
                 follows = self._before is not None and abs(t.last_alarm - self._before) <= _EPS
                 t.alarm_run = t.alarm_run + 1 if follows else 1
+                if not follows:
+                    t.alarm_courses = 0
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
                 move = self._seed_move(t)
@@ -348,6 +360,17 @@ class TargetLayer:
     def _hosts(o: Track, t: Track) -> bool:
         """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other."""
         return o.overlap(t) >= 0.5
+
+    def _refutes(self, o: Track, f) -> bool:
+        """``alarm_fresh``: whether the older track ``o`` that holds field ``f`` in collision alarm refutes the
+        alarm with a measurement of something else: its history began before the field was born and its fit,
+        long enough for one, gave no time to contact on its last frame (:func:`alarm_warns`' "no"). The field
+        then seeds a target of its own (as a field outside every box), which ``o`` neither hosts nor takes in
+        (:meth:`_merge`); ``o``'s box (the road, a wall, an object's part seen for long) is measured since
+        before the object that alarms grew in it."""
+        if not (self.params.alarm_fresh and self._alarming(f)) or o.born >= getattr(f, "born", o.born):
+            return False
+        return o.streak == 0 and o.fit_span > 0 and fits(o.history, o.fit_span)
 
     def _own_margin(self, t: Track, f) -> float:
         """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
@@ -705,7 +728,7 @@ class TargetLayer:
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t)
-                         and not (t.behind and self._opened(o, index))), None)
+                         and not (t.behind and self._opened(o, index)) and o.id != t.apart), None)
             if host is None:
                 out.append(t)
             else:
@@ -713,6 +736,6 @@ class TargetLayer:
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
-                    host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
+                    host.last_alarm, host.alarm_run, host.alarm_courses = t.last_alarm, t.alarm_run, t.alarm_courses
         self._tracks = out
 

@@ -320,6 +320,43 @@ class TargetParams(ParameterSet):
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
                                    real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+    course_stale: int = param(0, """A target's course (``miss``) is extrapolated from the frames on which its box was
+                              wholly inside the image (a cut box gives neither the object's centre nor its size)
+                              only while the newest of them is at most this many frames (at ``nominal_fps``) old;
+                              a box cut for longer has no course (the cut-box rules decide: ``cut_course``,
+                              ``cut_onset_s``). A course fitted on a box's first frames and carried over a long cut
+                              predicts from where the box was, not from what it has become. Whether a box is cut
+                              a frame earlier or later is a knife edge (issue 22, item 7: ``nc07.mp4``'s x264 copy,
+                              no collision, warned falsely at 84 on a box cut at the frame's top since 70, its course
+                              0.53 from frames 61-69). 0 = off (the default: 5 silences that copy, item 7 met on
+                              ``nc07.mp4``, the standard suite unchanged, but holdout 1's ``ground_forward_4_h1``
+                              collider, its course carried over 19 cut frames, warns 5 frames later, lead 0.38 -> 0.22
+                              s; docs/model.md, "The same warning whatever the encoding, session 17").""",
+                              unit="frames", valid=Valid.integer(0))
+    alarm_fresh: bool = param(False, """A field in collision alarm held by an older track (born before the field) whose fit, long
+                              enough for one, gave no time to contact on its last frame seeds a target of its own, as a
+                              field outside every box, which that track neither hosts nor takes in: the older box (the
+                              road, a wall, a part of the object seen for long, measured since before the field's
+                              object grew in it) would hold the alarm back with a measurement of something else
+                              (``alarm_warns``' "no": its growth anisotropic over its whole history). Whether the
+                              field falls in such a box or beside it is a knife edge (issue 22, item 7: the copies
+                              of ``UAV_outdoor_1.avi``, ``bear_attack.avi``, ``crossing_car_strong_light.mp4``).
+                              False = off (the default: on, only the 2x copy of ``crossing_car_strong_light.mp4``
+                              gained a warning, at 192, after the clip's 177; the standard suite's false episodes per
+                              1000 frames 0.41 -> 0.51 and targets per collision object 1.11 -> 1.23; docs/model.md,
+                              "The same warning whatever the encoding, session 17").""", valid=Valid.boolean())
+    alarm_onset_course: bool = param(True, """With ``alarm_onset_miss``: the frames of the alarm that count are those on which the
+                                     target's fit gave a course (``Track.alarm_courses``): an alarm that lasted while
+                                     the target had no course yet (a young track, its no-course alarm held back by
+                                     ``path_drift`` or ``bearing_drift``) has not been judged on a course, so its first
+                                     course begins a warning up to ``max_miss``, as an alarm on its first frame does.
+                                     Whether the course comes on the alarm's first frame or a frame later is a knife edge
+                                     (issue 22, item 7: ``night_rear_end.mp4``'s van, course 0.88 on the alarm's first
+                                     frame on the clip, 0.82 on its 5th on the 320x240 copy). False = off (on since
+                                     session 17: that copy warns at 102 on the van as the clip does (none before); the
+                                     standard suite, its real clips and holdouts 1-4, 6 and 8 unchanged; docs/model.md,
+                                     "The same warning whatever the encoding, session 17").""",
+                                     valid=Valid.boolean())
     alarm_unaligned: bool = param(False, """With ``alarm_isotropic``: from a translating camera (a measured heading), the
                                   field alarm without a course does not begin a warning on a target born on an alarm
                                   seed whose own alignment over ``change_frames`` was tried and failed (its residual

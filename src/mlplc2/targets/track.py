@@ -129,6 +129,7 @@ class Track:
     last_answer: float = -(10 ** 9)    # clock of the frame an attention field of it last answered
     last_alarm: float = -(10 ** 9)     # clock of the frame a field of it was last in collision alarm
     alarm_run: int = 0                 # processed frames in a row, up to ``last_alarm``, with a field of it in collision alarm
+    alarm_courses: int = 0             # of those frames, the ones on which its fit gave a course (``alarm_onset_course``)
     last_estimate: float = -(10 ** 9)  # clock of its last time to contact
     streak: int = 0
     streak_since: float = 0.0          # clock of the first estimate of the streak
@@ -154,6 +155,7 @@ class Track:
     early: bool = False                # its streak began on its first fit after a growth test (``confirm_birth``)
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
     behind: bool = False               # born inside the box of a target whose contact had passed (``passed_seeds``)
+    apart: int | None = None           # the id of the older track whose measurement refuted its field's alarm (``alarm_fresh``)
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
     absorbed: bool = False             # absorbed by a warning target (``absorb_frames``): refound late only (``refind_late``)

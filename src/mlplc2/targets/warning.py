@@ -19,14 +19,19 @@ from .track import EPS as _EPS, MIN_POINTS, Target, Track
 __all__ = ["estimate", "course", "alarm_warns", "passes_still", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
-def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
+def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
+           stale: float | None = None) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
     heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
-    pixels), from its last observations whose box was wholly inside the frame (``Track.inside``,
-    however old: a cut box gives neither the object's centre nor its size); None when they are too
-    few for a fit over ``span`` clock units (:func:`fits`)."""
+    pixels), from its last observations whose box was wholly inside the frame (``Track.inside``:
+    a cut box gives neither the object's centre nor its size); None when they are too
+    few for a fit over ``span`` clock units (:func:`fits`), or (``stale``, clock units; None: however
+    old; ``TargetParams.course_stale``) when the newest of them lies more than ``stale`` before the
+    track's newest observation."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     if not fits(inside, span):
+        return None
+    if stale is not None and t.history and t.history[-1].frame - inside[-1].frame > stale + _EPS:
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
@@ -78,7 +83,8 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if ttc is not None and ttc > p.horizon_s:
         return False
     if miss is not None:
-        if p.alarm_onset_miss and not t.warned and t.alarm_run > 1 and wide(p, miss):
+        if p.alarm_onset_miss and not t.warned and wide(p, miss) \
+                and (t.alarm_courses > 0 if p.alarm_onset_course else t.alarm_run > 1):
             return False
         return miss <= p.max_miss
     if heading is None or shape is None or t.cut(shape, p.border):
@@ -449,7 +455,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
-        miss_xy = course(t, heading, fit.ttc, t.fit_span)
+        miss_xy = course(t, heading, fit.ttc, t.fit_span,
+                         stale=p.span(p.course_stale, fps) if p.course_stale > 0 else None)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
             t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
@@ -471,6 +478,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
                                                        or anisotropic(t, p, measured) or passed_by(t, p))
+    if t.last_alarm == index and miss is not None:   # an alarm frame judged with a course (alarm_onset_course)
+        t.alarm_courses += 1
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
