@@ -86,6 +86,8 @@ class TargetLayer:
         self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
         self._blind_until = -math.inf   # contact_blind: no warning begins up to this clock
+        self._alarmed: set = set()      # the fields in collision alarm on the last frame
+        self._spent: set = set()        # drop_view: the fields in alarm of a target dropped at its contact
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
@@ -176,7 +178,10 @@ class TargetLayer:
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
         seeds, focused = [], set()              # focused: the seeds seed_focus tests
+        self._spent &= {f.id for f in fields}
         for f in fields:
+            if f.id in self._spent:
+                continue
             owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))
                       and not self._freed(t, now)]
             if owners:
@@ -252,6 +257,7 @@ class TargetLayer:
         self._past.append(self._prev)
         self._past_t.append(clock)
         alive = {f.id for f in fields}
+        self._alarmed = {f.id for f in fields if getattr(f, "collision", False)}
         out = []
         for t in self._tracks:
             t.fields &= alive
@@ -571,10 +577,27 @@ class TargetLayer:
                 if move is not None and gray is not None:
                     self._reseat(t, gray, clock)
                     self._reseat_uniform(t, gray)
+                if self._at_contact(t, clock, w, h):
+                    t.absorbed = True            # TargetParams.drop_view: at its contact; refound by its id only
+                    self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
+                    self._lose(t, clock)
+                    continue
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _at_contact(self, t: Track, clock: float, w: int, h: int) -> bool:
+        """``drop_view``: whether track ``t`` is at its contact: its box spanned at least ``drop_view`` of the view
+        both across and down (its object fills the view), and the contact its last time to contact then predicted
+        (``Track.held`` counted down; at once without one) has come (``Track.at_view``, set once)."""
+        p = self.params
+        if p.drop_view <= 0:
+            return False
+        if t.at_view is None and t.w >= p.drop_view * w and t.h >= p.drop_view * h:
+            left = 0.0 if t.held is None else max(t.held[1] * self.fps - (clock - t.held[0]), 0.0)
+            t.at_view = clock + left
+        return t.at_view is not None and clock >= t.at_view - _EPS
 
     def _reseat(self, t: Track, gray: np.ndarray, clock: float) -> None:
         """``TargetParams.reseat``: a followed box much larger than the region that changed around its
@@ -804,7 +827,8 @@ class TargetLayer:
         keep the older; but an older track that measures no approach merges a newer one only when
         the newer's centre lies near its own: a wide box over the road and an object that approaches
         inside it are two."""
-        tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
+        first = self.params.merge_warning        # TargetParams.merge_warning: a warning target hosts first
+        tracks = sorted(self._tracks, key=lambda t: (first and not t.last_warned, t.order or t.id))
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t, index)

@@ -523,6 +523,22 @@ class TargetParams(ParameterSet):
                                static world's box beside an object near contact is the object's (its fields go
                                to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
+    merge_warning: bool = param(False, """When two targets are one object (:meth:`TargetLayer._merge`), a target that
+                                warned on the last frame is kept (hosts the other) before an older one; among
+                                targets alike the older is kept. Without it an older small box (the ground at a
+                                collider's foot) takes in the collider's warning target, which is then born again
+                                as a new id. False = the older always (docs/model.md, "Targets per object, session
+                                17").""", valid=Valid.boolean())
+    drop_view: float = param(0.0, """A target whose box spans at least this fraction of the view both across and down
+                             (its object fills the view) is dropped once the contact its last time to contact then
+                             predicted has come (at once without one), not to be refound but for its id
+                             (``refind_late``); the attention fields in alarm it owned (its own object's) then seed
+                             no target and are no target's evidence. The box of an object at its contact keeps
+                             growing with the view's own change (459 x 536 px on a 320 x 240 view), would own every
+                             field and host every box inside it, and its warning keeps ``contact_blind`` on, so
+                             that an object behind it is never warned. A box over the view across or down only (an
+                             object passing beside the camera) is not dropped. 0 = off (docs/model.md, "Targets per
+                             object, session 17").""", unit="fraction of the view", valid=Valid.real(minimum=0.0))
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
