@@ -183,7 +183,7 @@ class TargetLayer:
             if f.id in self._spent:
                 continue
             owners = [t for t in self._tracks if self._holds(t, f.x, f.y, now, self._own_margin(t, f))
-                      and not self._freed(t, now)]
+                      and not self._freed(t, now) and not self._open_to(t, f)]
             if owners:
                 self._own(min(owners, key=lambda t: t.size), f, now)
             else:
@@ -216,7 +216,7 @@ class TargetLayer:
             if self._count(now) >= p.max_targets:
                 break
             if any(self._holds(t, x, y, now) for t in self._tracks
-                   if not (self._freed(t, now) or (f is None and self._opened(t, now)))):
+                   if not (self._freed(t, now) or (f is None and self._opened(t, now)) or self._open_to(t, f))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -229,7 +229,7 @@ class TargetLayer:
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t, now)
-                             and not (f is None and self._opened(o, now))), None)
+                             and not (f is None and self._opened(o, now)) and not self._open_to(o, f)), None)
                 t.uniform = swept is None
                 focus = f is None and (x, y) in focused
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
@@ -245,7 +245,7 @@ class TargetLayer:
                 continue
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any((self._freed(o, now) or self._opened(o, now)) and o.contains(t.cx, t.cy)
-                           for o in self._tracks)
+                           and not self._open_to(o, f) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             if not self._refind(t, now):
@@ -263,6 +263,8 @@ class TargetLayer:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
+            if t.spent is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the static world's surface, not an object: no warning this frame, so none last frame either
             if o.warning and self._slanted(t, levels):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
@@ -577,7 +579,10 @@ class TargetLayer:
                 if move is not None and gray is not None:
                     self._reseat(t, gray, clock)
                     self._reseat_uniform(t, gray)
-                if self._at_contact(t, clock, w, h):
+                if self._at_contact(t, clock, w, h) and p.view_keep:
+                    if t.spent is None:          # TargetParams.view_keep: kept, open to the other fields in alarm
+                        t.spent = t.fields & self._alarmed
+                elif self._at_contact(t, clock, w, h):
                     t.absorbed = True            # TargetParams.drop_view: at its contact; refound by its id only
                     self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
                     self._lose(t, clock)
@@ -586,6 +591,16 @@ class TargetLayer:
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _open_to(self, t: Track, f) -> bool:
+        """``view_keep``: whether track ``t``, kept past its contact, leaves field ``f`` to others: a field in collision
+        alarm that was not its own when its contact came (another object's alarm)."""
+        return t.spent is not None and f is not None and bool(getattr(f, "collision", False)) and f.id not in t.spent
+
+    def _apart(self, o: Track, t: Track) -> bool:
+        """``view_keep``: whether tracks ``o`` and ``t`` are never merged: one is kept past its contact and the other
+        has owned a field in alarm since (another object's alarm, :meth:`_open_to`)."""
+        return (o.spent is not None and t.last_alarm > o.at_view) or (t.spent is not None and o.last_alarm > t.at_view)
 
     def _at_contact(self, t: Track, clock: float, w: int, h: int) -> bool:
         """``drop_view``: whether track ``t`` is at its contact: its box spanned at least ``drop_view`` of the view
@@ -832,7 +847,7 @@ class TargetLayer:
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t, index)
-                         and not (t.behind and self._opened(o, index))), None)
+                         and not (t.behind and self._opened(o, index)) and not self._apart(o, t)), None)
             if host is None:
                 out.append(t)
             else:

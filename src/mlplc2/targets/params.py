@@ -539,6 +539,12 @@ class TargetParams(ParameterSet):
                              that an object behind it is never warned. A box over the view across or down only (an
                              object passing beside the camera) is not dropped. 0 = off (docs/model.md, "Targets per
                              object, session 17").""", unit="fraction of the view", valid=Valid.real(minimum=0.0))
+    view_keep: bool = param(False, """With ``drop_view``: a target at its contact is kept instead of dropped (it still
+                            owns the fields and hosts the boxes inside it, as without ``drop_view``), but it warns no
+                            more (nor opens ``contact_blind``), owns no field in collision alarm but its own (those it
+                            owned at its contact), no seed of such a field is a part of it, and it merges with no
+                            target that has owned a field in alarm since its contact: an object behind it warns.
+                            False = dropped (docs/model.md, "Targets per object, session 17").""", valid=Valid.boolean())
     drop_passed: bool = param(False, """(off by default: it warned one more holdout collision but added false
                               episodes on both suites, 1.24 -> 1.44 and 1.75 -> 1.85 per 1000 frames; docs/model.md,
                               "Objects missed", session 11) A target whose last time to contact has run out (its
