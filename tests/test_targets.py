@@ -1368,3 +1368,29 @@ def test_a_target_over_the_view_is_dropped_at_its_contact(drop_view):
     for i in range(3):
         lay.step(np.zeros((240, 320), np.float32), None, [alarm], i)
     assert bool(lay._tracks) == (drop_view == 0)
+
+
+@pytest.mark.parametrize("at_contact", [True, False])
+def test_a_target_kept_past_its_contact_leaves_another_alarm_to_a_target_of_its_own(at_contact):
+    """``view_keep`` (with ``drop_view``): a box over the view kept past its contact keeps owning its own field in
+    alarm (5, owned at its contact) but not another field in alarm inside it (7, a second object's): that one seeds a
+    target of its own; a box inside the view (before its contact) owns both and no target is born."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer, Track
+
+    def alarm(i, x, y):
+        return SimpleNamespace(id=i, x=x, y=y, radius=40.0, response=1.0, collision=True)
+
+    lay = TargetLayer(TargetParams(drop_view=1.0, view_keep=True), FPS)
+    blank = np.zeros((240, 320), np.float32)
+    lay.step(blank, None, [], 0)
+    near = Track(1, 0, 160.0, 120.0, *((400.0, 300.0) if at_contact else (300.0, 230.0)), birth=0.0)
+    near.fields = {5}
+    if at_contact:
+        near.at_view, near.kept_past = 0.0, {5}
+    lay._tracks, lay._next = [near], 2
+    lay.step(blank, None, [alarm(5, 160.0, 120.0), alarm(7, 60.0, 60.0)], 1)
+    others = [t for t in lay._tracks if t is not near]
+    assert 5 in near.fields and (7 in near.fields) != at_contact
+    assert [t.fields for t in others] == ([{7}] if at_contact else [])

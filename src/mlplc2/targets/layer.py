@@ -263,7 +263,7 @@ class TargetLayer:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
-            if t.spent is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
+            if t.kept_past is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the static world's surface, not an object: no warning this frame, so none last frame either
             if o.warning and self._slanted(t, levels):
@@ -580,8 +580,8 @@ class TargetLayer:
                     self._reseat(t, gray, clock)
                     self._reseat_uniform(t, gray)
                 if self._at_contact(t, clock, w, h) and p.view_keep:
-                    if t.spent is None:          # TargetParams.view_keep: kept, open to the other fields in alarm
-                        t.spent = t.fields & self._alarmed
+                    if t.kept_past is None:      # TargetParams.view_keep: kept, open to the other fields in alarm
+                        t.kept_past = t.fields & self._alarmed
                 elif self._at_contact(t, clock, w, h):
                     t.absorbed = True            # TargetParams.drop_view: at its contact; refound by its id only
                     self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
@@ -595,12 +595,12 @@ class TargetLayer:
     def _open_to(self, t: Track, f) -> bool:
         """``view_keep``: whether track ``t``, kept past its contact, leaves field ``f`` to others: a field in collision
         alarm that was not its own when its contact came (another object's alarm)."""
-        return t.spent is not None and f is not None and bool(getattr(f, "collision", False)) and f.id not in t.spent
+        return t.kept_past is not None and f is not None and bool(getattr(f, "collision", False)) and f.id not in t.kept_past
 
     def _apart(self, o: Track, t: Track) -> bool:
         """``view_keep``: whether tracks ``o`` and ``t`` are never merged: one is kept past its contact and the other
         has owned a field in alarm since (another object's alarm, :meth:`_open_to`)."""
-        return (o.spent is not None and t.last_alarm > o.at_view) or (t.spent is not None and o.last_alarm > t.at_view)
+        return (o.kept_past is not None and t.last_alarm > o.at_view) or (t.kept_past is not None and o.last_alarm > t.at_view)
 
     def _at_contact(self, t: Track, clock: float, w: int, h: int) -> bool:
         """``drop_view``: whether track ``t`` is at its contact: its box spanned at least ``drop_view`` of the view
