@@ -528,9 +528,10 @@ class TargetParams(ParameterSet):
                                 targets alike the older is kept. Without it an older small box (the ground at a
                                 collider's foot) takes in the collider's warning target, which is then born again
                                 as a new id. Off by default: with ``drop_view`` 1 and ``view_keep`` (without them
-                                a second collider is lost, ``drone_4_h4``) targets per object 1.36 -> 1.29 (holdout 6),
-                                1.32 -> 1.27 (holdout 8), 1.11 -> 1.14 (standard), nothing else changed on the sets
-                                measured; holdouts 3, 4, 5, 7 not measured in session 17. False = the older always
+                                a second collider is lost, ``drone_4_h4``) targets per object 1.34 -> 1.27 (holdout 3),
+                                1.36 -> 1.29 (holdout 6), 1.32 -> 1.27 (holdout 8), at most 1.24 on the standard suite
+                                and holdouts 1, 2, 5; no collision lost, no false warning added; holdouts 4 (but its
+                                drone setting) and 7 not measured in session 17. False = the older always
                                 (docs/model.md, "Targets per object, session 17").""", valid=Valid.boolean())
     drop_view: float = param(0.0, """A target whose box spans at least this fraction of the view both across and down
                              (its object fills the view) is dropped once the contact its last time to contact then
