@@ -1313,11 +1313,12 @@ def test_box_claim_lets_an_object_above_a_wide_box_seed():
 
 @pytest.mark.parametrize("merge_warning", [True, False])
 def test_a_target_warning_on_the_last_frame_hosts_the_merge(merge_warning):
-    """``merge_warning``: of two targets that are one object, the one that warned on the last frame (a newer 60-px
+    """``merge_warning`` (on by default since session 17): of two targets that are one object, the one that warned on the last frame (a newer 60-px
     box, the collider near its contact) is kept and takes the other's fields, not the older 30-px box inside it
     (the ground at its foot); without it, or when neither warned, the older is kept."""
     from mlplc2.targets import TargetLayer, Track
 
+    assert TargetParams().merge_warning                                    # the default since session 17
     def layer():
         lay = TargetLayer(TargetParams(merge_warning=merge_warning), FPS)
         old = Track(1, 0, 100.0, 120.0, 30.0, 30.0, birth=30.0)
@@ -1350,7 +1351,8 @@ def test_a_target_over_the_view_is_dropped_at_its_contact(drop_view):
     def grow(prev, levels, t, half, interval):
         return 0.0, 0.0, 1.1, 1.1, math.log(1.1), 0.0
 
-    lay = TargetLayer(TargetParams(drop_view=drop_view), FPS, measure=grow)
+    assert (TargetParams().drop_view, TargetParams().view_keep) == (1.0, True)      # on since session 17 (kept)
+    lay = TargetLayer(TargetParams(drop_view=drop_view, view_keep=False), FPS, measure=grow)
     near = Track(1, 0, 160.0, 120.0, 300.0, 230.0, birth=0.0)
     near.held, near.fields = (10.0, 0.1, 0.01, 0.0, (0.0, 0.0)), {5, 6}
     wide = Track(2, 0, 160.0, 120.0, 400.0, 60.0, birth=0.0)
@@ -1363,7 +1365,7 @@ def test_a_target_over_the_view_is_dropped_at_its_contact(drop_view):
     assert (near in lay._tracks) == (drop_view == 0) and wide in lay._tracks
     assert lay._spent == ({5} if drop_view else set())
     alarm = SimpleNamespace(id=5, x=100.0, y=100.0, radius=40.0, response=1.0, collision=True)
-    lay = TargetLayer(TargetParams(drop_view=drop_view), FPS)
+    lay = TargetLayer(TargetParams(drop_view=drop_view, view_keep=False), FPS)
     lay._spent = {5} if drop_view else set()
     for i in range(3):
         lay.step(np.zeros((240, 320), np.float32), None, [alarm], i)
