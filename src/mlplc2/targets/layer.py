@@ -83,6 +83,8 @@ class TargetLayer:
         self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
         self._blind_until = -math.inf   # contact_blind: no warning begins up to this clock
+        self._alarmed: set = set()      # the fields in collision alarm on the last frame
+        self._spent: set = set()        # drop_view: the fields in alarm of a target dropped at its contact
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
@@ -174,8 +176,11 @@ class TargetLayer:
         self._merge(now)
         seeds, focused = [], set()              # focused: the seeds seed_focus tests
         refuted = {}                            # alarm_fresh: field id -> the older track that refutes its alarm
+        self._spent &= {f.id for f in fields}
         for f in fields:
-            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))]
+            if f.id in self._spent:
+                continue
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not self._open_to(t, f)]
             if owners:
                 o = min(owners, key=lambda t: t.size)
                 if self._refutes(o, f):
@@ -213,7 +218,8 @@ class TargetLayer:
             if len(self._tracks) >= p.max_targets:
                 break
             apart = None if f is None else refuted.get(f.id)
-            if any(t.contains(x, y) for t in self._tracks if not ((f is None and self._opened(t, now)) or t is apart)):
+            if any(t.contains(x, y) for t in self._tracks
+                   if not ((f is None and self._opened(t, now)) or t is apart or self._open_to(t, f))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -226,7 +232,8 @@ class TargetLayer:
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t)
-                             and not (f is None and self._opened(o, now)) and o is not apart), None)
+                             and not (f is None and self._opened(o, now)) and o is not apart
+                             and not self._open_to(o, f)), None)
                 t.uniform = swept is None
                 focus = f is None and (x, y) in focused
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
@@ -244,7 +251,8 @@ class TargetLayer:
                 continue
             t.apart = None if apart is None else apart.id
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
-            t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
+            t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) and not self._open_to(o, f)
+                           for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             if not self._refind(t, now):
@@ -256,11 +264,14 @@ class TargetLayer:
         self._past.append(self._prev)
         self._past_t.append(clock)
         alive = {f.id for f in fields}
+        self._alarmed = {f.id for f in fields if getattr(f, "collision", False)}
         out = []
         for t in self._tracks:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
+            if t.kept_past is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
@@ -544,10 +555,40 @@ class TargetLayer:
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
                     self._reseat_uniform(t, gray)
+                if self._at_contact(t, clock, w, h) and p.view_keep:
+                    if t.kept_past is None:      # TargetParams.view_keep: kept, open to the other fields in alarm
+                        t.kept_past = t.fields & self._alarmed
+                elif self._at_contact(t, clock, w, h):
+                    t.absorbed = True            # TargetParams.drop_view: at its contact; refound by its id only
+                    self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
+                    self._lose(t, clock)
+                    continue
                 kept.append(t)
             else:
                 self._lose(t, clock)
         self._tracks = kept
+
+    def _open_to(self, t: Track, f) -> bool:
+        """``view_keep``: whether track ``t``, kept past its contact, leaves field ``f`` to others: a field in collision
+        alarm that was not its own when its contact came (another object's alarm)."""
+        return t.kept_past is not None and f is not None and bool(getattr(f, "collision", False)) and f.id not in t.kept_past
+
+    def _apart(self, o: Track, t: Track) -> bool:
+        """``view_keep``: whether tracks ``o`` and ``t`` are never merged: one is kept past its contact and the other
+        has owned a field in alarm since (another object's alarm, :meth:`_open_to`)."""
+        return (o.kept_past is not None and t.last_alarm > o.at_view) or (t.kept_past is not None and o.last_alarm > t.at_view)
+
+    def _at_contact(self, t: Track, clock: float, w: int, h: int) -> bool:
+        """``drop_view``: whether track ``t`` is at its contact: its box spanned at least ``drop_view`` of the view
+        both across and down (its object fills the view), and the contact its last time to contact then predicted
+        (``Track.held`` counted down; at once without one) has come (``Track.at_view``, set once)."""
+        p = self.params
+        if p.drop_view <= 0:
+            return False
+        if t.at_view is None and t.w >= p.drop_view * w and t.h >= p.drop_view * h:
+            left = 0.0 if t.held is None else max(t.held[1] * self.fps - (clock - t.held[0]), 0.0)
+            t.at_view = clock + left
+        return t.at_view is not None and clock >= t.at_view - _EPS
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform
@@ -723,12 +764,14 @@ class TargetLayer:
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
-        keep the older."""
-        tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
+        keep the older; with ``merge_warning`` a target that warned on the last frame first."""
+        first = self.params.merge_warning        # TargetParams.merge_warning: a warning target hosts first
+        tracks = sorted(self._tracks, key=lambda t: (first and not t.last_warned, t.order or t.id))
         out: list[Track] = []
         for t in tracks:
             host = next((o for o in out if self._hosts(o, t)
-                         and not (t.behind and self._opened(o, index)) and o.id != t.apart), None)
+                         and not (t.behind and self._opened(o, index)) and o.id != t.apart
+                         and not self._apart(o, t)), None)
             if host is None:
                 out.append(t)
             else:

@@ -159,6 +159,8 @@ class Track:
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
     absorbed: bool = False             # absorbed by a warning target (``absorb_frames``): refound late only (``refind_late``)
+    at_view: float | None = None       # ``drop_view``: the clock of its contact, predicted when its box first spanned the view
+    kept_past: set | None = None       # ``view_keep``: kept past that contact; the fields in alarm it owned then
     order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
