@@ -1135,3 +1135,56 @@ def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_
     assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
     passing.last_alarm = 24
     assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame
+
+
+def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found_drifting():
+    # drift_refused (docs/model.md, "False warnings, session 17"; off by default): a young box (3 frames, no fit,
+    # no course) that expands about the heading (drift 1) and owns a field in collision alarm is refused by the
+    # alarm's drift test, and the refusal is marked; one on a collision course warns and is not marked. A box so
+    # marked loses the field alarm's exemption from path_drift (main: the alarm exempts it once the fit gives it a
+    # course); one not marked keeps it, and a new alarm run clears the mark
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    off, on = TargetParams(), TargetParams(drift_refused=True)
+    assert not off.drift_refused                                          # the default
+    for p in (off, on):
+        young = _looming(30.0, 3, static=True)
+        young.last_alarm, young.alarm_run = 3, 3
+        assert drift(young, heading) == pytest.approx(1.0, abs=0.05)
+        out = estimate(young, p, FPS, 3, SHAPE, heading=heading)
+        assert out.miss is None and not out.warning and young.refused == p.drift_refused
+        steady = _looming(30.0, 3)
+        steady.last_alarm, steady.alarm_run = 3, 3
+        assert estimate(steady, p, FPS, 3, SHAPE, heading=heading).warning and not steady.refused
+    t = _looming(30.0, 8, static=True)
+    t.last_alarm, t.alarm_run = 8, 6
+    assert not off_path(t, on, 8, heading, SHAPE, 0.7)                   # not marked: the alarm exempts it
+    t.refused = True
+    assert off_path(t, on, 8, heading, SHAPE, 0.7)                       # marked: path_drift holds it back
+    assert not off_path(t, off, 8, heading, SHAPE, 0.7)                  # off: exempt, as main
+    layer = TargetLayer(on, FPS)
+    t.last_alarm, layer._before = 7.0, 7.0                              # its alarm's last frame was the one before
+    field = type("F", (), dict(id=4, response=1.0, collision=True))()
+    layer._own(t, field, 8.0)                                            # the alarm goes on: the mark stays
+    assert t.alarm_run == 7 and t.refused
+    layer._before = 9.0
+    layer._own(t, field, 10.0)                                           # a new run (frame 9 without alarm)
+    assert t.alarm_run == 1 and not t.refused
+
+
+def test_alarm_first_begins_the_alarm_without_a_course_only_on_its_runs_first_frame():
+    # alarm_first (docs/model.md, "False warnings, session 17"; off by default): a seed 3.5 widths beside the
+    # heading on a collision course (to hit at 0.5 widths: it keeps its bearing) warns on its alarm's second
+    # frame in a row (alarm_frames 2) with the rule off; with it on, only a box that holds the heading does, or
+    # a seed on its run's first frame whose own course passes within max_miss (alarm_course)
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+
+    def alarm(u0, uc, run, **kw):
+        s = _seed(_crossing(heading, u0, uc, frames=(0, 4), width=14.0, contact=20))
+        s.alarm_run = run
+        return estimate(s, TargetParams(alarm_warns=True, **kw), FPS, 4, SHAPE, heading=heading).warning
+
+    assert not TargetParams().alarm_first                                # the default
+    assert alarm(3.5, 0.5, 2) and not alarm(3.5, 0.5, 2, alarm_first=True)
+    assert alarm(0.2, 0.0, 2) and alarm(0.2, 0.0, 2, alarm_first=True)  # it holds the heading
+    assert alarm(3.5, 0.5, 1, alarm_first=True)                         # the first frame, a seed course of 0.5
+    assert not alarm(3.5, 2.5, 1) and not alarm(3.5, 2.5, 1, alarm_first=True)   # its course passes: fleeting

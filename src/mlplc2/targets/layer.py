@@ -316,6 +316,8 @@ class TargetLayer:
             if t.last_alarm != index:    # the frames in a row are processed ones: a held repeat is no gap
                 follows = self._before is not None and abs(t.last_alarm - self._before) <= _EPS
                 t.alarm_run = t.alarm_run + 1 if follows else 1
+                if not follows:
+                    t.refused = False
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
                 move = self._seed_move(t)
@@ -816,6 +818,6 @@ class TargetLayer:
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
-                    host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
+                    host.last_alarm, host.alarm_run, host.refused = t.last_alarm, t.alarm_run, t.refused
         self._tracks = out
 

@@ -461,6 +461,22 @@ class TargetParams(ParameterSet):
                                     alarm exempts": 3 loses the real clip crossing_car_strong_light's warning and
                                     shortens night_rear_end's and UAV_outdoor_1's leads).""", unit="frames",
                                     valid=Valid.integer(1))
+    drift_refused: bool = param(False, """``path_drift``'s exemption for a target with a field in collision alarm this frame
+                                does not hold for a target whose field alarm, without a course, was refused on an
+                                earlier frame of the same alarm run because its box neither lay on the path nor kept
+                                its bearing (:func:`~mlplc2.targets.warning.on_path`, :func:`~mlplc2.targets.warning.keeps_bearing`;
+                                ``Track.refused``, from a translating camera, a box wholly inside the frame): the
+                                alarm's own drift test already found the box drifting as the static world does, and
+                                the same alarm lasting does not make it a collider's once the fit gives it a course.
+                                False = off (session 17: docs/model.md, "False warnings, session 17").""",
+                                valid=Valid.boolean())
+    alarm_first: bool = param(False, """From a translating camera (a measured heading), the field alarm without a course
+                              begins a warning on a box that does not hold the heading only on the first frame of
+                              its alarm run (``Track.alarm_run`` 1, where ``alarm_course`` lets a seed on a course
+                              within ``max_miss`` warn): later frames of the run (``alarm_frames``) wait for the
+                              fit's course. A young box's drift over its first one to three frames is the box's
+                              jitter as much as its bearing. False = off (session 17: docs/model.md, "False
+                              warnings, session 17").""", valid=Valid.boolean())
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
                               once a field of the target has been in collision alarm this many processed
