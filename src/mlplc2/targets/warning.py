@@ -91,12 +91,13 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
 def refused(t: Track, p: TargetParams, index: int, measured: tuple[float, float] | None,
             shape: tuple[int, int] | None) -> bool:
     """``drift_refused``: whether the field alarm without a course of track ``t`` (a field of it in collision alarm
-    this frame, clock ``index``) is refused by its drift: the camera translates (``measured``: the measured heading,
-    px; None: no test), the box lies wholly inside a frame of ``shape`` (h, w), does not hold the heading, is not on
-    the path (:func:`on_path`) and drifted away from the heading by more than ``bearing_drift`` of the static world's
-    drift (:func:`drift`, known)."""
+    this frame, clock ``index``, that began no warning) lies on a box that drifts as the static world does: the
+    camera translates (``measured``: the measured heading, px; None: no test), the box lies wholly inside a frame of
+    ``shape`` (h, w), does not hold the heading and drifted away from it by more than ``bearing_drift`` of the static
+    world's drift (:func:`drift`, known), whether or not it lies on the path now (:func:`on_path`) and whatever held
+    the alarm back (``keeps_bearing``, ``alarm_frames``, ...)."""
     if not p.drift_refused or t.last_alarm != index or measured is None or shape is None \
-            or t.cut(shape, p.border) or holds(t, measured) or on_path(t, p, measured):
+            or t.cut(shape, p.border) or holds(t, measured):
         return False
     ratio = drift(t, measured)
     return ratio is not None and ratio > p.bearing_drift
@@ -498,8 +499,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
                                                        or anisotropic(t, p, measured) or passed_by(t, p)
                                                        or later(t, p, measured))
-    elif not warning and miss is None and refused(t, p, index, measured, shape):
-        t.refused = True      # drift_refused: the alarm's drift test said no this run
+    if not warning and miss is None and refused(t, p, index, measured, shape):
+        t.refused = True      # drift_refused: its alarm this run on a box drifting as the static world does
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
