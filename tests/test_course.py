@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, passes_still, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, on_path, passes_still, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -1140,7 +1140,8 @@ def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_
 def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found_drifting():
     # drift_refused (docs/model.md, "False warnings, session 17"; off by default): a young box (3 frames, no fit,
     # no course) that expands about the heading (drift 1) and owns a field in collision alarm is refused by the
-    # alarm's drift test, and the refusal is marked; one on a collision course warns and is not marked. A box so
+    # alarm's drift test, and the refusal is marked; one on a collision course warns and is not marked; one on the
+    # path now that drifts, held back on its alarm's first frame (alarm_frames), is marked too. A box so
     # marked loses the field alarm's exemption from path_drift (main: the alarm exempts it once the fit gives it a
     # course); one not marked keeps it, and a new alarm run clears the mark
     heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
@@ -1155,6 +1156,11 @@ def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found
         steady = _looming(30.0, 3)
         steady.last_alarm, steady.alarm_run = 3, 3
         assert estimate(steady, p, FPS, 3, SHAPE, heading=heading).warning and not steady.refused
+        near = _looming(62.0, 4, contact=20, static=True)                # on the path now, drifting (drift 1)
+        near.last_alarm, near.alarm_run = 4, 1
+        assert on_path(near, p, heading) and drift(near, heading) == pytest.approx(1.0, abs=0.05)
+        out = estimate(near, p, FPS, 4, SHAPE, heading=heading)           # its alarm's first frame: alarm_frames
+        assert not out.warning and near.refused == p.drift_refused
     t = _looming(30.0, 8, static=True)
     t.last_alarm, t.alarm_run = 8, 6
     assert not off_path(t, on, 8, heading, SHAPE, 0.7)                   # not marked: the alarm exempts it

@@ -462,14 +462,15 @@ class TargetParams(ParameterSet):
                                     shortens night_rear_end's and UAV_outdoor_1's leads).""", unit="frames",
                                     valid=Valid.integer(1))
     drift_refused: bool = param(False, """``path_drift``'s exemption for a target with a field in collision alarm this frame
-                                does not hold for a target whose field alarm, without a course, was refused on an
-                                earlier frame of the same alarm run because its box neither lay on the path nor kept
-                                its bearing (:func:`~mlplc2.targets.warning.on_path`, :func:`~mlplc2.targets.warning.keeps_bearing`;
-                                ``Track.refused``, from a translating camera, a box wholly inside the frame): the
-                                alarm's own drift test already found the box drifting as the static world does, and
-                                the same alarm lasting does not make it a collider's once the fit gives it a course.
-                                False = off (session 17: docs/model.md, "False warnings, session 17").""",
-                                valid=Valid.boolean())
+                                does not hold for a target whose field alarm, without a course and beginning no
+                                warning, lay on an earlier frame of the same alarm run (``Track.alarm_run``) on a box
+                                that drifted away from the heading by more than ``bearing_drift`` of the static
+                                world's drift (:func:`~mlplc2.targets.warning.drift`; from a translating camera, a box
+                                wholly inside the frame that does not hold the heading, whether or not it lay on the
+                                path: ``Track.refused``, :func:`~mlplc2.targets.warning.refused`): the alarm's own
+                                drift already said the box drifts as the static world does, and the same alarm lasting
+                                does not make it a collider's once the fit gives it a course. False = off (session 17,
+                                measured: docs/model.md, "False warnings, session 17").""", valid=Valid.boolean())
     alarm_first: bool = param(False, """From a translating camera (a measured heading), the field alarm without a course
                               begins a warning on a box that does not hold the heading only on the first frame of
                               its alarm run (``Track.alarm_run`` 1, where ``alarm_course`` lets a seed on a course
