@@ -1143,7 +1143,7 @@ def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found
     # alarm's drift test, and the refusal is marked; one on a collision course warns and is not marked; one on the
     # path now that drifts, held back on its alarm's first frame (alarm_frames), is marked too. A box so
     # marked loses the field alarm's exemption from path_drift (main: the alarm exempts it once the fit gives it a
-    # course); one not marked keeps it, and a new alarm run clears the mark
+    # course), in its later alarm runs too; one not marked keeps it
     heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
     off, on = TargetParams(), TargetParams(drift_refused=True)
     assert not off.drift_refused                                          # the default
@@ -1173,8 +1173,9 @@ def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found
     layer._own(t, field, 8.0)                                            # the alarm goes on: the mark stays
     assert t.alarm_run == 7 and t.refused
     layer._before = 9.0
-    layer._own(t, field, 10.0)                                           # a new run (frame 9 without alarm)
-    assert t.alarm_run == 1 and not t.refused
+    layer._own(t, field, 10.0)                                           # a new run (frame 9 without alarm): it stays
+    assert t.alarm_run == 1 and t.refused
+    assert off_path(t, on, 10, heading, SHAPE, 0.7)
 
 
 def test_alarm_first_begins_the_alarm_without_a_course_only_on_its_runs_first_frame():

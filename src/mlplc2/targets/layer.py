@@ -316,8 +316,6 @@ class TargetLayer:
             if t.last_alarm != index:    # the frames in a row are processed ones: a held repeat is no gap
                 follows = self._before is not None and abs(t.last_alarm - self._before) <= _EPS
                 t.alarm_run = t.alarm_run + 1 if follows else 1
-                if not follows:
-                    t.refused = False
             t.last_alarm = index
             if self._alarming(f) and len(t.history) == 1 and t.seed_move is None:
                 move = self._seed_move(t)

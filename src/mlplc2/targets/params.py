@@ -463,7 +463,7 @@ class TargetParams(ParameterSet):
                                     valid=Valid.integer(1))
     drift_refused: bool = param(False, """``path_drift``'s exemption for a target with a field in collision alarm this frame
                                 does not hold for a target whose field alarm, without a course and beginning no
-                                warning, lay on an earlier frame of the same alarm run (``Track.alarm_run``) on a box
+                                warning, lay on an earlier frame (of this alarm run or an earlier one) on a box
                                 that drifted away from the heading by more than ``bearing_drift`` of the static
                                 world's drift (:func:`~mlplc2.targets.warning.drift`; from a translating camera, a box
                                 wholly inside the frame that does not hold the heading, whether or not it lay on the
