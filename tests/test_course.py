@@ -1182,16 +1182,22 @@ def test_alarm_first_begins_the_alarm_without_a_course_only_on_its_runs_first_fr
     # alarm_first (docs/model.md, "False warnings, session 17"; off by default): a seed 3.5 widths beside the
     # heading on a collision course (to hit at 0.5 widths: it keeps its bearing) warns on its alarm's second
     # frame in a row (alarm_frames 2) with the rule off; with it on, only a box that holds the heading does, or
-    # a seed on its run's first frame whose own course passes within max_miss (alarm_course)
+    # a seed on its run's first frame whose own course passes within max_miss (alarm_course), or one whose drift is
+    # not measured
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
 
-    def alarm(u0, uc, run, **kw):
-        s = _seed(_crossing(heading, u0, uc, frames=(0, 4), width=14.0, contact=20))
+    def alarm(u0, uc, run, frames=(0, 4), **kw):
+        s = _seed(_crossing(heading, u0, uc, frames=frames, width=14.0, contact=20))
         s.alarm_run = run
-        return estimate(s, TargetParams(alarm_warns=True, **kw), FPS, 4, SHAPE, heading=heading).warning
+        return estimate(s, TargetParams(alarm_warns=True, **kw), FPS, frames[-1], SHAPE, heading=heading).warning
 
     assert not TargetParams().alarm_first                                # the default
     assert alarm(3.5, 0.5, 2) and not alarm(3.5, 0.5, 2, alarm_first=True)
     assert alarm(0.2, 0.0, 2) and alarm(0.2, 0.0, 2, alarm_first=True)  # it holds the heading
     assert alarm(3.5, 0.5, 1, alarm_first=True)                         # the first frame, a seed course of 0.5
     assert not alarm(3.5, 2.5, 1) and not alarm(3.5, 2.5, 1, alarm_first=True)   # its course passes: fleeting
+    # a box on the path near the heading whose drift is not measured (the static world there would drift under
+    # MIN_DRIFT_PX over one frame's growth) is not tested: it warns on its run's second frame as with the rule off
+    near = _seed(_crossing(heading, 0.9, 0.9, frames=(0, 1), width=14.0, contact=20))
+    assert drift(near, heading) is None
+    assert alarm(0.9, 0.9, 2, frames=(0, 1)) and alarm(0.9, 0.9, 2, frames=(0, 1), alarm_first=True)

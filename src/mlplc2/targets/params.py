@@ -475,10 +475,13 @@ class TargetParams(ParameterSet):
                                 lead or real clip moved; holdouts 3, 4, 5, 7 not measured: docs/model.md, "False
                                 warnings, session 17").""", valid=Valid.boolean())
     alarm_first: bool = param(False, """From a translating camera (a measured heading), the field alarm without a course
-                              begins a warning on a box that does not hold the heading only on the first frame of
-                              its alarm run (``Track.alarm_run`` 1, where ``alarm_course`` lets a seed on a course
-                              within ``max_miss`` warn): later frames of the run (``alarm_frames``) wait for the
-                              fit's course. A young box's drift over its first one to three frames is the box's
+                              begins a warning on a box that does not hold the heading and whose drift is measured
+                              (:func:`~mlplc2.targets.warning.drift`) only on the first frame of its alarm run
+                              (``Track.alarm_run`` 1, where ``alarm_course`` lets a seed on a course within
+                              ``max_miss`` warn): later frames of the run (``alarm_frames``) wait for the fit's
+                              course. A box near the heading, whose drift the static world's motion there cannot
+                              measure, is not tested (without that exception ``drive_1_h5``'s lead vehicle, warned
+                              3.06 s ahead on its alarm's second frame, was warned 0.96 s ahead). A young box's drift over its first one to three frames is the box's
                               jitter as much as its bearing. False = off (session 17, measured with
                               ``drift_refused``: 8 of the 12 false episodes the two take on the standard suite and
                               holdouts 1, 2, 6, 8, no collision, lead or real clip moved; holdouts 3, 4, 5, 7 not

@@ -106,8 +106,11 @@ def refused(t: Track, p: TargetParams, index: int, measured: tuple[float, float]
 def later(t: Track, p: TargetParams, measured: tuple[float, float] | None) -> bool:
     """``alarm_first``: whether the field alarm without a course of track ``t`` is past the first frame of its run
     (``Track.alarm_run`` > 1) from a translating camera (``measured``: the measured heading, px; None: no test) on a
-    box that does not hold the heading (:func:`holds`), so begins no warning (it waits for the fit's course)."""
-    return p.alarm_first and measured is not None and t.alarm_run > 1 and not holds(t, measured)
+    box that does not hold the heading (:func:`holds`) and whose drift is measured (:func:`drift`: a box near the
+    heading, where the static world barely drifts, is not tested), so begins no warning (it waits for the fit's
+    course)."""
+    return p.alarm_first and measured is not None and t.alarm_run > 1 and not holds(t, measured) \
+        and drift(t, measured) is not None
 
 
 def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
