@@ -779,6 +779,7 @@ class TargetLayer:
                 host.fields |= t.fields
                 host.last_answer = max(host.last_answer, t.last_answer)
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
-                    host.last_alarm, host.alarm_run, host.alarm_courses = t.last_alarm, t.alarm_run, t.alarm_courses
+                    host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
+                    host.alarm_courses, host.refused = t.alarm_courses, t.refused
         self._tracks = out
 
