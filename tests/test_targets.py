@@ -1153,7 +1153,7 @@ def test_a_target_warning_on_the_last_frame_hosts_the_merge(merge_warning):
     (the ground at its foot); without it, or when neither warned, the older is kept."""
     from mlplc2.targets import TargetLayer, Track
 
-    assert TargetParams().merge_warning                                    # the default since session 17
+    assert not TargetParams().merge_warning                                # off: measured (docs/model.md)
     def layer():
         lay = TargetLayer(TargetParams(merge_warning=merge_warning), FPS)
         old = Track(1, 0, 100.0, 120.0, 30.0, 30.0, birth=30.0)
@@ -1186,7 +1186,7 @@ def test_a_target_over_the_view_is_dropped_at_its_contact(drop_view):
     def grow(prev, levels, t, half, interval):
         return 0.0, 0.0, 1.1, 1.1, math.log(1.1), 0.0
 
-    assert (TargetParams().drop_view, TargetParams().view_keep) == (1.0, True)      # on since session 17 (kept)
+    assert (TargetParams().drop_view, TargetParams().view_keep) == (0.0, True)      # off: measured (docs/model.md)
     lay = TargetLayer(TargetParams(drop_view=drop_view, view_keep=False), FPS, measure=grow)
     near = Track(1, 0, 160.0, 120.0, 300.0, 230.0, birth=0.0)
     near.held, near.fields = (10.0, 0.1, 0.01, 0.0, (0.0, 0.0)), {5, 6}

@@ -556,17 +556,19 @@ class TargetParams(ParameterSet):
                                static world's box beside an object near contact is the object's (its fields go
                                to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
-    merge_warning: bool = param(True, """When two targets are one object (:meth:`TargetLayer._merge`), a target that
+    merge_warning: bool = param(False, """When two targets are one object (:meth:`TargetLayer._merge`), a target that
                                 warned on the last frame is kept (hosts the other) before an older one; among
                                 targets alike the older is kept. Without it an older small box (the ground at a
                                 collider's foot) takes in the collider's warning target, which is then born again
-                                as a new id. On since session 17, with ``drop_view`` 1 and ``view_keep`` (without them
-                                a second collider is lost, ``drone_4_h4``) targets per object 1.34 -> 1.27 (holdout 3),
+                                as a new id. Measured in session 17, with ``drop_view`` 1 and ``view_keep`` (without them
+                                a second collider is lost, ``drone_4_h4``): targets per object 1.34 -> 1.27 (holdout 3),
                                 1.36 -> 1.29 (holdout 6), 1.32 -> 1.27 (holdout 8), at most 1.24 on the standard suite
                                 and holdouts 1, 2, 5; no collision lost, no false warning added; holdout 4 1.18 -> 1.13,
-                                holdout 7 1.23 -> 1.20. False = the older always
-                                (docs/model.md, "Targets per object, session 17").""", valid=Valid.boolean())
-    drop_view: float = param(1.0, """A target whose box spans at least this fraction of the view both across and down
+                                holdout 7 1.23 -> 1.20; but on the held-back holdout 9 a second collider is lost
+                                (``drone_4_h9``, warned 0.15 s before contact without them): off. False = the older
+                                always, the default (docs/model.md, "Targets per object, session 17").""",
+                                valid=Valid.boolean())
+    drop_view: float = param(0.0, """A target whose box spans at least this fraction of the view both across and down
                              (its object fills the view) is dropped once the contact its last time to contact then
                              predicted has come (at once without one), not to be refound but for its id
                              (``refind_late``); the attention fields in alarm it owned (its own object's) then seed
@@ -574,9 +576,10 @@ class TargetParams(ParameterSet):
                              growing with the view's own change (459 x 536 px on a 320 x 240 view), would own every
                              field and host every box inside it, and its warning keeps ``contact_blind`` on, so
                              that an object behind it is never warned. A box over the view across or down only (an
-                             object passing beside the camera) is not dropped. 1 since session 17, with ``view_keep``; measured (with ``merge_warning``;
+                             object passing beside the camera) is not dropped. 1 measured in session 17 with ``view_keep`` and ``merge_warning``
+                             (off: see ``merge_warning``); without ``view_keep`` (with ``merge_warning``;
                              dropped, holdout 8 gets a false episode that main's runaway box hides, ``drive_3_h8``: see
-                             ``view_keep``). 0 = off (docs/model.md, "Targets per object, session 17").""",
+                             ``view_keep``). 0 = off, the default (docs/model.md, "Targets per object, session 17").""",
                              unit="fraction of the view", valid=Valid.real(minimum=0.0))
     view_keep: bool = param(True, """With ``drop_view``: a target at its contact is kept instead of dropped (it still
                             owns the fields and hosts the boxes inside it, as without ``drop_view``), but it warns no
@@ -585,7 +588,7 @@ class TargetParams(ParameterSet):
                             target that has owned a field in alarm since its contact, and a target born inside it on
                             such a field is not ``Track.behind`` it: an object behind it warns (``drone_4_h4``'s
                             second collider with ``merge_warning``), while the boxes of the static world and of passing
-                            objects inside it stay its own, as without ``drop_view`` (``drive_3_h8``). On since session 17. False = dropped
+                            objects inside it stay its own, as without ``drop_view`` (``drive_3_h8``). False = dropped
                             (docs/model.md, "Targets per object, session 17").""", valid=Valid.boolean())
     passed_seeds: bool = param(True, """A target whose last time to contact has run out (its contact passed) with no
                                time to contact since no longer claims the LM and change seeds inside its box, for
