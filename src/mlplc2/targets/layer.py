@@ -555,14 +555,15 @@ class TargetLayer:
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
                     self._reseat_uniform(t, gray)
-                if self._at_contact(t, clock, w, h) and p.view_keep:
-                    if t.kept_past is None:      # TargetParams.view_keep: kept, open to the other fields in alarm
-                        t.kept_past = t.fields & self._alarmed
-                elif self._at_contact(t, clock, w, h):
-                    t.absorbed = True            # TargetParams.drop_view: at its contact; refound by its id only
-                    self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
-                    self._lose(t, clock)
-                    continue
+                if self._at_contact(t, clock, w, h):
+                    if p.view_keep:              # TargetParams.view_keep: kept, open to the other fields in alarm
+                        if t.kept_past is None:
+                            t.kept_past = t.fields & self._alarmed
+                    else:                        # TargetParams.drop_view: at its contact; refound by its id only
+                        t.absorbed = True
+                        self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
+                        self._lose(t, clock)
+                        continue
                 kept.append(t)
             else:
                 self._lose(t, clock)
