@@ -475,7 +475,7 @@ class TargetParams(ParameterSet):
                                     alarm exempts": 3 loses the real clip crossing_car_strong_light's warning and
                                     shortens night_rear_end's and UAV_outdoor_1's leads).""", unit="frames",
                                     valid=Valid.integer(1))
-    drift_refused: bool = param(True, """``path_drift``'s exemption for a target with a field in collision alarm this frame
+    drift_refused: bool = param(False, """``path_drift``'s exemption for a target with a field in collision alarm this frame
                                 does not hold for a target whose field alarm, without a course and beginning no
                                 warning, lay on an earlier frame (of this alarm run or an earlier one) on a box
                                 that drifted away from the heading by more than ``bearing_drift`` of the static
@@ -483,11 +483,13 @@ class TargetParams(ParameterSet):
                                 wholly inside the frame that does not hold the heading, whether or not it lay on the
                                 path: ``Track.refused``, :func:`~mlplc2.targets.warning.refused`): the alarm's own
                                 drift already said the box drifts as the static world does, and the same alarm lasting
-                                does not make it a collider's once the fit gives it a course. On since session 17
+                                does not make it a collider's once the fit gives it a course. Off: measured in session 17
                                 (alone, on main after the session's merges: false episodes per 1000 frames standard
                                 0.41 -> 0.21, holdout 1 0.72 -> 0.51, the held-back holdout 9 0.41 -> 0.31, the others as
                                 before; no collision, lead or real clip moved on any of the eleven sets; with
-                                ``alarm_first`` the held-back holdout 10 lost a collider). False = off (docs/model.md,
+                                ``alarm_first`` the held-back holdout 10 lost a collider), but the 320x240 copy of the real
+                                clip ``night_rear_end`` then never warns on its van, which it warns at frame 102 without
+                                it, as the clip does (issue 22 item 7). False = off, the default (docs/model.md,
                                 "False warnings, session 17").""", valid=Valid.boolean())
     alarm_first: bool = param(False, """From a translating camera (a measured heading), the field alarm without a course
                               begins a warning on a box that does not hold the heading and whose drift is measured
