@@ -960,6 +960,34 @@ def test_a_target_on_a_neighbour_is_the_neighbours_not_a_fragment_of_the_collisi
     assert o["targets"] == 1
     assert o["ttc_errors"] and all(est == pytest.approx(true, rel=1e-3) for true, est in o["ttc_errors"])
 
+def test_a_warning_on_a_passing_car_beside_the_collision_object_is_the_cars_false_warning():
+    """A warning stands for the one object it lies nearest: a target warning on a passing car 5 px
+    from the car's box and 12-18 px from the collision object's box (within the match radius of
+    both) warns of the car. It is a false warning ("pass") and does not warn the collision object,
+    which is warned only by the target on it, later."""
+    passing = obj(2, "pass", range(20), 90, 50, 20)                 # box x 80-100; the collider's 42-64
+    gt = {"videos": {"a.mp4": video_truth([colliding(), passing], frames=22)}}
+    targets = ([T(f, 2, 75, 50, warn=True) for f in range(4, 8)]       # on the car
+               + [T(f, 1, 50, 50, warn=True) for f in range(12, 20)])  # on the collision object
+    ev = evaluate(result("a.mp4", 22, targets=targets), gt)
+    o = wobj(ev, oid=1)
+    assert o["warned"] and o["warning_frame"] == 12
+    v = wvid(ev, "a.mp4")
+    assert v["false_frames_by_cause"] == {"pass": 4} and v["false_episodes"] == 1
+
+
+def test_a_warning_on_one_of_two_collision_objects_does_not_warn_the_other():
+    """Two collision objects side by side (boxes 17 px apart at the start): the warning on the left
+    one lies within the match radius of the right one's box, but it warns of the left one only."""
+    left, right = colliding(1, x=50, contact=20), colliding(2, x=80, contact=25)
+    gt = {"videos": {"a.mp4": video_truth([left, right])}}
+    targets = [T(f, 1, 58, 50, warn=True) for f in range(3, 20)]     # on the left one, 7-15 px from the right one's box
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    assert wobj(ev, oid=1)["warned"] and wobj(ev, oid=1)["warning_frame"] == 3
+    assert not wobj(ev, oid=2)["warned"]
+    assert wvid(ev, "a.mp4")["false_frames"] == 0
+
+
 # ---------------------------------------------------------------------------
 # labelled clips
 # ---------------------------------------------------------------------------

@@ -7,15 +7,16 @@ matching
     :func:`first_field`, :func:`match_fields`) and :func:`box_distance` (the warning metrics: a
     target is on an object when its centre lies within the match radius of the object's box,
     so large objects are matched anywhere on them; :func:`on_object`; :func:`nearest_object`: the
-    one object a target stands for in a frame, for the targets on an object and their times to
-    contact).
+    one object a target or warning stands for in a frame: a warning warns of that object only,
+    and a target counts for it only, in the targets on an object and their times to contact).
 false alarms (the paper's metrics)
     :func:`alarm_explained`: an alarm is explained when it lies within the match radius of an
     object that approaches, up to :data:`DEFAULT_TAIL` frames after its approach (a global
     alarm: when any object does); :func:`false_alarms` lists a Record's unexplained ones.
 false warnings (the warning metrics, another question)
-    :func:`warning_cause`: a warning is true when it is on an object on a collision course
-    before its contact; otherwise its cause is ``"pass"`` (on a pass-by object),
+    :func:`warning_cause`: a warning is true when the object it stands for
+    (:func:`nearest_object`) is on a collision course before its contact; otherwise its cause is
+    ``"pass"`` (on a pass-by object),
     ``"distractor"`` (on a receding, translating or static object) or ``"background"``;
     :func:`episodes` counts its runs of frames.
 
@@ -147,34 +148,31 @@ def warning_cause(x: float | None, y: float | None, frame: int, truth: VideoTrut
                   radius: float = DEFAULT_MATCH_RADIUS, tail: int = 0) -> tuple[str, ObjectTruth | None]:
     """Whether a warning at (x, y) in ``frame`` is true, and on what.
 
-    Returns ``("true", obj)`` for a warning on an object on a collision course (``collides``;
-    the labelled ``collider`` of a clip) up to ``tail`` frames after its contact, else
-    ``(cause, obj)`` with cause one of :data:`CAUSES`: ``"pass"`` (on a pass-by object),
-    ``"distractor"`` (on another object: receding, translating, static, or a collider after its
-    contact) or ``"background"`` (on no object; ``obj`` None). A warning without a position
-    (``x`` None: a global alarm) is true while a collision object is in view before its
-    contact, else it takes the cause of the objects in view (pass-by first).
+    A warning with a position stands for one object, the one :func:`nearest_object` gives (its
+    box nearest within ``radius``, among equals the nearer centre). Returns ``("true", obj)`` when
+    that object is on a collision course (``collides``; the labelled ``collider`` of a clip) up to
+    ``tail`` frames after its contact, else ``(cause, obj)`` with cause one of :data:`CAUSES`:
+    ``"pass"`` (a pass-by object), ``"distractor"`` (another object: receding, translating,
+    static, or a collider after its contact) or ``"background"`` (no object that near; ``obj``
+    None). A warning on a passing car 10 px beside a collision object's box warns of the car: it
+    is false, not a warning of the collision. A warning without a position (``x`` None: a global
+    alarm) is true while a collision object is in view before its contact, else it takes the
+    cause of the objects in view (pass-by first).
     """
-    objects = list(truth.objects) + ([truth.collider] if truth.collider is not None else [])
-    cands = []
-    for o in objects:
-        if not _present(o, frame) and not (o is truth.collider):
-            continue
-        if x is None:
-            cands.append((0.0, o))
-        else:
-            d = box_distance(x, y, o, frame)
-            if d <= radius:
-                cands.append((d, o))
-
     def live(o):
         return o.collides and (o.contact_frame is None or frame <= o.contact_frame + tail)
 
-    # the nearest candidate of the first class that has one (min keeps the first of equals)
+    if x is not None:
+        o = nearest_object(x, y, frame, truth, radius)
+        if o is None:
+            return "background", None
+        return ("true" if live(o) else "pass" if o.kind == "pass" else "distractor"), o
+    seen = [o for o in list(truth.objects) + ([truth.collider] if truth.collider is not None else [])
+            if _present(o, frame) or o is truth.collider]
     for verdict, of in (("true", live), ("pass", lambda o: o.kind == "pass"), ("distractor", lambda o: True)):
-        hits = [c for c in cands if of(c[1])]
-        if hits:
-            return verdict, min(hits, key=lambda c: c[0])[1]
+        hit = next((o for o in seen if of(o)), None)
+        if hit is not None:
+            return verdict, hit
     return "background", None
 
 

@@ -14,7 +14,7 @@ clip level (:func:`score_run`)
     the warning time.
 warning metrics (:func:`score_warnings`, for truth that says which objects will hit:
 :func:`warning_truth`)
-    collision objects warned before contact (:func:`mlplc2.evaluation.match.on_object`), lead
+    collision objects warned before contact (:func:`mlplc2.evaluation.match.nearest_object`), lead
     time, false warnings per cause (:func:`mlplc2.evaluation.match.warning_cause`) and their
     episodes, time-to-contact errors (RTE, MiD: :func:`mid_error`) and coverage,
     fragmentation; per labelled clip warned / missed / unplaced / false.
@@ -324,8 +324,8 @@ def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[
 
     A model's warning is its targets' warnings (models with targets), else its alarm: the fields
     in alarm of a model that localises, the frame's alarm of one that does not. Collision objects
-    (``kind == "collision"``, a clip's collider) are warned when a warning lies on them
-    (:func:`mlplc2.evaluation.match.on_object`) before contact; every other warning is false, with its
+    (``kind == "collision"``, a clip's collider) are warned when a warning stands for them (lies
+    nearest them, :func:`mlplc2.evaluation.match.nearest_object`) before contact; every other warning is false, with its
     cause (:func:`mlplc2.evaluation.match.warning_cause`), except within ``LATE_S`` after a contact, on
     the object that hit. On a labelled clip, frames from the contact on are not scored, and a
     warning before the danger onset minus ``EARLY_S`` is false ("early"), as is one off the
@@ -456,7 +456,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                        unplaced_lead_s=None if cf is None else round((cf - f) / fps, 4))
         if not blind and not rec["warned"] and (rules.early_before is None or f >= rules.early_before):
             for key, x, y in run.warnings_at(f):
-                if x is None or on_object(x, y, o, f, radius):
+                if x is None or nearest_object(x, y, f, truth, radius) is o:
                     c = o.center_at(f)
                     true = o.ttc_at(f, fps)
                     rec.update(warned=True, warning_frame=f,
@@ -467,7 +467,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                     break
         if run.has_targets and run.localises and not blind and rec["alarm_frame"] is None \
                 and (rules.early_before is None or f >= rules.early_before) \
-                and any(on_object(x, y, o, f, radius) for _, x, y in run.alarms_at(f)):
+                and any(nearest_object(x, y, f, truth, radius) is o for _, x, y in run.alarms_at(f)):
             # the paper's field alarm on the object (what the targets are built on), for comparison
             rec.update(alarm_frame=f, alarm_lead_s=None if cf is None else round((cf - f) / fps, 4))
         # fragmentation and time to contact: the targets (fields) on the object while in view
@@ -524,8 +524,8 @@ def _false_warnings(run: ModelRun, truth: VideoTruth,
                 false_frames.setdefault(cause, set()).add(f)
                 runs.setdefault(key, {}).setdefault(f, cause)
             elif x is not None:
-                o = next((c for c in rules.colliders if on_object(x, y, c, f, rules.radius)), None)
-                if o is not None:
+                o = nearest_object(x, y, f, truth, rules.radius)
+                if any(o is c for c in rules.colliders):
                     now[key] = o
         held = now
     episodes_by: dict[str, int] = {}
