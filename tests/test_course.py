@@ -16,7 +16,7 @@ from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
 from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, on_path, passes_still, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, passes_still, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -67,25 +67,6 @@ def test_a_box_cut_only_lately_keeps_the_course_of_its_frames_in_view():
     assert [q.cut for q in t.history][-1] and sum(not q.cut for q in t.history) >= TargetParams().min_frames
     out = estimate(t, TargetParams(), FPS, 12, SHAPE)
     assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
-
-
-def test_a_course_from_frames_in_view_long_ago_is_none_with_course_stale():
-    # course_stale (docs/model.md, "The same warning whatever the encoding, session 17"): the approach in view for
-    # its first frames, then cut by the border for the rest of its 30 frames. Off (0), its course is carried from
-    # its frames in view however long it has been cut; with course_stale 5 only while its newest frame in view is
-    # at most 5 frames old: later it has no course (the cut-box rules decide)
-    def misses(p):
-        seen = []
-        _looming(14.0, 30, contact=60, each=lambda t, k: seen.append(
-            (k, t.history[-1].frame - t.inside[-1].frame, estimate(t, p, FPS, k, SHAPE).miss)))
-        return seen
-
-    assert TargetParams().course_stale == 0                             # the default: off
-    off, on = misses(TargetParams()), misses(TargetParams(course_stale=5))
-    assert max(age for _, age, _ in off) > 5                            # cut for longer than 5 frames
-    assert all(m is not None for k, age, m in off if age > 5)           # carried from long ago
-    assert all((m is None) == (age > 5) for (k, age, m), (_, _, m0) in zip(on, off) if m0 is not None)
-    assert any(m is not None and age > 0 for _, age, m in on)           # a box cut lately keeps its course
 
 
 def test_a_warning_does_not_begin_on_a_cut_box_near_contact():
@@ -1159,69 +1140,3 @@ def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_
     assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
     passing.last_alarm = 24
     assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame
-
-
-def test_drift_refused_withholds_the_alarms_exemption_from_a_box_its_alarm_found_drifting():
-    # drift_refused (docs/model.md, "False warnings, session 17"; off by default): a young box (3 frames, no fit,
-    # no course) that expands about the heading (drift 1) and owns a field in collision alarm is refused by the
-    # alarm's drift test, and the refusal is marked; one on a collision course warns and is not marked; one on the
-    # path now that drifts, held back on its alarm's first frame (alarm_frames), is marked too. A box so
-    # marked loses the field alarm's exemption from path_drift (main: the alarm exempts it once the fit gives it a
-    # course), in its later alarm runs too; one not marked keeps it
-    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
-    off, on = TargetParams(drift_refused=False), TargetParams(drift_refused=True)
-    assert not TargetParams().drift_refused                               # off: measured (docs/model.md)
-    for p in (off, on):
-        young = _looming(30.0, 3, static=True)
-        young.last_alarm, young.alarm_run = 3, 3
-        assert drift(young, heading) == pytest.approx(1.0, abs=0.05)
-        out = estimate(young, p, FPS, 3, SHAPE, heading=heading)
-        assert out.miss is None and not out.warning and young.refused == p.drift_refused
-        steady = _looming(30.0, 3)
-        steady.last_alarm, steady.alarm_run = 3, 3
-        assert estimate(steady, p, FPS, 3, SHAPE, heading=heading).warning and not steady.refused
-        near = _looming(62.0, 4, contact=20, static=True)                # on the path now, drifting (drift 1)
-        near.last_alarm, near.alarm_run = 4, 1
-        assert on_path(near, p, heading) and drift(near, heading) == pytest.approx(1.0, abs=0.05)
-        out = estimate(near, p, FPS, 4, SHAPE, heading=heading)           # its alarm's first frame: alarm_frames
-        assert not out.warning and near.refused == p.drift_refused
-    t = _looming(30.0, 8, static=True)
-    t.last_alarm, t.alarm_run = 8, 6
-    assert not off_path(t, on, 8, heading, SHAPE, 0.7)                   # not marked: the alarm exempts it
-    t.refused = True
-    assert off_path(t, on, 8, heading, SHAPE, 0.7)                       # marked: path_drift holds it back
-    assert not off_path(t, off, 8, heading, SHAPE, 0.7)                  # off: exempt, as main
-    layer = TargetLayer(on, FPS)
-    t.last_alarm, layer._before = 7.0, 7.0                              # its alarm's last frame was the one before
-    field = type("F", (), dict(id=4, response=1.0, collision=True))()
-    layer._own(t, field, 8.0)                                            # the alarm goes on: the mark stays
-    assert t.alarm_run == 7 and t.refused
-    layer._before = 9.0
-    layer._own(t, field, 10.0)                                           # a new run (frame 9 without alarm): it stays
-    assert t.alarm_run == 1 and t.refused
-    assert off_path(t, on, 10, heading, SHAPE, 0.7)
-
-
-def test_alarm_first_begins_the_alarm_without_a_course_only_on_its_runs_first_frame():
-    # alarm_first (docs/model.md, "False warnings, session 17"; off by default): a seed 3.5 widths beside the
-    # heading on a collision course (to hit at 0.5 widths: it keeps its bearing) warns on its alarm's second
-    # frame in a row (alarm_frames 2) with the rule off; with it on, only a box that holds the heading does, or
-    # a seed on its run's first frame whose own course passes within max_miss (alarm_course), or one whose drift is
-    # not measured
-    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
-
-    def alarm(u0, uc, run, frames=(0, 4), **kw):
-        s = _seed(_crossing(heading, u0, uc, frames=frames, width=14.0, contact=20))
-        s.alarm_run = run
-        return estimate(s, TargetParams(alarm_warns=True, **kw), FPS, frames[-1], SHAPE, heading=heading).warning
-
-    assert not TargetParams().alarm_first                                # the default
-    assert alarm(3.5, 0.5, 2) and not alarm(3.5, 0.5, 2, alarm_first=True)
-    assert alarm(0.2, 0.0, 2) and alarm(0.2, 0.0, 2, alarm_first=True)  # it holds the heading
-    assert alarm(3.5, 0.5, 1, alarm_first=True)                         # the first frame, a seed course of 0.5
-    assert not alarm(3.5, 2.5, 1) and not alarm(3.5, 2.5, 1, alarm_first=True)   # its course passes: fleeting
-    # a box on the path near the heading whose drift is not measured (the static world there would drift under
-    # MIN_DRIFT_PX over one frame's growth) is not tested: it warns on its run's second frame as with the rule off
-    near = _seed(_crossing(heading, 0.9, 0.9, frames=(0, 1), width=14.0, contact=20))
-    assert drift(near, heading) is None
-    assert alarm(0.9, 0.9, 2, frames=(0, 1)) and alarm(0.9, 0.9, 2, frames=(0, 1), alarm_first=True)

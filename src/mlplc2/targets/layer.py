@@ -781,6 +781,6 @@ class TargetLayer:
                 host.last_answer = max(host.last_answer, t.last_answer)
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
                     host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
-                    host.alarm_courses, host.refused = t.alarm_courses, t.refused
+                    host.alarm_courses = t.alarm_courses
         self._tracks = out
 

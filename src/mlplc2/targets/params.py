@@ -320,19 +320,6 @@ class TargetParams(ParameterSet):
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
                                    real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
-    course_stale: int = param(0, """A target's course (``miss``) is extrapolated from the frames on which its box was
-                              wholly inside the image (a cut box gives neither the object's centre nor its size)
-                              only while the newest of them is at most this many frames (at ``nominal_fps``) old;
-                              a box cut for longer has no course (the cut-box rules decide: ``cut_course``,
-                              ``cut_onset_s``). A course fitted on a box's first frames and carried over a long cut
-                              predicts from where the box was, not from what it has become. Whether a box is cut
-                              a frame earlier or later is a knife edge (issue 22, item 7: ``nc07.mp4``'s x264 copy,
-                              no collision, warned falsely at 84 on a box cut at the frame's top since 70, its course
-                              0.53 from frames 61-69). 0 = off (the default: 5 silences that copy, item 7 met on
-                              ``nc07.mp4``, the standard suite unchanged, but holdout 1's ``ground_forward_4_h1``
-                              collider, its course carried over 19 cut frames, warns 5 frames later, lead 0.38 -> 0.22
-                              s; docs/model.md, "The same warning whatever the encoding, session 17").""",
-                              unit="frames", valid=Valid.integer(0))
     alarm_fresh: bool = param(False, """A field in collision alarm held by an older track (born before the field) whose fit, long
                               enough for one, gave no time to contact on its last frame seeds a target of its own, as a
                               field outside every box, which that track neither hosts nor takes in: the older box (the
@@ -475,35 +462,6 @@ class TargetParams(ParameterSet):
                                     alarm exempts": 3 loses the real clip crossing_car_strong_light's warning and
                                     shortens night_rear_end's and UAV_outdoor_1's leads).""", unit="frames",
                                     valid=Valid.integer(1))
-    drift_refused: bool = param(False, """``path_drift``'s exemption for a target with a field in collision alarm this frame
-                                does not hold for a target whose field alarm, without a course and beginning no
-                                warning, lay on an earlier frame (of this alarm run or an earlier one) on a box
-                                that drifted away from the heading by more than ``bearing_drift`` of the static
-                                world's drift (:func:`~mlplc2.targets.warning.drift`; from a translating camera, a box
-                                wholly inside the frame that does not hold the heading, whether or not it lay on the
-                                path: ``Track.refused``, :func:`~mlplc2.targets.warning.refused`): the alarm's own
-                                drift already said the box drifts as the static world does, and the same alarm lasting
-                                does not make it a collider's once the fit gives it a course. Off: measured in session 17
-                                (alone, on main after the session's merges: false episodes per 1000 frames standard
-                                0.41 -> 0.21, holdout 1 0.72 -> 0.51, the held-back holdout 9 0.41 -> 0.31, the others as
-                                before; no collision, lead or real clip moved on any of the eleven sets; with
-                                ``alarm_first`` the held-back holdout 10 lost a collider), but the 320x240 copy of the real
-                                clip ``night_rear_end`` then never warns on its van, which it warns at frame 102 without
-                                it, as the clip does (issue 22 item 7). False = off, the default (docs/model.md,
-                                "False warnings, session 17").""", valid=Valid.boolean())
-    alarm_first: bool = param(False, """From a translating camera (a measured heading), the field alarm without a course
-                              begins a warning on a box that does not hold the heading and whose drift is measured
-                              (:func:`~mlplc2.targets.warning.drift`) only on the first frame of its alarm run
-                              (``Track.alarm_run`` 1, where ``alarm_course`` lets a seed on a course within
-                              ``max_miss`` warn): later frames of the run (``alarm_frames``) wait for the fit's
-                              course. A box near the heading, whose drift the static world's motion there cannot
-                              measure, is not tested (without that exception ``drive_1_h5``'s lead vehicle, warned
-                              3.06 s ahead on its alarm's second frame, was warned 0.96 s ahead). A young box's drift over its first one to three frames is the box's
-                              jitter as much as its bearing. False = off (session 17, measured with
-                              ``drift_refused``: 8 of the 12 false episodes the two take on the standard suite and
-                              holdouts 1, 2, 6, 8, no collision, lead or real clip moved; but on the held-back holdout
-                              10 it loses ``ground_forward_3_h10``'s collider, warned 0.11 s ahead without it:
-                              docs/model.md, "False warnings, session 17").""", valid=Valid.boolean())
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
                               once a field of the target has been in collision alarm this many processed

@@ -16,22 +16,17 @@ from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "refused", "later", "passes_still", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "passes_still", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
-def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
-           stale: float | None = None) -> tuple[float, float] | None:
+def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
     heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
     pixels), from its last observations whose box was wholly inside the frame (``Track.inside``:
     a cut box gives neither the object's centre nor its size); None when they are too
-    few for a fit over ``span`` clock units (:func:`fits`), or (``stale``, clock units; None: however
-    old; ``TargetParams.course_stale``) when the newest of them lies more than ``stale`` before the
-    track's newest observation."""
+    few for a fit over ``span`` clock units (:func:`fits`)."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     if not fits(inside, span):
-        return None
-    if stale is not None and t.history and t.history[-1].frame - inside[-1].frame > stale + _EPS:
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
@@ -90,31 +85,6 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     if heading is None or shape is None or t.cut(shape, p.border):
         return False
     return on_path(t, p, heading) or keeps_bearing(t, heading, p.bearing_drift)
-
-
-def refused(t: Track, p: TargetParams, index: int, measured: tuple[float, float] | None,
-            shape: tuple[int, int] | None) -> bool:
-    """``drift_refused``: whether the field alarm without a course of track ``t`` (a field of it in collision alarm
-    this frame, clock ``index``, that began no warning) lies on a box that drifts as the static world does: the
-    camera translates (``measured``: the measured heading, px; None: no test), the box lies wholly inside a frame of
-    ``shape`` (h, w), does not hold the heading and drifted away from it by more than ``bearing_drift`` of the static
-    world's drift (:func:`drift`, known), whether or not it lies on the path now (:func:`on_path`) and whatever held
-    the alarm back (``keeps_bearing``, ``alarm_frames``, ...)."""
-    if not p.drift_refused or t.last_alarm != index or measured is None or shape is None \
-            or t.cut(shape, p.border) or holds(t, measured):
-        return False
-    ratio = drift(t, measured)
-    return ratio is not None and ratio > p.bearing_drift
-
-
-def later(t: Track, p: TargetParams, measured: tuple[float, float] | None) -> bool:
-    """``alarm_first``: whether the field alarm without a course of track ``t`` is past the first frame of its run
-    (``Track.alarm_run`` > 1) from a translating camera (``measured``: the measured heading, px; None: no test) on a
-    box that does not hold the heading (:func:`holds`) and whose drift is measured (:func:`drift`: a box near the
-    heading, where the static world barely drifts, is not tested), so begins no warning (it waits for the fit's
-    course)."""
-    return p.alarm_first and measured is not None and t.alarm_run > 1 and not holds(t, measured) \
-        and drift(t, measured) is not None
 
 
 def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
@@ -219,7 +189,6 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
         return False
     if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
             and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames) \
-            and not (p.drift_refused and t.refused) \
             and not (p.drift_miss > 0 and miss is not None and miss > p.drift_miss):
         return False
     ratio = drift(t, heading, away=True)
@@ -481,8 +450,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
-        miss_xy = course(t, heading, fit.ttc, t.fit_span,
-                         stale=p.span(p.course_stale, fps) if p.course_stale > 0 else None)
+        miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
             t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
@@ -503,12 +471,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape):
         warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
-                                                       or anisotropic(t, p, measured) or passed_by(t, p)
-                                                       or later(t, p, measured))
+                                                       or anisotropic(t, p, measured) or passed_by(t, p))
     if t.last_alarm == index and miss is not None:   # an alarm frame judged with a course (alarm_onset_course)
         t.alarm_courses += 1
-    if not warning and miss is None and refused(t, p, index, measured, shape):
-        t.refused = True      # drift_refused: its alarm this run on a box drifting as the static world does
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
