@@ -52,6 +52,9 @@ def held_back(t, p, index, ttc, miss, heading, shape) -> str:
     if ttc is not None and ttc > p.horizon_s:
         return f"ttc {ttc:.2f} > horizon"
     if miss is not None:
+        if p.alarm_onset_miss and not t.warned and _warning.wide(p, miss) \
+                and (t.alarm_courses > 0 if p.alarm_onset_course else t.alarm_run > 1):
+            return f"onset_miss: course {miss:.2f} beyond onset_miss past the alarm's first frame"
         return f"miss {miss:.2f} > {p.max_miss:.2f}"
     if heading is None or shape is None or t.cut(shape, p.border):
         return "cut/no heading"
