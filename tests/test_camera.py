@@ -165,9 +165,9 @@ def test_both_front_ends_stabilise_alike():
         assert np.allclose(maps[0], maps[1], atol=1e-4 * max(1.0, float(maps[0].max())))
 
 
-@pytest.mark.parametrize("name", ["MLPLC2", "SLPLC2"])
+@pytest.mark.parametrize("name", ["MLPLC2", "SLPLC2", "LPLC2"])
 def test_a_stabilised_model_honours_the_model_contract(name):
-    """MLPLC2 and SLPLC2 (stabilise=True) pass every check of mlplc2.testing (streaming = batch, reset,
+    """MLPLC2, SLPLC2 and LPLC2 (stabilise=True) pass every check of mlplc2.testing (streaming = batch, reset,
     pickling, determinism, bad input, size change, ...)."""
     import mlplc2
     from mlplc2.testing import run_checks
@@ -460,3 +460,41 @@ def test_the_compiled_texture_test_and_conversion_give_opencvs_and_numpys_values
     _fast_camera.to_uint8(gray, out)
     assert np.array_equal(out, np.clip(gray, 0, 255).astype(np.uint8))
     assert np.array_equal(est._reduce(gray)[0], np.clip(gray, 0, 255).astype(np.uint8))
+
+
+def _pan_then_loom(size=(160, 120), step=4, pan=25, still=10, loom=30):
+    """A camera panning over a far texture by ``step`` px a frame for ``pan`` frames (further than half the
+    frame), then still; ``still`` frames later a dark square looms at the frame centre (+1 px a side a frame)."""
+    from mlplc2.stimuli import procedural_background
+
+    w, h = size
+    bg = procedural_background(w + step * pan + 1, h, seed=3)
+    frames = [bg[:, step * t: step * t + w].copy() for t in range(pan + 1)]
+    for k in range(still + loom):
+        f = bg[:, step * pan: step * pan + w].copy()
+        if k >= still:
+            half = k - still + 1
+            f[h // 2 - half: h // 2 + half, w // 2 - half: w // 2 + half] = 0
+        frames.append(f)
+    return frames, pan + 1
+
+
+def test_lplc2s_cell_stays_at_the_frame_centre_under_gaze_stabilisation():
+    """LPLC2's one cell is retinotopic: at the centre of the frame whatever the camera did. After a pan
+    longer than half the frame, an object looming at the centre of the still camera's view: the
+    stabilised LPLC2 answers it as the paper's model does. (Carried with the turns as an attention
+    field is, the cell went with the pan to the border and never answered again: the flat LPLC2 panel
+    of ``mlplc2 demo``, whose background scrolls.)"""
+    import mlplc2
+
+    frames, start = _pan_then_loom()
+    h, w = frames[0].shape
+    answers = {}
+    for stabilise in (False, True):
+        model = mlplc2.LPLC2(fps=FPS, stabilise=stabilise)
+        outs = [model.step(f) for f in frames]
+        assert all((o.fields[0].x, o.fields[0].y) == (w // 2, h // 2) for o in outs)
+        answers[stabilise] = [o.response for o in outs[start:]]
+    assert max(answers[False]) > 0                       # the paper's model sees the object ...
+    assert max(answers[True]) >= 0.8 * max(answers[False])   # ... and so does the stabilised one
+    assert sum(r > 0 for r in answers[True]) >= 0.8 * sum(r > 0 for r in answers[False])

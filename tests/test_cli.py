@@ -460,6 +460,27 @@ def test_demo_command(tmp_path, capsys):
     assert {"mlplc2", "slplc2", "lplc2"} <= set(summary["models"])
 
 
+def test_demo_runs_the_papers_model_unless_told_to_stabilise(tmp_path, monkeypatch, capsys):
+    """The demo's scenes (the paper's Fig. 4 and 5) scroll their background behind a still camera while
+    the objects keep their places in the image: stabilised, the scroll is taken for a pan. So `mlplc2 demo`
+    runs the paper's model and says so; `--stabilise` runs the models as `mlplc2 run` builds them."""
+    import mlplc2.runner as runner
+
+    real_run, seen = runner.run, []
+
+    def spy(source, models, **kw):                       # a few frames are enough to see the options
+        seen.append(kw.get("stabilise", runner.RunOptions.stabilise))
+        return real_run(source, models, **{**kw, "max_frames": 3, "video": False})
+
+    monkeypatch.setattr(runner, "run", spy)
+    for extra in ([], ["--stabilise"]):
+        assert main(["demo", "--out", str(tmp_path / "demo"), "--scene", "six_objects", *extra]) == 0
+    err = capsys.readouterr().err
+    assert seen == [False, True]
+    assert "without gaze stabilisation" in err and "--stabilise" in err
+    assert "gaze stabilisation on" in err
+
+
 # -- a real clip from the paper -----------------------------------------------------------
 @pytest.mark.paper
 def test_paper_car_fullres_mapped_back(paper_dir, tmp_path):

@@ -201,12 +201,22 @@ def _print_run_summary(args, result) -> None:
 # ---------------------------------------------------------------------------
 # demo
 # ---------------------------------------------------------------------------
+#: The note `mlplc2 demo` ends with (stderr): why it runs the paper's model, not ``mlplc2 run``'s stabilised one.
+DEMO_NOTE = ("note: the paper's model, without gaze stabilisation (on by default in 'mlplc2 run'): the scene's "
+             "background scrolls behind a still camera; --stabilise takes the scroll for a pan (docs/model.md)")
+DEMO_NOTE_STABILISED = ("note: gaze stabilisation on: the scroll is taken for a pan, so the objects, which keep their "
+                        "places in the image, drift with the camera; fields and alarms come later (docs/model.md)")
+
+
 def _add_demo(p: argparse.ArgumentParser) -> None:
     p.add_argument("--out", "-o", default="mlplc2_demo", metavar="DIR",
                    help="folder for demo.mp4, its ground truth and the outputs (default: ./mlplc2_demo)")
     p.add_argument("--scene", choices=("four_phase", "six_objects"), default="four_phase",
                    help="which multi-object scene (default: four_phase, 400 frames)")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bar and no summary")
+    p.add_argument("--stabilise", action="store_true",
+                   help="gaze stabilisation, as 'mlplc2 run' has it by default (off here: the scene's background "
+                        "scrolls behind a still camera; stabilised, the scroll is taken for a pan)")
 
 
 def _cmd_demo(args) -> int:
@@ -214,7 +224,7 @@ def _cmd_demo(args) -> int:
 
     try:
         with compile_notice(list(DEMO_MODELS), args.quiet):
-            d = demo(args.out, scene=args.scene, quiet=args.quiet)
+            d = demo(args.out, scene=args.scene, quiet=args.quiet, stabilise=args.stabilise)
     except RunInterrupted as exc:
         return _report_interrupt(exc)
     lines = [f"demo scene {d.video} ({d.result.n_frames} frames) with {', '.join(d.result.models)} "
@@ -235,6 +245,8 @@ def _cmd_demo(args) -> int:
     lines.append(f"  mlplc2 made {n_fields} field(s); {len(matched)} matched an object")
     lines.append(f"outputs in {d.result.out}: {', '.join(sorted(d.result.files))}")
     say(args, *lines)
+    if not args.quiet:
+        print(f"{PROG}: {DEMO_NOTE_STABILISED if args.stabilise else DEMO_NOTE}", file=sys.stderr)
     return EXIT_OK
 
 

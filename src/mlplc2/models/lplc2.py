@@ -91,13 +91,18 @@ class _LPLC2Family(Model):
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
-        h, w = gray.shape
+        self._carry_fields(hom, gray.shape)
+        if self._layer is not None:
+            self._layer.compensate(hom, gray)
+
+    def _carry_fields(self, hom: np.ndarray, shape: tuple[int, int]) -> None:
+        """Move each attention field's centre with the camera's turn (homography ``hom``), so that a field
+        stays on the part of the world it answers to (mLPLC2's fields, sLPLC2's roaming field)."""
+        h, w = shape
         for f in self._fields:
             x, y, z = hom @ np.array([f.x, f.y, 1.0])
             f.x = int(min(max(round(x / z), 0), w - 1))
             f.y = int(min(max(round(y / z), 0), h - 1))
-        if self._layer is not None:
-            self._layer.compensate(hom, gray)
 
     def _hold(self, last: Output, elapsed: float) -> Output:
         """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""
@@ -245,6 +250,12 @@ class LPLC2(_LPLC2Family):
     """
 
     localises = False
+
+    def _carry_fields(self, hom: np.ndarray, shape: tuple[int, int]) -> None:
+        """Nothing: the cell is retinotopic, fixed at the centre of the frame (of the stabilised view, whose
+        pixels are the new frame's), whatever the camera does. Carried with the turns, as an attention field
+        is, it left the centre at the pan's rate and, pinned to the border, never answered again
+        (docs/model.md, "LPLC2's cell under gaze stabilisation")."""
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         lm = self._front(gray)
