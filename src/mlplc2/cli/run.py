@@ -47,7 +47,11 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         help="with --video: also draw every attention field")
     p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
                    help="camera's horizontal field of view in degrees: targets get bearings (azimuth_deg, "
-                        "elevation_deg; empty without it); stabilisation assumes 60 without it; see docs/targets.md")
+                        "elevation_deg; empty without it), and gaze stabilisation turns image motion into the "
+                        "camera's rotation through it (60 assumed without it; --gyro needs it), so the warnings "
+                        "depend on it: the defaults were set at 60, the benchmark scenes' value, and on the real "
+                        "clips 78 warns 5 of 8 collisions where 60 warns 8 (docs/cli.md, --hfov). Give the true "
+                        "value when known")
     p.add_argument("--heading", type=point_xy, metavar="X,Y",
                    help="a fixed heading: the point the camera moves towards (the focus of expansion), in the "
                         "pixels of the input (as every output, whatever --resize and the models' working size; "
