@@ -30,7 +30,7 @@ With ``--hfov 45,60,78,90,120`` it measures the field of view instead of the enc
 ``*_fullres`` copies left out) run with ``hfov_deg`` at each value (``none``: not given, 60 degrees assumed), and
 prints per clip and value the first warning frame, its position and whether it lies on the colliding object, the
 first field alarm, then one line per clip and model: ``first warning by field of view`` (the clip's contact frame
-in brackets). Default model there: ``mlplc2`` alone. (Session 18: 9 clips x 6 values, 336 s on two shared cores.)
+in brackets). Default model there: ``mlplc2`` alone. (Session 18: 9 clips x 6 values, 184 s on two cores at a load of ~12.)
 
     python benchmarks/encoding_invariance.py --hfov none,45,60,78,90,120 [--clip ...] [--model ...] [--json out.json]
 
@@ -139,7 +139,8 @@ class _HeldFrames(mlplc2.LGMD2):
         return out
 
 
-def measure(video: Path, truth, native: tuple[int, int], models: list[str], hfov_deg: float | None = None) -> dict[str, dict]:
+def measure(video: Path, truth, native: tuple[int, int], models: list[str],
+            hfov_deg: float | None = None) -> dict[str, dict]:
     """Per model: first warning frame, position in the labels' pixels, on the collider or not; and the
     indices of the frames held as repeats. ``hfov_deg``: the run's field of view (None: not given)."""
     with av.open(str(video)) as c:
@@ -236,8 +237,10 @@ def by_hfov(data: Path, names: list[str], models: list[str], values: list[float 
             print(f"{video.name:34s} hfov {name:5s} " + "  ".join(f"{m}: {fmt(r[m]):24s}" for m in models)
                   + f" first alarm {r[models[0]]['alarm']}", flush=True)
         col = truth.collider if truth is not None and truth.label == "collision" else None
-        contact = f" (contact {col.contact_frame})" if col is not None and getattr(col, "contact_frame", None) is not None else (
-            " (no collision)" if truth is not None and truth.label != "collision" else "")
+        if col is not None and getattr(col, "contact_frame", None) is not None:
+            contact = f" (contact {col.contact_frame:g})"
+        else:
+            contact = " (no collision)" if truth is not None and truth.label != "collision" else ""
         for m in models:
             false = truth is not None and truth.label != "collision"       # any warning there is false
             seq = ", ".join(f"{k}->{'none' if r[m]['frame'] is None else r[m]['frame']}"

@@ -515,9 +515,11 @@ class Evaluation:
         parts = [self.object_table()] if any(s["objects"] or not s["clips"] for s in self.models.values()) else []
         warn, cw = self.warning_table(), self.clip_warning_table()
         clip = self.clip_table()
-        parts += [self.notes(), clip and CLIP_ALARM_TITLE + clip, warn and "Warnings (collision objects of 3-D truth):\n\n" + warn,
-                  cw and "Warnings on labelled clips (the targets' warnings, on the collider; the field alarm's lead on "
-                         "it beside):\n\n" + cw, self.video_table() if details else ""]
+        parts += [self.notes(), clip and CLIP_ALARM_TITLE + clip,
+                  warn and "Warnings (collision objects of 3-D truth):\n\n" + warn,
+                  cw and "Warnings on labelled clips (the targets' warnings, on the collider; the field alarm's "
+                         "lead on it beside):\n\n" + cw,
+                  self.video_table() if details else ""]
         return "\n\n".join(p for p in parts if p)
 
     def write(self, out) -> dict[str, Path]:

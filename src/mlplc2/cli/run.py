@@ -58,7 +58,7 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "e.g. the frame's centre ((W-1)/2,(H-1)/2) for a camera that drives along its optical "
                         "axis); the targets' course (miss) and the camera-motion estimate use it; default: "
                         "measured from the images while the camera translates (with --stabilise), else the "
-                        "frame's centre (TargetParams.heading; docs/targets.md)")
+                        "frame's centre (TargetParams.heading; docs/targets.md); a negative X: --heading=X,Y")
     p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
                    help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
                         "and compensated before the front end, for a camera that pans, tilts or rolls "
