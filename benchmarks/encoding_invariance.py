@@ -26,6 +26,14 @@ version, scaled.
     python benchmarks/encoding_invariance.py [--data ../shared/data] [--clip helmet] [--model mlplc2] [--json out.json]
         [--cache DIR]
 
+With ``--hfov 45,60,78,90,120`` it measures the field of view instead of the encoding: each clip as it is (the
+``*_fullres`` copies left out) run with ``hfov_deg`` at each value (``none``: not given, 60 degrees assumed), and
+prints per clip and value the first warning frame, its position and whether it lies on the colliding object, the
+first field alarm, then one line per clip and model: ``first warning by field of view`` (the clip's contact frame
+in brackets). Default model there: ``mlplc2`` alone. (Session 18: 9 clips x 6 values, 184 s on two cores at a load of ~12.)
+
+    python benchmarks/encoding_invariance.py --hfov none,45,60,78,90,120 [--clip ...] [--model ...] [--json out.json]
+
 The first run writes the copies (411 s for all of them and mLPLC2 on two cores at a load of about 20); later runs
 reuse them (305 s at a load of 25; the model runs took ~65 s on a quiet machine in session 10).
 """
@@ -131,13 +139,15 @@ class _HeldFrames(mlplc2.LGMD2):
         return out
 
 
-def measure(video: Path, truth, native: tuple[int, int], models: list[str]) -> dict[str, dict]:
+def measure(video: Path, truth, native: tuple[int, int], models: list[str],
+            hfov_deg: float | None = None) -> dict[str, dict]:
     """Per model: first warning frame, position in the labels' pixels, on the collider or not; and the
-    indices of the frames held as repeats."""
+    indices of the frames held as repeats. ``hfov_deg``: the run's field of view (None: not given)."""
     with av.open(str(video)) as c:
         fps = float(c.streams.video[0].average_rate or 30)
     probe = _HeldFrames(fps=fps)
-    res = mlplc2.run(str(video), [*models, probe], out=False, quiet=True, progress=False, plot=False)
+    res = mlplc2.run(str(video), [*models, probe], out=False, quiet=True, progress=False, plot=False,
+                     hfov_deg=hfov_deg)
     sx, sy = native[0] / res.size[0], native[1] / res.size[1]
     nat = lambda x, y: ((x + 0.5) * sx - 0.5, (y + 0.5) * sy - 0.5)  # noqa: E731
     out = {}
@@ -207,6 +217,41 @@ def fmt(r: dict) -> str:
     return f"{r['frame']:>3} ({r['x']:>4},{r['y']:>4}) {on}"
 
 
+def hfov_values(text: str) -> list[float | None]:
+    """``--hfov``'s comma-separated degrees (``none``: not given)."""
+    return [None if v.strip().lower() == "none" else float(v) for v in text.split(",") if v.strip()]
+
+
+def by_hfov(data: Path, names: list[str], models: list[str], values: list[float | None]) -> dict:
+    """The first warning of each clip as it is (no ``*_fullres`` copy) at each field of view in ``values``."""
+    table = {}
+    for video, key, truth, native, size in measured(data, names):
+        if "_fullres" in video.name:
+            continue
+        rows = {}
+        for hfov in values:
+            name = "none" if hfov is None else f"{hfov:g}"
+            rows[name] = r = measure(video, truth, native, models, hfov)
+            for m in models:
+                r[m].pop("_births"), r[m].pop("_boxes"), r[m].pop("held_frames")
+            print(f"{video.name:34s} hfov {name:5s} " + "  ".join(f"{m}: {fmt(r[m]):24s}" for m in models)
+                  + f" first alarm {r[models[0]]['alarm']}", flush=True)
+        col = truth.collider if truth is not None and truth.label == "collision" else None
+        if col is not None and getattr(col, "contact_frame", None) is not None:
+            contact = f" (contact {col.contact_frame:g})"
+        else:
+            contact = " (no collision)" if truth is not None and truth.label != "collision" else ""
+        for m in models:
+            false = truth is not None and truth.label != "collision"       # any warning there is false
+            seq = ", ".join(f"{k}->{'none' if r[m]['frame'] is None else r[m]['frame']}"
+                            + ("" if r[m]["frame"] is None or (r[m]["on"] in (None, True) and not false)
+                               else " (false)" if false else " OFF")
+                            for k, r in rows.items())
+            print(f"{'':34s} {m}: first warning by field of view{contact}: {seq}", flush=True)
+        table[video.name] = rows
+    return table
+
+
 def main(argv=None) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--data", type=Path, default=Path(__file__).resolve().parents[1] / ".." / "shared" / "data")
@@ -216,7 +261,14 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path, help="also write the table as JSON")
     ap.add_argument("--cache", type=Path, default=CACHE,
                     help=f"where the copies are kept, named by source checksum and settings (default {CACHE})")
+    ap.add_argument("--hfov", type=hfov_values, metavar="DEG,DEG,...",
+                    help="measure the field of view instead: each clip as it is at these values (none: not given)")
     args = ap.parse_args(argv)
+    if args.hfov:
+        table = by_hfov(args.data, args.clip, args.model or ["mlplc2"], args.hfov)
+        if args.json:
+            args.json.write_text(json.dumps(table, indent=1))
+        return 0
     models = args.model or ["mlplc2", "flow"]
     copies = args.copy or list(COPIES)
     table = {}

@@ -223,6 +223,21 @@ def test_clip_level_metrics():
     assert "| lgmd1 | 5 | 2 | 1 | 1 | 1 | 0.60 | 0.67 | 0.67 | 0.17 |" in md
 
 
+def test_the_clip_table_is_named_for_the_field_alarm_it_scores():
+    """The clip-level outcome and lead are the field alarm's (any field, anywhere): beside the targets'
+    warnings on a labelled clip (warned: no), the table must not read as a warning (ux9, session 18)."""
+    gt = {"videos": {"a.mp4": {"label": "collision", "collision_frame": 20, "track": [[0, 100.0, 80.0, 20.0]]}}}
+    ev = evaluate(_result("x/a.mp4", 30, alarms={15, 16}, field_rows={15: [(1, 300.0, 200.0, True)],
+                                                                    16: [(1, 300.0, 200.0, True)]}), gt)
+    assert ev.videos[0]["outcome"] == "TP" and ev.models["mlplc2"]["warning_s"] == pytest.approx(5 / 30, abs=1e-4)
+    md = ev.to_markdown(details=True)
+    table = md.split("Field alarm on labelled clips", 1)[1].split("\n\n")[1]
+    assert table.splitlines()[0].endswith("| recall | alarm lead (s) |")
+    assert "warning (s)" not in md and "| alarm outcome |" in md
+    lines = [line for line in md.splitlines() if line.startswith("| mlplc2 | x/a.mp4") or line.startswith("| mlplc2 | a.mp4")]
+    assert any("| no |" in line for line in lines)                  # the targets' warning: none
+
+
 def test_markdown_and_json_round_trip(scene, tmp_path):
     ev = evaluate(scene["result"], scene["gt"])
     md = ev.to_markdown()

@@ -11,7 +11,7 @@ object level
 clip level
     ``"label": "collision" | "no_collision"`` with an optional ``collision_frame``, scored as a
     binary classification (alarm before the collision frame = true positive, alarm in a
-    no-collision clip = false positive): accuracy, precision, recall and warning time.
+    no-collision clip = false positive): accuracy, precision, recall and the alarm's lead time (``warning_s``).
 
 Truth that says which objects will hit (3-D objects with a ``kind``, labelled clips with the
 collider's track) also gets the **warning metrics** (``docs/evaluation.md``, "Warning metrics";
@@ -298,6 +298,11 @@ def _fmt(v, digits=1, pct=False) -> str:
 #: Model labels longer than this are shortened in the Markdown tables (the JSON keeps them whole).
 LABEL_WIDTH = 40
 
+#: The title of the clip-level table (:meth:`Evaluation.clip_table`): it scores the paper's field alarm, which a
+#: clip's targets may not share (a TP there beside "warned: no" in the warnings on labelled clips).
+CLIP_ALARM_TITLE = ("Field alarm on labelled clips (the paper's clip-level score: any field in collision alarm, "
+                    "anywhere in the frame, before contact; not the targets' warning, below):\n\n")
+
 
 @dataclass
 class Evaluation:
@@ -416,11 +421,13 @@ class Evaluation:
         return "\n".join(lines)
 
     def clip_table(self) -> str:
-        """Markdown: clip-level metrics per model (empty string without clip-level truth)."""
+        """Markdown: clip-level metrics per model (empty string without clip-level truth): the paper's
+        score of the field alarm (any field in alarm, anywhere in the frame), not the targets' warning
+        (:meth:`clip_warning_table`); its lead column is the JSON's ``warning_s``, the alarm's lead."""
         if not any(s["clips"] for s in self.models.values()):
             return ""
         shown = self._shown()[0]
-        lines = ["| model | clips | TP | FP | TN | FN | accuracy | precision | recall | warning (s) |",
+        lines = ["| model | clips | TP | FP | TN | FN | accuracy | precision | recall | alarm lead (s) |",
                  "|" + "|".join(["---"] * 10) + "|"]
         for s in self.models.values():
             lines.append(f"| {shown[s['model']]} | {s['clips']} | {s['tp']} | {s['fp']} | {s['tn']} | {s['fn']} "
@@ -429,10 +436,10 @@ class Evaluation:
         return "\n".join(lines)
 
     def video_table(self) -> str:
-        """Markdown: one row per (model, video)."""
+        """Markdown: one row per (model, video); ``alarm outcome``: the clip-level outcome of the field alarm."""
         shown = self._shown()[0]
         lines = ["| model | video | frames | objects | detected | alarmed | fields | false alarms | first alarm "
-                 "| clip |", "|" + "|".join(["---"] * 10) + "|"]
+                 "| alarm outcome |", "|" + "|".join(["---"] * 10) + "|"]
         for v in self.videos:
             det = "-" if not v["localises"] else f"{v['detected']}/{v['objects']}"
             lines.append(f"| {shown[v['model']]} | {v['video']} | {v['frames']} | {v['objects']} | {det} "
@@ -507,8 +514,12 @@ class Evaluation:
         """The per-model comparison table(s); ``details`` adds the per-video table."""
         parts = [self.object_table()] if any(s["objects"] or not s["clips"] for s in self.models.values()) else []
         warn, cw = self.warning_table(), self.clip_warning_table()
-        parts += [self.notes(), self.clip_table(), warn and "Warnings (collision objects of 3-D truth):\n\n" + warn,
-                  cw and "Warnings on labelled clips:\n\n" + cw, self.video_table() if details else ""]
+        clip = self.clip_table()
+        parts += [self.notes(), clip and CLIP_ALARM_TITLE + clip,
+                  warn and "Warnings (collision objects of 3-D truth):\n\n" + warn,
+                  cw and "Warnings on labelled clips (the targets' warnings, on the collider; the field alarm's "
+                         "lead on it beside):\n\n" + cw,
+                  self.video_table() if details else ""]
         return "\n\n".join(p for p in parts if p)
 
     def write(self, out) -> dict[str, Path]:

@@ -186,6 +186,18 @@ hfov_degrees = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "d
 nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
+def point_xy(text: str) -> tuple[float, float]:
+    """An argparse ``type`` for ``--heading``: ``'X,Y'`` -> ``(X, Y)``, two finite numbers (pixels)."""
+    parts = text.replace(" ", "").split(",")
+    try:
+        x, y = (float(v) for v in parts)
+    except ValueError:
+        x = y = math.nan
+    if not (math.isfinite(x) and math.isfinite(y)):
+        raise argparse.ArgumentTypeError(f"expected X,Y (two numbers, pixels of the input), got {text!r}")
+    return x, y
+
+
 def frame_size(text: str) -> tuple[int, int]:
     """An argparse ``type`` for ``--resize``: ``'WxH'`` -> ``(W, H)`` (:func:`mlplc2.io.parse_resize`'s
     checks; its message as a one-line usage error, as the other options')."""

@@ -243,7 +243,7 @@ def _false_alarms(run: ModelRun, approaching: list[ObjectTruth], *, radius: floa
 
 def _clip_outcome(truth: VideoTruth, alarm_frames: list[int], fps: float) -> tuple[str | None, float | None]:
     """A labelled clip's outcome (TP, FN, FP, TN; None without a label) and, for a TP with a
-    collision frame, the warning time (s)."""
+    collision frame, the field alarm's lead (s; ``warning_s``, a historical name: not the targets' warning)."""
     if truth.label is None:
         return None, None
     if truth.label != "collision":

@@ -178,6 +178,12 @@ class FrameSource:
             return (x + 0.5) * self.scale_x - 0.5, (y + 0.5) * self.scale_y - 0.5
         return x * self.scale_x, y * self.scale_y
 
+    def to_model(self, x: float, y: float) -> tuple[float, float]:
+        """Map a point from input pixels to model (resized) pixels: the inverse of :meth:`to_input`."""
+        if self._centres:
+            return (x + 0.5) / self.scale_x - 0.5, (y + 0.5) / self.scale_y - 0.5
+        return x / self.scale_x, y / self.scale_y
+
     # -- decoding thread ------------------------------------------------------
     def _drain(self) -> None:
         """Live, before iteration: read on, keeping the newest frame as the first to give."""

@@ -311,6 +311,7 @@ class Model(abc.ABC):
         self._diffs.clear()
         self._primed = 0                              # changes of prime_repeats still ahead
         self._work: tuple[int, int] | None = None     # (W, H) of the working frames, None: as given
+        self._input_map = None                        # input pixels -> the frames' (set_input_map)
         self._t0: float | None = None      # time (s) of frame 0: the clock's origin
         self._t_last: float | None = None  # time (s) of the last frame
         self.clock: float = 0              # this frame's time in frame intervals since frame 0
@@ -459,9 +460,28 @@ class Model(abc.ABC):
         self._last_out = out
         return out
 
+    def set_input_map(self, to_frames) -> None:
+        """How the pixels of the input the user gave map onto the frames this model is given:
+        ``to_frames(x, y) -> (x, y)``, or None (the same pixels). :func:`mlplc2.run` sets it after
+        resizing the video (``--resize``, ``--scale``, or its reduction to the working width in the
+        decoding thread: :meth:`mlplc2.io.FrameSource.to_model`), so that ``TargetParams.heading``,
+        given in the input's pixels as every output is, means the same point whatever size the
+        frames reach the model at. :meth:`reset` forgets it."""
+        self._input_map = to_frames
+
+    def _work_heading(self) -> tuple[float, float] | None:
+        """``TargetParams.heading`` (the input's pixels; None stays None) in the working frame's
+        pixels: the one mapping of a fixed heading, for every model with targets (the course,
+        the warning and the camera-motion estimate read it there)."""
+        tp = getattr(self, "target_params", None)
+        return None if tp is None else self._work_point(tp.heading)
+
     def _work_point(self, point: tuple[float, float] | None) -> tuple[float, float] | None:
-        """``point`` (x, y), in the pixels of the frames given, in the working frame's pixels (the
-        inverse of the mapping of the outputs; None stays None)."""
+        """``point`` (x, y), in the pixels of the input (:meth:`set_input_map`; without one, of the
+        frames given), in the working frame's pixels (the inverse of the mapping of the outputs;
+        None stays None)."""
+        if point is not None and self._input_map is not None:
+            point = tuple(float(v) for v in self._input_map(float(point[0]), float(point[1])))
         if point is None or self._work is None:
             return point
         sx, sy = self._work[0] / self._shape[1], self._work[1] / self._shape[0]

@@ -377,7 +377,7 @@ class FlowTTC(Model):
         """Gaze stabilisation, as the LPLC2 family's (docs/model.md, "Camera motion"): when the
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
         self.camera_motion, hom = self._camera.turn(cur, gray.shape, hfov_deg=self.hfov_deg,
-                                                    heading=self._work_point(self.target_params.heading),
+                                                    heading=self._work_heading(),
                                                     omega=self.rotation_given)
         if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
             self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
@@ -415,7 +415,7 @@ class FlowTTC(Model):
         if self._layer is None:
             tp = self.target_params
             if tp.heading is not None:                     # the heading in working pixels
-                tp = tp.replace(heading=self._work_point(tp.heading))
+                tp = tp.replace(heading=self._work_heading())
             self._layer = TargetLayer(tp, self.fps, align_kernel=self._align_kernel, change_kernel=self._change_kernel,
                                       focal=focal_length(w, self.hfov_deg), measure=self._measure)
         self._stabilise(gray, cur)

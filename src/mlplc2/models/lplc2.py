@@ -84,7 +84,7 @@ class _LPLC2Family(Model):
     def _stabilise(self, gray: np.ndarray) -> None:
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
         self.camera_motion, hom = self._camera.turn(gray, gray.shape, hfov_deg=self.hfov_deg,
-                                                    heading=self._work_point(self.target_params.heading),
+                                                    heading=self._work_heading(),
                                                     omega=self.rotation_given)
         if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
             self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
@@ -151,7 +151,7 @@ class _LPLC2Family(Model):
         if self._layer is None:
             tp = self.target_params
             if tp.heading is not None:                     # the heading in working pixels
-                tp = tp.replace(heading=self._work_point(tp.heading))
+                tp = tp.replace(heading=self._work_heading())
             self._layer = TargetLayer(tp, self.fps, kernel=self._edge_kernel, align_kernel=self._align_kernel,
                                       change_kernel=self._change_kernel,
                                       focal=focal_length(gray.shape[1], self.hfov_deg))

@@ -315,6 +315,8 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     if len(widths) == 1 and None not in widths and not src.resized and w > (work := widths.pop()):
         # The models' reduction to their working width (Model.work_width), done in the decoding thread.
         src.reduce_to((work, max(int(round(h * work / w)), max(m.min_size for m in built))))
+    for m in built:          # TargetParams.heading is in the input's pixels, as every output
+        m.set_input_map(src.to_model if src.resized else None)
     auto = [m for m in built if m.repeat_threshold == "auto"]
     changes = _prescan_changes(source, auto, src, options) if auto else None
     duplicated = None if changes is None else looks_duplicated(changes)

@@ -159,9 +159,15 @@ class TargetParams(ParameterSet):
                              valid=Valid.real(minimum=0))
     max_ttc_s: float = param(10.0, "Longer times to contact are reported as None (no measurable approach).",
                              unit="s", valid=Valid.real(minimum=0))
-    heading: tuple[float, float] | None = param(None, """Heading point (x, y) in the model's frames; None =
-                                                the principal point ((W - 1) / 2, (H - 1) / 2): the camera
-                                                moves along its optical axis, or stands still.""",
+    heading: tuple[float, float] | None = param(None, """Heading point (x, y): where the camera moves to (the
+                                                focus of expansion), in the pixels of the input, as every
+                                                output (``mlplc2.run`` and ``mlplc2 run --heading X,Y``: the
+                                                video's, whatever ``resize`` and the models' working width; a
+                                                model stepped by hand: the frames given to ``step``); the model
+                                                maps it to its working pixels. None = measured from the images
+                                                while the camera translates (gaze stabilisation), else the
+                                                principal point ((W - 1) / 2, (H - 1) / 2): the camera moves
+                                                along its optical axis, or stands still.""",
                                                 unit="px", valid=Valid.point())
     border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
                           neither the object's size nor its centre, so the course is fitted only from the
