@@ -155,17 +155,18 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     real = tmp_path / "real"
     assert main(["benchmark", "--out", "o", "--quick", "--models", "mlplc2", "-m", "lgmd2", "--real", str(real),
                  "--scheduler", "tcp://h:8786", "--horizon", "2.5", "--max-miss", "0.5", "--stabilise", "--force",
-                 "--settings", "drive, drone", "--holdout", "2"]) == 0
+                 "--settings", "drive, drone", "--holdout", "2", "--hfov", "90"]) == 0
     assert capsys.readouterr().out == f"TABLE\nwrote {tmp_path / 'benchmark.md'}\n"
     out, kw = seen[-1]
     assert out == "o" and kw == {"quick": True, "models": ["mlplc2", "lgmd2"], "real": str(real),
                                  "scheduler": "tcp://h:8786", "workers": None,
                                  "target_params": {"horizon_s": 2.5, "max_miss": 0.5}, "stabilise": True,
-                                 "progress": True, "force": True, "settings": ["drive", "drone"], "holdout": 2}
+                                 "progress": True, "force": True, "settings": ["drive", "drone"], "holdout": 2,
+                                 "hfov_deg": 90.0}
     assert main(["benchmark", "--out", "o", "--no-real", "--workers", "2", "-q"]) == 0
     assert seen[-1][1] == {"quick": False, "models": None, "real": None, "scheduler": None, "workers": 2,
                            "target_params": None, "stabilise": None, "progress": False, "force": False,
-                           "settings": None, "holdout": 0}
+                           "settings": None, "holdout": 0, "hfov_deg": None}
     assert main(["benchmark", "--out", "o"]) == 0 and seen[-1][1]["real"] == "auto"
     assert main(["benchmark", "--out", "o", "--no-stabilise"]) == 0 and seen[-1][1]["stabilise"] is False
 
@@ -178,6 +179,7 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     (["benchmark", "--out", "o", "-m", "nope"], "unknown model 'nope'"),
     (["benchmark", "--out", "o", "--settings", "drive,highway"], "unknown benchmark setting(s) highway"),
     (["benchmark", "--out", "o", "--holdout", "-1"], "--holdout"),
+    (["benchmark", "--out", "o", "--hfov", "180", "--no-real"], "--hfov: expected degrees in (0, 180)"),
     (["run", "v.mp4", "--horizon", "1e40"], "horizon_s"),
     (["batch", "v.mp4", "--out", "o", "--max-miss", "nan"], "--max-miss: expected a number >= 0, got 'nan'"),
 ])
@@ -233,7 +235,8 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)
 
 
-@pytest.mark.parametrize("extra", [["--settings", "drive"], ["--settings", "drivee"], ["--holdout", "1"]])
+@pytest.mark.parametrize("extra", [["--settings", "drive"], ["--settings", "drivee"], ["--holdout", "1"],
+                                   ["--hfov", "90"]])
 def test_quick_with_settings_or_holdout_is_a_one_line_error(extra, tmp_path, monkeypatch, capsys):
     """``--quick`` has its own four scenes: ``--settings`` and ``--holdout`` (which choose among the
     full suite's) were dropped silently with it, a misspelt setting too, and the run measured
@@ -246,3 +249,43 @@ def test_quick_with_settings_or_holdout_is_a_one_line_error(extra, tmp_path, mon
     err = capsys.readouterr().err.splitlines()
     assert len(err) == 1 and err[0].startswith("mlplc2: error: ") and "--quick" in err[0], err
     assert not (tmp_path / "o").exists()
+
+
+def test_another_lens_renders_the_same_worlds_through_it_and_tells_the_models(tmp_path, monkeypatch, capsys):
+    """``--hfov D`` renders the generated scenes through a camera of field of view D (the same draws; named
+    ..._fD): in the settings of real use, placed in metres, the same world, so an object at the same place is
+    smaller by the ratio of the focal lengths, tan(30 deg) / tan(D / 2); the models are given D (as a user who
+    knows the lens); the real clips, whose lens is their own, need --no-real: one error line otherwise, before
+    anything is generated."""
+    import math
+
+    std, wide = suite(settings=["drive"]), suite(settings=["drive"], hfov_deg=90)
+    assert [s.name + "_f90" for s in std] == [s.name for s in wide] and {s.hfov_deg for s in wide} == {90.0}
+    assert suite(hfov_deg=60) == suite()                           # the suite's own lens: the same scenes
+    a, b = std[0].generate().truth(), wide[0].generate().truth()
+    assert (a.camera["hfov_deg"], b.camera["hfov_deg"]) == (60.0, 90.0)
+    oa, ob = a.objects[0], b.objects[0]
+    frame = next(p.frame for p in oa.track if p.width and p.width > 20)
+    ratio = ob.width_at(frame) / oa.width_at(frame)
+    assert ratio == pytest.approx(math.tan(math.radians(30)) / math.tan(math.radians(45)), rel=0.02)
+
+    def generate(*args, **kwargs):
+        raise AssertionError("scenes generated")
+
+    monkeypatch.setattr(benchmark_module, "_generate", generate)
+    assert main(["benchmark", "--out", str(tmp_path / "o"), "--hfov", "90"]) == 2
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and "--no-real" in err[0], err
+    seen = {}
+
+    def batch(videos, out, **kw):
+        seen.update(kw)
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(benchmark_module, "_generate", lambda scenes, folder, progress: ([], folder / "gt.json"))
+    import mlplc2.batch as batch_module
+
+    monkeypatch.setattr(batch_module, "batch", batch)
+    with pytest.raises(KeyboardInterrupt):
+        benchmark(tmp_path / "o", real=None, hfov_deg=90, models=["mlplc2"], progress=False)
+    assert seen["run_options"] == {"hfov_deg": 90.0}

@@ -45,6 +45,9 @@ MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
 REAL_DIR = Path("..") / "shared" / "data" / "real"
 #: File name of the generated suite's ground truth (in ``scenes/``).
 SUITE_GT = "ground_truth.json"
+#: The horizontal field of view (degrees) of the generated scenes' camera, unless ``--hfov`` says otherwise; the
+#: models run without ``hfov_deg`` then, so the 60 degrees they assume is the truth.
+SUITE_HFOV = 60.0
 
 
 @dataclass(frozen=True)
@@ -61,6 +64,7 @@ class Scene:
     blur_px: float = 0.0
     kinds: tuple[str, ...] | None = None
     index: int | None = None
+    hfov_deg: float = 60.0
 
     def generate(self):
         from .stimuli import random_scene
@@ -69,10 +73,10 @@ class Scene:
             from .stimuli.world.realuse import real_use_scene
 
             return real_use_scene(self.camera, self.index, self.seed, duration_s=self.duration_s,
-                                  noise_std=self.noise_std, blur_px=self.blur_px)
+                                  noise_std=self.noise_std, blur_px=self.blur_px, hfov_deg=self.hfov_deg)
         return random_scene(self.seed, background=self.background, camera=self.camera,
                             appearance=self.appearance, duration_s=self.duration_s, noise_std=self.noise_std,
-                            blur_px=self.blur_px, kinds=self.kinds)
+                            blur_px=self.blur_px, kinds=self.kinds, hfov_deg=self.hfov_deg)
 
 
 #: The settings of real use (:mod:`mlplc2.stimuli.world.realuse`), five scenes each, after the others.
@@ -88,7 +92,8 @@ _KINDS = (("collision",), ("collision", "pass"), ("pass", "static", "translate")
           ("collision", "collision", "pass"))
 
 
-def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: int = 0) -> list[Scene]:
+def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: int = 0,
+          hfov_deg: float | None = None) -> list[Scene]:
     """The generated scenes: 30 (every background and camera motion of :data:`_SETTINGS` with
     dark, bright, textured and mixed objects, the objects of :data:`_KINDS`, 5-10 s, sensor
     noise and optics blur on every other scene) and 15 of real use (:data:`REAL_USE`), or 4
@@ -96,7 +101,13 @@ def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: i
 
     ``settings`` keeps only those settings (names as in :func:`setting_names`); ``holdout`` > 0
     draws every scene with other seeds (``seed + 1000 * holdout``, named ``..._hN``: other textures,
-    speeds, turns and object paths in the same settings), for checking a figure on scenes nothing was tuned on."""
+    speeds, turns and object paths in the same settings), for checking a figure on scenes nothing was tuned on.
+    ``hfov_deg`` (None: :data:`SUITE_HFOV`, 60 degrees) renders every scene through a camera of that horizontal
+    field of view (the same draws; named ``..._fD`` when it is not 60): a check of the defaults, set at 60, on the
+    lenses of real cameras. The settings of real use place their objects in metres, so they are the same worlds
+    seen through another lens (a wider one: smaller objects, more of the roadside); the other settings place each
+    object by its width in the image at its onset (3-12 px), so their objects start as large as at 60 degrees,
+    nearer, and the background's geometry changes with the lens."""
     if settings is not None:
         unknown = sorted(set(settings) - set(setting_names()))
         if unknown:
@@ -124,6 +135,11 @@ def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: i
         scenes = [sc for sc in scenes if _setting_of(sc) in settings]
     if holdout:
         scenes = [replace(sc, name=f"{sc.name}_h{holdout}", seed=sc.seed + 1000 * int(holdout)) for sc in scenes]
+    from .camera import check_hfov
+
+    hfov = check_hfov(SUITE_HFOV if hfov_deg is None else hfov_deg)
+    if hfov != SUITE_HFOV:
+        scenes = [replace(sc, name=f"{sc.name}_f{hfov:g}", hfov_deg=hfov) for sc in scenes]
     return scenes
 
 
@@ -400,7 +416,7 @@ def _stabilise(stabilise) -> bool:
 def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
               scheduler: str | None = None, workers: int | None = None, target_params=None,
               stabilise: bool | None = None, settings: Sequence[str] | None = None, holdout: int = 0,
-              progress: bool = True, force: bool = False) -> BenchmarkResult:
+              hfov_deg: float | None = None, progress: bool = True, force: bool = False) -> BenchmarkResult:
     """Run the benchmark into folder ``out`` (see the module docstring).
 
     Parameters
@@ -426,6 +442,11 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         Only these settings of the generated suite (:func:`setting_names`; default all). Not with ``quick``.
     holdout : int
         0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`). Not with ``quick``.
+    hfov_deg : float, optional
+        Render the generated scenes through a camera of this horizontal field of view (degrees, in (0, 180);
+        None: :data:`SUITE_HFOV`, 60) and give it to the models (``hfov_deg`` of :func:`mlplc2.run`, as a user who
+        knows the lens would): how the defaults, set at 60, hold on another lens. Not with the real clips, whose
+        field of view is their own (``real=None``), nor with ``quick``.
     progress : bool
         Progress bars on stderr.
     force : bool
@@ -437,9 +458,15 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     from .targets import TargetParams
 
     t0 = time.perf_counter()
-    if quick and (settings is not None or holdout):   # they choose among the full suite's scenes
-        raise InputValueError("--settings and --holdout choose among the full suite's scenes: not with --quick "
-                              "(its own four scenes)")
+    if quick and (settings is not None or holdout or hfov_deg is not None):   # the full suite's scenes
+        raise InputValueError("--settings, --holdout and --hfov choose among the full suite's scenes: not with "
+                              "--quick (its own four scenes)")
+    from .camera import check_hfov
+
+    hfov = None if hfov_deg is None else check_hfov(hfov_deg)
+    if hfov is not None and hfov != SUITE_HFOV and real is not None:
+        raise InputValueError("--hfov renders the generated scenes through another lens; the real clips have their "
+                              "own: add --no-real")
     models = resolve_names(models) if models else [m for m in MODELS if m in available_models()]
     tp = TargetParams.coerce(target_params, "target_params")
     out = Path(out)
@@ -451,7 +478,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     if real == "auto" and not quick and real_dir is None:
         warnings.warn(f"no labelled real clips found ({REAL_DIR} from here, nor beside the checkout): the report "
                       "has none; --real DIR gives them, --no-real leaves them out", BenchmarkWarning, stacklevel=2)
-    scenes = suite(quick, settings=settings, holdout=holdout)
+    scenes = suite(quick, settings=settings, holdout=holdout, hfov_deg=hfov)
     videos, suite_gt = _generate(scenes, out / "scenes", progress)
     clips, real_gt = _real_inputs(real_dir)
     run_options = {}
@@ -459,6 +486,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         run_options["target_params"] = {k: v for k, v in tp.to_dict().items() if getattr(type(tp)(), k) != v}
     if stabilise is not None:
         run_options["stabilise"] = bool(stabilise)
+    if hfov is not None and hfov != SUITE_HFOV:
+        run_options["hfov_deg"] = hfov
     res = batch([str(v) for v in videos + clips], out / "runs", models=models, scheduler=scheduler,
                 workers=workers, run_options=run_options, progress=progress, force=force)
     failed, seen = [], set()
@@ -490,6 +519,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
                                        "stabilise": _stabilise(stabilise), "holdout": int(holdout),
+                                       "hfov_deg": SUITE_HFOV if hfov is None else hfov,
                                        "settings": None if settings is None else list(settings),
                                        "real": None if real_dir is None else str(real_dir),
                                        "scheduler": res.scheduler}, failed=failed,

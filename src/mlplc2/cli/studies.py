@@ -12,7 +12,7 @@ import warnings
 from .._validation import InputValueError
 from ..models.base import resolve_names
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_stabilise_option, add_warning_options, frame_size, nonneg_int, one_line, pos_float, say,
+                     add_stabilise_option, add_warning_options, frame_size, hfov_degrees, nonneg_int, one_line, pos_float, say,
                      target_options, video_run_options, warn)
 
 
@@ -148,6 +148,10 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     p.add_argument("--holdout", type=nonneg_int, default=0, metavar="N",
                    help="N > 0: draw every scene with other seeds (other textures, speeds, turns), to check "
                         "a figure on scenes nothing was tuned on (default 0, the standard suite)")
+    p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
+                   help="render the generated scenes through a camera of this horizontal field of view (default "
+                        "60, the value the defaults were set at) and give it to the models, as a user who knows "
+                        "the lens would (scenes named ..._fDEG); with --no-real")
     p.add_argument("--force", action="store_true", help="rerun tasks that are already done")
     p.add_argument("--quiet", "-q", action="store_true", help="no progress bars and no table")
 
@@ -164,7 +168,7 @@ def _cmd_benchmark(args) -> int:
                         stabilise=args.stabilise, progress=not args.quiet, force=args.force,
                         settings=None if args.settings is None else [s.strip() for s in args.settings.split(",")
                                                                      if s.strip()],
-                        holdout=args.holdout)
+                        holdout=args.holdout, hfov_deg=args.hfov)
     except BatchInterrupted as exc:
         if args.quiet:  # with progress output batch() has already said it
             print(f"{PROG}: {one_line(str(exc))}", file=sys.stderr)

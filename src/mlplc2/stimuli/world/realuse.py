@@ -146,9 +146,10 @@ def _handheld(rng, index: int, fps: float, n: int) -> tuple[CameraPath, list[App
 
 def real_use_scene(setting: str, index: int, seed: int, *, duration_s: float = 6.0, size=(320, 240),
                    fps: float = 30.0, noise_std: float = 0.0, blur_px: float = 0.0,
-                   supersample: int = 4) -> ApproachStimulus:
+                   supersample: int = 4, hfov_deg: float = 60.0) -> ApproachStimulus:
     """Scene ``index`` (0-4: its kinds) of ``setting`` ("drive", "drone", "handheld"; the module
-    docstring), drawn from ``seed``: the same arguments give the same scene."""
+    docstring), drawn from ``seed``: the same arguments give the same scene. ``hfov_deg``: the camera's
+    horizontal field of view (the same world seen through another lens; :func:`approach`)."""
     if setting not in REAL_USE_SETTINGS:
         raise InputValueError(f"setting must be one of {', '.join(REAL_USE_SETTINGS)}, got {setting!r}")
     index = check_int(index, "index", minimum=0, maximum=len(_KINDS) - 1)
@@ -156,7 +157,7 @@ def real_use_scene(setting: str, index: int, seed: int, *, duration_s: float = 6
     rng = np.random.default_rng(sub_seed(check_int(seed, "seed"), 8))
     make = {"drive": _drive, "drone": _drone, "handheld": _handheld}[setting]
     path, objs, height, background = make(rng, index, fps, n)
-    return approach(objs, size=size, fps=fps, frames=n, background=background, camera=path,
+    return approach(objs, size=size, fps=fps, hfov_deg=hfov_deg, frames=n, background=background, camera=path,
                     camera_height_m=height, noise_std=noise_std, blur_px=blur_px, supersample=supersample,
                     seed=seed, name=f"{setting}_{index}_{seed}")
 
