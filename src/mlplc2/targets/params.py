@@ -91,6 +91,43 @@ class TargetParams(ParameterSet):
                               focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
     focus_slack: float = param(0.25, """The shift beyond its focus (``seed_focus``) a seed's alignment may have: the
                                alignment's own error.""", unit="px", valid=Valid.real(minimum=0))
+    seed_shadow: bool = param(False, """A target born from an extra LM seed (``lm_seeds`` > 1) is a shadow until its
+                              first time to contact: not output, it owns no attention field, claims no seed
+                              but the extra seeds', counts against no ``max_targets`` and yields to any other
+                              target over it, so that the extra seeds change none of the other targets until
+                              one of theirs measures an approach. Off (the default; measured with ``lm_seeds``
+                              2-3 and ``seed_focus``, not adopted: docs/model.md, "Shadow targets", session
+                              17).""", valid=Valid.boolean())
+    extra_change: float = param(0.0, """The extra seeds of each nominal frame interval (``lm_seeds`` > 1) are change seeds
+                                (``seed_change``) whose change is at least this many times the frame's mean change,
+                                not LM seeds: a small object that grows at the heading changes its grey levels
+                                where its LM is the frame's least. 0 = LM seeds, as the first (the default; 4-5
+                                with ``seed_shadow`` measured, not adopted: docs/model.md, "Shadow targets", session
+                                17).""", unit="x mean change", valid=Valid.real(minimum=0))
+    extra_window: float = param(0.0, """With ``extra_change``, an extra seed's change is measured against the mean change
+                                of a window this wide around it, not the frame's: the seed goes where the grey
+                                levels change most against their surround (at least ``seed_change`` grey levels
+                                and ``extra_change`` times the surround's mean): a small object at the heading
+                                over a quiet backdrop, not the near ground that changes everywhere. 0 = the
+                                frame's mean (the default).""", unit="px", valid=Valid.real(minimum=0))
+    shadow_uniform: bool = param(False, """With ``seed_shadow``, a shadow's box (an extra change seed's, the change it swept) is
+                                 put on the uniform region at its centre each frame, as a box seeded on a uniform
+                                 region (``uniform_reseat``, ``uniform_growth``), when that region is a compact
+                                 object inside it of about its size: a dark square's change box, a few px off the
+                                 object and holding the road beside it, otherwise drifts off it and measures the road's
+                                 growth (``drive_4_h4``'s collider 7, docs/model.md, "Shadow targets, session 18"). Off =
+                                 only boxes seeded on a uniform region.""", valid=Valid.boolean())
+    merge_ttc: float = param(0.0, """Two targets that both measured a time to contact on the last frame, the larger at least
+                             this many times the smaller, are never merged (:meth:`TargetLayer._merge`): two
+                             objects whose contacts come apart, such as a collider's box grown over the view at its
+                             contact and a second collider beside it (``texture_pan_4_h1``), not one object's two
+                             boxes. 0 = off (docs/model.md, "Shadow targets, session 18").""",
+                             unit="ratio", valid=Valid.real(minimum=0))
+    extra_rest: int = param(0, """An extra seed (``lm_seeds`` > 1) whose candidate became no target keeps its place
+                            (``claim`` px) out of the extra seeds' search for this many frames (``nominal_fps``),
+                            so that they move on from a spot that fails every frame; the first seed's search
+                            is main's. 0 = off (the default; measured: docs/model.md, "Shadow targets", session
+                            17).""", unit="frames", valid=Valid.integer(0))
     focus_first: bool = param(False, """``seed_focus`` tests the first LM (or change) seed of each nominal frame too,
                               not only the extra ones (``lm_seeds``).""", valid=Valid.boolean())
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
