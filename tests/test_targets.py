@@ -1357,3 +1357,18 @@ def test_merge_ttc_keeps_apart_two_targets_whose_contacts_come_apart():
     assert merged((0.1, 0.5)) == [1]
     assert merged((0.1, 0.5), merge_ttc=2.0) == [1, 2]
     assert merged((0.45, 0.5), merge_ttc=2.0) == [1]
+
+
+def test_seed_shadow_shown_after_a_loss_keeps_the_lost_targets_id():
+    """The disc is hidden for three frames (its target lost); the extra seed finds it again and its shadow is
+    shown with its first time to contact: it is refound then, as any new target, and keeps the disc's id
+    (a shadow is not refound at its birth, which would hand a lost target's id to a box that may never
+    measure an approach)."""
+    frames = _ground_and_disc(n=50)
+    for k in range(30, 33):
+        frames[k][40:100, 70:130] = 128.0
+    outs = _zero_lm_run(frames, peak=(160, 205), lm_seeds=2, extra_change=4.0, extra_window=48.0, seed_focus=0.25,
+                        seed_shadow=True)
+    disc = [[t.id for t in out if abs(t.x - 100) < 6 and abs(t.y - 70) < 6] for out in outs]
+    assert disc[29] and not any(disc[33:36])        # seen before, lost while hidden
+    assert disc[45] and set(disc[45]) == set(disc[29])

@@ -290,6 +290,10 @@ class TargetLayer:
             if t.shadow and t.last_estimate >= t.birth:    # seed_shadow: its first time to contact shows it
                 t.shadow = False
                 shown.append(t)
+                held = t.held                    # refound now as a new target would be (its own time to contact kept)
+                if self._refind(t, now):
+                    t.held = held
+                    o = replace(o, id=t.id, born=t.born)
             if t.kept_past is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the view filled by an object about to hit: no other warning begins (contact_blind)
