@@ -1069,9 +1069,9 @@ def test_seed_focus_keeps_the_roadside_out_and_the_object_ahead_in(r0):
     (expanding about its own centre) becomes a target either way. Without ``focus_first`` only the
     extra seeds (``lm_seeds`` > 1) are tested: the one seed a frame becomes a target as before."""
     frames, centres = _expanding_patch(16, r0)
-    off = _lm_seeded_run(frames, centres)
-    on = _lm_seeded_run(frames, centres, seed_focus=2.0, focus_first=True)
-    first = _lm_seeded_run(frames, centres, seed_focus=2.0)     # the first seed a frame is not tested
+    off = _lm_seeded_run(frames, centres, lm_seeds=1, seed_focus=0.0)     # the one LM seed a frame, untested
+    on = _lm_seeded_run(frames, centres, lm_seeds=1, seed_focus=2.0, focus_first=True)
+    first = _lm_seeded_run(frames, centres, lm_seeds=1, seed_focus=2.0)     # the first seed a frame is not tested
     assert any(out for out in off) and any(out for out in first)
     assert any(out for out in on) == (r0 == 0.0)
 
@@ -1256,8 +1256,8 @@ def test_extra_window_seeds_a_small_object_the_ground_outchanges():
     an extra change seed against its surround's mean change (``extra_window``) finds the disc."""
     frames = _ground_and_disc()
     kw = dict(lm_seeds=2, seed_shadow=True, seed_focus=0.25)
-    assert _first_on(_zero_lm_run(frames, peak=(160, 205)), (100, 70)) is None
-    assert _first_on(_zero_lm_run(frames, peak=(160, 205), extra_change=4.0, **kw), (100, 70)) is None
+    assert _first_on(_zero_lm_run(frames, peak=(160, 205), lm_seeds=1), (100, 70)) is None
+    assert _first_on(_zero_lm_run(frames, peak=(160, 205), extra_change=4.0, extra_window=0.0, **kw), (100, 70)) is None
     on = _zero_lm_run(frames, peak=(160, 205), extra_change=4.0, extra_window=48.0, **kw)
     assert _first_on(on, (100, 70)) is not None
 
@@ -1267,7 +1267,7 @@ def test_seed_shadow_shows_an_extra_seeds_target_with_its_time_to_contact():
     (``seed_shadow``) is output only from its first time to contact on, and it keeps that target's id."""
     frames = _ground_and_disc()
     kw = dict(peak=(160, 205), lm_seeds=2, extra_change=4.0, extra_window=48.0, seed_focus=0.25)
-    off, on = _zero_lm_run(frames, **kw), _zero_lm_run(frames, seed_shadow=True, **kw)
+    off, on = _zero_lm_run(frames, seed_shadow=False, **kw), _zero_lm_run(frames, seed_shadow=True, **kw)
     disc = [[t for t in out if abs(t.x - 100) < 6 and abs(t.y - 70) < 6] for out in off]
     first = next(k for k, ts in enumerate(disc) if ts)
     assert disc[first][0].ttc_s is None
@@ -1324,7 +1324,7 @@ def test_shadow_uniform_puts_a_shadow_born_beside_a_dark_disc_on_it():
     keeps its centre and size."""
     frames = _ground_and_disc(n=50)
     kw = dict(lm_seeds=2, extra_change=4.0, extra_window=48.0, seed_focus=0.25, seed_shadow=True)
-    off, on = _offset_birth_run(frames, **kw), _offset_birth_run(frames, shadow_uniform=True, **kw)
+    off, on = _offset_birth_run(frames, shadow_uniform=False, **kw), _offset_birth_run(frames, shadow_uniform=True, **kw)
 
     def disc(out):
         return next(t for t in out if abs(t.x - 100) < 15 and abs(t.y - 70) < 15)
@@ -1354,7 +1354,7 @@ def test_merge_ttc_keeps_apart_two_targets_whose_contacts_come_apart():
         layer._merge(10.0)
         return sorted(t.id for t in layer._tracks)
 
-    assert merged((0.1, 0.5)) == [1]
+    assert merged((0.1, 0.5), merge_ttc=0.0) == [1]
     assert merged((0.1, 0.5), merge_ttc=2.0) == [1, 2]
     assert merged((0.45, 0.5), merge_ttc=2.0) == [1]
 
