@@ -73,6 +73,7 @@ class TargetLayer:
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
         self._tried: list[tuple[int, int, float]] = []   # (x, y, clock) of the candidates tried lately (:meth:`_in_turn`)
+        self._rests: list[tuple[int, int, float]] = []   # (x, y, clock) of the extra seeds that failed (``extra_rest``)
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
@@ -174,13 +175,14 @@ class TargetLayer:
         self._clock = clock
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
-        seeds, focused = [], set()              # focused: the seeds seed_focus tests
+        seeds, focused, extra = [], set(), set()    # focused: the seeds seed_focus tests; extra: lm_seeds' extra ones
         refuted = {}                            # alarm_fresh: field id -> the older track that refutes its alarm
         self._spent &= {f.id for f in fields}
         for f in fields:
             if f.id in self._spent:
                 continue
-            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not self._open_to(t, f)]
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))
+                      and not (self._open_to(t, f) or t.shadow)]
             if owners:
                 o = min(owners, key=lambda t: t.size)
                 if self._refutes(o, f):
@@ -190,24 +192,34 @@ class TargetLayer:
                     self._own(o, f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
-        if lm is not None and p.seed_lm > 0 and len(self._tracks) + len(seeds) < p.max_targets:
+        if lm is not None and p.seed_lm > 0 and self._count() + len(seeds) < p.max_targets:
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
             from ..neuropils.attention import argmax_outside
 
-            zones = [self._claim(t) for t in self._tracks if not self._opened(t, now)]
+            zones = [self._claim(t) for t in self._tracks if not (self._opened(t, now) or t.shadow)]
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
+            hidden = [self._claim(t) for t in self._tracks    # seed_shadow: claimed from the extra seeds only
+                      if t.shadow and not self._opened(t, now)]
+            if p.extra_rest > 0:                 # extra_rest: a failed extra seed's place rests
+                self._rests = [r for r in self._rests if now - r[2] <= p.span(p.extra_rest, self.fps) + _EPS]
+                hidden += [(x, y, int(p.claim)) for x, y, _ in self._rests]
             n = self._seeds(interval)
             for i in range(n):
-                cand = argmax_outside(lm.magnitude, zones)
+                if i >= n // p.lm_seeds and hidden is not None:
+                    zones, hidden = zones + hidden, None
+                more = i >= n // p.lm_seeds and p.extra_change > 0     # TargetParams.extra_change: a change seed
+                cand = None if more else argmax_outside(lm.magnitude, zones)
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
-                    cand = self._change_seed(levels, zones)
+                    cand = self._change_seed(levels, zones, *((p.extra_change, p.extra_window) if more else (0.0, 0.0)))
                 if cand is None:
                     break
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
                 if p.focus_first or i >= n // p.lm_seeds:    # TargetParams.seed_focus: an extra seed
                     focused.add((cand[0], cand[1]))
+                if i >= n // p.lm_seeds:
+                    extra.add((cand[0], cand[1]))
         budget = None
         if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
             span = p.span(p.change_frames, self.fps) + _EPS
@@ -215,11 +227,13 @@ class TargetLayer:
             if len(seeds) > p.seed_budget:
                 budget, seeds = p.seed_budget, self._in_turn(seeds)
         for x, y, f in seeds:
-            if len(self._tracks) >= p.max_targets:
+            if self._count() >= p.max_targets:
                 break
             apart = None if f is None else refuted.get(f.id)
+            hide = p.seed_shadow and f is None and (x, y) in extra   # seed_shadow: a shadow target, if any
             if any(t.contains(x, y) for t in self._tracks
-                   if not ((f is None and self._opened(t, now)) or t is apart or self._open_to(t, f))):
+                   if not ((f is None and self._opened(t, now)) or t is apart or self._open_to(t, f)
+                           or (t.shadow and not hide))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -233,14 +247,16 @@ class TargetLayer:
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t)
                              and not (f is None and self._opened(o, now)) and o is not apart
-                             and not self._open_to(o, f)), None)
-                t.uniform = swept is None
+                             and not self._open_to(o, f) and (hide or not o.shadow)), None)
+                t.uniform = swept is None or (hide and p.shadow_uniform)   # shadow_uniform: a shadow's region too
                 focus = f is None and (x, y) in focused
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
                     if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
                         t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
                     break
                 t = None
+            if t is None and host is None and f is None and p.extra_rest > 0 and (x, y) in extra:
+                self._rests.append((x, y, now))
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, now)
@@ -255,7 +271,8 @@ class TargetLayer:
                            for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
-            if not self._refind(t, now):
+            t.shadow = hide
+            if hide or not self._refind(t, now):
                 self._next += 1
             if f is not None:
                 self._own(t, f, now)
@@ -265,17 +282,35 @@ class TargetLayer:
         self._past_t.append(clock)
         alive = {f.id for f in fields}
         self._alarmed = {f.id for f in fields if getattr(f, "collision", False)}
-        out = []
+        out, shown = [], []
         for t in self._tracks:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
+            if t.shadow and t.last_estimate >= t.birth:    # seed_shadow: its first time to contact shows it
+                t.shadow = False
+                shown.append(t)
+                held = t.held                    # refound now as a new target would be (its own time to contact kept)
+                if self._refind(t, now):
+                    t.held = held
+                    o = replace(o, id=t.id, born=t.born)
             if t.kept_past is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
+        if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
+            ids = {id(t) for t in shown}
+            gone = {id(o) for o in self._tracks if not o.shadow and id(o) not in ids and abs(o.birth - now) <= _EPS
+                    and any(t.overlap(o) >= 0.5 for t in shown)}
+            for t in shown:
+                for o in self._tracks:
+                    if id(o) in gone and t.overlap(o) >= 0.5:
+                        t.fields |= o.fields
+                        t.last_answer = max(t.last_answer, o.last_answer)
+            out = [o for t, o in zip(self._tracks, out) if id(t) not in gone]
+            self._tracks = [t for t in self._tracks if id(t) not in gone]
         self._blind_until = blind_until(out, p, self.fps, now, (h, w), self._blind_until)
         self._absorb(out, now)
         self._drop_idle(now)
@@ -283,7 +318,7 @@ class TargetLayer:
         for c in self._past:
             c.read.clear()
         self._settle()
-        keep = {t.id for t in self._tracks}
+        keep = {t.id for t in self._tracks if not t.shadow}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 
     def _in_turn(self, seeds: list) -> list:
@@ -404,25 +439,35 @@ class TargetLayer:
         y0, y1 = max(f.y - f.radius, 0.0), min(f.y + f.radius, h - 1.0)
         return (x0 + x1) / 2.0, (y0 + y1) / 2.0, max(x1 - x0, 2.0), max(y1 - y0, 2.0)
 
-    def _change_seed(self, levels, zones):
+    def _change_seed(self, levels, zones, contrast: float = 0.0, window: float = 0.0):
         """A candidate where the image changed most over the last ``change_frames`` frames (at
         half resolution, outside the zones of targets and fields), when that change stands out:
         at least ``seed_change`` grey levels and ``seed_contrast`` times the frame's mean change.
         An object that grows straight at the camera moves its edges a fraction of a pixel per
         frame, too little for the local motion, while the grey levels along its edge change
-        steadily; a moving background changes everywhere and seeds nothing here."""
+        steadily; a moving background changes everywhere and seeds nothing here. ``contrast``: that
+        factor instead (``TargetParams.extra_change``, the extra seeds'; 0: ``change_contrast``, else
+        ``seed_contrast``); ``window`` (``extra_window``): the change against the mean change of a window
+        that wide around each point, at least ``contrast`` times it (and ``seed_change`` grey levels)."""
         p = self.params
         ref = self._reference()
         if p.seed_change <= 0 or ref is None or len(levels) < 2:
             return None
         d = cv2.blur(cv2.absdiff(levels[1], ref[0][1]), (3, 3))
+        if window > 0:                           # extra_window: the change against its surround's
+            k = max(int(window) // 2, 3)
+            r = d / np.maximum(cv2.blur(d, (k, k)), 1.0)
+            r[d < p.seed_change] = 0
+            d = r
         for zx, zy, *zr in zones:                # at half resolution
             rx, ry = zr[0], zr[-1]
             x0, x1 = max((zx - rx) // 2, 0), max((zx + rx) // 2 + 1, 0)
             y0, y1 = max((zy - ry) // 2, 0), max((zy + ry) // 2 + 1, 0)
             d[y0:y1, x0:x1] = 0
         _, top, _, (x, y) = cv2.minMaxLoc(d)
-        if top < max(p.seed_change, (p.change_contrast or p.seed_contrast) * float(d.mean())):
+        if window > 0:
+            return (2 * x + 1, 2 * y + 1) if top >= contrast else None
+        if top < max(p.seed_change, (contrast or p.change_contrast or p.seed_contrast) * float(d.mean())):
             return None
         return 2 * x + 1, 2 * y + 1
 
@@ -569,6 +614,26 @@ class TargetLayer:
                 self._lose(t, clock)
         self._tracks = kept
 
+    def _count(self) -> int:
+        """The tracks that count against ``max_targets``: all but the shadows (``seed_shadow``: a target born
+        from an extra seed, without a time to contact yet; until its first one it is not output, owns no
+        attention field, claims no seed but the extra seeds', hosts no box but an extra seed's, is neither
+        remembered for :meth:`_refind` nor refound, and yields to any other target over it, :meth:`_merge`;
+        docs/model.md, "Shadow targets")."""
+        return sum(not t.shadow for t in self._tracks)
+
+    def _two_contacts(self, o: Track, t: Track) -> bool:
+        """``merge_ttc``: whether tracks ``o`` and ``t`` both measured a time to contact on the last frame and the
+        larger is at least ``merge_ttc`` times the smaller: two objects whose contacts come apart (a collider's box
+        grown over the view at its contact and a second collider's box beside it), not one object's two boxes."""
+        k = self.params.merge_ttc
+        if k <= 0 or self._before is None or o.held is None or t.held is None:
+            return False
+        if o.held[0] < self._before - _EPS or t.held[0] < self._before - _EPS:
+            return False
+        a, b = sorted((max(o.held[1], 1e-6), max(t.held[1], 1e-6)))
+        return b >= k * a
+
     def _open_to(self, t: Track, f) -> bool:
         """``view_keep``: whether track ``t``, kept past its contact, leaves field ``f`` to others: a field in collision
         alarm that was not its own when its contact came (another object's alarm)."""
@@ -675,7 +740,9 @@ class TargetLayer:
         return now - t.held[0] > t.held[1] * self.fps + _EPS
 
     def _lose(self, t: Track, now: float) -> None:
-        """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`)."""
+        """Remember track ``t``, lost at clock ``now``, for ``refind_frames`` (:meth:`_refind`); not a shadow."""
+        if t.shadow:                             # seed_shadow: not remembered
+            return
         span = self.params.span(max(self.params.refind_frames, self.params.refind_late), self.fps) + _EPS
         self._lost = [(c, o) for c, o in self._lost if now - c <= span and o.id != t.id]
         if self.params.refind_frames > 0 or self.params.refind_late > 0:
@@ -770,9 +837,11 @@ class TargetLayer:
         tracks = sorted(self._tracks, key=lambda t: (first and not t.last_warned, t.order or t.id))
         out: list[Track] = []
         for t in tracks:
+            if t.shadow:                         # seed_shadow: merged after the others
+                continue
             host = next((o for o in out if self._hosts(o, t)
                          and not (t.behind and self._opened(o, index)) and o.id != t.apart
-                         and not self._apart(o, t)), None)
+                         and not self._apart(o, t) and not self._two_contacts(o, t)), None)
             if host is None:
                 out.append(t)
             else:
@@ -782,5 +851,8 @@ class TargetLayer:
                 if t.last_alarm > host.last_alarm or (t.last_alarm == host.last_alarm and t.alarm_run > host.alarm_run):
                     host.last_alarm, host.alarm_run = t.last_alarm, t.alarm_run
                     host.alarm_courses = t.alarm_courses
+        for t in tracks:                         # seed_shadow: a shadow over another target yields to it
+            if t.shadow and not any(o.overlap(t) >= 0.5 for o in out):
+                out.append(t)
         self._tracks = out
 

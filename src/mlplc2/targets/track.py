@@ -163,6 +163,7 @@ class Track:
     kept_past: set | None = None       # ``view_keep``: kept past that contact; the fields in alarm it owned then
     order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
+    shadow: bool = False               # a shadow target (``TargetParams.seed_shadow``): no time to contact yet
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
 
     def contains(self, x: float, y: float, margin: float = 0.0) -> bool:
