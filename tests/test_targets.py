@@ -1146,93 +1146,6 @@ def test_box_claim_lets_an_object_above_a_wide_box_seed():
     assert _first_on(on, (160, 120)) is not None and _first_on(on, (160, 120)) <= 8
 
 
-@pytest.mark.parametrize("merge_warning", [True, False])
-def test_a_target_warning_on_the_last_frame_hosts_the_merge(merge_warning):
-    """``merge_warning`` (on by default since session 17): of two targets that are one object, the one that warned on the last frame (a newer 60-px
-    box, the collider near its contact) is kept and takes the other's fields, not the older 30-px box inside it
-    (the ground at its foot); without it, or when neither warned, the older is kept."""
-    from mlplc2.targets import TargetLayer, Track
-
-    assert not TargetParams().merge_warning                                # off: measured (docs/model.md)
-    def layer():
-        lay = TargetLayer(TargetParams(merge_warning=merge_warning), FPS)
-        old = Track(1, 0, 100.0, 120.0, 30.0, 30.0, birth=30.0)
-        old.fields = {4}
-        new = Track(2, 0, 105.0, 120.0, 60.0, 60.0, birth=32.0)
-        lay._tracks = [old, new]
-        return lay, old, new
-
-    lay, old, new = layer()
-    new.last_warned = True
-    lay._merge(40.0)
-    kept = new if merge_warning else old
-    assert lay._tracks == [kept] and 4 in kept.fields
-    lay, old, new = layer()                     # neither warned: the older
-    lay._merge(40.0)
-    assert lay._tracks == [old]
-
-
-@pytest.mark.parametrize("drop_view", [1.0, 0.0])
-def test_a_target_over_the_view_is_dropped_at_its_contact(drop_view):
-    """``drop_view``: a target whose box grows over the view (320 x 240) both across and down, 0.1 s (3 frames)
-    before the contact its last time to contact predicts, is dropped at that contact (clock 13), not before (its
-    time to contact is reported up to it); the field in alarm it owned (its own object's) then seeds no target and
-    is no evidence. A box over the view across only (an object passing beside the camera) stays, and so does every
-    box with the option off."""
-    from types import SimpleNamespace
-
-    from mlplc2.targets import TargetLayer, Track
-
-    def grow(prev, levels, t, half, interval):
-        return 0.0, 0.0, 1.1, 1.1, math.log(1.1), 0.0
-
-    assert (TargetParams().drop_view, TargetParams().view_keep) == (0.0, True)      # off: measured (docs/model.md)
-    lay = TargetLayer(TargetParams(drop_view=drop_view, view_keep=False), FPS, measure=grow)
-    near = Track(1, 0, 160.0, 120.0, 300.0, 230.0, birth=0.0)
-    near.held, near.fields = (10.0, 0.1, 0.01, 0.0, (0.0, 0.0)), {5, 6}
-    wide = Track(2, 0, 160.0, 120.0, 400.0, 60.0, birth=0.0)
-    wide.held = (10.0, 0.1, 0.01, 0.0, (0.0, 0.0))
-    lay._tracks, lay._alarmed, lay._prev = [near, wide], {5}, object()
-    for clock in (11.0, 12.0):
-        lay._follow(None, clock, 1.0, 320, 240)
-        assert near in lay._tracks and wide in lay._tracks
-    lay._follow(None, 13.0, 1.0, 320, 240)
-    assert (near in lay._tracks) == (drop_view == 0) and wide in lay._tracks
-    assert lay._spent == ({5} if drop_view else set())
-    alarm = SimpleNamespace(id=5, x=100.0, y=100.0, radius=40.0, response=1.0, collision=True)
-    lay = TargetLayer(TargetParams(drop_view=drop_view, view_keep=False), FPS)
-    lay._spent = {5} if drop_view else set()
-    for i in range(3):
-        lay.step(np.zeros((240, 320), np.float32), None, [alarm], i)
-    assert bool(lay._tracks) == (drop_view == 0)
-
-
-@pytest.mark.parametrize("at_contact", [True, False])
-def test_a_target_kept_past_its_contact_leaves_another_alarm_to_a_target_of_its_own(at_contact):
-    """``view_keep`` (with ``drop_view``): a box over the view kept past its contact keeps owning its own field in
-    alarm (5, owned at its contact) but not another field in alarm inside it (7, a second object's): that one seeds a
-    target of its own; a box inside the view (before its contact) owns both and no target is born."""
-    from types import SimpleNamespace
-
-    from mlplc2.targets import TargetLayer, Track
-
-    def alarm(i, x, y):
-        return SimpleNamespace(id=i, x=x, y=y, radius=40.0, response=1.0, collision=True)
-
-    lay = TargetLayer(TargetParams(drop_view=1.0, view_keep=True), FPS)
-    blank = np.zeros((240, 320), np.float32)
-    lay.step(blank, None, [], 0)
-    near = Track(1, 0, 160.0, 120.0, *((400.0, 300.0) if at_contact else (300.0, 230.0)), birth=0.0)
-    near.fields = {5}
-    if at_contact:
-        near.at_view, near.kept_past = 0.0, {5}
-    lay._tracks, lay._next = [near], 2
-    lay.step(blank, None, [alarm(5, 160.0, 120.0), alarm(7, 60.0, 60.0)], 1)
-    others = [t for t in lay._tracks if t is not near]
-    assert 5 in near.fields and (7 in near.fields) != at_contact
-    assert [t.fields for t in others] == ([{7}] if at_contact else [])
-
-
 def _ground_and_disc(n=40, at=(100, 70)):
     """A textured ground band at the view's foot (y 170-240) that slides down 1.5 px a frame (a
     translating camera's near ground: its grey levels change everywhere) and a dark disc over the plain
@@ -1289,7 +1202,6 @@ def test_extra_rest_moves_the_extra_seed_on_from_a_spot_that_never_grows():
     off = _first_on(_zero_lm_run(frames, **kw), (100, 70))
     on = _first_on(_zero_lm_run(frames, extra_rest=15, **kw), (100, 70))
     assert on is not None and (off is None or off >= on + 10)
-
 
 
 def _offset_birth_run(frames, **kw):

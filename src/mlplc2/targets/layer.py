@@ -24,7 +24,7 @@ from .change import change_box, uniform_box, uniform_region, unswept
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate, fits
+from .warning import blind_until, drift, estimate
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -84,8 +84,6 @@ class TargetLayer:
         self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
         self._blind_until = -math.inf   # contact_blind: no warning begins up to this clock
-        self._alarmed: set = set()      # the fields in collision alarm on the last frame
-        self._spent: set = set()        # drop_view: the fields in alarm of a target dropped at its contact
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
         """This frame's measured heading (the focus of expansion, px of this frame: ``CameraMotion.heading``)
@@ -176,20 +174,10 @@ class TargetLayer:
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
         seeds, focused, extra = [], set(), set()    # focused: the seeds seed_focus tests; extra: lm_seeds' extra ones
-        refuted = {}                            # alarm_fresh: field id -> the older track that refutes its alarm
-        self._spent &= {f.id for f in fields}
         for f in fields:
-            if f.id in self._spent:
-                continue
-            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f))
-                      and not (self._open_to(t, f) or t.shadow)]
+            owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not t.shadow]
             if owners:
-                o = min(owners, key=lambda t: t.size)
-                if self._refutes(o, f):
-                    refuted[f.id] = o
-                    seeds.append((int(f.x), int(f.y), f))
-                else:
-                    self._own(o, f, now)
+                self._own(min(owners, key=lambda t: t.size), f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and self._count() + len(seeds) < p.max_targets:
@@ -229,11 +217,9 @@ class TargetLayer:
         for x, y, f in seeds:
             if self._count() >= p.max_targets:
                 break
-            apart = None if f is None else refuted.get(f.id)
             hide = p.seed_shadow and f is None and (x, y) in extra   # seed_shadow: a shadow target, if any
             if any(t.contains(x, y) for t in self._tracks
-                   if not ((f is None and self._opened(t, now)) or t is apart or self._open_to(t, f)
-                           or (t.shadow and not hide))):
+                   if not ((f is None and self._opened(t, now)) or (t.shadow and not hide))):
                 continue
             alarm = self._alarming(f)
             if budget is not None and not alarm:  # a field in alarm is tried beside the budget
@@ -246,8 +232,7 @@ class TargetLayer:
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t)
-                             and not (f is None and self._opened(o, now)) and o is not apart
-                             and not self._open_to(o, f) and (hide or not o.shadow)), None)
+                             and not (f is None and self._opened(o, now)) and (hide or not o.shadow)), None)
                 t.uniform = swept is None or (hide and p.shadow_uniform)   # shadow_uniform: a shadow's region too
                 focus = f is None and (x, y) in focused
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
@@ -262,13 +247,9 @@ class TargetLayer:
                     self._own(host, f, now)
                 continue
             if t is None:
-                if apart is not None:     # no box of its own: the older track keeps the field
-                    self._own(apart, f, now)
                 continue
-            t.apart = None if apart is None else apart.id
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
-            t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) and not self._open_to(o, f)
-                           for o in self._tracks)
+            t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             t.shadow = hide
@@ -281,7 +262,6 @@ class TargetLayer:
         self._past.append(self._prev)
         self._past_t.append(clock)
         alive = {f.id for f in fields}
-        self._alarmed = {f.id for f in fields if getattr(f, "collision", False)}
         out, shown = [], []
         for t in self._tracks:
             t.fields &= alive
@@ -294,8 +274,6 @@ class TargetLayer:
                 if self._refind(t, now):
                     t.held = held
                     o = replace(o, id=t.id, born=t.born)
-            if t.kept_past is not None and o.warning:     # view_keep: past its contact, no warning (nor contact_blind)
-                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
@@ -406,17 +384,6 @@ class TargetLayer:
     def _hosts(o: Track, t: Track) -> bool:
         """Whether box ``t`` is a part of track ``o``: most of the smaller of the two lies in the other."""
         return o.overlap(t) >= 0.5
-
-    def _refutes(self, o: Track, f) -> bool:
-        """``alarm_fresh``: whether the older track ``o`` that holds field ``f`` in collision alarm refutes the
-        alarm with a measurement of something else: its history began before the field was born and its fit,
-        long enough for one, gave no time to contact on its last frame (:func:`alarm_warns`' "no"). The field
-        then seeds a target of its own (as a field outside every box), which ``o`` neither hosts nor takes in
-        (:meth:`_merge`); ``o``'s box (the road, a wall, an object's part seen for long) is measured since
-        before the object that alarms grew in it."""
-        if not (self.params.alarm_fresh and self._alarming(f)) or o.born >= getattr(f, "born", o.born):
-            return False
-        return o.streak == 0 and o.fit_span > 0 and fits(o.history, o.fit_span)
 
     def _own_margin(self, t: Track, f) -> float:
         """How far beyond its box a track owns a field: a quarter of its size (plus 4 px), none for
@@ -600,15 +567,6 @@ class TargetLayer:
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
                     self._reseat_uniform(t, gray)
-                if self._at_contact(t, clock, w, h):
-                    if p.view_keep:              # TargetParams.view_keep: kept, open to the other fields in alarm
-                        if t.kept_past is None:
-                            t.kept_past = t.fields & self._alarmed
-                    else:                        # TargetParams.drop_view: at its contact; refound by its id only
-                        t.absorbed = True
-                        self._spent |= t.fields & self._alarmed     # its object's own alarm: no seed, no evidence
-                        self._lose(t, clock)
-                        continue
                 kept.append(t)
             else:
                 self._lose(t, clock)
@@ -633,28 +591,6 @@ class TargetLayer:
             return False
         a, b = sorted((max(o.held[1], 1e-6), max(t.held[1], 1e-6)))
         return b >= k * a
-
-    def _open_to(self, t: Track, f) -> bool:
-        """``view_keep``: whether track ``t``, kept past its contact, leaves field ``f`` to others: a field in collision
-        alarm that was not its own when its contact came (another object's alarm)."""
-        return t.kept_past is not None and f is not None and bool(getattr(f, "collision", False)) and f.id not in t.kept_past
-
-    def _apart(self, o: Track, t: Track) -> bool:
-        """``view_keep``: whether tracks ``o`` and ``t`` are never merged: one is kept past its contact and the other
-        has owned a field in alarm since (another object's alarm, :meth:`_open_to`)."""
-        return (o.kept_past is not None and t.last_alarm > o.at_view) or (t.kept_past is not None and o.last_alarm > t.at_view)
-
-    def _at_contact(self, t: Track, clock: float, w: int, h: int) -> bool:
-        """``drop_view``: whether track ``t`` is at its contact: its box spanned at least ``drop_view`` of the view
-        both across and down (its object fills the view), and the contact its last time to contact then predicted
-        (``Track.held`` counted down; at once without one) has come (``Track.at_view``, set once)."""
-        p = self.params
-        if p.drop_view <= 0:
-            return False
-        if t.at_view is None and t.w >= p.drop_view * w and t.h >= p.drop_view * h:
-            left = 0.0 if t.held is None else max(t.held[1] * self.fps - (clock - t.held[0]), 0.0)
-            t.at_view = clock + left
-        return t.at_view is not None and clock >= t.at_view - _EPS
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform
@@ -832,16 +768,14 @@ class TargetLayer:
 
     def _merge(self, index: int) -> None:
         """Two tracks are one object when most of the smaller box lies in the larger (:meth:`_hosts`):
-        keep the older; with ``merge_warning`` a target that warned on the last frame first."""
-        first = self.params.merge_warning        # TargetParams.merge_warning: a warning target hosts first
-        tracks = sorted(self._tracks, key=lambda t: (first and not t.last_warned, t.order or t.id))
+        keep the older."""
+        tracks = sorted(self._tracks, key=lambda t: t.order or t.id)
         out: list[Track] = []
         for t in tracks:
             if t.shadow:                         # seed_shadow: merged after the others
                 continue
             host = next((o for o in out if self._hosts(o, t)
-                         and not (t.behind and self._opened(o, index)) and o.id != t.apart
-                         and not self._apart(o, t) and not self._two_contacts(o, t)), None)
+                         and not (t.behind and self._opened(o, index)) and not self._two_contacts(o, t)), None)
             if host is None:
                 out.append(t)
             else:

@@ -376,18 +376,6 @@ class TargetParams(ParameterSet):
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
                                    real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
-    alarm_fresh: bool = param(False, """A field in collision alarm held by an older track (born before the field) whose fit, long
-                              enough for one, gave no time to contact on its last frame seeds a target of its own, as a
-                              field outside every box, which that track neither hosts nor takes in: the older box (the
-                              road, a wall, a part of the object seen for long, measured since before the field's
-                              object grew in it) would hold the alarm back with a measurement of something else
-                              (``alarm_warns``' "no": its growth anisotropic over its whole history). Whether the
-                              field falls in such a box or beside it is a knife edge (issue 22, item 7: the copies
-                              of ``UAV_outdoor_1.avi``, ``bear_attack.avi``, ``crossing_car_strong_light.mp4``).
-                              False = off (the default: on, only the 2x copy of ``crossing_car_strong_light.mp4``
-                              gained a warning, at 192, after the clip's 177; the standard suite's false episodes per
-                              1000 frames 0.41 -> 0.51 and targets per collision object 1.11 -> 1.23; docs/model.md,
-                              "The same warning whatever the encoding, session 17").""", valid=Valid.boolean())
     alarm_onset_course: bool = param(True, """With ``alarm_onset_miss``: the frames of the alarm that count are those on which the
                                      target's fit gave a course (``Track.alarm_courses``): an alarm that lasted while
                                      the target had no course yet (a young track, its no-course alarm held back by
@@ -574,40 +562,6 @@ class TargetParams(ParameterSet):
                                static world's box beside an object near contact is the object's (its fields go
                                to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
-    merge_warning: bool = param(False, """When two targets are one object (:meth:`TargetLayer._merge`), a target that
-                                warned on the last frame is kept (hosts the other) before an older one; among
-                                targets alike the older is kept. Without it an older small box (the ground at a
-                                collider's foot) takes in the collider's warning target, which is then born again
-                                as a new id. Measured in session 17, with ``drop_view`` 1 and ``view_keep`` (without them
-                                a second collider is lost, ``drone_4_h4``): targets per object 1.34 -> 1.27 (holdout 3),
-                                1.36 -> 1.29 (holdout 6), 1.32 -> 1.27 (holdout 8), at most 1.24 on the standard suite
-                                and holdouts 1, 2, 5; no collision lost, no false warning added; holdout 4 1.18 -> 1.13,
-                                holdout 7 1.23 -> 1.20; but on the held-back holdout 9 a second collider is lost
-                                (``drone_4_h9``, warned 0.15 s before contact without them): off. False = the older
-                                always, the default (docs/model.md, "Targets per object, session 17").""",
-                                valid=Valid.boolean())
-    drop_view: float = param(0.0, """A target whose box spans at least this fraction of the view both across and down
-                             (its object fills the view) is dropped once the contact its last time to contact then
-                             predicted has come (at once without one), not to be refound but for its id
-                             (``refind_late``); the attention fields in alarm it owned (its own object's) then seed
-                             no target and are no target's evidence. The box of an object at its contact keeps
-                             growing with the view's own change (459 x 536 px on a 320 x 240 view), would own every
-                             field and host every box inside it, and its warning keeps ``contact_blind`` on, so
-                             that an object behind it is never warned. A box over the view across or down only (an
-                             object passing beside the camera) is not dropped. 1 measured in session 17 with ``view_keep`` and ``merge_warning``
-                             (off: see ``merge_warning``); without ``view_keep`` (with ``merge_warning``;
-                             dropped, holdout 8 gets a false episode that main's runaway box hides, ``drive_3_h8``: see
-                             ``view_keep``). 0 = off, the default (docs/model.md, "Targets per object, session 17").""",
-                             unit="fraction of the view", valid=Valid.real(minimum=0.0))
-    view_keep: bool = param(True, """With ``drop_view``: a target at its contact is kept instead of dropped (it still
-                            owns the fields and hosts the boxes inside it, as without ``drop_view``), but it warns no
-                            more (nor opens ``contact_blind``), owns no field in collision alarm but its own (those it
-                            owned at its contact), no seed of such a field is a part of it, and it merges with no
-                            target that has owned a field in alarm since its contact, and a target born inside it on
-                            such a field is not ``Track.behind`` it: an object behind it warns (``drone_4_h4``'s
-                            second collider with ``merge_warning``), while the boxes of the static world and of passing
-                            objects inside it stay its own, as without ``drop_view`` (``drive_3_h8``). False = dropped
-                            (docs/model.md, "Targets per object, session 17").""", valid=Valid.boolean())
     passed_seeds: bool = param(True, """A target whose last time to contact has run out (its contact passed) with no
                                time to contact since no longer claims the LM and change seeds inside its box, for
                                good, its box spanning the view or not: no seed zone, and a box seeded there is not a

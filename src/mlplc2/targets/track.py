@@ -155,12 +155,9 @@ class Track:
     early: bool = False                # its streak began on its first fit after a growth test (``confirm_birth``)
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)
     behind: bool = False               # born inside the box of a target whose contact had passed (``passed_seeds``)
-    apart: int | None = None           # the id of the older track whose measurement refuted its field's alarm (``alarm_fresh``)
     opened: bool = False               # its contact passed (``passed_seeds``): for good, a later fit notwithstanding
     lost_drift: float | None = None    # the drift of the lost track(s) it was refound from (``refind_drift``)
     absorbed: bool = False             # absorbed by a warning target (``absorb_frames``): refound late only (``refind_late``)
-    at_view: float | None = None       # ``drop_view``: the clock of its contact, predicted when its box first spanned the view
-    kept_past: set | None = None       # ``view_keep``: kept past that contact; the fields in alarm it owned then
     order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
     shadow: bool = False               # a shadow target (``TargetParams.seed_shadow``): no time to contact yet
