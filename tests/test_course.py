@@ -374,7 +374,7 @@ def test_a_warning_begins_off_the_path_only_on_an_object_that_keeps_its_bearing(
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
     x0 = heading[0] + 20.0                     # 0.83 widths right of the heading at first
     # (onset_miss off: the patch's course, 0.83, lies beyond its default 0.8)
-    off = TargetParams(alarm_warns=False, path_drift=0.0, onset_miss=0.0)
+    off = TargetParams(alarm_warns=False, path_drift=0.0, onset_miss=0.0, fresh_ttc=0.0)
     on = TargetParams(alarm_warns=False, path_drift=0.4, onset_miss=0.0)
     last = 19
     static = _approach(x0, heading[0], True)
@@ -1140,3 +1140,44 @@ def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_
     assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
     passing.last_alarm = 24
     assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame
+
+
+def _mixed(x0: float, heading_x: float, part: float, width: float = 24.0, frames=range(10, 20)) -> Track:
+    """As :func:`_approach`, a box whose centre drifts away from the heading at ``part`` of the static world's
+    drift (a box over a passing object and the road beside it: 0 an object on a collision course, 1 the
+    static world)."""
+    t = _approach(x0, heading_x, False, width, frames)
+    t.history = deque(Observation(q.frame, q.log_scale, heading_x + (x0 - heading_x) * (1 + part * math.expm1(q.log_scale)),
+                                  q.y, q.width, q.anisotropy) for q in t.history)
+    t.inside = deque(t.history)
+    t.cx = t.history[-1].x
+    return t
+
+
+def test_a_track_found_near_its_contact_begins_a_warning_off_the_path_only_on_a_box_that_keeps_its_bearing():
+    # fresh_ttc (session 18): a box beside the path whose centre drifts away from the heading at a quarter
+    # of the static world's drift (within path_drift, 0.4: the road beside a passing car, seeded near the
+    # camera) gets its first time to contact 0.7 s before its contact and warned; with fresh_ttc 0.9 it does
+    # not, unless its centre keeps its bearing (an object on a collision course found that late), its course
+    # passes within fresh_miss (0.2), a field of it is in collision alarm, it was seen approaching from beyond
+    # fresh_ttc, or no heading is measured
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+    x0 = heading[0] + 20.0
+    off = TargetParams(alarm_warns=False, fresh_ttc=0.0)
+    on = TargetParams(alarm_warns=False, fresh_ttc=0.9)
+    last = 19
+    assert estimate(_mixed(x0, heading[0], 0.25), off, FPS, last, SHAPE, heading=heading).warning   # the false warning
+    mixed = _mixed(x0, heading[0], 0.25)
+    out = estimate(mixed, on, FPS, last, SHAPE, heading=heading)
+    assert not out.warning and out.ttc_s == pytest.approx(0.7, abs=0.02)
+    assert mixed.first_ttc == pytest.approx(0.7, abs=0.02)
+    assert estimate(_mixed(x0, heading[0], 0.0), on, FPS, last, SHAPE, heading=heading).warning      # keeps its bearing
+    near = estimate(_mixed(heading[0] + 14.4, heading[0], 0.25), on, FPS, last, SHAPE, heading=heading)
+    assert near.warning and near.miss < on.fresh_miss    # 0.6 widths off: a course through the camera's middle
+    alarmed = _mixed(x0, heading[0], 0.25)
+    alarmed.last_alarm = last
+    assert estimate(alarmed, on, FPS, last, SHAPE, heading=heading).warning
+    seen = _mixed(x0, heading[0], 0.25)
+    seen.first_ttc = 1.5                       # its first time to contact lay beyond fresh_ttc
+    assert estimate(seen, on, FPS, last, SHAPE, heading=heading).warning
+    assert estimate(_mixed(x0, heading[0], 0.25), on, FPS, last, SHAPE).warning       # no measured heading

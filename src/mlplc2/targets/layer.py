@@ -707,6 +707,7 @@ class TargetLayer:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held, t.order = o.id, o.born, o.held, o.order
                 t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
+                t.first_ttc = o.first_ttc if o.first_ttc is not None else t.first_ttc   # the object's (fresh_ttc)
                 if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
                     seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]
                     t.lost_drift = max(seen) if seen else None

@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "passes_still", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "passes_still", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -207,6 +207,29 @@ def passes_still(t: Track, p: TargetParams, index: int, measured: tuple[float, f
         return False
     ratio = drift(t, heading)
     return ratio is not None and ratio > p.still_drift
+
+
+def fresh(t: Track, p: TargetParams, fps: float, index: float, measured: tuple[float, float] | None,
+          interval: float | None = None, miss: float | None = None) -> bool:
+    """``fresh_ttc`` (docs/model.md, "False warnings, session 18"): whether a warning that would begin this frame
+    (clock ``index``) on track ``t`` is the static world's, found already near: the camera translates
+    (``measured``: the measured heading, px; None: none measured, no test), no field of ``t`` is in collision
+    alarm this frame, the track's first time to contact (``Track.first_ttc``) was under ``fresh_ttc`` (it was
+    never seen approaching from beyond it), its box does not hold the heading (:func:`holds`) and its centre
+    drifted away from the heading by more than ``fresh_drift`` of the static world's drift (:func:`drift`, with
+    ``away``); not on a frame that follows a camera slower than ``nominal_fps`` (:func:`slow`: its track has few
+    observations before its contact, its first time to contact comes late by the clock alone). The road and the
+    ground beside a passing car seeded near the camera expand about the heading (a drift of 0.1-0.4 on a box
+    that also holds the car); an object on a collision course found that late keeps its bearing. Only a box whose
+    course ``miss`` (None: none known, no test) misses by more than ``fresh_miss``: a collider that will pass
+    near the middle of the camera's extent drifts little less than that (``drift`` is about its miss over its
+    offset from the heading, in its widths)."""
+    if p.fresh_ttc <= 0 or measured is None or t.last_alarm == index or t.first_ttc is None \
+            or t.first_ttc >= p.fresh_ttc or holds(t, measured) or slow(t, p, fps, index, interval) \
+            or miss is None or miss <= p.fresh_miss:
+        return False
+    ratio = drift(t, measured, away=True)
+    return ratio is not None and ratio > p.fresh_drift
 
 
 def _cut_at(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
@@ -457,6 +480,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.streak += 1
         t.last_estimate = index
         t.held = (index, ttc, sigma, miss, miss_xy)
+        if t.first_ttc is None:
+            t.first_ttc = ttc
     else:
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index, heading, interval)
@@ -487,6 +512,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     # ... and, where no heading is measured, only on a box that keeps its bearing (still_drift)
     if warning and not t.warned and passes_still(t, p, index, measured, heading, miss):
+        warning = False
+    # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
+    if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
