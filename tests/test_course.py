@@ -444,7 +444,7 @@ def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
 
     def track(before):
         t = _looming(80.0)
-        t.ttcs.append((9, before))
+        t.ttcs.append((9, before, None))
         return t
 
     assert estimate(track(ttc + 3 / FPS), p, FPS, 12, SHAPE).warning
@@ -1181,3 +1181,67 @@ def test_a_track_found_near_its_contact_begins_a_warning_off_the_path_only_on_a_
     seen.first_ttc = 1.5                       # its first time to contact lay beyond fresh_ttc
     assert estimate(seen, on, FPS, last, SHAPE, heading=heading).warning
     assert estimate(_mixed(x0, heading[0], 0.25), on, FPS, last, SHAPE).warning       # no measured heading
+
+
+def _lapsing(p: TargetParams, wide: float, narrow: float, extra: int = 8) -> list:
+    """A track on a collision course warning at frame 12, whose box then grows ``wide`` and ``narrow`` times an
+    approach's rate in width and height for ``extra`` frames (its fit's isotropy test fails after a few): the
+    targets of frames 12 on."""
+    t = _looming(80.0)
+    outs = [estimate(t, p, FPS, 12, SHAPE)]
+    rate = math.log((CONTACT - 12) / (CONTACT - 13))          # an approach's log-growth per frame there
+    for k in range(13, 13 + extra):
+        move = (0.0, 0.0, math.exp(wide * rate), math.exp(narrow * rate), (wide + narrow) / 2 * rate,
+                (wide - narrow) / 2 * rate)
+        assert t.follow(move, k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    return outs
+
+
+def test_a_running_warning_goes_on_through_a_fit_that_lapses():
+    # warn_through (docs/model.md, "A warning held to contact"): the fit of a collider's box that grows faster
+    # in width than in height (a re-seated box, two colliders overlapping) fails its isotropy test and gives no
+    # time to contact; the warning goes on, on the one held, where without warn_through it lapsed for good
+    off, on = TargetParams(), TargetParams(warn_through=15)
+    lapsed = _lapsing(off, 4.0, 1.0)
+    assert lapsed[0].warning and not all(o.warning for o in lapsed)
+    held = _lapsing(on, 4.0, 1.0)
+    assert all(o.warning for o in held)
+    assert all(o.ttc_s is not None and o.ttc_s <= on.horizon_s for o in held)
+
+
+def test_a_warning_is_not_held_longer_than_warn_through_frames_after_its_last_fit():
+    p = TargetParams(warn_through=2)
+    outs = _lapsing(p, 4.0, 1.0)
+    assert outs[0].warning and not outs[-1].warning
+
+
+def _rise(p: TargetParams, old_ttc: float, old_sigma: float):
+    """The target at frame 12 of a track whose warning runs, whose time to contact 3 frames before
+    (``countdown_frames``) was ``old_ttc`` s with standard error ``old_sigma``."""
+    t = _looming(80.0)
+    t.warned = t.last_warned = True
+    t.ttcs.append((9, old_ttc, old_sigma))
+    return estimate(t, p, FPS, 12, SHAPE), t
+
+
+def test_a_rise_within_both_estimates_scatter_does_not_end_a_warning():
+    # rise_sigma: the time to contact now (0.93 s, a sharp fit) exceeds the one 3 frames before by 0.05 s, which
+    # had a standard error of 0.1 s (a fit's first estimates): no rise beyond the scatter of their difference
+    ttc = (CONTACT - 12) / FPS
+    out, t = _rise(TargetParams(), ttc - 0.05, 0.1)
+    assert not out.warning and t.spent                       # this frame's standard error alone: ended for good
+    out, t = _rise(TargetParams(rise_sigma=True), ttc - 0.05, 0.1)
+    assert out.warning and not t.spent
+    out, t = _rise(TargetParams(rise_sigma=True), ttc - 0.3, 0.1)  # beyond it: a rise
+    assert not out.warning and t.spent
+
+
+def test_a_rise_counts_only_against_the_same_run_of_fits():
+    # rise_streak: the run of fits began at frame 12 (after a gap, say): the time to contact of frame 9 is of
+    # another box, and a higher one now is no rise
+    ttc = (CONTACT - 12) / FPS
+    out, t = _rise(TargetParams(rise_streak=True), ttc - 0.3, 0.001)
+    assert t.streak_since == 12 and out.warning and not t.spent
+    out, t = _rise(TargetParams(), ttc - 0.3, 0.001)
+    assert not out.warning and t.spent

@@ -26,6 +26,7 @@ from mlplc2.evaluator import EARLY_S, LATE_S, Evaluation, EvaluationWarning, eva
 from mlplc2.io import write_video
 from mlplc2.runner import COLUMNS, TARGET_COLUMNS, RunResult
 from mlplc2.evaluation.truth import TRACK_COLUMNS
+from mlplc2.evaluation.score import LAPSE_S
 
 FPS = 30.0
 
@@ -1192,3 +1193,30 @@ def test_warning_table_shows_the_metrics():
     assert cells[cols.index("TTC error 3-6 s (RTE / MiD)")] == "-"
     assert cells[cols.index("distance (px)")] == "5.0"
     assert math.isclose(warn_summary(ev)["ttc_coverage"], 12 / 14, abs_tol=1e-4)
+
+
+def test_a_warning_that_lapses_before_contact_is_counted():
+    """Two colliders warned 1.0 s before contact (10 fps, contact at 20): one warning held to contact, one that
+    blinks for a frame and is silent for 0.9 s. Both are warned (the first warning counts); only the second
+    lapsed (silent for at least LAPSE_S), and its share of frames kept is 1 of 10."""
+    gt = {"videos": {"a.mp4": video_truth([colliding(1, x=50), colliding(2, x=150)])}}
+    targets = ([T(f, 1, 50, 50, warn=True) for f in range(10, 20)]                # held to contact
+               + [T(10, 2, 150, 50, warn=True)]                                   # a blink ...
+               + [T(f, 2, 150, 50) for f in range(11, 20)])                       # ... then silence
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    held, blink = wobj(ev, oid=1), wobj(ev, oid=2)
+    assert held["warned"] and blink["warned"] and held["lead_s"] == blink["lead_s"] == pytest.approx(1.0)
+    assert held["warning_kept"] == pytest.approx(1.0) and held["warning_gap_s"] == pytest.approx(0.0)
+    assert blink["warning_kept"] == pytest.approx(0.1) and blink["warning_gap_s"] == pytest.approx(0.9)
+    s = warn_summary(ev)
+    assert s["warnings_lapsed"] == 1 and s["warning_kept_median"] == pytest.approx(0.55)
+
+
+def test_a_short_break_in_a_warning_is_not_a_lapse():
+    """A warning silent for one frame (0.1 s at 10 fps, under LAPSE_S) before contact has not lapsed."""
+    assert LAPSE_S > 0.1
+    gt = {"videos": {"a.mp4": video_truth([colliding()])}}
+    targets = [T(f, 1, 50, 50, warn=f != 15) for f in range(10, 20)]
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    assert wobj(ev)["warning_gap_s"] == pytest.approx(0.1) and wobj(ev)["warning_kept"] == pytest.approx(0.9)
+    assert warn_summary(ev)["warnings_lapsed"] == 0

@@ -203,7 +203,7 @@ def default_real_dir() -> Path | None:
 
 
 #: Columns of ``benchmark.csv`` (one row per model).
-COLUMNS = ("model", "collision_objects", "warned", "warned_pct", "lead_median_s", "lead_p10_s",
+COLUMNS = ("model", "collision_objects", "warned", "warned_pct", "lead_median_s", "lead_p10_s", "warnings_lapsed",
            "ttc_at_warning_median_s", "false_frames_per_1000", "false_frames_pct", "false_episodes_per_1000",
            "false_episodes_pass", "false_episodes_distractor", "false_episodes_background",
            "ttc_rte_pct_0-1s", "ttc_rte_pct_1-3s", "ttc_rte_pct_3-6s", "ttc_mid_0-1s", "ttc_mid_1-3s",
@@ -307,14 +307,15 @@ def _markdown(res: BenchmarkResult) -> str:
     st = res.settings
     lines = [f"Generated suite: {len(res.scenes)} scenes ({st.get('frames', 0)} frames); real clips: "
              f"{len(res.clips)}; {res.seconds:.0f} s.", "",
-             "| model | warned | lead median (s) | lead p10 (s) | false episodes /1000 fr | false frames (%) "
+             "| model | warned | lead median (s) | lead p10 (s) | lapsed | false episodes /1000 fr | false frames (%) "
              "| pass / distractor / background (episodes /1000) | TTC error 0-1 s | 1-3 s | 3-6 s "
              "| TTC coverage | targets/object | real clips warned | missed | false | lead (s) | ms/frame |",
-             "|" + "|".join(["---"] * 17) + "|"]
+             "|" + "|".join(["---"] * 18) + "|"]
     for r in res.rows:
         lines.append(
             f"| {r['model']} | {_fmt(r['warned'])}/{_fmt(r['collision_objects'])} ({_fmt(r['warned_pct'], 0)} %) "
-            f"| {_fmt(r['lead_median_s'])} | {_fmt(r['lead_p10_s'])} | {_fmt(r['false_episodes_per_1000'])} "
+            f"| {_fmt(r['lead_median_s'])} | {_fmt(r['lead_p10_s'])} | {_fmt(r['warnings_lapsed'])} "
+            f"| {_fmt(r['false_episodes_per_1000'])} "
             f"| {_fmt(r['false_frames_pct'])} | {_fmt(r['false_episodes_pass'])} / {_fmt(r['false_episodes_distractor'])} "
             f"/ {_fmt(r['false_episodes_background'])} "
             + "".join(f"| {_fmt(r[f'ttc_rte_pct_{b}'], 0)}{'' if r[f'ttc_rte_pct_{b}'] is None else ' %'} "

@@ -35,7 +35,7 @@ from .truth import ObjectTruth, VideoTruth
 
 __all__ = ["ModelRun", "score_run", "score_warnings", "warning_truth", "summarise", "summarise_warnings",
            "TTC_BINS", "MIN_TTC_WIDTH", "FRAGMENT_SHARE", "EARLY_S", "LATE_S", "SEEN_S", "HIDDEN_SHARE",
-           "MID_INTERVAL_S", "mid_error", "unseen", "hidden_frames"]
+           "MID_INTERVAL_S", "LAPSE_S", "mid_error", "unseen", "hidden_frames"]
 
 #: Bins of the true time to contact (s) for the TTC errors (lower bound inclusive).
 TTC_BINS = ((0.0, 1.0), (1.0, 3.0), (3.0, 6.0))
@@ -57,6 +57,9 @@ SEEN_S = 1.0
 #: A 3-D object is hidden in a frame when at least this share of its image box (within the image) lies
 #: in the boxes of nearer 3-D objects (depth from the truth: physical width over image width).
 HIDDEN_SHARE = 0.75
+#: A warned collision object's warning lapsed when no warning stood for it for at least this long (s) between its
+#: first warning and its contact (``warning_gap_s``): a blip that a robot cannot act on, then silence.
+LAPSE_S = 0.2
 #: MiD (the TSTTC benchmark's motion-in-depth error) compares the depth ratio over this interval (s):
 #: TSTTC's frame interval (10 fps).
 MID_INTERVAL_S = 0.1
@@ -445,8 +448,8 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
     rec = {"model": run.label, "video": truth.key, "object": o.id, "kind": "collision",
            "contact_frame": cf, "warned": False, "warning_frame": None, "lead_s": None,
            "ttc_at_warning_s": None, "warning_distance_px": None, "unplaced": False, "unplaced_frame": None,
-           "unplaced_lead_s": None, "alarm_frame": None, "alarm_lead_s": None, "targets": None, "ttc_frames": 0,
-           "ttc_estimated": 0, "ttc_errors": []}
+           "unplaced_lead_s": None, "alarm_frame": None, "alarm_lead_s": None, "warning_kept": None,
+           "warning_gap_s": None, "targets": None, "ttc_frames": 0, "ttc_estimated": 0, "ttc_errors": []}
     ids = set()
     blind = rules.blind and o is collider   # its position is unknown: no warning can be placed on it
     for f in range(start, stop):
@@ -496,7 +499,28 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
         elif run.localises and fits:
             ids.update(fid for fid, x, y, _ in run.fields_at(f) if nearest_object(x, y, f, truth, radius) is o)
     rec["targets"] = len(ids) if (run.has_targets or run.localises) else None
+    if rec["warned"] and cf is not None:
+        rec["warning_kept"], rec["warning_gap_s"] = _kept(run, truth, o, rules, rec["warning_frame"], stop)
     return rec
+
+
+def _kept(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _WarningRules, first: int,
+          stop: int) -> tuple[float, float]:
+    """(share, longest gap in s) of the frames from a collision object's first warning ``first`` up to its
+    contact (``stop``, exclusive) in which a warning stands for it: lies nearest it, or goes on without a break
+    from one that did within ``LATE_S`` before its contact (its box past the view: the rule of
+    :func:`_false_warnings`)."""
+    keys: set = set()
+    on = gap = longest = 0
+    for f in range(first, stop):
+        near = o.contact_frame is not None and f >= o.contact_frame - rules.late
+        keys = {key for key, x, y in run.warnings_at(f)
+                if x is None or (near and key in keys) or nearest_object(x, y, f, truth, rules.radius) is o}
+        on += bool(keys)
+        gap = 0 if keys else gap + 1
+        longest = max(longest, gap)
+    n = stop - first
+    return (round(on / n, 4), round(longest / rules.fps, 4)) if n > 0 else (1.0, 0.0)
 
 
 def _false_warnings(run: ModelRun, truth: VideoTruth,
@@ -583,6 +607,8 @@ def summarise_warnings(label: str, wvideos: list[dict], wobjects: list[dict]) ->
         "lead_p10_s": _quantile([o["lead_s"] for o in warned], 0.1),
         "ttc_at_warning_median_s": _median(o["ttc_at_warning_s"] for o in warned),
         "warning_distance_median_px": _median(o["warning_distance_px"] for o in warned),
+        "warning_kept_median": _median(o["warning_kept"] for o in warned if o.get("warning_kept") is not None),
+        "warnings_lapsed": sum(1 for o in warned if (o.get("warning_gap_s") or 0.0) >= LAPSE_S - 1e-9),
         "frames": frames,
         "false_frames_per_1000": per_k(sum(v["false_frames"] for v in synth)),
         "false_episodes_per_1000": per_k(sum(v["false_episodes"] for v in synth)),

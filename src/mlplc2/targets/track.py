@@ -148,7 +148,7 @@ class Track:
     last_warned: bool = False          # its last frame was a warning (``reonset_miss``)
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
     first_ttc: float | None = None     # its first time to contact (s), of its own fit or the lost track's it was refound from (``fresh_ttc``)
-    ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None) of its last estimates
+    ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None, sigma_s or None) of its last estimates
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
     onset_cut: bool = False            # its warning began on a box cut by the border (``cut_exit``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)

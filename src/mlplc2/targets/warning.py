@@ -260,8 +260,13 @@ def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
     if p.countdown_frames <= 0 or ttc is None:
         return False
     then = index - p.span(p.countdown_frames, fps) + _EPS
-    old = next((v for clock, v in reversed(t.ttcs) if clock <= then), None)
-    return old is not None and ttc > old + (sigma or 0.0)
+    if p.rise_streak and sigma is not None and then < t.streak_since - _EPS:
+        return False                # the fit's run began after ``then``: nothing of its own to compare with
+    old = next(((v, sd) for clock, v, sd in reversed(t.ttcs) if clock <= then), None)
+    if old is None or old[0] is None:
+        return False
+    both = p.rise_sigma and sigma is not None and old[1] is not None
+    return ttc > old[0] + (math.hypot(sigma, old[1]) if both else (sigma or 0.0))
 
 
 def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
@@ -393,6 +398,17 @@ def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
         return None, None, None, None
     left = t.held[1] - (now - t.held[0]) / fps
     return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
+
+
+def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None) -> bool:
+    """``warn_through`` (docs/model.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
+    clock ``now``, where its own measurement does not (no fit, a fit not yet evident or too uncertain), on its time to
+    contact ``ttc`` (s; without a fit the one held, :func:`held`) and course ``miss``: its last fit at most
+    ``warn_through`` frames old, ``ttc`` within ``horizon_s`` and ``miss`` within ``reonset_miss`` (the course on which
+    a lapsed warning returns: a box that slid off its object, or a passing object's, straddles it and misses)."""
+    return (p.warn_through > 0 and ttc is not None and miss is not None and t.held is not None
+            and now - t.held[0] <= p.span(p.warn_through, fps) + _EPS and ttc <= p.horizon_s
+            and miss <= p.reonset_miss)
 
 
 def slow(t: Track, p: TargetParams, fps: float, index: float, interval: float | None) -> bool:
@@ -528,6 +544,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index)
+    # ... goes on through frames without a fit, on the time to contact held (warn_through)
+    if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss):
+        warning = True
     # ... goes on while cut by the border off the heading only on a course through its box (cut_exit)
     if warning and began and exits(t, p, shape, heading, miss):
         warning = False
@@ -541,7 +560,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.last_warned = warning
     # (the time to contact a refound track took over from the lost one, Track.held, is not its own:
     # its countdown starts from its own fit)
-    t.ttcs.append((index, ttc if t.held is None or t.held[0] >= t.birth else None))
+    own = t.held is None or t.held[0] >= t.birth
+    t.ttcs.append((index, ttc if own else None, sigma if own else None))
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
