@@ -5,7 +5,6 @@ onset), and a forward drive past and into static objects."""
 from __future__ import annotations
 
 import math
-import statistics
 from collections import deque
 
 import pytest
@@ -14,9 +13,8 @@ from mlplc2.evaluation.truth import parse
 from mlplc2.models import MLPLC2
 from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
-from mlplc2.targets.change import unswept
 from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, passes_still, seed_course
+from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -155,23 +153,6 @@ def test_the_alarm_alone_does_not_begin_a_warning_on_a_track_refound_from_one_th
             assert young.lost_drift == pytest.approx(1.0 if static else 0.0, abs=0.05)
         out = estimate(young, p, FPS, 3, SHAPE, heading=heading)
         assert out.miss is None and out.warning == warns
-
-
-def test_the_field_alarm_exempts_a_drifting_box_from_path_drift_only_on_a_short_course():
-    # drift_miss (issue 22, session 15): a box in view that expands about the heading (drift 1, the static
-    # world's; path_drift 0.4 holds its warning back) and owns a field in collision alarm is exempted by the
-    # alarm; with drift_miss 0.4 only while its course (if known) misses by at most 0.4: a box over a passing
-    # car and the road beside it (course 0.6-0.9, measured short) is held back, a short course is not
-    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
-    t = _looming(30.0, 8, static=True)
-    t.last_alarm, t.alarm_run = 8, 3
-    assert drift(t, heading) == pytest.approx(1.0, abs=0.05) and not t.cut(SHAPE, 2.0)
-    off, on = TargetParams(), TargetParams(drift_miss=0.4)
-    assert not off_path(t, off, 8, heading, SHAPE, 0.7)                  # main: the alarm exempts it
-    assert off_path(t, on, 8, heading, SHAPE, 0.7)                       # a course beyond drift_miss: not
-    assert not off_path(t, on, 8, heading, SHAPE, 0.3)                   # a short course: exempt
-    assert not off_path(t, on, 8, heading, SHAPE, None)                  # no course known: exempt
-    assert off_path(t, on, 9, heading, SHAPE, 0.3)                       # no alarm this frame: path_drift
 
 
 def test_a_warning_begun_in_view_goes_on_while_the_box_is_cut():
@@ -682,23 +663,6 @@ def test_the_layer_smooths_the_measured_heading_by_its_confidence():
     assert layer.heading is None
 
 
-# -- the course's width and centre (issue 22, the miss measured right): a faint candidate's change
-# box spans the object and its sweep over ``change_frames``; cut to the object's own box, a passing
-# object's miss is no longer short by that much --
-def test_the_change_box_less_its_sweep_is_the_object_box():
-    # the object was [45, 55] and is [52.5, 63.5] (centre 50 -> 58, scale 1.1): the union is
-    # [45, 63.5]; an alignment about the union's centre c measures the shift d + (k - 1)(c - c0)
-    c0, w0, d, k = 50.0, 10.0, 8.0, 1.1
-    left, right = c0 - w0 / 2, c0 + d + k * w0 / 2
-    c, w = (left + right) / 2, right - left
-    shift = d + (k - 1) * (c - c0)
-    for sign in (1.0, -1.0):                              # moving right, and its mirror image moving left
-        box = unswept((sign * c, 30.0, w, 12.0), sign * shift, 0.0, math.log(k))
-        assert box == pytest.approx((sign * (c0 + d), 30.0, k * w0, 12.0), abs=1e-9)
-    # a box that only grows (an object coming straight on) is its own
-    assert unswept((40.0, 30.0, 20.0, 20.0), 0.4, -0.3, math.log(1.1)) == (40.0, 30.0, 20.0, 20.0)
-
-
 def _pass_misses(x_m: float, p: TargetParams) -> list[float]:
     """The misses a still camera's mLPLC2 measures on a dark square 0.5 m wide approaching at 8 m/s
     over a textured background whose centre passes ``x_m`` right of the camera (truth: ``|x_m| /
@@ -714,18 +678,8 @@ def _pass_misses(x_m: float, p: TargetParams) -> list[float]:
     return out
 
 
-@pytest.mark.parametrize("x_m", [-1.5, 1.5])
-def test_an_object_passing_three_widths_beside_the_camera_misses_by_about_three(x_m):
-    # without (unsweep off, the default: the change box's width and centre): medians 1.15 and 1.62
-    misses = _pass_misses(x_m, TargetParams(unsweep=True))
-    assert misses and statistics.median(misses) == pytest.approx(3.0, abs=0.5)
-    assert min(misses) > 2.0
-    off = _pass_misses(x_m, TargetParams())
-    assert statistics.median(off) < 2.0                  # what the option is for
-
-
 def test_an_object_on_a_collision_course_stays_under_half_a_width():
-    misses = _pass_misses(0.1, TargetParams(unsweep=True))            # truth 0.2
+    misses = _pass_misses(0.1, TargetParams())            # truth 0.2
     assert misses and max(misses) < 0.5
 
 
@@ -886,12 +840,11 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
 
 
 def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_drift():
-    # drift_cut / drift_side (on) / drift_alarm_frames (off) (docs/model.md, "The fit's onset the field alarm
-    # exempts"): a roadside
+    # drift_cut / drift_side (on) (docs/model.md, "The fit's onset the field alarm exempts"): a roadside
     # wall's box beside the path, its centre drifted away from the heading as the static world's (0.8 of
     # its drift: r0 40 px, grown by e^0.5), a field of it in collision alarm this frame (index 24). The
     # alarm exempts it from path_drift (main), unless, with drift_cut, the box is cut by the border (it
-    # sweeps out of view), or, with drift_alarm_frames 3, the alarm has lasted fewer frames in a row
+    # sweeps out of view)
     from mlplc2.targets.warning import off_path
 
     heading, shape = (160.0, 120.0), (240, 320)
@@ -926,49 +879,9 @@ def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_dr
     assert off_path(low, p, 24, heading, shape) and not off_path(low, side, 24, heading, shape)
     cut.last_alarm = 24
     assert off_path(cut, side, 24, heading, shape)
-    q = TargetParams(path_drift=0.4, drift_cut=False, drift_alarm_frames=3)
-    assert off_path(wall(0.0, 2), q, 24, heading, shape)            # an alarm of 2 frames does not exempt
-    assert not off_path(wall(0.0, 3), q, 24, heading, shape)        # one of 3 does
-    assert not off_path(wall(0.0, 2), main, 24, heading, shape)
     d = TargetParams()                                               # the defaults: drift_cut with drift_side
-    assert d.drift_cut and d.drift_side and d.drift_alarm_frames == 1
+    assert d.drift_cut and d.drift_side
     assert off_path(cut, d, 24, heading, shape) and not off_path(low, d, 24, heading, shape)
-
-
-def test_the_alarm_seed_whose_alignment_failed_begins_no_warning_with_alarm_unaligned():
-    # alarm_unaligned (off; docs/model.md, "False warnings, session 15"): from a translating
-    # camera the field alarm without a course begins no warning on a seed whose own alignment was tried and
-    # failed (an edge of the static world no similarity maps onto itself); with the rule off it warns (the
-    # seed lies on the path, 0.8 widths beside the heading, on its alarm's second frame). A track born before
-    # its alarm (no alignment tried) and a camera without a measured heading are not tested
-    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
-    off = TargetParams(alarm_warns=True, alarm_frames=2)
-    assert not off.alarm_unaligned                                  # the default
-    on = TargetParams(alarm_warns=True, alarm_frames=2, alarm_unaligned=True)
-
-    def seed(failed):
-        s = _seed(_crossing(heading, 0.8, 0.8, frames=(0, 4), width=14.0, contact=20))
-        s.seed_move, s.seed_failed, s.alarm_run = None, failed, 2
-        return s
-
-    assert estimate(seed(True), off, FPS, 4, SHAPE, heading=heading).warning
-    assert not estimate(seed(True), on, FPS, 4, SHAPE, heading=heading).warning
-    assert estimate(seed(False), on, FPS, 4, SHAPE, heading=heading).warning
-    assert estimate(seed(True), on, FPS, 4, SHAPE).warning          # no measured heading: no test
-
-
-def test_the_layer_marks_an_alarm_seed_whose_alignment_failed():
-    # TargetLayer._own tries the seed's alignment on its alarm's first frame: a failure (here no image
-    # measures it) marks the track (alarm_unaligned); none tried (no frame change_frames before) does not
-    for reference, failed in [((None, 4.0), True), (None, False)]:
-        layer = TargetLayer(TargetParams(alarm_warns=True), fps=FPS)
-        layer._reference = lambda ref=reference: ref
-        layer._now = (None, None)
-        layer._seed_move = lambda t: None
-        t = _young_static(80.0, 100.0, frames=(3,))
-        layer._clock = 3
-        layer._own(t, _Field(), 3)
-        assert t.seed_failed == failed and t.seed_move is None
 
 
 def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
@@ -1076,70 +989,6 @@ def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_a
         t.last_alarm, t.alarm_run, t.alarm_courses = 12, 3, courses
         assert estimate(t, on, FPS, 12, SHAPE, heading=heading).warning == warns
         assert t.alarm_courses == courses + 1                   # this frame had a course: counted
-
-
-def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_its_side():
-    # path_core (docs/model.md, "False warnings, session 16"): the road below the heading, its box
-    # reaching up past the heading (the heading 0.8 of its half height above its centre) and its centre
-    # drifting away from the heading as the static world's does (drift 1: r0 40 px, grown by e^0.5). With
-    # path_core 1 (main) the box holds the heading and path_drift does not test it; with 0.5 it does, and
-    # holds it back, while a box that keeps its bearing there (drift 0) and one whose middle holds the
-    # heading are not held back
-    heading, shape = (160.0, 120.0), (240, 320)
-    g = 0.5
-
-    def road(drift_frac: float, off: float) -> Track:
-        y0 = heading[1] + off
-        y1 = heading[1] + off * (1.0 + drift_frac * math.expm1(g))
-        h1 = 2.0 * (y1 - heading[1]) / 0.8 if off > 0 else 100.0
-        t = Track(3, 13, heading[0], y1, 100.0, h1, log_s=g)
-        t.history = deque([Observation(13, 0.0, heading[0], y0, 60.0, 0.0),
-                           Observation(24, g, heading[0], y1, 100.0, 0.0)])
-        return t
-
-    static, steady = road(1.0, 40.0), road(0.0, 40.0)
-    assert drift(static, heading) == pytest.approx(1.0) and drift(steady, heading) == pytest.approx(0.0)
-    assert holds(static, heading) and not holds(static, heading, 0.5)
-    main, core = TargetParams(path_drift=0.4), TargetParams(path_drift=0.4, path_core=0.5)
-    assert not off_path(static, main, 24, heading, shape)            # main: it holds the heading, no test
-    assert off_path(static, core, 24, heading, shape)                # path_core 0.5: it drifts, held back
-    assert not off_path(steady, core, 24, heading, shape)            # it keeps its bearing: begins
-    middle = road(1.0, 40.0)
-    middle.h = 4.0 * 40.0 * (1.0 + math.expm1(g))                   # the heading 0.5 of its half height away
-    assert holds(middle, heading, 0.5) and not off_path(middle, core, 24, heading, shape)
-    with pytest.raises(Exception):
-        TargetParams(path_core=1.5)
-
-
-def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_translate():
-    # still_drift / still_miss (docs/model.md, "False warnings, session 16"; off by default): no heading measured
-    # (a still or turning camera); a box 40 px right of the principal point whose centre moves away from it as a
-    # point at a fixed lateral offset does (drift 1: it passes beside the camera at its offset) on a course of 0.7
-    # is held back with still_drift 0.1 and 0.2; one that converges on its bearing (drift 0), one on a short course (0.3), one
-    # with a field in collision alarm this frame, or with a measured heading (path_drift's case) is not
-    pp = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
-    g = 0.3
-
-    def box(frac: float) -> Track:
-        x0 = pp[0] + 40.0
-        x1 = pp[0] + 40.0 * (1.0 + frac * math.expm1(g))
-        t = Track(2, 13, x1, pp[1], 20.0, 20.0, log_s=g)
-        t.history = deque([Observation(13, 0.0, x0, pp[1], 15.0, 0.0), Observation(24, g, x1, pp[1], 20.0, 0.0)])
-        return t
-
-    passing, steady = box(1.0), box(0.0)
-    off, on = TargetParams(still_drift=0.0), TargetParams(still_drift=0.1)
-    assert not passes_still(passing, off, 24, None, pp, 0.7)             # off
-    assert passes_still(passing, on, 24, None, pp, 0.7)                  # drifts at its offset: held back
-    assert not passes_still(steady, on, 24, None, pp, 0.7)               # keeps its bearing
-    assert not passes_still(passing, on, 24, None, pp, 0.3)              # a short course (still_miss 0.4)
-    assert not passes_still(passing, on, 24, None, pp, None)             # no course known
-    assert not passes_still(passing, on, 24, pp, pp, 0.7)                # a measured heading: path_drift's
-    assert passes_still(passing, TargetParams(still_drift=0.2), 24, None, pp, 0.7)
-    assert not passes_still(box(0.15), TargetParams(still_drift=0.2), 24, None, pp, 0.7)
-    assert not passes_still(passing, TargetParams(), 24, None, pp, 0.7)  # off by default
-    passing.last_alarm = 24
-    assert not passes_still(passing, on, 24, None, pp, 0.7)              # a field in alarm this frame
 
 
 def _mixed(x0: float, heading_x: float, part: float, width: float = 24.0, frames=range(10, 20)) -> Track:

@@ -150,8 +150,7 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
     """Eq. 13: (x, y, value) of the largest LM outside every zone (None if no pixel left).
 
     ``zones`` is a sequence of (x, y, r): excluded squares (or discs) of
-    half-side r centred on (x, y); a square zone may also be (x, y, rx, ry), a box of
-    half-width rx and half-height ry (``TargetParams.box_claim``).
+    half-side r centred on (x, y).
     """
     if not zones:
         idx = int(np.argmax(lm_map))
@@ -159,9 +158,8 @@ def argmax_outside(lm_map: np.ndarray, zones, shape: str = "square"):
         return x, y, float(lm_map[y, x])
     masked = lm_map.copy()
     h, w = masked.shape
-    for fx, fy, *half in zones:
-        r, ry = half[0], half[-1]
-        rows = slice(max(fy - ry, 0), min(fy + ry + 1, h))
+    for fx, fy, r in zones:
+        rows = slice(max(fy - r, 0), min(fy + r + 1, h))
         cols = slice(max(fx - r, 0), min(fx + r + 1, w))
         if rows.start >= rows.stop or cols.start >= cols.stop:
             continue  # the zone lies outside the frame

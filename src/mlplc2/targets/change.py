@@ -11,7 +11,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-__all__ = ["change_box", "unswept", "uniform_box", "uniform_region"]
+__all__ = ["change_box", "uniform_box", "uniform_region"]
 
 
 @lru_cache(maxsize=None)
@@ -138,33 +138,6 @@ def _boxed(best, best_d, x0, y0, x1, y1, w, h, radius):
         return None
     # the dilation added a pixel on each side
     return x0 + bx + bw / 2.0 - 0.5, y0 + by + bh / 2.0 - 0.5, max(bw - 2.0, 1.0), max(bh - 2.0, 1.0)
-
-
-def unswept(box: tuple[float, float, float, float], dx: float, dy: float, log_scale: float
-            ) -> tuple[float, float, float, float]:
-    """The object's own box ``(cx, cy, w, h)`` in the newer frame, from the box ``box`` of
-    :func:`change_box` (the union of where the object was and where it is: it spans the object
-    plus its sweep) and the object's move between the two frames (the image alignment's shift
-    ``dx``, ``dy`` px and log-scale). Per axis, an edge of the union is the old object's where the
-    shift ``d`` outruns the growth of the edge, ``e = |d| - (k - 1) W / 2 > 0`` (``k`` the scale,
-    ``W`` the union's extent): the object's extent is then ``W - e`` and its centre ``e / 2``
-    along ``d`` from the union's (``docs/targets.md``, step 2). Without a sweep the box is kept.
-    A passing object's change box was as wide as the object plus its move over ``change_frames``
-    frames, and its miss (in box widths) came out short by that much (issue 22)."""
-    cx, cy, w, h = box
-    k = math.exp(log_scale)
-
-    def axis(c, extent, d):
-        e = abs(d) - (k - 1.0) * extent / 2.0
-        if e <= 0:
-            return c, extent
-        e = min(e, extent / 2.0)       # an object at least half its union: the alignment's shift is noisy
-        return c + math.copysign(e / 2.0, d), extent - e
-
-    cx, w = axis(cx, w, dx)
-    cy, h = axis(cy, h, dy)
-    return cx, cy, w, h
-
 
 
 def _flood(img: np.ndarray, mask: np.ndarray, x: int, y: int, tol: float):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import change_box, uniform_box, uniform_region, unswept
+from .change import change_box, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -72,8 +72,6 @@ class TargetLayer:
         self._hot: tuple[list[int], list[int]] = ([], [])   # levels read last frame: of the last and the oldest frame
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
-        self._tried: list[tuple[int, int, float]] = []   # (x, y, clock) of the candidates tried lately (:meth:`_in_turn`)
-        self._rests: list[tuple[int, int, float]] = []   # (x, y, clock) of the extra seeds that failed (``extra_rest``)
         self._next = 1
         self._prev: Carried | None = None
         self._clock: float = 0       # clock of the last frame (frame intervals)
@@ -173,7 +171,7 @@ class TargetLayer:
         self._clock = clock
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
         self._merge(now)
-        seeds, focused, extra = [], set(), set()    # focused: the seeds seed_focus tests; extra: lm_seeds' extra ones
+        seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
         for f in fields:
             owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not t.shadow]
             if owners:
@@ -189,9 +187,6 @@ class TargetLayer:
             zones += [(int(f.x), int(f.y), int(f.radius)) for f in fields]
             hidden = [self._claim(t) for t in self._tracks    # seed_shadow: claimed from the extra seeds only
                       if t.shadow and not self._opened(t, now)]
-            if p.extra_rest > 0:                 # extra_rest: a failed extra seed's place rests
-                self._rests = [r for r in self._rests if now - r[2] <= p.span(p.extra_rest, self.fps) + _EPS]
-                hidden += [(x, y, int(p.claim)) for x, y, _ in self._rests]
             n = self._seeds(interval)
             for i in range(n):
                 if i >= n // p.lm_seeds and hidden is not None:
@@ -204,16 +199,8 @@ class TargetLayer:
                     break
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
-                if p.focus_first or i >= n // p.lm_seeds:    # TargetParams.seed_focus: an extra seed
-                    focused.add((cand[0], cand[1]))
-                if i >= n // p.lm_seeds:
+                if i >= n // p.lm_seeds:         # an extra seed: TargetParams.seed_focus tests it
                     extra.add((cand[0], cand[1]))
-        budget = None
-        if p.seed_budget > 0:                    # TargetParams.seed_budget: the candidates tried lately
-            span = p.span(p.change_frames, self.fps) + _EPS
-            self._tried = [e for e in self._tried if now - e[2] <= span]
-            if len(seeds) > p.seed_budget:
-                budget, seeds = p.seed_budget, self._in_turn(seeds)
         for x, y, f in seeds:
             if self._count() >= p.max_targets:
                 break
@@ -222,26 +209,16 @@ class TargetLayer:
                    if not ((f is None and self._opened(t, now)) or (t.shadow and not hide))):
                 continue
             alarm = self._alarming(f)
-            if budget is not None and not alarm:  # a field in alarm is tried beside the budget
-                if budget <= 0:                   # it waits for a later frame
-                    continue
-                budget -= 1
-            if p.seed_budget > 0:
-                self._tried.append((x, y, now))
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
                 host = next((o for o in self._tracks if self._hosts(o, t)
                              and not (f is None and self._opened(o, now)) and (hide or not o.shadow)), None)
                 t.uniform = swept is None or (hide and p.shadow_uniform)   # shadow_uniform: a shadow's region too
-                focus = f is None and (x, y) in focused
+                focus = f is None and (x, y) in extra
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
-                    if host is None and swept and p.unsweep and t.motion is not None:   # the object, not its sweep
-                        t.cx, t.cy, t.w, t.h = unswept(box, *(v * self._reference()[1] for v in t.motion))
                     break
                 t = None
-            if t is None and host is None and f is None and p.extra_rest > 0 and (x, y) in extra:
-                self._rests.append((x, y, now))
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._own(host, f, now)
@@ -299,20 +276,6 @@ class TargetLayer:
         keep = {t.id for t in self._tracks if not t.shadow}
         return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
 
-    def _in_turn(self, seeds: list) -> list:
-        """``seeds`` in the order ``TargetParams.seed_budget`` tries them when there are more than it
-        allows: a field in collision alarm first, then by when a candidate within ``claim`` px of the
-        seed was last tried (never first; those tried more than ``change_frames`` ago are
-        forgotten), else in their order."""
-        p = self.params
-
-        def last(seed):
-            x, y, _ = seed
-            return max((c for tx, ty, c in self._tried if abs(tx - x) <= p.claim and abs(ty - y) <= p.claim),
-                       default=-math.inf)
-
-        return sorted(seeds, key=lambda s: (not self._alarming(s[2]), last(s)))
-
     def _keep_past(self, clock: float) -> None:
         """Forget the kept frames older than needed: the newest frame at least ``change_frames``
         (``nominal_fps``) before ``clock`` stays the oldest (:meth:`_reference`)."""
@@ -348,8 +311,6 @@ class TargetLayer:
                 move = self._seed_move(t)
                 if move is not None:
                     t.seed_move, t.seed_skew = move[:3], move[3]
-                else:
-                    t.seed_failed = self._reference() is not None and self._now is not None
 
     def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest
@@ -371,14 +332,9 @@ class TargetLayer:
         return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
 
     def _claim(self, t: Track) -> tuple:
-        """The seed zone of track ``t`` (x, y, half-width[, half-height]): its box and ``claim`` px
-        beyond, a square of its larger side, or with ``TargetParams.box_claim`` for a flat or tall box
-        its box's own shape."""
-        x, y = int(round(t.cx)), int(round(t.cy))
-        k = self.params.box_claim
-        if k <= 0 or max(t.w, t.h) < k * min(t.w, t.h):
-            return x, y, int(t.size / 2.0 + self.params.claim)
-        return x, y, int(t.w / 2.0 + self.params.claim), int(t.h / 2.0 + self.params.claim)
+        """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square
+        of its larger side."""
+        return int(round(t.cx)), int(round(t.cy)), int(t.size / 2.0 + self.params.claim)
 
     @staticmethod
     def _hosts(o: Track, t: Track) -> bool:
@@ -413,9 +369,9 @@ class TargetLayer:
         An object that grows straight at the camera moves its edges a fraction of a pixel per
         frame, too little for the local motion, while the grey levels along its edge change
         steadily; a moving background changes everywhere and seeds nothing here. ``contrast``: that
-        factor instead (``TargetParams.extra_change``, the extra seeds'; 0: ``change_contrast``, else
-        ``seed_contrast``); ``window`` (``extra_window``): the change against the mean change of a window
-        that wide around each point, at least ``contrast`` times it (and ``seed_change`` grey levels)."""
+        factor instead (``TargetParams.extra_change``, the extra seeds'; 0: ``seed_contrast``);
+        ``window`` (``extra_window``): the change against the mean change of a window that wide
+        around each point, at least ``contrast`` times it (and ``seed_change`` grey levels)."""
         p = self.params
         ref = self._reference()
         if p.seed_change <= 0 or ref is None or len(levels) < 2:
@@ -426,15 +382,14 @@ class TargetLayer:
             r = d / np.maximum(cv2.blur(d, (k, k)), 1.0)
             r[d < p.seed_change] = 0
             d = r
-        for zx, zy, *zr in zones:                # at half resolution
-            rx, ry = zr[0], zr[-1]
-            x0, x1 = max((zx - rx) // 2, 0), max((zx + rx) // 2 + 1, 0)
-            y0, y1 = max((zy - ry) // 2, 0), max((zy + ry) // 2 + 1, 0)
+        for zx, zy, r in zones:                  # at half resolution
+            x0, x1 = max((zx - r) // 2, 0), max((zx + r) // 2 + 1, 0)
+            y0, y1 = max((zy - r) // 2, 0), max((zy + r) // 2 + 1, 0)
             d[y0:y1, x0:x1] = 0
         _, top, _, (x, y) = cv2.minMaxLoc(d)
         if window > 0:
             return (2 * x + 1, 2 * y + 1) if top >= contrast else None
-        if top < max(p.seed_change, (contrast or p.change_contrast or p.seed_contrast) * float(d.mean())):
+        if top < max(p.seed_change, (contrast or p.seed_contrast) * float(d.mean())):
             return None
         return 2 * x + 1, 2 * y + 1
 

@@ -61,19 +61,6 @@ class TargetParams(ParameterSet):
                                candidate (:meth:`TargetLayer._change_seed`) when it is at least this
                                much and ``seed_contrast`` times the frame's mean change. 0 = off.""",
                                unit="grey levels", valid=Valid.real(minimum=0))
-    change_contrast: float = param(0.0, """The change seed's own contrast: its change must be this many times
-                                   the frame's mean change (instead of ``seed_contrast``). Over a turning
-                                   textured view the stabilised frame changes everywhere by a few grey levels,
-                                   and a far object that grows straight at the camera changes its edges by 3-14
-                                   times that: the largest change outside the targets, under 20 times the mean
-                                   (docs/model.md, "Objects missed", session 16). 0 = ``seed_contrast``
-                                   (the default; 5 and 10 measured, not adopted).""", valid=Valid.real(minimum=0))
-    box_claim: float = param(0.0, """A track whose box is at least this many times wider than tall (or taller than
-                             wide) claims its seeds (``claim``) over its box, ``w / 2 + claim`` across and
-                             ``h / 2 + claim`` down, instead of a square of its larger side: a wide box over
-                             the ground ahead no longer claims the view above it, where an object at the
-                             heading grows (docs/model.md, "Objects missed", session 16). 0 = off (the
-                             default; 1, every box, and 2 measured, not adopted).""", valid=Valid.real(minimum=0))
     lm_seeds: int = param(2, """LM seeds (``seed_lm``, else ``seed_change``) per nominal frame interval: the strongest
                           point outside every target, field and seed tried before it (``claim``), that many
                           times; the seeds beyond the first are the extra seeds (``extra_change``, ``seed_focus``,
@@ -84,7 +71,7 @@ class TargetParams(ParameterSet):
                           lost"; with it, "A seed's own focus").""",
                           unit="seeds", valid=Valid.integer(1))
     seed_focus: float = param(0.25, """An extra LM seed (beyond the first per nominal frame interval:
-                              ``lm_seeds`` > 1; with ``focus_first`` every LM and change seed) becomes a
+                              ``lm_seeds`` > 1) becomes a
                               target only when its growth test's alignment (``change_frames``) expands about
                               a point within this many half-sizes of its box from its centre (its shift at
                               most the growth times that distance, plus ``focus_slack``) and its box is not
@@ -136,13 +123,6 @@ class TargetParams(ParameterSet):
                              without 2), not one object's two boxes. 2 (the default since session 18: docs/model.md,
                              "Shadow targets, session 18"); 0 = off.""",
                              unit="ratio", valid=Valid.real(minimum=0))
-    extra_rest: int = param(0, """An extra seed (``lm_seeds`` > 1) whose candidate became no target keeps its place
-                            (``claim`` px) out of the extra seeds' search for this many frames (``nominal_fps``),
-                            so that they move on from a spot that fails every frame; the first seed's search
-                            is main's. 0 = off (the default; measured: docs/model.md, "Shadow targets", session
-                            17).""", unit="frames", valid=Valid.integer(0))
-    focus_first: bool = param(False, """``seed_focus`` tests the first LM (or change) seed of each nominal frame too,
-                              not only the extra ones (``lm_seeds``).""", valid=Valid.boolean())
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
                                frames (:func:`change_box`): a slow edge moves a fraction of a pixel per
                                frame.""", unit="frames", valid=Valid.integer(1))
@@ -152,25 +132,8 @@ class TargetParams(ParameterSet):
                               with a turning camera, a receding or a static object does not grow. 0.005
                               over 4 frames is a time to contact of 27 s at 30 fps. 0 = no test.""",
                               valid=Valid.real(minimum=0))
-    unsweep: bool = param(False, """(off by default: it costs the real clip UAV_outdoor_1 its lead, 0.50 -> 0.03 s;
-                          docs/model.md, "The miss against the truth") A faint candidate's change box (the union of where the object was
-                          ``change_frames`` frames before and where it is) is cut to the object's own
-                          extent and centre with the move its growth test measured
-                          (:func:`~mlplc2.targets.change.unswept`): a passing object's box spanned its
-                          sweep too, and its miss in box widths came out short (issue 22).""",
-                          valid=Valid.boolean())
     max_targets: int = param(12, "Upper bound on simultaneous targets (no new candidate while this many exist).",
                              unit="targets", valid=Valid.integer(0))
-    seed_budget: int = param(0, """At most this many candidates have their box found and its growth tested
-                             per frame (a frame's latency: each costs a change box or the edges and an
-                             alignment, ~0.2-0.4 ms, and a frame of many seeds was the tail of issue 23);
-                             the others wait: when there are more, candidates of a field in collision
-                             alarm come first (always tried, beside the budget), then those whose place (within ``claim``)
-                             was tried least recently, so that each is tried within a few frames.
-                             0 = every candidate every frame, the default: 2 cost the standard suite a
-                             collision warned and raised its false warnings (docs/model.md, "The seeding
-                             frames' cost").""",
-                             unit="candidates", valid=Valid.integer(0))
     # --- the image measurement ------------------------------------------------------------
     patch: int = param(32, "Side of the resampled patch the alignment works on (:func:`align`).",
                        unit="samples", valid=Valid.integer(8, 256))
@@ -404,14 +367,6 @@ class TargetParams(ParameterSet):
                                      standard suite, its real clips and holdouts 1-4, 6 and 8 unchanged; docs/model.md,
                                      "The same warning whatever the encoding, session 17").""",
                                      valid=Valid.boolean())
-    alarm_unaligned: bool = param(False, """With ``alarm_isotropic``: from a translating camera (a measured heading), the
-                                  field alarm without a course does not begin a warning on a target born on an alarm
-                                  seed whose own alignment over ``change_frames`` was tried and failed (its residual
-                                  over ``max_residual``, no scale): the edge where the static world's surfaces meet, a
-                                  wall's edge or the ground sheared by the camera's motion, which no similarity maps
-                                  onto itself; the alarm of an approaching object's seed aligns. Its later course (the
-                                  fit, ``min_frames``) may still warn. False = off (measured, not adopted: it took two
-                                  holdout 4 collisions, docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
     cut_exit_onset: bool = param(True, """With ``cut_exit``: no warning begins either on a frame on which ``cut_exit``
                                  would hold one back (the box cut by the border, not holding the heading, its course
                                  missing by more than ``cut_exit``), whatever began it (the fit, the field alarm with a
@@ -470,13 +425,6 @@ class TargetParams(ParameterSet):
                               1000 frames, holdout 10.19 -> 9.26, no collision or lead lost; docs/model.md,
                               "A warning that begins off the path").""",
                               valid=Valid.real(minimum=0))
-    path_core: float = param(1.0, """``path_drift`` spares a box that holds the heading only when the heading lies
-                             within this fraction of the box's half width and half height of its centre; any other
-                             box is tested by its drift: a box on the road or the ground that reaches the heading
-                             from its side expands about the heading as the static world does (its centre drifts
-                             away), an object on a collision course that holds the heading keeps its bearing.
-                             1 = anywhere in the box (main's; docs/model.md, "False warnings, session 16").""",
-                             valid=Valid.real(minimum=0, maximum=1))
     fresh_ttc: float = param(0.9, """From a translating camera (a measured heading), a warning begins without a field of
                              the target in collision alarm on a track whose first time to contact (of its own fit, or
                              of the lost track it was refound from) was under this only on a box that holds the heading
@@ -503,21 +451,6 @@ class TargetParams(ParameterSet):
                               over its offset from the heading: ``ground_forward_4_h8``'s collider, a course of 0.12,
                               drifted by 0.15 and warned 0.33 s later with 0; the drive's false boxes: courses
                               0.24-0.78).""", unit="object extents", valid=Valid.real(minimum=0))
-    still_drift: float = param(0.0, """Where no heading is measured (a camera that stands still or only turns), a
-                               warning begins without a field of the target in collision alarm only on a box that
-                               holds the principal point (``heading``, if given) or whose centre drifted away from it
-                               by at most this fraction of what a point at a fixed lateral offset would drift over the
-                               same growth (:func:`~mlplc2.targets.warning.drift`): an object on a course through the
-                               camera converges on its bearing (0), one that passes beside it at its offset (1); only
-                               on a course beyond ``still_miss``. 0 = off (session 16, measured: 0.2 takes false
-                               episodes per 1000 frames standard 0.41 -> 0.31, holdout 3 0.10 -> 0.00, holdout 5 0.93
-                               -> 0.82 (0.31 -> 0.29 % of frames), holdout 6 0.32 -> 0.29 % of frames, no collision,
-                               lead or real clip changed; 0.1 delays a still camera's collider by 2 frames;
-                               docs/model.md, "False warnings, session 16").""",
-                               valid=Valid.real(minimum=0))
-    still_miss: float = param(0.4, """``still_drift`` holds back only a box whose course (``miss``) misses by more than
-                              this (none known: no test): an object on a collision course whose box jitters about its
-                              bearing has a short one.""", unit="object extents", valid=Valid.real(minimum=0))
     drift_cut: bool = param(True, """``path_drift``'s exemption for a target with a field in collision alarm this
                             frame holds only for a box wholly inside the frame (not cut by the border,
                             ``border``; with ``drift_side``, not cut by its left or right border): a roadside
@@ -534,20 +467,6 @@ class TargetParams(ParameterSet):
                              low in the view, on the ground ahead, is cut by the bottom border as it nears). False =
                              every cut box loses it (session 14: docs/model.md, "The fit's onset the field alarm
                              exempts").""", valid=Valid.boolean())
-    drift_miss: float = param(0.0, """``path_drift``'s exemption for a target with a field in collision alarm this frame
-                              holds only on a course within this (none known: no test): a box whose centre drifts away
-                              from the heading by more than ``path_drift`` of the static world's drift and whose
-                              course misses by more is the static world's or a passing object's (a box over a passing
-                              car and the road beside it, whose miss is measured short), not a collider's. 0 = off
-                              (docs/model.md, "Objects missed", session 15).""",
-                              valid=Valid.real(minimum=0))
-    drift_alarm_frames: int = param(1, """``path_drift``'s exemption for a target with a field in collision alarm this
-                                    frame holds only once a field of it has been in collision alarm this many processed
-                                    frames in a row (``Track.alarm_run``): the static world's alarms beside the path are
-                                    fleeting. 1 = off (session 14: measured, docs/model.md, "The fit's onset the field
-                                    alarm exempts": 3 loses the real clip crossing_car_strong_light's warning and
-                                    shortens night_rear_end's and UAV_outdoor_1's leads).""", unit="frames",
-                                    valid=Valid.integer(1))
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
                               once a field of the target has been in collision alarm this many processed

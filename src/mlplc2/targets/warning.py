@@ -16,7 +16,7 @@ from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "passes_still", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
@@ -164,14 +164,13 @@ def cut_course(t: Track, p: TargetParams, ttc: float | None, heading: tuple[floa
     return ratio is not None and ratio <= p.cut_course_drift
 
 
-def holds(t: Track, heading: tuple[float, float], core: float = 1.0) -> bool:
-    """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now; with ``core`` < 1,
-    through the middle of it (within ``core`` of its half width and half height of its centre)."""
-    return abs(t.cx - heading[0]) <= core * t.w / 2.0 and abs(t.cy - heading[1]) <= core * t.h / 2.0
+def holds(t: Track, heading: tuple[float, float]) -> bool:
+    """Whether track ``t``'s box holds ``heading`` (px): the camera's path runs through it now."""
+    return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
 
 
 def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
-             shape: tuple[int, int] | None = None, miss: float | None = None) -> bool:
+             shape: tuple[int, int] | None = None) -> bool:
     """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -180,33 +179,15 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     more than ``path_drift`` of the static world's drift (:func:`drift`), or, where the static world
     would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
     world beside the path expands about the heading, while an object on a collision course keeps its
-    bearing. The field alarm exempts a box only once it has lasted ``drift_alarm_frames`` frames in a
-    row (``Track.alarm_run``) and, with ``drift_cut``, only a box wholly inside a frame of ``shape``
+    bearing. With ``drift_cut``, the field alarm exempts only a box wholly inside a frame of ``shape``
     (h, w; None: no test): the static world beside the path sweeps out of view through the border
-    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts"); with
-    ``drift_miss``, only a box whose course ``miss`` (None: none known) is within it."""
-    if p.path_drift <= 0 or heading is None or holds(t, heading, p.path_core):
+    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts")."""
+    if p.path_drift <= 0 or heading is None or holds(t, heading):
         return False
-    if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)) \
-            and (p.drift_alarm_frames <= 1 or t.alarm_run >= p.drift_alarm_frames) \
-            and not (p.drift_miss > 0 and miss is not None and miss > p.drift_miss):
+    if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)):
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
-
-
-def passes_still(t: Track, p: TargetParams, index: int, measured: tuple[float, float] | None,
-                 heading: tuple[float, float], miss: float | None) -> bool:
-    """``still_drift``: whether a warning that would begin this frame on track ``t`` is a passing object's, so
-    does not begin: no heading is measured (``measured`` None), no field of ``t`` is in collision alarm this
-    frame, its box does not hold ``heading`` (px: ``TargetParams.heading`` or the principal point) and its
-    centre drifted away from it by more than ``still_drift`` of the drift of a point at a fixed lateral offset
-    (:func:`drift`), on a course ``miss`` beyond ``still_miss`` (None: no test)."""
-    if p.still_drift <= 0 or measured is not None or t.last_alarm == index or holds(t, heading) \
-            or miss is None or miss <= p.still_miss:
-        return False
-    ratio = drift(t, heading)
-    return ratio is not None and ratio > p.still_drift
 
 
 def fresh(t: Track, p: TargetParams, fps: float, index: float, measured: tuple[float, float] | None,
@@ -295,12 +276,11 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
     static world's surfaces meet alarm as the camera moves forward, and grow unlike in both directions; an
     approaching object grows alike. A track without its seed's alignment (born before its alarm): no test
     (its own box's history was measured too, session 14, and delayed a real clip's warning past its alarm
-    on a scaled copy: docs/model.md). With ``alarm_unaligned``, a seed whose alignment was tried and failed
-    (``Track.seed_failed``) does not begin one either."""
+    on a scaled copy: docs/model.md)."""
     if not p.alarm_isotropic or heading is None or holds(t, heading):
         return False
     if t.seed_move is None or t.seed_skew is None:
-        return p.alarm_unaligned and t.seed_failed
+        return False
     growth, skew = t.seed_move[2], t.seed_skew
     return growth < p.min_growth or abs(skew) > p.max_anisotropy * growth
 
@@ -524,10 +504,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured, shape, miss):
-        warning = False
-    # ... and, where no heading is measured, only on a box that keeps its bearing (still_drift)
-    if warning and not t.warned and passes_still(t, p, index, measured, heading, miss):
+    if warning and not t.warned and off_path(t, p, index, measured, shape):
         warning = False
     # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
     if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
