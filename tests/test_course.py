@@ -886,7 +886,7 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
 
 
 def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_drift():
-    # drift_cut / drift_side (on) / drift_alarm_frames (off) (docs/model.md, "The fit's onset the field alarm
+    # drift_cut / drift_side (on) / drift_alarm_frames (off) (docs/history.md, "The fit's onset the field alarm
     # exempts"): a roadside
     # wall's box beside the path, its centre drifted away from the heading as the static world's (0.8 of
     # its drift: r0 40 px, grown by e^0.5), a field of it in collision alarm this frame (index 24). The
@@ -936,7 +936,7 @@ def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_dr
 
 
 def test_the_alarm_seed_whose_alignment_failed_begins_no_warning_with_alarm_unaligned():
-    # alarm_unaligned (off; docs/model.md, "False warnings, session 15"): from a translating
+    # alarm_unaligned (off; docs/history.md, "False warnings, session 15"): from a translating
     # camera the field alarm without a course begins no warning on a seed whose own alignment was tried and
     # failed (an edge of the static world no similarity maps onto itself); with the rule off it warns (the
     # seed lies on the path, 0.8 widths beside the heading, on its alarm's second frame). A track born before
@@ -972,7 +972,7 @@ def test_the_layer_marks_an_alarm_seed_whose_alignment_failed():
 
 
 def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
-    # cut_exit_onset (on; docs/model.md, "False warnings, session 15"): the static world
+    # cut_exit_onset (on; docs/history.md, "False warnings, session 15"): the static world
     # 0.75 of its widths beside the heading of a camera driving forward (a course of 0.75, as in the test of
     # cut_exit above) whose time to contact falls within horizon_s only once its box is cut by the border (as
     # the ground's at 0.97 s, horizon_s 1 s): with the rule on, no warning begins there (it would be held back
@@ -998,7 +998,7 @@ def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
 
 
 def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
-    # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/model.md, "False warnings, session
+    # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/history.md, "False warnings, session
     # 15"): an object 3.5 widths beside the heading that will pass 1.5 widths beside keeps 0.57 of its bearing
     # (drift 0.43): on its alarm's second frame it warns at 0.5, not at 0.4; a collision course (to hit at 0.5
     # widths, drift 0.14) warns at both
@@ -1015,7 +1015,7 @@ def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
 
 
 def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm_onset_miss():
-    # alarm_onset_miss (on; docs/model.md, "False warnings, session 15"): the static world 0.9 of its widths
+    # alarm_onset_miss (on; docs/history.md, "False warnings, session 15"): the static world 0.9 of its widths
     # beside the heading (a course of 0.9: within max_miss, beyond onset_miss, so the fit alone begins no warning)
     # whose field alarms: on the alarm's first frame in a row it warns with the rule on or off; on a later
     # frame only with the rule off. A target that warned goes on
@@ -1038,7 +1038,7 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
 
 
 def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_alarm_onset_course():
-    # alarm_onset_course (docs/model.md, "The same warning whatever the encoding, session 17"): the static world
+    # alarm_onset_course (docs/history.md, "The same warning whatever the encoding, session 17"): the static world
     # 0.9 of its widths beside the heading (a course of 0.9: within max_miss, beyond onset_miss) whose field alarms
     # on every frame from its track's first, while its history is too short for a course (the alarm without a
     # course held back here by a long alarm_frames, as path_drift holds the static world's; its time to contact
@@ -1079,7 +1079,7 @@ def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_a
 
 
 def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_its_side():
-    # path_core (docs/model.md, "False warnings, session 16"): the road below the heading, its box
+    # path_core (docs/history.md, "False warnings, session 16"): the road below the heading, its box
     # reaching up past the heading (the heading 0.8 of its half height above its centre) and its centre
     # drifting away from the heading as the static world's does (drift 1: r0 40 px, grown by e^0.5). With
     # path_core 1 (main) the box holds the heading and path_drift does not test it; with 0.5 it does, and
@@ -1112,7 +1112,7 @@ def test_path_core_holds_the_drift_test_on_a_box_that_reaches_the_heading_from_i
 
 
 def test_still_drift_holds_back_a_box_that_passes_beside_a_camera_that_does_not_translate():
-    # still_drift / still_miss (docs/model.md, "False warnings, session 16"; off by default): no heading measured
+    # still_drift / still_miss (docs/history.md, "False warnings, session 16"; off by default): no heading measured
     # (a still or turning camera); a box 40 px right of the principal point whose centre moves away from it as a
     # point at a fixed lateral offset does (drift 1: it passes beside the camera at its offset) on a course of 0.7
     # is held back with still_drift 0.1 and 0.2; one that converges on its bearing (drift 0), one on a short course (0.3), one
