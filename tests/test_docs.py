@@ -153,10 +153,11 @@ def test_the_bench_synopsis_shows_the_defaults_of_the_parser():
 # References between the docs, and from the code to the docs, name headings that exist
 # ---------------------------------------------------------------------------
 ROOT = Path(__file__).resolve().parents[1]
-#: ``docs/model.md, "Heading"``, ``model.md``, "Heading"``, ``("docs/model.md", "Heading")``, over line breaks
-#: (a docstring's indent, a comment's ``#``); the quoted text is a heading or its start ("LGMD2 ..." its start).
-_REF = re.compile(r"""(?<![\w/.-])(?P<dir>(?:docs|benchmarks)/)?(?P<name>[A-Za-z_]+)\.md[`"']*,\s*"""
-                  r"""(?:"(?P<dq>[^"]{1,300}?)"|'(?P<sq>[^']{1,300}?)')""")
+#: ``docs/model.md, "Heading"``, ``model.md "Heading"``, ``model.md ("Heading")``, ``("docs/model.md", "Heading")``,
+#: over line breaks (a docstring's indent, a comment's ``#``); the quoted text is a heading or its start
+#: ("LGMD2 ..." its start).
+_REF = re.compile(r"""(?<![\w/.-])(?P<dir>(?:docs|benchmarks)/)?(?P<name>[A-Za-z_]+)\.md[`"']*"""
+                  r"""(?:,\s*(?:"(?P<dq>[^"]{1,300}?)"|'(?P<sq>[^']{1,300}?)')|\s+\(?"(?P<sp>[^"]{1,300}?)")""")
 _LINK = re.compile(r"\]\((?P<file>[\w./-]*?\.md)?#(?P<anchor>[\w-]+)\)")
 
 
@@ -204,7 +205,7 @@ def heading_references(path: Path) -> list[tuple[Path, str]]:
     refs = []
     for m in _REF.finditer(text):
         target = _target(m, path)
-        quoted = " ".join((m["dq"] or m["sq"]).split())
+        quoted = " ".join((m["dq"] or m["sq"] or m["sp"]).split())
         if re.fullmatch(r"[a-z_][\w.]*", quoted) or "\\n" in quoted:   # code: open("x.md", "w"), "benchmark.json"
             continue
         if target.is_file():
@@ -248,13 +249,17 @@ def test_every_link_to_a_heading_of_the_docs_finds_it():
 
 
 def test_a_reference_to_a_missing_heading_is_found(tmp_path):
-    """The reference check can fail: a heading that moved, a wrapped docstring line, a comment, single quotes."""
+    """The reference check can fail: a heading that moved, a wrapped docstring line, a comment, single quotes, no
+    comma; a file opened in code is no reference."""
     source = tmp_path / "mod.py"
     source.write_text('"""See docs/model.md, "Time", and docs/history.md, "False warnings,\n    session 15"."""\n'
-                      "#: (docs/model.md, 'Camera\n#: motion')\nx = 1  # docs/model.md, \"No such heading\"\n")
+                      "#: (docs/model.md, 'Camera\n#: motion')\nx = 1  # docs/model.md, \"No such heading\"\n"
+                      '# docs/model.md ("Repeated frames"), docs/model.md "Encoding and size"\n'
+                      'y = (DOCS / "model.md").read_text(encoding="utf-8")\n')
     refs = heading_references(source)
     assert [(t.name, q) for t, q in refs] == [("model.md", "Time"), ("history.md", "False warnings, session 15"),
-                                               ("model.md", "Camera motion"), ("model.md", "No such heading")]
-    assert [any(h.startswith(q) for h in _names(t)) for t, q in refs] == [True, True, True, False]
+                                               ("model.md", "Camera motion"), ("model.md", "No such heading"),
+                                               ("model.md", "Repeated frames"), ("model.md", "Encoding and size")]
+    assert [any(h.startswith(q) for h in _names(t)) for t, q in refs] == [True, True, True, False, True, False]
     moved = [(t.with_name("model.md"), q) for t, q in refs if t.name == "history.md"]
     assert not any(h.startswith(q) for t, q in moved for h in _names(t))   # moved: not in model.md
