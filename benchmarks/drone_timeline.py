@@ -1,5 +1,5 @@
-"""When does each stage first see a collision object? (issue 22's diagnosis; docs/model.md, "Why
-the drone's collisions are warned late" and "A finer channel for small objects")
+"""When does each stage first see a collision object? (issue 22's diagnosis; docs/history.md, "Camera motion: the benchmark
+with and without stabilisation", "Why the drone's collisions are warned late", and "A finer channel for small objects")
 
 For every collision object of the scenes of one setting (a benchmark's ``scenes/`` folder with its
 ``ground_truth.json``), the true time to contact (s) when, with ``MLPLC2(fps, hfov_deg=60,

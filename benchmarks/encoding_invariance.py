@@ -100,7 +100,7 @@ def cached_copy(src: Path, src_sha: str, copy: str, size: tuple[int, int] | None
     """The ``copy`` of ``src`` (re-encoded with libx264, CRF ``crf``, resized to ``size`` first when given), from
     ``cache`` when it holds one of the same source bytes and settings, else written there by
     ``x264_copy.py`` in a process of its own (libx264 through PyAV is not repeatable within a process that
-    has run a model; a fresh one gives the same bytes every time: docs/model.md, "Encoding and size")."""
+    has run a model; a fresh one gives the same bytes every time: docs/history.md, "Encoding and size")."""
     settings = json.dumps({"size": size, "crf": crf, **OPTIONS, "av": av.__version__}, sort_keys=True)
     key = hashlib.sha256(f"{src_sha} {settings}".encode()).hexdigest()[:16]
     dst = cache / f"{src.stem}_{copy}_{key}.mp4"

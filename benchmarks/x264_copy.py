@@ -5,7 +5,7 @@
 Decodes ``SRC`` with PyAV, resizes each frame to ``--size`` when given (``cv2.INTER_AREA`` when it shrinks,
 ``cv2.INTER_LINEAR`` when it grows), and encodes it with libx264 (CRF ``--crf``, preset ``veryfast``, yuv420p,
 one thread, the source's frame rate) into ``DST``. It imports nothing of the package: libx264 through PyAV gave
-different bytes for the same call after a model had run in the same process (docs/model.md, "Encoding and
+different bytes for the same call after a model had run in the same process (docs/history.md, "Encoding and
 size"), so every copy is written by a fresh interpreter whose history is only this file.
 """
 

@@ -840,7 +840,7 @@ def test_the_alarm_seed_that_grows_unlike_in_both_directions_does_not_begin_a_wa
 
 
 def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_drift():
-    # drift_cut / drift_side (on) (docs/model.md, "The fit's onset the field alarm exempts"): a roadside
+    # drift_cut / drift_side (on) (docs/history.md, "The fit's onset the field alarm exempts"): a roadside
     # wall's box beside the path, its centre drifted away from the heading as the static world's (0.8 of
     # its drift: r0 40 px, grown by e^0.5), a field of it in collision alarm this frame (index 24). The
     # alarm exempts it from path_drift (main), unless, with drift_cut, the box is cut by the border (it
@@ -885,7 +885,7 @@ def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_dr
 
 
 def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
-    # cut_exit_onset (on; docs/model.md, "False warnings, session 15"): the static world
+    # cut_exit_onset (on; docs/history.md, "False warnings, session 15"): the static world
     # 0.75 of its widths beside the heading of a camera driving forward (a course of 0.75, as in the test of
     # cut_exit above) whose time to contact falls within horizon_s only once its box is cut by the border (as
     # the ground's at 0.97 s, horizon_s 1 s): with the rule on, no warning begins there (it would be held back
@@ -911,7 +911,7 @@ def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
 
 
 def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
-    # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/model.md, "False warnings, session
+    # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/history.md, "False warnings, session
     # 15"): an object 3.5 widths beside the heading that will pass 1.5 widths beside keeps 0.57 of its bearing
     # (drift 0.43): on its alarm's second frame it warns at 0.5, not at 0.4; a collision course (to hit at 0.5
     # widths, drift 0.14) warns at both
@@ -928,7 +928,7 @@ def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
 
 
 def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm_onset_miss():
-    # alarm_onset_miss (on; docs/model.md, "False warnings, session 15"): the static world 0.9 of its widths
+    # alarm_onset_miss (on; docs/history.md, "False warnings, session 15"): the static world 0.9 of its widths
     # beside the heading (a course of 0.9: within max_miss, beyond onset_miss, so the fit alone begins no warning)
     # whose field alarms: on the alarm's first frame in a row it warns with the rule on or off; on a later
     # frame only with the rule off. A target that warned goes on
@@ -951,7 +951,7 @@ def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm
 
 
 def test_an_alarm_that_lasted_without_a_course_begins_on_its_first_course_with_alarm_onset_course():
-    # alarm_onset_course (docs/model.md, "The same warning whatever the encoding, session 17"): the static world
+    # alarm_onset_course (docs/history.md, "The same warning whatever the encoding, session 17"): the static world
     # 0.9 of its widths beside the heading (a course of 0.9: within max_miss, beyond onset_miss) whose field alarms
     # on every frame from its track's first, while its history is too short for a course (the alarm without a
     # course held back here by a long alarm_frames, as path_drift holds the static world's; its time to contact
@@ -1048,7 +1048,7 @@ def _lapsing(p: TargetParams, wide: float, narrow: float, extra: int = 8) -> lis
 
 
 def test_a_running_warning_goes_on_through_a_fit_that_lapses():
-    # warn_through (docs/model.md, "A warning held to contact"): the fit of a collider's box that grows faster
+    # warn_through (docs/history.md, "A warning held to contact"): the fit of a collider's box that grows faster
     # in width than in height (a re-seated box, two colliders overlapping) fails its isotropy test and gives no
     # time to contact; the warning goes on, on the one held, where without warn_through it lapsed for good
     off, on = TargetParams(), TargetParams(warn_through=15)

@@ -8,6 +8,7 @@ import dataclasses
 import doctest
 import importlib
 import pydoc
+import re
 from pathlib import Path
 
 import pytest
@@ -146,3 +147,119 @@ def test_the_bench_synopsis_shows_the_defaults_of_the_parser():
     assert len(shown) >= 3, synopsis
     for option, value in shown:
         assert defaults[option] == int(value), (option, value, defaults[option])
+
+
+# ---------------------------------------------------------------------------
+# References between the docs, and from the code to the docs, name headings that exist
+# ---------------------------------------------------------------------------
+ROOT = Path(__file__).resolve().parents[1]
+#: ``docs/model.md, "Heading"``, ``model.md "Heading"``, ``model.md ("Heading")``, ``("docs/model.md", "Heading")``,
+#: over line breaks (a docstring's indent, a comment's ``#``); the quoted text is a heading or its start
+#: ("LGMD2 ..." its start).
+_REF = re.compile(r"""(?<![\w/.-])(?P<dir>(?:docs|benchmarks)/)?(?P<name>[A-Za-z_]+)\.md[`"']*"""
+                  r"""(?:,\s*(?:"(?P<dq>[^"]{1,300}?)"|'(?P<sq>[^']{1,300}?)')|\s+\(?"(?P<sp>[^"]{1,300}?)")""")
+_LINK = re.compile(r"\]\((?P<file>[\w./-]*?\.md)?#(?P<anchor>[\w-]+)\)")
+
+
+def _headings(path: Path) -> list[str]:
+    out, fence = [], False
+    for line in path.read_text(encoding="utf-8").splitlines():
+        if line.startswith("```"):
+            fence = not fence
+        if not fence and re.match(r"#{1,6} ", line):
+            out.append(" ".join(line.lstrip("#").split()))
+    return out
+
+
+def _names(path: Path) -> list[str]:
+    """What a reference may name in ``path``: a heading, or a paragraph's label (``**First run.**``, ``- *Session
+    14: ...*``, ``Live sources.``): the start of any line, past its list, table and emphasis marks."""
+    return [" ".join(re.sub(r"^[\s>*#|-]+", "", line).split()) for line in path.read_text(encoding="utf-8").splitlines()]
+
+
+def _anchor(heading: str) -> str:
+    """GitHub's anchor of a heading: lower case, punctuation dropped, spaces to hyphens."""
+    return re.sub(r"[^\w\- ]", "", heading.lower()).replace(" ", "-")
+
+
+def _target(match: re.Match, source: Path) -> Path:
+    name = match["name"] + ".md"
+    if match["dir"]:
+        return ROOT / match["dir"] / name
+    if name == "README.md":
+        return (source.parent if source.parent.name == "benchmarks" else ROOT) / name
+    return ROOT / "docs" / name
+
+
+def _sources() -> list[Path]:
+    files = [ROOT / "README.md", ROOT / "pyproject.toml", *sorted((ROOT / "docs").glob("*.md"))]
+    for folder in ("src", "tests", "benchmarks"):
+        files += sorted(p for p in (ROOT / folder).rglob("*") if p.suffix in (".py", ".md"))
+    return [f for f in files if f != Path(__file__).resolve()]   # this file's references are its test data
+
+
+def heading_references(path: Path) -> list[tuple[Path, str]]:
+    """(file, quoted heading) of every ``X.md, "Heading"`` reference in ``path`` to a file of the repository."""
+    text = path.read_text(encoding="utf-8")
+    text = re.sub(r"\n[ \t]*(?:#:?)?[ \t]*", " ", text)   # a reference wraps over lines, comments included
+    refs = []
+    for m in _REF.finditer(text):
+        target = _target(m, path)
+        quoted = " ".join((m["dq"] or m["sq"] or m["sp"]).split())
+        if re.fullmatch(r"[a-z_][\w.]*", quoted) or "\\n" in quoted:   # code: open("x.md", "w"), "benchmark.json"
+            continue
+        if target.is_file():
+            refs.append((target, quoted.removesuffix("...").strip()))
+    return refs
+
+
+def test_every_reference_to_a_docs_heading_names_one_that_exists():
+    """``docs/model.md, "Heading"`` in a docstring, a ``help=`` or a page must name a heading of that file (or its
+    start, or a paragraph's label): when the journal moved to docs/history.md, a reference left on model.md would
+    send the reader nowhere."""
+    headings: dict[Path, list[str]] = {}
+    wrong = []
+    sources = _sources()
+    refs = 0
+    for source in sources:
+        for target, quoted in heading_references(source):
+            refs += 1
+            if target not in headings:
+                headings[target] = _names(target)
+            names = headings[target]
+            if not any(h.startswith(quoted) for h in names):
+                wrong.append(f"{source.relative_to(ROOT)}: {target.relative_to(ROOT)}, {quoted!r}")
+    assert refs > 100
+    assert not wrong, "references to headings that do not exist:\n" + "\n".join(wrong)
+
+
+def test_every_link_to_a_heading_of_the_docs_finds_it():
+    """``[...](history.md#anchor)`` and ``[...](#anchor)`` in README and docs/ go to a heading that exists."""
+    wrong, links, anchors = [], 0, {}
+    for source in [ROOT / "README.md", *sorted((ROOT / "docs").glob("*.md"))]:
+        for m in _LINK.finditer(source.read_text(encoding="utf-8")):
+            target = (source.parent / m["file"]).resolve() if m["file"] else source
+            links += 1
+            if target.is_file() and target not in anchors:
+                anchors[target] = {_anchor(h) for h in _headings(target)}
+            if m["anchor"] not in anchors.get(target, ()):
+                wrong.append(f"{source.relative_to(ROOT)}: {m['file'] or ''}#{m['anchor']}")
+    assert links > 20
+    assert not wrong, "links to headings that do not exist:\n" + "\n".join(wrong)
+
+
+def test_a_reference_to_a_missing_heading_is_found(tmp_path):
+    """The reference check can fail: a heading that moved, a wrapped docstring line, a comment, single quotes, no
+    comma; a file opened in code is no reference."""
+    source = tmp_path / "mod.py"
+    source.write_text('"""See docs/model.md, "Time", and docs/history.md, "False warnings,\n    session 15"."""\n'
+                      "#: (docs/model.md, 'Camera\n#: motion')\nx = 1  # docs/model.md, \"No such heading\"\n"
+                      '# docs/model.md ("Repeated frames"), docs/model.md "Encoding and size"\n'
+                      'y = (DOCS / "model.md").read_text(encoding="utf-8")\n')
+    refs = heading_references(source)
+    assert [(t.name, q) for t, q in refs] == [("model.md", "Time"), ("history.md", "False warnings, session 15"),
+                                               ("model.md", "Camera motion"), ("model.md", "No such heading"),
+                                               ("model.md", "Repeated frames"), ("model.md", "Encoding and size")]
+    assert [any(h.startswith(q) for h in _names(t)) for t, q in refs] == [True, True, True, False, True, False]
+    moved = [(t.with_name("model.md"), q) for t, q in refs if t.name == "history.md"]
+    assert not any(h.startswith(q) for t, q in moved for h in _names(t))   # moved: not in model.md

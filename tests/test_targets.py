@@ -957,7 +957,7 @@ def test_a_warning_target_absorbs_the_stale_boxes_beside_it(absorb_frames):
 
 
 def test_the_view_filled_by_a_warned_object_opens_a_window_until_its_contact():
-    """contact_blind (2; docs/model.md, "False warnings, session 15"): a target warning
+    """contact_blind (2; docs/history.md, "False warnings, session 15"): a target warning
     on a box wider or taller than the frame, 0.1 s (3 frames) from contact at frame 50, keeps other warnings
     from beginning up to frame 53 + contact_blind; a box inside the frame, a target not warning, or the rule
     off (0) open none, and a later window is kept."""

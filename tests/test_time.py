@@ -225,7 +225,7 @@ def test_the_helmet_thrown_at_a_slow_camera_gets_a_target(real_dir):
     on = [r for r in rows if r["frame"] == 25 and math.hypot(r["x"] - x, r["y"] - y) <= w]
     assert any(r["ttc_s"] is not None and 0 < r["ttc_s"] < 1.0 for r in on), on
     # ... and that first time to contact, the last frame before contact, begins the warning, on the helmet
-    # (``slow_evidence``, ``slow_onset``: docs/model.md, "A slow camera's first estimate")
+    # (``slow_evidence``, ``slow_onset``: docs/history.md, "A slow camera's first estimate")
     warned = [r for r in rows if r["warning"]]
     assert warned and min(r["frame"] for r in warned) < truth["contact_frame"], warned[:1]
     first = [r for r in warned if r["frame"] == min(q["frame"] for q in warned)]

@@ -1,6 +1,6 @@
 """Designs of Eq. 13 (where and when mLPLC2 makes an attention field) measured in session 12 against issue 22's
 item 7 (the same first warning whatever the encoding); a measurement aid, not part of the package: none was taken
-(docs/model.md, "Encoding and size", session 12).
+(docs/history.md, "Encoding and size", session 12).
 
 Python imports this module at start-up when its folder is on ``PYTHONPATH``; with ``MLPLC2_BIRTH_DESIGN`` set (a JSON
 object) it replaces ``MLPLC2._step`` in that process and in every process it starts with the same environment (the

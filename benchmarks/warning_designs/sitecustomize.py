@@ -1,5 +1,5 @@
 """Designs of the target layer's warning decision measured in session 13 against issue 22's item 7 (the same
-first warning whatever the encoding); a measurement aid, not part of the package (docs/model.md, "Encoding and
+first warning whatever the encoding); a measurement aid, not part of the package (docs/history.md, "Encoding and
 size", session 13).
 
 Python imports this module at start-up when its folder is on ``PYTHONPATH``; with ``MLPLC2_WARNING_DESIGN`` set

@@ -1,5 +1,5 @@
 """Which rule opens each copy's first target warning, and which rule holds back each field alarm (a measurement
-aid, not part of the package; docs/model.md, "Encoding and size", session 13).
+aid, not part of the package; docs/history.md, "Encoding and size", session 13).
 
 For every clip of ``benchmarks/encoding_invariance.py`` and each copy already in its ``--cache``, runs mLPLC2 with
 ``mlplc2.targets.layer.estimate`` and ``mlplc2.targets.warning.alarm_warns`` wrapped, and prints per copy the first

@@ -194,7 +194,7 @@ def threads(n: int | None) -> Iterator[int]:
 def one_fewer() -> int | None:
     """One thread fewer than in force for the compiled front end and OpenCV, for a run whose decoding
     thread resizes a file's frames beside the model (:class:`mlplc2.runner.RunOptions`, ``spare_core``;
-    docs/model.md, "Decoding beside the model"); None (as they are) on one thread or without Numba."""
+    docs/history.md, "Decoding beside the model"); None (as they are) on one thread or without Numba."""
     with threads(None) as n:
         return n - 1 if n > 1 else None
 

@@ -30,7 +30,7 @@ TRANSLATION_MARGIN = 0.15
 #: heading alone is fitted again on the flow from this many frames back, where the same translation moves the
 #: points this many times as far; the rotation stays the frame's own. 1 = off (the default: 3 measured in session 14,
 #: ground_forward's heading in 0.07-0.09 -> 0.92-0.97 of the frames, but drone_3's collider and a real clip's lead
-#: lost to the target layer's rules that a heading enables; docs/model.md, "The heading of a slow translation").
+#: lost to the target layer's rules that a heading enables; docs/history.md, "The heading of a slow translation").
 HEADING_FRAMES = 1
 
 __all__ = ["check_hfov", "focal_length", "bearing", "CameraMotion", "MotionEstimator", "rotation_matrix", "warp",

@@ -255,7 +255,7 @@ class LPLC2(_LPLC2Family):
         """Nothing: the cell is retinotopic, fixed at the centre of the frame (of the stabilised view, whose
         pixels are the new frame's), whatever the camera does. Carried with the turns, as an attention field
         is, it left the centre at the pan's rate and, pinned to the border, never answered again
-        (docs/model.md, "LPLC2's cell under gaze stabilisation")."""
+        (docs/history.md, "LPLC2's cell and the paper's scenes under gaze stabilisation")."""
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         lm = self._front(gray)

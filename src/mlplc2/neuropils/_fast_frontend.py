@@ -109,7 +109,7 @@ def _pack4(a, b, c, d, out):
 @jit()
 def _unpack4(src, a, b, c, d):
     """``(a, b, c, d)[y, x] = src[y, x]``, one output row after the other (contiguous writes: ~25 %
-    less time than the four written together, docs/model.md, "session 12")."""
+    less time than the four written together, docs/history.md, "The stabilised pipeline's speed")."""
     for y in range(src.shape[0]):
         s = src[y]
         o = a[y]

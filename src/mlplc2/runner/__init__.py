@@ -763,8 +763,8 @@ def demo(out="mlplc2_demo", *, scene: str = "four_phase", quiet: bool = False, p
 
     ``stabilise``: gaze stabilisation (:attr:`RunOptions.stabilise`). False by default, unlike
     :func:`run`: the scenes are the paper's Fig. 4 and 5, whose background scrolls behind a still
-    camera while the objects keep their places in the image (docs/model.md, "The paper's scenes under
-    gaze stabilisation"); stabilised, the scroll is taken for a pan and the objects then drift with
+    camera while the objects keep their places in the image (docs/history.md, "LPLC2's cell and the
+    paper's scenes under gaze stabilisation"); stabilised, the scroll is taken for a pan and the objects then drift with
     the camera, one edge standing still.
 
     ``matches`` has one entry per ground-truth object (see :func:`match_fields`):

@@ -10,7 +10,7 @@ beyond the window, as ``cv2.dilate``'s default border), the 8-connected regions 
 bounding boxes, the one nearest the seed. ``change_box`` took the first nearest in
 ``cv2.connectedComponentsWithStats``' label order; the kernel labels the regions in its own order,
 so when two regions with different boxes lie equally near it says so, and ``change_box`` then asks
-OpenCV (the same answer in every case; docs/model.md, "The seeding frames' cost"). ``nogil`` and cached on disk
+OpenCV (the same answer in every case; docs/history.md, "The seeding frames' cost"). ``nogil`` and cached on disk
 where possible; nothing here is public API.
 """
 

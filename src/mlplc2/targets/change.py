@@ -64,7 +64,7 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     # the change is measured on the Hann-windowed windows (a change fades towards the window's
     # border). OpenCV up to 5.0 gave that by a side effect: its phaseCorrelate multiplies its
     # inputs by the window in place; 5.1 leaves them alone. So the window is applied here, and
-    # phaseCorrelate gets arrays not used after it (docs/model.md, "Dependencies: OpenCV 5.1").
+    # phaseCorrelate gets arrays not used after it (docs/history.md, "Dependencies: OpenCV 5.1").
     # It is given the windowed windows and no window: it multiplies by the window first, the same
     # float32 products, so the same shift (on 3000 random windows with 5.1), without doing it twice
     a, b = a * win, b * win

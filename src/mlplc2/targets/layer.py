@@ -110,7 +110,7 @@ class TargetLayer:
         (``clock``) will likely read: those its last and its oldest kept frame had read the frame
         before (:func:`~mlplc2.targets.track.carry_ahead`: the same values, and every level always
         carried by the same thread for the same inputs). Called by the model after its front end,
-        while it works out its fields; nothing on one thread. docs/model.md, "Decoding beside the model"."""
+        while it works out its fields; nothing on one thread. docs/history.md, "Decoding beside the model"."""
         if self._prev is None or cv2.getNumThreads() < 2:
             return
         span = self.params.span(self.params.change_frames, self.fps) - _EPS
@@ -532,7 +532,7 @@ class TargetLayer:
         from an extra seed, without a time to contact yet; until its first one it is not output, owns no
         attention field, claims no seed but the extra seeds', hosts no box but an extra seed's, is neither
         remembered for :meth:`_refind` nor refound, and yields to any other target over it, :meth:`_merge`;
-        docs/model.md, "Shadow targets")."""
+        docs/history.md, "Shadow targets")."""
         return sum(not t.shadow for t in self._tracks)
 
     def _two_contacts(self, o: Track, t: Track) -> bool:
@@ -580,7 +580,7 @@ class TargetLayer:
     def _absorb(self, out, now: float) -> None:
         """``absorb_frames``: drop (not to be refound, but by ``refind_late``) the targets without a time to contact
         for that many frames (since their last one, or their birth) whose centre lies in a warning target's box plus
-        a quarter of its size; the warning target takes their fields (docs/model.md, "Targets per object, session 15")."""
+        a quarter of its size; the warning target takes their fields (docs/history.md, "Targets per object, session 15")."""
         n = self.params.absorb_frames
         warn = [t for t, o in zip(self._tracks, out) if o.warning] if n > 0 else []
         if not warn:
@@ -617,7 +617,7 @@ class TargetLayer:
         spans the view (a passing object's box, grown over a collider beside it, too): no seed zone, and a box
         seeded there is not a part of it, then or later (:meth:`_merge`); it keeps the
         attention fields it owns (after a contact they are the collider's own) and counts against
-        ``max_targets``. docs/model.md, "Objects missed", session 14."""
+        ``max_targets``. docs/history.md, "Objects missed", session 14."""
         if self.params.passed_seeds and not t.opened and self._contact_passed(t, now):
             t.opened = True
         return self.params.passed_seeds and t.opened
@@ -647,13 +647,13 @@ class TargetLayer:
         It then takes over the lost track's id, frame of birth, last time to contact
         (``Track.held``, ``hold_frames``) and warning state whole (``Track.warned``,
         ``Track.last_warned``, ``Track.onset_cut``: the same object, so a warning that ran on the lost
-        track's last frame runs on, one that had lapsed is a lapsed one; docs/model.md, "Target
+        track's last frame runs on, one that had lapsed is a lapsed one; docs/history.md, "Target
         bookkeeping"), not its history (the new box is measured afresh: its size against the old
         box's would be a jump in the log-scale fit); the newest such wins. ``refind_late``: else a track
         lost more than ``refind_frames`` (or absorbed, :meth:`_absorb`) and at most that many frames before,
         whose last centre lies in the new box and of a size within a factor of 4, gives it its id and frame of
         birth only: labels, nothing the layer does (the new track keeps its own age for :meth:`_merge`,
-        ``Track.order``; docs/model.md, "Targets per object, session 16")."""
+        ``Track.order``; docs/history.md, "Targets per object, session 16")."""
         span = self.params.span(self.params.refind_frames, self.fps) + _EPS
         live = {o.id for o in self._tracks}
         for c, o in reversed(self._lost):

@@ -66,7 +66,7 @@ class TargetParams(ParameterSet):
                           times; the seeds beyond the first are the extra seeds (``extra_change``, ``seed_focus``,
                           ``seed_shadow``). 2 (the default since session 18, with ``seed_shadow``: TTC coverage
                           69.3 -> 74.9 % on the standard suite, up 3.4-8.0 points on each of holdouts 1-10
-                          (71.7-81.6 %), no collision lost: docs/model.md, "Shadow targets, session 18"); 1 = the strongest only
+                          (71.7-81.6 %), no collision lost: docs/history.md, "Shadow targets, session 18"); 1 = the strongest only
                           (main's before); 3 without ``seed_focus`` measured, not adopted ("Where TTC coverage is
                           lost"; with it, "A seed's own focus").""",
                           unit="seeds", valid=Valid.integer(1))
@@ -78,7 +78,7 @@ class TargetParams(ParameterSet):
                               cut by the border (``border``): an object on a collision course expands about
                               a point inside itself, the static world seen from a translating camera about
                               the heading, outside a patch beside the path. 0.25 (the default since session 18,
-                              with ``seed_shadow``: docs/model.md, "Shadow targets, session 18"); 0 = no test;
+                              with ``seed_shadow``: docs/history.md, "Shadow targets, session 18"); 0 = no test;
                               0.25-2 with ``lm_seeds`` 3 and LM extra seeds measured in session 15 ("A seed's own
                               focus").""", unit="half-sizes", valid=Valid.real(minimum=0))
     focus_slack: float = param(0.25, """The shift beyond its focus (``seed_focus``) a seed's alignment may have: the
@@ -91,7 +91,7 @@ class TargetParams(ParameterSet):
                               shown (that first time to contact) it is refound as a new target would be (a
                               target lost there lately gives it its id). On (the default since session 18, with
                               ``lm_seeds`` 2, ``extra_change`` 4, ``extra_window`` 48, ``seed_focus`` 0.25,
-                              ``shadow_uniform``, ``merge_ttc`` 2: std and holdouts 1-10 measured, docs/model.md,
+                              ``shadow_uniform``, ``merge_ttc`` 2: std and holdouts 1-10 measured, docs/history.md,
                               "Shadow targets, session 18"; session 17's measurement without the last two lost a
                               collider, "Shadow targets"). Off = an extra seed's target is output from its
                               birth.""", valid=Valid.boolean())
@@ -99,7 +99,7 @@ class TargetParams(ParameterSet):
                                 (``seed_change``) whose change is at least this many times the frame's mean change,
                                 not LM seeds: a small object that grows at the heading changes its grey levels
                                 where its LM is the frame's least. 4 (the default since session 18, with
-                                ``seed_shadow``; 4-5 measured in session 17: docs/model.md, "Shadow targets"); 0 = LM
+                                ``seed_shadow``; 4-5 measured in session 17: docs/history.md, "Shadow targets"); 0 = LM
                                 seeds, as the first.""", unit="x mean change", valid=Valid.real(minimum=0))
     extra_window: float = param(48.0, """With ``extra_change``, an extra seed's change is measured against the mean change
                                 of a window this wide around it, not the frame's: the seed goes where the grey
@@ -107,20 +107,20 @@ class TargetParams(ParameterSet):
                                 and ``extra_change`` times the surround's mean): a small object at the heading
                                 over a quiet backdrop, not the near ground that changes everywhere. 48 (the
                                 default since session 18; session 17 measured it against the frame's mean on the
-                                traced misses: docs/model.md, "Shadow targets"); 0 = the frame's mean.""", unit="px", valid=Valid.real(minimum=0))
+                                traced misses: docs/history.md, "Shadow targets"); 0 = the frame's mean.""", unit="px", valid=Valid.real(minimum=0))
     shadow_uniform: bool = param(True, """With ``seed_shadow``, a shadow's box (an extra change seed's, the change it swept) is
                                  put on the uniform region at its centre each frame, as a box seeded on a uniform
                                  region (``uniform_reseat``, ``uniform_growth``), when that region is a compact
                                  object inside it of about its size: a dark square's change box, a few px off the
                                  object and holding the road beside it, otherwise drifts off it and measures the road's
                                  growth (``drive_4_h4``'s collider 7: warned 0.93 s before contact with it, not at all
-                                 without; docs/model.md, "Shadow targets, session 18"). On (the default since session
+                                 without; docs/history.md, "Shadow targets, session 18"). On (the default since session
                                  18); off = only boxes seeded on a uniform region.""", valid=Valid.boolean())
     merge_ttc: float = param(2.0, """Two targets that both measured a time to contact on the last frame, the larger at least
                              this many times the smaller, are never merged (:meth:`TargetLayer._merge`): two
                              objects whose contacts come apart, such as a collider's box grown over the view at its
                              contact and a second collider beside it (``texture_pan_4_h1``: with it 0 false episodes,
-                             without 2), not one object's two boxes. 2 (the default since session 18: docs/model.md,
+                             without 2), not one object's two boxes. 2 (the default since session 18: docs/history.md,
                              "Shadow targets, session 18"); 0 = off.""",
                              unit="ratio", valid=Valid.real(minimum=0))
     change_frames: int = param(4, """A faint candidate's box is the region that changed over this many
@@ -210,7 +210,7 @@ class TargetParams(ParameterSet):
                                 (``min_growth`` over ``change_frames``, not a field alarm) and its fit has given a
                                 time to contact on every frame since the first it could (``min_frames``): the
                                 growth seen before its birth and every fit since are one streak. False = from its
-                                first time to contact (docs/model.md, "Objects missed", session 13).""",
+                                first time to contact (docs/history.md, "Objects missed", session 13).""",
                                 valid=Valid.boolean())
     confirm_birth_drift: float = param(0.2, """... ``confirm_birth`` only for a box that holds the heading (the measured one,
                                        else the principal point) or whose centre drifted away from it by at most this
@@ -223,7 +223,7 @@ class TargetParams(ParameterSet):
                                 over the last ``confirm_frames - 1`` frames, from one at or before their start: a
                                 7.5 fps camera's streak of estimates would need 3 of its frames (0.53 s after the
                                 first of the fit), longer in time than at 30 fps (the 7.5 fps helmet clip's first
-                                time to contact comes 4 frames = 0.13 s before contact). False = off (docs/model.md,
+                                time to contact comes 4 frames = 0.13 s before contact). False = off (docs/history.md,
                                 "A slow camera's first estimate").""", valid=Valid.boolean())
     alarm_warns: bool = param(True, """... or (True, the default since session 8: the real clips' warnings
                               3/9 -> 6/9, the suite's 41/45 -> 43/45, at 2.57 -> 3.09 false episodes per
@@ -252,13 +252,13 @@ class TargetParams(ParameterSet):
                              about the heading (1) as it sweeps out of view; an object on a collision course
                              near the border keeps its bearing (0) and often shows itself whole only for a
                              few frames. 0 = off (every cut box under ``cut_onset_s`` is held back;
-                             docs/model.md, "Objects missed", session 11).""", valid=Valid.real(minimum=0))
+                             docs/history.md, "Objects missed", session 11).""", valid=Valid.real(minimum=0))
     cut_course: bool = param(True, """A target whose box is cut by the border (``border``) has no course (the
                              course takes only the boxes wholly inside); with ``cut_course`` such a box that
                              keeps its bearing while it grows (``cut_course_drift``) stands on a collision course
                              and may warn from its fit's time to contact (:func:`~mlplc2.targets.warning.cut_course`;
                              on since session 12: it warned ``drone_0_h1`` and ``drone_4_h3``, no false warning
-                             added on any suite or real clip). False = off (docs/model.md, "Objects missed",
+                             added on any suite or real clip). False = off (docs/history.md, "Objects missed",
                              session 12).""",
                              valid=Valid.boolean())
     cut_course_drift: float = param(0.0, """... ``cut_course``'s largest drift of the cut box's centre away from the
@@ -275,7 +275,7 @@ class TargetParams(ParameterSet):
                               widths), and it crosses ``max_miss`` from above; the colliders' fit onsets lie
                               at 0.03-0.78. 0 = off (0.8, the default since session 11: false episodes per
                               1000 frames 1.24 -> 1.13 standard, 1.75 -> 1.34 holdout 1, no collision or lead
-                              lost; docs/model.md, "A course that crosses max_miss").""",
+                              lost; docs/history.md, "A course that crosses max_miss").""",
                               valid=Valid.real(minimum=0))
     slow_onset: bool = param(True, """``onset_miss`` does not hold a track's first time to contact (no estimate before
                              it) on a frame more than one nominal frame after the frame processed before it
@@ -283,7 +283,7 @@ class TargetParams(ParameterSet):
                              it): that course has crossed nothing from above (a passing object's falls
                              through ``max_miss`` over its estimates), and a slow camera's first fit comes
                              late (the 7.5 fps helmet's at 4 frames = 0.13 s before contact, course 0.85).
-                             ``max_miss`` holds it. False = off (docs/model.md, "A slow camera's first estimate").""", valid=Valid.boolean())
+                             ``max_miss`` holds it. False = off (docs/history.md, "A slow camera's first estimate").""", valid=Valid.boolean())
     countdown_frames: int = param(3, """A target's warning goes on only while its time to contact counts down: once it
                                   has warned, a warning frame whose ``ttc_s`` exceeds the one the target had this
                                   many frames (at ``nominal_fps``) before by more than its standard error
@@ -292,23 +292,23 @@ class TargetParams(ParameterSet):
                                   object's, stops growing at the fitted rate, and its time to contact rises; an
                                   approach's falls by a frame's time each frame. 0 = off (3, the default since
                                   session 11: with ``onset_miss``, false episodes per 1000 frames 1.13 -> 0.93
-                                  standard, 1.34 -> 1.13 holdout 1, no collision or lead lost; docs/model.md,
+                                  standard, 1.34 -> 1.13 holdout 1, no collision or lead lost; docs/history.md,
                                   "A course that crosses max_miss").""", unit="frames", valid=Valid.integer(0))
     rise_sigma: bool = param(False, """With ``countdown_frames``: a time to contact rises when it exceeds the older one by
                              more than the standard error of their difference (both estimates' standard errors
                              combined), not by this frame's alone. False = this frame's alone (as until session 19;
-                             docs/model.md, "A warning held to contact").""", valid=Valid.boolean())
+                             docs/history.md, "A warning held to contact").""", valid=Valid.boolean())
     rise_streak: bool = param(False, """With ``countdown_frames``: a running warning's time to contact rises only against an
                               estimate of the same run of fits (``Track.streak_since``): the first fits after a gap
                               (a box re-seated, grown over the view) start from another box and are not compared with
                               the time to contact held through the gap. False = compared with any (as until session
-                              19; docs/model.md, "A warning held to contact").""", valid=Valid.boolean())
+                              19; docs/history.md, "A warning held to contact").""", valid=Valid.boolean())
     warn_through: int = param(0, """A running warning goes on through frames whose fit gives no time to contact (its
                               growth not significant or not isotropic for a while: a box re-seated, two colliders
                               overlapping), on the time to contact held (``hold_frames``: the last one counted down)
                               and its course, within ``horizon_s`` and ``reonset_miss``, for up to this many frames after
                               the last fit. 0 = off: a warning needs this frame's fit, and a collider's warning
-                              lapsed for 0.7-1.2 s before its contact (docs/model.md, "A warning held to
+                              lapsed for 0.7-1.2 s before its contact (docs/history.md, "A warning held to
                               contact").""", unit="frames", valid=Valid.integer(0))
     countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
                                   counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
@@ -318,7 +318,7 @@ class TargetParams(ParameterSet):
                                   The ground beside the path as it nears the frame's foot holds a time to contact near
                                   ``horizon_s`` that does not fall, while an approach's falls by a frame's time each frame.
                                   False = off (on since session 13: holdout 3's false episodes per 1000 frames 0.72 ->
-                                  0.62 with ``flat_onset``, no collision, lead or real clip changed; docs/model.md,
+                                  0.62 with ``flat_onset``, no collision, lead or real clip changed; docs/history.md,
                                   "A flat box across the path").""",
                                   valid=Valid.boolean())
     cut_exit: float = param(0.5, """Once a target has warned, a frame on which its box is cut by the image's border
@@ -332,7 +332,7 @@ class TargetParams(ParameterSet):
                             the default since session 12: false episodes per 1000 frames 0.82 -> 0.72 standard (0.35 ->
                             0.25 % of frames), 1.34 -> 1.24 holdout 2, holdout 1's frames 0.55 -> 0.51 %, no lead or real
                             clip changed; ``texture_tilt_1``'s collider, warned only by a passing object's box over it,
-                            lost; docs/model.md, "A warning that leaves through the border").""",
+                            lost; docs/history.md, "A warning that leaves through the border").""",
                             unit="object extents", valid=Valid.real(minimum=0))
     bearing_drift: float = param(0.4, """The field alarm without a course (a young track, or a seed on its first frame)
                                  warns on a box off the path only if it keeps its bearing while it grows
@@ -342,7 +342,7 @@ class TargetParams(ParameterSet):
                                  warnings by it drifted 0.03-0.25. 0.4 since session 15 (before: 0.5, halfway, the
                                  constant ``DRIFT_FRACTION``): holdout 4's false episodes per 1000 frames 0.51 -> 0.41
                                  (the ground's seed at 0.45 where no heading is measured), ``drive_0_h1``'s wall edge
-                                 (0.45) 3 false frames -> 1, no collision, lead or real clip changed; docs/model.md,
+                                 (0.45) 3 false frames -> 1, no collision, lead or real clip changed; docs/history.md,
                                  "False warnings, session 15"; session 10: "A warning that begins off the path",
                                  (H)).""", valid=Valid.real(minimum=0))
     alarm_onset_miss: bool = param(True, """The field alarm with a course begins a warning beyond ``onset_miss`` (up to
@@ -354,7 +354,7 @@ class TargetParams(ParameterSet):
                                    warned goes on as before. False = off (on since session 15: holdout 1's false
                                    episodes per 1000 frames 0.82 -> 0.72 with ``bearing_drift``, ``drive_1_h1``'s
                                    parked car (course 1.21 -> 1.00 on its alarm's 7th frame), no collision, lead or
-                                   real clip changed; docs/model.md, "False warnings, session 15").""", valid=Valid.boolean())
+                                   real clip changed; docs/history.md, "False warnings, session 15").""", valid=Valid.boolean())
     alarm_onset_course: bool = param(True, """With ``alarm_onset_miss``: the frames of the alarm that count are those on which the
                                      target's fit gave a course (``Track.alarm_courses``): an alarm that lasted while
                                      the target had no course yet (a young track, its no-course alarm held back by
@@ -364,7 +364,7 @@ class TargetParams(ParameterSet):
                                      (issue 22, item 7: ``night_rear_end.mp4``'s van, course 0.88 on the alarm's first
                                      frame on the clip, 0.82 on its 5th on the 320x240 copy). False = off (on since
                                      session 17: that copy warns at 102 on the van as the clip does (none before); the
-                                     standard suite, its real clips and holdouts 1-4, 6 and 8 unchanged; docs/model.md,
+                                     standard suite, its real clips and holdouts 1-4, 6 and 8 unchanged; docs/history.md,
                                      "The same warning whatever the encoding, session 17").""",
                                      valid=Valid.boolean())
     cut_exit_onset: bool = param(True, """With ``cut_exit``: no warning begins either on a frame on which ``cut_exit``
@@ -375,7 +375,7 @@ class TargetParams(ParameterSet):
                                  whose warnings began on cut boxes did on courses of 0.09-0.39. False = off (on since
                                  session 15: false episodes per 1000 frames holdout 1 0.93 -> 0.82, holdout 3 0.51 ->
                                  0.41 (0.28 -> 0.10 % of frames), holdout 4 0.62 -> 0.51 with ``contact_blind``, no
-                                 collision, lead or real clip changed; docs/model.md, "False warnings, session 15").""",
+                                 collision, lead or real clip changed; docs/history.md, "False warnings, session 15").""",
                                  valid=Valid.boolean())
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
@@ -387,7 +387,7 @@ class TargetParams(ParameterSet):
                               colliders' first warnings on boxes that hold the heading are at most 1.70 times wider than
                               tall (the real clips': 1.65). 0 = off (1.8, the default since session 13: holdout 2's false
                               episodes per 1000 frames 1.24 -> 0.82 (0.38 -> 0.10 % of frames), holdout 3's 0.82 -> 0.72,
-                              no collision, lead or real clip changed; docs/model.md, "A flat box across the path").""",
+                              no collision, lead or real clip changed; docs/history.md, "A flat box across the path").""",
                               valid=Valid.real(minimum=0))
     reonset_miss: float = param(0.4, """A target that has warned and whose warning lapsed (its last frame was no warning)
                                 warns again without a field of it in collision alarm this frame only on a course
@@ -398,7 +398,7 @@ class TargetParams(ParameterSet):
                                 extents, 0.59 and 0.87 on returns of targets that had warned on their collider
                                 already). 0 = off (0.4, the default since session 13: the standard suite's false
                                 episodes per 1000 frames 0.72 -> 0.41 (0.25 -> 0.15 % of frames), holdout 2's 0.82 -> 0.72 with
-                                ``flat_onset``, no collision, lead or real clip changed; docs/model.md, "A flat box
+                                ``flat_onset``, no collision, lead or real clip changed; docs/history.md, "A flat box
                                 across the path").""",
                                 unit="object extents", valid=Valid.real(minimum=0))
     contact_blind: int = param(2, """Once a target warns on a box wider or taller than the frame (the object fills
@@ -410,7 +410,7 @@ class TargetParams(ParameterSet):
                                target that warned goes on; one that begins after the window is not held back. 0 =
                                off (2, the default since session 15: false episodes per 1000 frames 0.41 -> 0.31
                                standard, 0.93 -> 0.62 holdout 4, no collision, lead or real clip changed;
-                               docs/model.md, "False warnings, session 15").""",
+                               docs/history.md, "False warnings, session 15").""",
                                unit="frames", valid=Valid.integer(0))
     path_drift: float = param(0.4, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning begins without a field of the target in collision alarm only on a box
@@ -422,7 +422,7 @@ class TargetParams(ParameterSet):
                               passing van). The static world beside the path expands about the heading (1),
                               an object on a collision course keeps its bearing (0). 0 = off (0.4, the
                               default since session 10: the drive scenes' false episodes 15.74 -> 10.19 per
-                              1000 frames, holdout 10.19 -> 9.26, no collision or lead lost; docs/model.md,
+                              1000 frames, holdout 10.19 -> 9.26, no collision or lead lost; docs/history.md,
                               "A warning that begins off the path").""",
                               valid=Valid.real(minimum=0))
     fresh_ttc: float = param(0.9, """From a translating camera (a measured heading), a warning begins without a field of
@@ -438,7 +438,7 @@ class TargetParams(ParameterSet):
                              holdout 5 0.93 -> 0.82, holdout 6 1.24 -> 1.13, holdout 7 0.51 -> 0.31 (the drive's 47
                              episodes on the eleven sets -> 36); the standard suite, the real clips and their re-encoded
                              copies, holdouts 3, 4, 8, 9 and 10 as before; no collision, lead or real clip changed;
-                             docs/model.md, "False warnings, session 18").""",
+                             docs/history.md, "False warnings, session 18").""",
                              unit="s", valid=Valid.real(minimum=0))
     fresh_drift: float = param(0.1, """``fresh_ttc``'s largest drift away from the heading, as a fraction of the static
                                world's drift over the same growth (0: an object on a collision course, 1: the static
@@ -460,12 +460,12 @@ class TargetParams(ParameterSet):
                             episodes per 1000 frames holdout 2 0.41 -> 0.21, holdout 3 0.62 -> 0.51, the standard
                             suite and holdout 1 as before, no collision, lead or real clip changed; without
                             ``drift_side`` a collider cut by the bottom border, ``ground_forward_4_h1``'s, warns
-                            0.13 s later; docs/model.md, "The fit's onset the field alarm exempts").""",
+                            0.13 s later; docs/history.md, "The fit's onset the field alarm exempts").""",
                             valid=Valid.boolean())
     drift_side: bool = param(True, """With ``drift_cut``: only a box cut by the left or right border loses the
                              exemption (the static world beside the path leaves the view through the sides; an object
                              low in the view, on the ground ahead, is cut by the bottom border as it nears). False =
-                             every cut box loses it (session 14: docs/model.md, "The fit's onset the field alarm
+                             every cut box loses it (session 14: docs/history.md, "The fit's onset the field alarm
                              exempts").""", valid=Valid.boolean())
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
@@ -476,14 +476,14 @@ class TargetParams(ParameterSet):
                               session 10: the drive scenes' false episodes 10.19 -> 5.56 per 1000 frames,
                               holdout 9.26 -> 7.41, no collision or clip lost, the real clips' leads
                               ``bear_attack`` 0.67 -> 0.57 s (0.60 s since session 11 counts processed frames), ``UAV_outdoor_1``
-                              0.50 -> 0.47 s; docs/model.md,
+                              0.50 -> 0.47 s; docs/history.md,
                               "The field alarm on the static world").""", unit="frames", valid=Valid.integer(1))
     alarm_course: bool = param(True, """With ``alarm_frames`` > 1: the field alarm's first frame in a row begins a
                               warning on an alarm seed (a target born on it) without waiting when the course
                               of the seed's own alignment over ``change_frames`` (``Track.seed_move``;
                               :func:`~mlplc2.targets.warning.seed_course`) passes within ``max_miss``, as the
                               alarm with a fitted course does (issue 22 item 4: the real clips' warnings on
-                              their field alarm's first frame; docs/model.md, "The field alarm's first frame
+                              their field alarm's first frame; docs/history.md, "The field alarm's first frame
                               with the seed's course"). False = off (``alarm_frames`` alone).""",
                               valid=Valid.boolean())
     alarm_isotropic: bool = param(True, """From a translating camera (a measured heading), the field alarm without a
@@ -495,7 +495,7 @@ class TargetParams(ParameterSet):
                               (:func:`~mlplc2.targets.warning.anisotropic`); a track born before its alarm (no
                               seed alignment) is not tested. False = off (on since session 14: false episodes per
                               1000 frames holdout 1 1.24 -> 1.03, holdout 2 0.72 -> 0.51, the standard suite and
-                              holdout 3 as before, no collision, lead or real clip changed; docs/model.md, "The
+                              holdout 3 as before, no collision, lead or real clip changed; docs/history.md, "The
                               field alarm's seed that does not loom").""", valid=Valid.boolean())
     hold_frames: int = param(15, """A target whose fit gives no time to contact this frame (the growth not
                              significant, not isotropic, a gap in its measurement) reports its last one
@@ -515,13 +515,13 @@ class TargetParams(ParameterSet):
                              birth only (its warning state, last time to contact and history begin afresh; its age in
                              ``_merge`` stays its own): a far object lost while it did not grow measurably and found
                              again, grown, where it was. Labels only: every target's box, time to contact and warning
-                             are those without it. 0 = off; 45 since session 16 (docs/model.md, "Targets per object,
+                             are those without it. 0 = off; 45 since session 16 (docs/history.md, "Targets per object,
                              session 16").""", unit="frames", valid=Valid.integer(0))
     absorb_frames: int = param(5, """A target warning this frame absorbs every other target whose centre lies in
                                its box plus a quarter of its size (as a field it would own) and that has had no
                                time to contact for this many frames (since its last one, or its birth): the
                                static world's box beside an object near contact is the object's (its fields go
-                               to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/model.md,
+                               to it; the absorbed one is not refound, but for its id by ``refind_late``). 0 = off; 5 since session 15 (docs/history.md,
                                "Targets per object, session 15", and "Session 15: the defaults measured together").""", unit="frames", valid=Valid.integer(0))
     passed_seeds: bool = param(True, """A target whose last time to contact has run out (its contact passed) with no
                                time to contact since no longer claims the LM and change seeds inside its box, for
@@ -531,7 +531,7 @@ class TargetParams(ParameterSet):
                                against ``max_targets``; a target born inside it (``Track.behind``) does not begin a
                                warning on the field alarm alone, without a course. On: two more collisions warned
                                (the standard suite, holdout 1), no false frame added on the four seed sets (only for
-                               a box over the view: the same, with later leads). False = off (docs/model.md,
+                               a box over the view: the same, with later leads). False = off (docs/history.md,
                                "Objects missed", session 14).""",
                                valid=Valid.boolean())
     refind_drift: float = param(0.4, """A target refound after a gap (``refind_frames``) whose lost track's centre drifted
@@ -540,7 +540,7 @@ class TargetParams(ParameterSet):
                                 does not begin a warning on the field alarm alone, without a course: the lost track
                                 passed beside the path (a passing car leaving the view at the border, lost and found
                                 again there), and the refound track's own history is too short to tell. 0 = off; 0.4
-                                since session 15 (docs/model.md, "Objects missed", session 15).""",
+                                since session 15 (docs/history.md, "Objects missed", session 15).""",
                                 valid=Valid.real(minimum=0))
     uniform_tol: float = param(4.0, """A candidate's first box is the uniform region beside its seed when there is one:
                                the pixels reached by a flood fill of at most this many grey levels from a start point
@@ -551,7 +551,7 @@ class TargetParams(ParameterSet):
                                local motion and change lie on its outline only, the seed on an edge or a corner, and
                                the change window (``max_shift``) is smaller than it, so the other boxes hold a part
                                of it plus road. The box is tried before the others (which follow when it does not
-                               grow). 0 = off; 4 since session 15 (docs/model.md, "A uniform object's box", and "Objects missed",
+                               grow). 0 = off; 4 since session 15 (docs/history.md, "A uniform object's box", and "Objects missed",
                                session 15).""",
                                unit="grey levels", valid=Valid.real(minimum=0))
     uniform_fill: float = param(0.85, """``uniform_tol``: the smallest fraction of its bounding box a uniform region fills
@@ -569,7 +569,7 @@ class TargetParams(ParameterSet):
                                  whose area is within a factor 2 of the box's. The alignment's patch holds the
                                  object's outline and the road around it, which flows faster than the object: the
                                  box grows taller than its object and slides off it (the drive scenes' lead
-                                 vehicle). False = off; on since session 15 (docs/model.md, "A uniform object's box").""",
+                                 vehicle). False = off; on since session 15 (docs/history.md, "A uniform object's box").""",
                                  valid=Valid.boolean())
     uniform_growth: bool = param(True, """With ``uniform_reseat``, a re-seated box's growth is its uniform region's: the
                                  accumulated log-scale and log-anisotropy of the newest observation are those of the

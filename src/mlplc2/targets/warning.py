@@ -139,7 +139,7 @@ def drift(t: Track, heading: tuple[float, float], *, away: bool = False) -> floa
 
 
 def cut_keeps_bearing(t: Track, p: TargetParams, ttc: float | None, heading: tuple[float, float]) -> bool:
-    """``cut_drift`` (docs/model.md, "Objects missed"): whether track ``t``, whose box is cut by the
+    """``cut_drift`` (docs/history.md, "Objects missed"): whether track ``t``, whose box is cut by the
     border, may begin its fit's warning under ``cut_onset_s`` because it keeps its bearing while it
     grows: a time to contact this frame, and its centre drifted away from ``heading`` (px) by at most
     ``cut_drift`` of the static world's drift (:func:`drift`; unknown: no). The static world beside the
@@ -153,7 +153,7 @@ def cut_keeps_bearing(t: Track, p: TargetParams, ttc: float | None, heading: tup
 
 def cut_course(t: Track, p: TargetParams, ttc: float | None, heading: tuple[float, float],
                shape: tuple[int, int]) -> bool:
-    """``cut_course`` (docs/model.md, "Objects missed", session 12): whether track ``t``, whose box is cut
+    """``cut_course`` (docs/history.md, "Objects missed", session 12): whether track ``t``, whose box is cut
     by the border of a frame of ``shape`` (h, w) and so has no course (:func:`course` takes only the
     boxes wholly inside), stands on a collision course because it keeps its bearing while it grows: a time
     to contact this frame, and its centre drifted away from ``heading`` (px) by at most ``cut_course_drift``
@@ -171,7 +171,7 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
 
 def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
              shape: tuple[int, int] | None = None) -> bool:
-    """``path_drift`` (docs/model.md, "A warning that begins off the path"): whether a warning that
+    """``path_drift`` (docs/history.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
     ``t`` is in collision alarm this frame (the field alarm is evidence of its own, issue 22 item 4),
@@ -181,7 +181,7 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     world beside the path expands about the heading, while an object on a collision course keeps its
     bearing. With ``drift_cut``, the field alarm exempts only a box wholly inside a frame of ``shape``
     (h, w; None: no test): the static world beside the path sweeps out of view through the border
-    and its field alarm there is the sweep's (docs/model.md, "The fit's onset the field alarm exempts")."""
+    and its field alarm there is the sweep's (docs/history.md, "The fit's onset the field alarm exempts")."""
     if p.path_drift <= 0 or heading is None or holds(t, heading):
         return False
     if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)):
@@ -192,7 +192,7 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
 
 def fresh(t: Track, p: TargetParams, fps: float, index: float, measured: tuple[float, float] | None,
           interval: float | None = None, miss: float | None = None) -> bool:
-    """``fresh_ttc`` (docs/model.md, "False warnings, session 18"): whether a warning that would begin this frame
+    """``fresh_ttc`` (docs/history.md, "False warnings, session 18"): whether a warning that would begin this frame
     (clock ``index``) on track ``t`` is the static world's, found already near: the camera translates
     (``measured``: the measured heading, px; None: none measured, no test), no field of ``t`` is in collision
     alarm this frame, the track's first time to contact (``Track.first_ttc``) was under ``fresh_ttc`` (it was
@@ -224,7 +224,7 @@ def _cut_at(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
 
 
 def wide(p: TargetParams, miss: float) -> bool:
-    """``onset_miss`` (docs/model.md, "A course that crosses max_miss"): whether the fit's course
+    """``onset_miss`` (docs/history.md, "A course that crosses max_miss"): whether the fit's course
     ``miss`` is too wide to begin a warning: a passing object's box holds its sweep and the
     background beside it, so its miss is measured short and crosses ``max_miss`` from above.
     The field alarm with a course is not held to it (:func:`alarm_warns`: ``max_miss``)."""
@@ -233,7 +233,7 @@ def wide(p: TargetParams, miss: float) -> bool:
 
 def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
           sigma: float | None = None) -> bool:
-    """``countdown_frames`` (docs/model.md, "A course that crosses max_miss"): whether track ``t``'s
+    """``countdown_frames`` (docs/history.md, "A course that crosses max_miss"): whether track ``t``'s
     time to contact ``ttc`` (s) at clock ``index`` exceeds its time to contact of ``countdown_frames``
     frames (at ``nominal_fps``) before (its newest estimate at least that old, ``Track.ttcs``) by more
     than ``sigma`` (s, the standard error of ``ttc``; None: 0): an approach's falls by the time
@@ -251,7 +251,7 @@ def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
 
 
 def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
-    """``alarm_frames`` (docs/model.md, "The field alarm on the static world"): whether the field
+    """``alarm_frames`` (docs/history.md, "The field alarm on the static world"): whether the field
     alarm of track ``t`` is too young to begin a warning without a course: the camera translates
     (``heading``: the measured heading, px; None: none measured, no test), its box does not hold the
     heading (:func:`holds`), a field of it has been in collision alarm fewer than ``alarm_frames``
@@ -267,7 +267,7 @@ def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> 
 
 
 def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
-    """``alarm_isotropic`` (docs/model.md, "The field alarm's seed that does not loom"): whether the field alarm
+    """``alarm_isotropic`` (docs/history.md, "The field alarm's seed that does not loom"): whether the field alarm
     without a course of track ``t`` does not begin a warning because its seed's own alignment over
     ``change_frames`` (``Track.seed_move``, ``Track.seed_skew``) fails the growth test every other seed
     passes (``min_growth``, ``max_anisotropy``): the camera translates (``heading``: the measured heading,
@@ -316,7 +316,7 @@ def seed_course(t: Track, heading: tuple[float, float]) -> tuple[float, float] |
 
 def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
           miss: float | None) -> bool:
-    """``cut_exit`` (docs/model.md, "A warning that leaves through the border"): whether the warning of
+    """``cut_exit`` (docs/history.md, "A warning that leaves through the border"): whether the warning of
     track ``t``, which has warned and whose warning began on a box wholly inside the frame
     (``Track.onset_cut``), is held back this frame: its box is cut by the border of a frame of
     ``shape`` (h, w) while it does not hold ``heading`` (px; :func:`holds`) and its course ``miss``
@@ -336,7 +336,7 @@ def _leaves(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[fl
 
 
 def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
-    """``flat_onset`` (docs/model.md, "A flat box across the path"): whether a warning that would begin this
+    """``flat_onset`` (docs/history.md, "A flat box across the path"): whether a warning that would begin this
     frame on track ``t`` is a roadside object's that runs along the path, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), the box holds the
     heading (:func:`holds`) and is more than ``flat_onset`` times wider than tall. Seen in perspective, an
@@ -347,7 +347,7 @@ def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool
 
 
 def relapse(t: Track, p: TargetParams, index: int, miss: float | None) -> bool:
-    """``reonset_miss`` (docs/model.md, "A flat box across the path"): whether the warning of track ``t``, which
+    """``reonset_miss`` (docs/history.md, "A flat box across the path"): whether the warning of track ``t``, which
     has warned and whose last frame was no warning, does not begin again this frame (clock ``index``): no field
     of it is in collision alarm this frame and its course ``miss`` (None: none known, no test) exceeds
     ``reonset_miss``. A box whose warning lapsed has mostly slid off its object (onto a neighbour, a passing
@@ -357,7 +357,7 @@ def relapse(t: Track, p: TargetParams, index: int, miss: float | None) -> bool:
 
 
 def blind_until(targets, p: TargetParams, fps: float, now: float, shape: tuple[int, int], until: float) -> float:
-    """``contact_blind`` (docs/model.md, "False warnings, session 15"): the clock up to
+    """``contact_blind`` (docs/history.md, "False warnings, session 15"): the clock up to
     which no other warning begins, given this frame's ``targets`` (clock ``now``) in a frame of ``shape``
     (h, w): the predicted contact (``ttc_s``) plus ``contact_blind`` frames of each target warning on a box
     wider or taller than the frame (the object fills the view), or ``until`` (the window so far) if later."""
@@ -381,7 +381,7 @@ def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
 
 
 def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None) -> bool:
-    """``warn_through`` (docs/model.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
+    """``warn_through`` (docs/history.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
     clock ``now``, where its own measurement does not (no fit, a fit not yet evident or too uncertain), on its time to
     contact ``ttc`` (s; without a fit the one held, :func:`held`) and course ``miss``: its last fit at most
     ``warn_through`` frames old, ``ttc`` within ``horizon_s`` and ``miss`` within ``reonset_miss`` (the course on which
