@@ -495,9 +495,13 @@ def test_a_warning_ends_for_good_when_its_time_to_contact_stops_counting_down():
     # onto the background at frame 25 (it stops growing at the approach's rate: its growth per
     # frame halves), its time to contact rises; 3 frames later its warning ends and does not come
     # back, although its time to contact, its course and its evidence would allow it. With the
-    # rule off (0) it warns on
+    # rule off (0) it warns on. The rule as until session 19 (this frame's standard error alone, no
+    # warn_through) ends it within 3 frames of the rise (by frame 30); the defaults (the standard error of the
+    # difference, rise_sigma; the warning held through lapses of the fit, warn_through) end it too, for good
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
-    p, off = TargetParams(alarm_warns=False, countdown_frames=3), TargetParams(alarm_warns=False, countdown_frames=0)
+    p = TargetParams(alarm_warns=False, countdown_frames=3, rise_sigma=False, rise_streak=False, warn_through=0)
+    off = TargetParams(alarm_warns=False, countdown_frames=0)
+    default = TargetParams(alarm_warns=False)
 
     def run(params, slide: int | None) -> list[tuple[int, bool, float]]:
         t, out = None, []
@@ -529,6 +533,10 @@ def test_a_warning_ends_for_good_when_its_time_to_contact_stops_counting_down():
     rise = [v for k, _, v in slid if 25 <= k <= end]
     assert rise[-1] > min(rise)                                      # it ended as its contact receded
     assert all(w for k, w, _ in run(off, 25) if k >= first)          # the rule off: it warns on
+    assert all(w for k, w, _ in run(default, None) if k >= first)      # the defaults: an approach warns on
+    slid = run(default, 25)
+    end = next(k for k, w, _ in slid if k > first and not w)
+    assert end < CONTACT - 3 and not any(w for k, w, _ in slid if k >= end)
 
 
 def test_the_alarm_alone_from_a_moving_camera_begins_once_it_has_lasted():
@@ -1051,7 +1059,7 @@ def test_a_running_warning_goes_on_through_a_fit_that_lapses():
     # warn_through (docs/history.md, "A warning held to contact"): the fit of a collider's box that grows faster
     # in width than in height (a re-seated box, two colliders overlapping) fails its isotropy test and gives no
     # time to contact; the warning goes on, on the one held, where without warn_through it lapsed for good
-    off, on = TargetParams(), TargetParams(warn_through=15)
+    off, on = TargetParams(warn_through=0), TargetParams(warn_through=15)
     lapsed = _lapsing(off, 4.0, 1.0)
     assert lapsed[0].warning and not all(o.warning for o in lapsed)
     held = _lapsing(on, 4.0, 1.0)
@@ -1078,11 +1086,11 @@ def test_a_rise_within_both_estimates_scatter_does_not_end_a_warning():
     # rise_sigma: the time to contact now (0.93 s, a sharp fit) exceeds the one 3 frames before by 0.05 s, which
     # had a standard error of 0.1 s (a fit's first estimates): no rise beyond the scatter of their difference
     ttc = (CONTACT - 12) / FPS
-    out, t = _rise(TargetParams(), ttc - 0.05, 0.1)
+    out, t = _rise(TargetParams(rise_sigma=False, rise_streak=False), ttc - 0.05, 0.1)
     assert not out.warning and t.spent                       # this frame's standard error alone: ended for good
-    out, t = _rise(TargetParams(rise_sigma=True), ttc - 0.05, 0.1)
+    out, t = _rise(TargetParams(rise_sigma=True, rise_streak=False), ttc - 0.05, 0.1)
     assert out.warning and not t.spent
-    out, t = _rise(TargetParams(rise_sigma=True), ttc - 0.3, 0.1)  # beyond it: a rise
+    out, t = _rise(TargetParams(rise_sigma=True, rise_streak=False), ttc - 0.3, 0.1)  # beyond it: a rise
     assert not out.warning and t.spent
 
 
@@ -1092,5 +1100,5 @@ def test_a_rise_counts_only_against_the_same_run_of_fits():
     ttc = (CONTACT - 12) / FPS
     out, t = _rise(TargetParams(rise_streak=True), ttc - 0.3, 0.001)
     assert t.streak_since == 12 and out.warning and not t.spent
-    out, t = _rise(TargetParams(), ttc - 0.3, 0.001)
+    out, t = _rise(TargetParams(rise_streak=False), ttc - 0.3, 0.001)
     assert not out.warning and t.spent

@@ -810,6 +810,22 @@ def test_collision_object_hidden_behind_a_nearer_object_is_not_scored(other_x, o
     assert [o["object"] for o in ev.warning_objects] == ([] if hidden else [1])
 
 
+@pytest.mark.parametrize("small_width_m, lead_warned", [(1.0, True), (0.1, False)])
+def test_a_warning_on_the_lead_vehicle_is_not_scored_for_a_car_hidden_behind_it(small_width_m, lead_warned):
+    """A lead vehicle on a collision course, 40 px and 2 m wide (depth 1/20 of the focal length) at (100, 50),
+    and a small car 10 px wide at (104, 50), inside its box: 1 m wide it is farther (1/10), hidden behind the lead
+    vehicle, and a warning at (105, 50), nearer the small car's centre, is the lead vehicle's (warned, nothing
+    false); 0.1 m wide it is nearer (1/100), in front of it, and the same warning is the small car's (false)."""
+    contact = 30
+    ttc = lambda f: (contact - f) / WARN_FPS                                  # noqa: E731
+    lead = dict(obj(1, "collision", range(contact), 100, 50, 40.0, contact=float(contact), ttc=ttc), width_m=2.0)
+    small = dict(obj(2, "pass", range(contact), 104, 50, 10.0), width_m=small_width_m)
+    gt = {"videos": {"a.mp4": video_truth([lead, small], frames=35)}}
+    ev = evaluate(result("a.mp4", 35, targets=[T(f, 1, 105, 50, warn=True) for f in range(10, contact)]), gt)
+    assert wobj(ev)["warned"] is lead_warned
+    assert (wvid(ev, "a.mp4")["false_episodes"] == 0) is lead_warned
+
+
 @pytest.mark.parametrize("camera, speed, scored", [("pan", 10.0, False), ("static", 0.0, True)])
 def test_a_rendered_pan_that_turns_away_from_its_collision_does_not_score_it(camera, speed, scored):
     """A collision aimed at the camera from the left of the view: a camera panning right at 10 deg/s

@@ -26,7 +26,8 @@ Coordinates are those of the ground truth (the video's own pixels).
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Collection, Iterable, Mapping, Sequence
+from typing import Any
 
 from .record import FieldHistory, Record
 from .truth import ObjectTruth, VideoTruth, load
@@ -95,15 +96,22 @@ def on_object(x: float, y: float, obj: ObjectTruth, frame: int, radius: float = 
 
 
 def nearest_object(x: float, y: float, frame: int, truth: VideoTruth,
-                   radius: float = DEFAULT_MATCH_RADIUS) -> ObjectTruth | None:
+                   radius: float = DEFAULT_MATCH_RADIUS,
+                   hidden: Mapping[Any, Collection[int]] | None = None) -> ObjectTruth | None:
     """The one object a target at (x, y) stands for at ``frame``: of the objects in view then
     (the clip's collider always), the one whose box lies nearest (:func:`box_distance`, within
     ``radius``; among equals the nearer centre, then the first); None when none is that near.
     A target between two objects counts for one of them only: beside a passing car, the target
-    on the car is not a second target of the collision object next to it (fragmentation)."""
+    on the car is not a second target of the collision object next to it (fragmentation).
+    ``hidden``: object id -> the frames in which it is hidden behind nearer objects
+    (:func:`mlplc2.evaluation.score.hidden_frames`); a hidden object stands for no target then (a
+    warning on the lead vehicle is the lead vehicle's, not that of a small car behind it whose
+    centre lies nearer)."""
     best, key = None, None
     for o in list(truth.objects) + ([truth.collider] if truth.collider is not None else []):
         if not (_present(o, frame) or o is truth.collider):
+            continue
+        if hidden is not None and frame in hidden.get(o.id, ()):
             continue
         d = box_distance(x, y, o, frame)
         if d <= radius and (key is None or (d, centre_distance(x, y, o, frame)) < key):
@@ -145,7 +153,8 @@ def _present(obj: ObjectTruth, frame: int) -> bool:
 
 
 def warning_cause(x: float | None, y: float | None, frame: int, truth: VideoTruth, *,
-                  radius: float = DEFAULT_MATCH_RADIUS, tail: int = 0) -> tuple[str, ObjectTruth | None]:
+                  radius: float = DEFAULT_MATCH_RADIUS, tail: int = 0,
+                  hidden: Mapping[Any, Collection[int]] | None = None) -> tuple[str, ObjectTruth | None]:
     """Whether a warning at (x, y) in ``frame`` is true, and on what.
 
     A warning with a position stands for one object, the one :func:`nearest_object` gives (its
@@ -157,13 +166,14 @@ def warning_cause(x: float | None, y: float | None, frame: int, truth: VideoTrut
     None). A warning on a passing car 10 px beside a collision object's box warns of the car: it
     is false, not a warning of the collision. A warning without a position (``x`` None: a global
     alarm) is true while a collision object is in view before its contact, else it takes the
-    cause of the objects in view (pass-by first).
+    cause of the objects in view (pass-by first). ``hidden``: as in :func:`nearest_object` (for a
+    warning with a position).
     """
     def live(o):
         return o.collides and (o.contact_frame is None or frame <= o.contact_frame + tail)
 
     if x is not None:
-        o = nearest_object(x, y, frame, truth, radius)
+        o = nearest_object(x, y, frame, truth, radius, hidden)
         if o is None:
             return "background", None
         return ("true" if live(o) else "pass" if o.kind == "pass" else "distractor"), o

@@ -301,6 +301,12 @@ class _WarningRules:
     late: int
     early_before: float | None
     radius: float
+    hidden: dict[Any, set[int]]
+
+    def nearest(self, x: float, y: float, f: int, truth: VideoTruth) -> ObjectTruth | None:
+        """The object a warning or target at (x, y) stands for in frame ``f``
+        (:func:`mlplc2.evaluation.match.nearest_object`; not one hidden behind nearer objects then)."""
+        return nearest_object(x, y, f, truth, self.radius, self.hidden)
 
 
 def _warning_rules(run: ModelRun, truth: VideoTruth, radius: float) -> _WarningRules:
@@ -319,7 +325,8 @@ def _warning_rules(run: ModelRun, truth: VideoTruth, radius: float) -> _WarningR
     early_before = None
     if clip and truth.danger_onset_frame is not None:
         early_before = truth.danger_onset_frame - EARLY_S * fps
-    return _WarningRules(first, last, end, fps, clip, collider, blind, colliders, late, early_before, radius)
+    hidden = {o.id: hidden_frames(o, truth) for o in truth.objects}
+    return _WarningRules(first, last, end, fps, clip, collider, blind, colliders, late, early_before, radius, hidden)
 
 
 def score_warnings(run: ModelRun, truth: VideoTruth, *, radius: float) -> tuple[dict, list[dict]]:
@@ -459,7 +466,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                        unplaced_lead_s=None if cf is None else round((cf - f) / fps, 4))
         if not blind and not rec["warned"] and (rules.early_before is None or f >= rules.early_before):
             for key, x, y in run.warnings_at(f):
-                if x is None or nearest_object(x, y, f, truth, radius) is o:
+                if x is None or rules.nearest(x, y, f, truth) is o:
                     c = o.center_at(f)
                     true = o.ttc_at(f, fps)
                     rec.update(warned=True, warning_frame=f,
@@ -470,7 +477,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                     break
         if run.has_targets and run.localises and not blind and rec["alarm_frame"] is None \
                 and (rules.early_before is None or f >= rules.early_before) \
-                and any(nearest_object(x, y, f, truth, radius) is o for _, x, y in run.alarms_at(f)):
+                and any(rules.nearest(x, y, f, truth) is o for _, x, y in run.alarms_at(f)):
             # the paper's field alarm on the object (what the targets are built on), for comparison
             rec.update(alarm_frame=f, alarm_lead_s=None if cf is None else round((cf - f) / fps, 4))
         # fragmentation and time to contact: the targets (fields) on the object while in view
@@ -483,7 +490,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
         if run.has_targets:
             # the targets this object stands for: each target counts for the one object it lies
             # nearest (a target on a neighbour within the radius is the neighbour's, not a fragment)
-            on = [t for t in run.frame_targets.get(f, ()) if nearest_object(t.x, t.y, f, truth, radius) is o]
+            on = [t for t in run.frame_targets.get(f, ()) if rules.nearest(t.x, t.y, f, truth) is o]
             if fits:
                 ids.update(t.id for t in on)
             true = o.ttc_at(f, fps)
@@ -497,7 +504,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                     rec["ttc_estimated"] += 1
                     rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
         elif run.localises and fits:
-            ids.update(fid for fid, x, y, _ in run.fields_at(f) if nearest_object(x, y, f, truth, radius) is o)
+            ids.update(fid for fid, x, y, _ in run.fields_at(f) if rules.nearest(x, y, f, truth) is o)
     rec["targets"] = len(ids) if (run.has_targets or run.localises) else None
     if rec["warned"] and cf is not None:
         rec["warning_kept"], rec["warning_gap_s"] = _kept(run, truth, o, rules, rec["warning_frame"], stop)
@@ -515,7 +522,7 @@ def _kept(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _WarningRules
     for f in range(first, stop):
         near = o.contact_frame is not None and f >= o.contact_frame - rules.late
         keys = {key for key, x, y in run.warnings_at(f)
-                if x is None or (near and key in keys) or nearest_object(x, y, f, truth, rules.radius) is o}
+                if x is None or (near and key in keys) or rules.nearest(x, y, f, truth) is o}
         on += bool(keys)
         gap = 0 if keys else gap + 1
         longest = max(longest, gap)
@@ -548,7 +555,7 @@ def _false_warnings(run: ModelRun, truth: VideoTruth,
                 false_frames.setdefault(cause, set()).add(f)
                 runs.setdefault(key, {}).setdefault(f, cause)
             elif x is not None:
-                o = nearest_object(x, y, f, truth, rules.radius)
+                o = rules.nearest(x, y, f, truth)
                 if any(o is c for c in rules.colliders):
                     now[key] = o
         held = now
@@ -568,7 +575,7 @@ def _false_cause(x: float | None, y: float | None, f: int, truth: VideoTruth, ru
         return "early"
     if rules.blind:
         return None                     # a collision clip without a track: unplaced, neither true nor false
-    verdict, _ = warning_cause(x, y, f, truth, radius=rules.radius, tail=rules.late)
+    verdict, _ = warning_cause(x, y, f, truth, radius=rules.radius, tail=rules.late, hidden=rules.hidden)
     if verdict == "true":
         return None
     return verdict if not rules.clip else "elsewhere"

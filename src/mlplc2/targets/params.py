@@ -294,22 +294,29 @@ class TargetParams(ParameterSet):
                                   session 11: with ``onset_miss``, false episodes per 1000 frames 1.13 -> 0.93
                                   standard, 1.34 -> 1.13 holdout 1, no collision or lead lost; docs/history.md,
                                   "A course that crosses max_miss").""", unit="frames", valid=Valid.integer(0))
-    rise_sigma: bool = param(False, """With ``countdown_frames``: a time to contact rises when it exceeds the older one by
+    rise_sigma: bool = param(True, """With ``countdown_frames``: a time to contact rises when it exceeds the older one by
                              more than the standard error of their difference (both estimates' standard errors
                              combined), not by this frame's alone. False = this frame's alone (as until session 19;
-                             docs/history.md, "A warning held to contact").""", valid=Valid.boolean())
-    rise_streak: bool = param(False, """With ``countdown_frames``: a running warning's time to contact rises only against an
+                             on since session 20, with ``warn_through`` and ``rise_streak``: docs/history.md, "A warning
+                             held to contact").""", valid=Valid.boolean())
+    rise_streak: bool = param(True, """With ``countdown_frames``: a running warning's time to contact rises only against an
                               estimate of the same run of fits (``Track.streak_since``): the first fits after a gap
                               (a box re-seated, grown over the view) start from another box and are not compared with
                               the time to contact held through the gap. False = compared with any (as until session
-                              19; docs/history.md, "A warning held to contact").""", valid=Valid.boolean())
-    warn_through: int = param(0, """A running warning goes on through frames whose fit gives no time to contact (its
+                              19; on since session 20: docs/history.md, "A warning held to contact").""",
+                              valid=Valid.boolean())
+    warn_through: int = param(15, """A running warning goes on through frames whose fit gives no time to contact (its
                               growth not significant or not isotropic for a while: a box re-seated, two colliders
                               overlapping), on the time to contact held (``hold_frames``: the last one counted down)
                               and its course, within ``horizon_s`` and ``reonset_miss``, for up to this many frames after
-                              the last fit. 0 = off: a warning needs this frame's fit, and a collider's warning
-                              lapsed for 0.7-1.2 s before its contact (docs/history.md, "A warning held to
-                              contact").""", unit="frames", valid=Valid.integer(0))
+                              the last fit. 0 = off (as until session 19): a warning needs this frame's fit, and a
+                              collider's warning lapsed for 0.7-1.2 s before its contact. 15 since session 20 (with
+                              ``rise_sigma`` and ``rise_streak``): warned colliders silent for 0.2 s or more before
+                              their contact 9 -> 5 on the standard suite (and 4 -> 3 of its 8 warned real
+                              collisions), 6 -> 3, 6 -> 3, 8 -> 6, 9 -> 4 on holdouts 15-18 (17 and 18 held back), none
+                              warned later or not at all
+                              (docs/history.md, "A warning held to contact").""", unit="frames",
+                              valid=Valid.integer(0))
     countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
                                   counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
                                   frames before (by any amount: there is no warning yet to keep through the fit's noise;
