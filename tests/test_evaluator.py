@@ -367,6 +367,30 @@ def test_evaluate_errors(scene):
         evaluate(scene["result"], scene["gt"], match_radius=0)
 
 
+def test_a_model_the_results_lack_is_named(scene):
+    """Asked for a model the results do not hold, the error names it (it said only 'no model output')."""
+    with pytest.raises(InputValueError, match="^nothing to evaluate: the results hold no output of lgmd1$"):
+        evaluate(scene["dir"] / "two_out", scene["gt"], models=["lgmd1"])
+
+
+def test_a_run_of_standard_input_says_how_to_score_it(scene, tmp_path, capsys):
+    """`mlplc2 run -` records its video as '-', which no key matches: the message says how to score it
+    (the clip's entry alone), and that way scores it as the file's run is scored."""
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "piped", 50, video="-")
+    with pytest.raises(InputValueError, match=r"no ground truth in .* for - \(a run of standard input .* entry alone"):
+        evaluate(tmp_path / "piped", scene["gt"], models=["mlplc2"])
+    entry = {k: v for k, v in scene["gt"]["videos"]["clips/two.avi"].items() if k != "video"}
+    assert (evaluate(tmp_path / "piped", entry, models=["mlplc2"]).models
+            == evaluate(scene["dir"] / "two_out", scene["gt"], models=["mlplc2"]).models)
+    # beside a run that is scored, the CLI's warning line has the same hint
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps(scene["gt"]))
+    assert main(["evaluate", str(scene["dir"] / "two_out"), str(tmp_path / "piped"), "--gt", str(gt), "-q"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mlplc2: warning: -: no ground truth for it in "), err
+    assert "a run of standard input has no video name" in err[0]
+
+
 @pytest.mark.parametrize("kw, error, message", [
     ({"models": 5}, InputTypeError, "models must be"),
     ({"models": [None]}, InputTypeError, "model names"),

@@ -593,7 +593,7 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
                      f"{n} approaching object(s) outside the processed frames not scored")
     if not sc.videos:
         _issue(notes)
-        raise _nothing_to_evaluate(problems, sc.skipped, truth)
+        raise _nothing_to_evaluate(problems, sc.skipped, truth, models)
     notes.extend(f"{p}; not scored" for p in problems)
     _issue(notes)
     order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
@@ -702,15 +702,28 @@ def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *
     return sc
 
 
-def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundTruth) -> InputValueError:
+def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundTruth,
+                         models: list[str] | None) -> InputValueError:
     """The error when no run was scored: the problems of the inputs, else the videos without truth."""
     if problems:
         return InputValueError(f"nothing to evaluate: {'; '.join(problems[:3])}"
                                f"{' ...' if len(problems) > 3 else ''}")
     if skipped:
         return InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
-                               f"{' ...' if len(skipped) > 3 else ''}")
+                               f"{' ...' if len(skipped) > 3 else ''}{unnamed_source_hint(skipped[0])}")
+    if models:
+        return InputValueError(f"nothing to evaluate: the results hold no output of {', '.join(models)}")
     return InputValueError("nothing to evaluate (no model output in the results)")
+
+
+def unnamed_source_hint(source: str) -> str:
+    """Why the run of ``source`` matches no ground-truth key when it was standard input (``-``) or a camera
+    (its index), which have no file name, and what to give instead (docs/evaluation.md); else ``""``."""
+    if source != "-" and not source.isdigit():
+        return ""
+    what = "standard input" if source == "-" else f"camera {source}"
+    return (f" (a run of {what} has no video name to match a key: give the clip's entry alone as the ground "
+            f"truth, without \"video\", and it applies to any run; docs/evaluation.md)")
 
 
 def _rank(r: ModelRun, label: str, order: list[str]) -> tuple:
