@@ -358,6 +358,18 @@ def test_malformed_ground_truth_files(tmp_path):
         load_ground_truth(bad)
 
 
+def test_an_error_in_a_one_entry_file_names_the_file_apart(tmp_path):
+    """The error in a file of one entry (what `mlplc2 stimulus --gt` writes) puts the file's name apart
+    from the place in it, as in a file of several (it read 'gt.json.objects[0].approach')."""
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps({**GOOD, "objects": [{"center": [1, 2], "approach": [10, 5]}]}))
+    with pytest.raises(InputValueError, match=r"^\S*gt\.json: entry\.objects\[0\]\.approach: interval"):
+        load_ground_truth(gt)
+    gt.write_text(json.dumps({"videos": {"v.avi": {**GOOD, "objects": [{"center": [1, 2], "approach": [10, 5]}]}}}))
+    with pytest.raises(InputValueError, match=r"^\S*gt\.json: videos\['v\.avi'\]\.objects\[0\]\.approach: interval"):
+        load_ground_truth(gt)
+
+
 def test_evaluate_errors(scene):
     with pytest.raises(InputValueError, match="no ground truth"):
         evaluate(scene["result"], {"videos": {"other.avi": GOOD}})
