@@ -563,6 +563,19 @@ def test_a_file_where_a_folder_is_needed_is_said_so(data, tmp_path, capsys, argv
     assert f.read_text() == "x\n"
 
 
+def test_an_output_folder_given_as_the_input_is_refused(data, tmp_path, capsys):
+    """`mlplc2 run OUT` on a run's own output folder ran its responses.png as a one-frame video (exit 0,
+    'no fields, no alarm'); it is one error line, and nothing is written."""
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "6", "-q"]) == 0
+    assert (out / "responses.png").is_file()
+    capsys.readouterr()
+    assert main(["run", str(out), "--out", str(tmp_path / "again"), "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "an output folder of `mlplc2 run`" in line and "not a folder of frames" in line, line
+    assert not (tmp_path / "again").exists()
+
+
 def test_output_folder_may_not_be_the_frame_folder(data, capsys):
     before = sorted(p.name for p in data["images"].iterdir())
     assert main(["run", str(data["images"]), "--out", str(data["images"]), "-q"]) == 2
