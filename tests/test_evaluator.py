@@ -385,6 +385,15 @@ def test_a_model_the_results_lack_is_named(scene):
         evaluate(scene["dir"] / "two_out", scene["gt"], models=["lgmd1"])
 
 
+def test_a_one_entry_truth_for_another_video_names_that_video(scene, tmp_path):
+    """The truth of `mlplc2 stimulus --gt` names its video; a run of a renamed copy is not scored, and the
+    error says which video the entry is for (it said only 'no ground truth in gt.json for copy.avi')."""
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "copy", 50, video=str(tmp_path / "copy.avi"))
+    entry = {**scene["gt"]["videos"]["clips/two.avi"], "video": "two.avi"}
+    with pytest.raises(InputValueError, match=r"for \S*copy\.avi \(its one entry is for video 'two\.avi'\)$"):
+        evaluate(tmp_path / "copy", entry)
+
+
 def test_a_run_of_standard_input_says_how_to_score_it(scene, tmp_path, capsys):
     """`mlplc2 run -` records its video as '-', which no key matches: the message says how to score it
     (the clip's entry alone), and that way scores it as the file's run is scored."""

@@ -710,10 +710,17 @@ def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundT
                                f"{' ...' if len(problems) > 3 else ''}")
     if skipped:
         return InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
-                               f"{' ...' if len(skipped) > 3 else ''}{unnamed_source_hint(skipped[0])}")
+                               f"{' ...' if len(skipped) > 3 else ''}"
+                               f"{unnamed_source_hint(skipped[0]) or _one_key_hint(truth)}")
     if models:
         return InputValueError(f"nothing to evaluate: the results hold no output of {', '.join(models)}")
     return InputValueError("nothing to evaluate (no model output in the results)")
+
+
+def _one_key_hint(truth: GroundTruth) -> str:
+    """The key of a ground truth of one entry (its ``"video"``: what `mlplc2 stimulus` wrote it for), which the
+    run's video did not match; else ``""``."""
+    return f" (its one entry is for video {next(iter(truth))!r})" if len(truth) == 1 else ""
 
 
 def unnamed_source_hint(source: str) -> str:
