@@ -155,6 +155,12 @@ def test_run_gives_the_gyro_to_the_models_that_stabilise(tmp_path):
     assert model.camera_motion.given and model.camera_motion.omega[1] == pytest.approx(RATE / FPS)
     with pytest.raises(mlplc2.InputError, match=r"covers t = 0 to 0.1 s but the run's frames are at 0 to 0.166667"):
         mlplc2.run(src, "mlplc2", out=False, gyro=rows[:4], hfov_deg=60.0, quiet=True)
+    # a robot's epoch clock, not shifted to the video's: the message shows where the samples lie (it read
+    # 'covers t = 1.73325e+09 to 1.73325e+09 s', both ends alike)
+    epoch = rows + [1733250000.125, 0, 0, 0]
+    with pytest.raises(mlplc2.InputError, match=r"covers t = 1733250000\.125 to 1733250000\.292 s but the run's "
+                                                 r"frames are at 0 to 0\.166667 s"):
+        mlplc2.run(src, "mlplc2", out=False, gyro=epoch, hfov_deg=60.0, quiet=True)
 
 
 def test_cli_gyro_errors_are_one_line_and_write_nothing(tmp_path, capsys):
