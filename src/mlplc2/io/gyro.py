@@ -70,8 +70,10 @@ class Gyro:
         header = [c.strip().lower() for c in rows[0]] if rows else []
         missing = [c for c in _COLUMNS if c not in header]
         if missing:
-            raise InputValueError(f"{path}: the gyro file needs a header with columns t, wx, wy, wz "
-                                  f"(missing: {', '.join(missing)})")
+            first = ",".join(rows[0]) if rows else ""
+            seen = f"; its first line: {first[:60]!r}" if first else ""
+            raise InputValueError(f"{path}: the gyro file needs a header line with the comma-separated columns "
+                                  f"t, wx, wy, wz (missing: {', '.join(missing)}{seen})")
         cols = [header.index(c) for c in _COLUMNS]
         values = np.empty((len(rows) - 1, 4))
         for i, row in enumerate(rows[1:]):
