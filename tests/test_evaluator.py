@@ -528,6 +528,29 @@ def test_cli_evaluate_warns_on_incomplete_results(scene, tmp_path, capsys):
     assert "1 approaching object(s) outside the processed frames" in cap.out
 
 
+def test_a_run_that_ends_before_the_contact_says_so(scene, tmp_path, capsys):
+    """A run stopped before a labelled collision (`mlplc2 run --end`, complete as asked) scores it as missed:
+    the evaluation says why in one warning line (it said nothing)."""
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps({"clips": {"clips/two.avi": {"label": "collision", "contact_frame": 45}}}))
+    assert main(["run", str(scene["video"]), "-m", "lgmd2", "--end", "10", "--out", str(tmp_path / "part"),
+                 "-q"]) == 0
+    capsys.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", EvaluationWarning)
+        warnings.showwarning = lambda msg, cat, *a, **k: print(f"{cat.__name__}: {msg}", file=sys.stderr)
+        assert main(["evaluate", str(tmp_path / "part"), "--gt", str(gt)]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == [f"mlplc2: warning: {tmp_path / 'part'}: the results end at frame 9, before the "
+                                    f"contact at frame 45 of clips/two.avi: a collision not warned of by then is "
+                                    f"scored as missed"], cap.err
+    assert "| lgmd2 | clips/two.avi | collision | no |" in cap.out
+    # a run that reaches the contact: no such line
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EvaluationWarning)
+        evaluate(scene["dir"] / "two_out", json.loads(gt.read_text()), models=["lgmd2"])
+
+
 def test_inputs_that_are_not_results(scene, tmp_path):
     """Say what is wrong instead of 'no ground truth'."""
     text = tmp_path / "afile"

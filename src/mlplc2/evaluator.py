@@ -591,6 +591,9 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     for origin, (reason, n) in sc.incomplete.items():
         notes.append(f"{origin}: incomplete results ({reason}); scored as they are, "
                      f"{n} approaching object(s) outside the processed frames not scored")
+    for (origin, video), (end, contact) in sc.ended_early.items():
+        notes.append(f"{origin}: the results end at frame {end}, before the contact at frame {contact:g} of "
+                     f"{video}: a collision not warned of by then is scored as missed")
     if not sc.videos:
         _issue(notes)
         raise _nothing_to_evaluate(problems, sc.skipped, truth, models)
@@ -662,6 +665,8 @@ class _Scores:
     skipped: list[str] = field(default_factory=list)
     by_label: dict[str, ModelRun] = field(default_factory=dict)
     incomplete: dict[str, tuple[str, int]] = field(default_factory=dict)
+    # (origin, video) -> (last processed frame, contact frame) of a collision the run ended before, unwarned
+    ended_early: dict[tuple[str, str], tuple[int, float]] = field(default_factory=dict)
 
 
 def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *, radius: float,
@@ -696,6 +701,11 @@ def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *
             wv, wo = score_warnings(r, t, radius=radius)
             sc.wvideos.append(wv)
             sc.wobjects.extend(wo)
+            last = r.start + r.n_frames
+            for rec in wo:
+                cf = rec["contact_frame"]
+                if cf is not None and last < math.ceil(cf) and not rec["warned"] and not rec["unplaced"]:
+                    sc.ended_early.setdefault((r.origin, t.key), (last - 1, cf))
         if r.incomplete is not None:
             reason, n = sc.incomplete.get(r.origin, (r.incomplete, 0))
             sc.incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
