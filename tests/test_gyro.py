@@ -126,6 +126,9 @@ def test_the_gyro_file_is_interpolated_at_each_time(tmp_path):
     with pytest.raises(mlplc2.InputError, match="covers t = 0 to 1 s"):
         g.at(1.2, FPS)
     assert Gyro.load(np.array([[0, 1, 2, 3], [2, 1, 2, 3]])).at(1.0, FPS) == (1.0, 2.0, 3.0)
+    # a source of unknown length (a stream): where its frames start, not 'the run's frames are at 0 s'
+    with pytest.raises(mlplc2.InputError, match=r"covers t = 1 to 2 s but the run's frames start at 0 s \("):
+        Gyro.load(np.array([[1, 0, 0, 0], [2, 0, 0, 0]])).check_covers(0.0, None, FPS)
 
 
 @pytest.mark.parametrize("text, match", [("t,wx,wy\n0,0,0\n1,0,0\n", "missing: wz"),
