@@ -549,7 +549,8 @@ def test_output_folder_that_is_a_file(data, tmp_path, capsys):
 @pytest.mark.parametrize("argv, path", [
     (["demo", "--out", "{f}", "-q"], "{f}: is a file, where a folder is needed"),
     (["run", "{avi}", "--out", "{f}/sub", "-q"], "{f}/sub: {f} is a file, not a folder"),
-    (["run", "{avi}", "--out", "{t}/o", "--jsonl", "{f}/lines.jsonl", "-q"], "{f}: is a file, where a folder is needed"),
+    (["run", "{avi}", "--out", "{t}/o", "--jsonl", "{f}/lines.jsonl", "-q"],
+     "{f}: is a file, where a folder is needed"),
     (["stimulus", "grating", "--out", "{f}/g.avi"], "{f}: is a file, where a folder is needed"),
 ])
 def test_a_file_where_a_folder_is_needed_is_said_so(data, tmp_path, capsys, argv, path):

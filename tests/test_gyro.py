@@ -138,7 +138,8 @@ def test_the_gyro_file_is_interpolated_at_each_time(tmp_path):
                                          ("", r"missing: t, wx, wy, wz\)$"),
                                          # another separator: the message shows the line it read
                                          ("t;wx;wy;wz\n0;0;0;0\n1;0;0;0\n",
-                                          r"comma-separated .*missing: t, wx, wy, wz; its first line: 't;wx;wy;wz'\)$")])
+                                          r"comma-separated .*missing: t, wx, wy, wz; "
+                                          r"its first line: 't;wx;wy;wz'\)$")])
 def test_a_malformed_gyro_file_is_one_clear_error(tmp_path, text, match):
     with pytest.raises(mlplc2.InputError, match=match):
         Gyro.load(_csv(tmp_path / "g.csv", text))

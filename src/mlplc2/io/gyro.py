@@ -91,7 +91,8 @@ class Gyro:
             frames = (f"a frame is at {_s(first_s)} s" if last_s == first_s else
                       f"the run's frames start at {_s(first_s)} s" if last_s is None else
                       f"the run's frames are at {_s(first_s)} to {_s(last_s)} s")
-            raise InputValueError(f"{self.name}: the gyro covers t = {_s(self.t[0])} to {_s(self.t[-1])} s but {frames} "
+            raise InputValueError(f"{self.name}: the gyro covers t = {_s(self.t[0])} to {_s(self.t[-1])} s "
+                                  f"but {frames} "
                                   f"(t is on the video's clock: frame i at i / fps, or its timestamp)")
 
     def at(self, t: float, fps: float) -> tuple[float, float, float]:
