@@ -546,6 +546,37 @@ def test_output_folder_that_is_a_file(data, tmp_path, capsys):
     assert "afile: is a file, expected a folder" in _one_error_line(capsys.readouterr().err)
 
 
+@pytest.mark.parametrize("argv, path", [
+    (["demo", "--out", "{f}", "-q"], "{f}: is a file, where a folder is needed"),
+    (["run", "{avi}", "--out", "{f}/sub", "-q"], "{f}/sub: {f} is a file, not a folder"),
+    (["run", "{avi}", "--out", "{t}/o", "--jsonl", "{f}/lines.jsonl", "-q"],
+     "{f}: is a file, where a folder is needed"),
+    (["stimulus", "grating", "--out", "{f}/g.avi"], "{f}: is a file, where a folder is needed"),
+])
+def test_a_file_where_a_folder_is_needed_is_said_so(data, tmp_path, capsys, argv, path):
+    """An output folder (or a folder above an output) that is a file: one line that says so, from every
+    command, not the system's 'afile: File exists' or 'Not a directory'."""
+    f = tmp_path / "afile"
+    f.write_text("x\n")
+    fill = {"f": f, "t": tmp_path, "avi": data["avi"]}
+    assert main([a.format(**fill) for a in argv]) == 2
+    assert _one_error_line(capsys.readouterr().err) == "mlplc2: error: " + path.format(**fill)
+    assert f.read_text() == "x\n"
+
+
+def test_an_output_folder_given_as_the_input_is_refused(data, tmp_path, capsys):
+    """`mlplc2 run OUT` on a run's own output folder ran its responses.png as a one-frame video (exit 0,
+    'no fields, no alarm'); it is one error line, and nothing is written."""
+    out = tmp_path / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "--end", "6", "-q"]) == 0
+    assert (out / "responses.png").is_file()
+    capsys.readouterr()
+    assert main(["run", str(out), "--out", str(tmp_path / "again"), "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert "an output folder of `mlplc2 run`" in line and "not a folder of frames" in line, line
+    assert not (tmp_path / "again").exists()
+
+
 def test_output_folder_may_not_be_the_frame_folder(data, capsys):
     before = sorted(p.name for p in data["images"].iterdir())
     assert main(["run", str(data["images"]), "--out", str(data["images"]), "-q"]) == 2

@@ -358,6 +358,18 @@ def test_malformed_ground_truth_files(tmp_path):
         load_ground_truth(bad)
 
 
+def test_an_error_in_a_one_entry_file_names_the_file_apart(tmp_path):
+    """The error in a file of one entry (what `mlplc2 stimulus --gt` writes) puts the file's name apart
+    from the place in it, as in a file of several (it read 'gt.json.objects[0].approach')."""
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps({**GOOD, "objects": [{"center": [1, 2], "approach": [10, 5]}]}))
+    with pytest.raises(InputValueError, match=r"^\S*gt\.json: entry\.objects\[0\]\.approach: interval"):
+        load_ground_truth(gt)
+    gt.write_text(json.dumps({"videos": {"v.avi": {**GOOD, "objects": [{"center": [1, 2], "approach": [10, 5]}]}}}))
+    with pytest.raises(InputValueError, match=r"^\S*gt\.json: videos\['v\.avi'\]\.objects\[0\]\.approach: interval"):
+        load_ground_truth(gt)
+
+
 def test_evaluate_errors(scene):
     with pytest.raises(InputValueError, match="no ground truth"):
         evaluate(scene["result"], {"videos": {"other.avi": GOOD}})
@@ -365,6 +377,39 @@ def test_evaluate_errors(scene):
         evaluate(scene["result"], scene["gt"], models=["nope"])
     with pytest.raises(InputValueError, match="match_radius"):
         evaluate(scene["result"], scene["gt"], match_radius=0)
+
+
+def test_a_model_the_results_lack_is_named(scene):
+    """Asked for a model the results do not hold, the error names it (it said only 'no model output')."""
+    with pytest.raises(InputValueError, match="^nothing to evaluate: the results hold no output of lgmd1$"):
+        evaluate(scene["dir"] / "two_out", scene["gt"], models=["lgmd1"])
+
+
+def test_a_one_entry_truth_for_another_video_names_that_video(scene, tmp_path):
+    """The truth of `mlplc2 stimulus --gt` names its video; a run of a renamed copy is not scored, and the
+    error says which video the entry is for (it said only 'no ground truth in gt.json for copy.avi')."""
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "copy", 50, video=str(tmp_path / "copy.avi"))
+    entry = {**scene["gt"]["videos"]["clips/two.avi"], "video": "two.avi"}
+    with pytest.raises(InputValueError, match=r"for \S*copy\.avi \(its one entry is for video 'two\.avi'\)$"):
+        evaluate(tmp_path / "copy", entry)
+
+
+def test_a_run_of_standard_input_says_how_to_score_it(scene, tmp_path, capsys):
+    """`mlplc2 run -` records its video as '-', which no key matches: the message says how to score it
+    (the clip's entry alone), and that way scores it as the file's run is scored."""
+    _cut_folder(scene["dir"] / "two_out", tmp_path / "piped", 50, video="-")
+    with pytest.raises(InputValueError, match=r"no ground truth in .* for - \(a run of standard input .* entry alone"):
+        evaluate(tmp_path / "piped", scene["gt"], models=["mlplc2"])
+    entry = {k: v for k, v in scene["gt"]["videos"]["clips/two.avi"].items() if k != "video"}
+    assert (evaluate(tmp_path / "piped", entry, models=["mlplc2"]).models
+            == evaluate(scene["dir"] / "two_out", scene["gt"], models=["mlplc2"]).models)
+    # beside a run that is scored, the CLI's warning line has the same hint
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps(scene["gt"]))
+    assert main(["evaluate", str(scene["dir"] / "two_out"), str(tmp_path / "piped"), "--gt", str(gt), "-q"]) == 0
+    err = capsys.readouterr().err.splitlines()
+    assert len(err) == 1 and err[0].startswith("mlplc2: warning: -: no ground truth for it in "), err
+    assert "a run of standard input has no video name" in err[0]
 
 
 @pytest.mark.parametrize("kw, error, message", [
@@ -481,6 +526,29 @@ def test_cli_evaluate_warns_on_incomplete_results(scene, tmp_path, capsys):
     assert len(lines) == 1 and lines[0].startswith("mlplc2: warning: "), cap.err   # one line, not Python's
     assert "(the run was interrupted after 18 frames)" in lines[0] and "EvaluationWarning" not in cap.err
     assert "1 approaching object(s) outside the processed frames" in cap.out
+
+
+def test_a_run_that_ends_before_the_contact_says_so(scene, tmp_path, capsys):
+    """A run stopped before a labelled collision (`mlplc2 run --end`, complete as asked) scores it as missed:
+    the evaluation says why in one warning line (it said nothing)."""
+    gt = tmp_path / "gt.json"
+    gt.write_text(json.dumps({"clips": {"clips/two.avi": {"label": "collision", "contact_frame": 45}}}))
+    assert main(["run", str(scene["video"]), "-m", "lgmd2", "--end", "10", "--out", str(tmp_path / "part"),
+                 "-q"]) == 0
+    capsys.readouterr()
+    with warnings.catch_warnings():
+        warnings.simplefilter("always", EvaluationWarning)
+        warnings.showwarning = lambda msg, cat, *a, **k: print(f"{cat.__name__}: {msg}", file=sys.stderr)
+        assert main(["evaluate", str(tmp_path / "part"), "--gt", str(gt)]) == 0
+    cap = capsys.readouterr()
+    assert cap.err.splitlines() == [f"mlplc2: warning: {tmp_path / 'part'}: the results end at frame 9, before the "
+                                    f"contact at frame 45 of clips/two.avi: a collision not warned of by then is "
+                                    f"scored as missed"], cap.err
+    assert "| lgmd2 | clips/two.avi | collision | no |" in cap.out
+    # a run that reaches the contact: no such line
+    with warnings.catch_warnings():
+        warnings.simplefilter("error", EvaluationWarning)
+        evaluate(scene["dir"] / "two_out", json.loads(gt.read_text()), models=["lgmd2"])
 
 
 def test_inputs_that_are_not_results(scene, tmp_path):

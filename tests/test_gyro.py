@@ -126,13 +126,20 @@ def test_the_gyro_file_is_interpolated_at_each_time(tmp_path):
     with pytest.raises(mlplc2.InputError, match="covers t = 0 to 1 s"):
         g.at(1.2, FPS)
     assert Gyro.load(np.array([[0, 1, 2, 3], [2, 1, 2, 3]])).at(1.0, FPS) == (1.0, 2.0, 3.0)
+    # a source of unknown length (a stream): where its frames start, not 'the run's frames are at 0 s'
+    with pytest.raises(mlplc2.InputError, match=r"covers t = 1 to 2 s but the run's frames start at 0 s \("):
+        Gyro.load(np.array([[1, 0, 0, 0], [2, 0, 0, 0]])).check_covers(0.0, None, FPS)
 
 
 @pytest.mark.parametrize("text, match", [("t,wx,wy\n0,0,0\n1,0,0\n", "missing: wz"),
                                          ("t,wx,wy,wz\n0,0,0,0\n0.5,0,x,0\n", "line 3"),
                                          ("t,wx,wy,wz\n0,0,0,0\n0,1,0,0\n", "t must increase"),
                                          ("t,wx,wy,wz\n0,0,0,0\n", "at least 2 samples"),
-                                         ("", "missing: t, wx, wy, wz")])
+                                         ("", r"missing: t, wx, wy, wz\)$"),
+                                         # another separator: the message shows the line it read
+                                         ("t;wx;wy;wz\n0;0;0;0\n1;0;0;0\n",
+                                          r"comma-separated .*missing: t, wx, wy, wz; "
+                                          r"its first line: 't;wx;wy;wz'\)$")])
 def test_a_malformed_gyro_file_is_one_clear_error(tmp_path, text, match):
     with pytest.raises(mlplc2.InputError, match=match):
         Gyro.load(_csv(tmp_path / "g.csv", text))
@@ -155,6 +162,12 @@ def test_run_gives_the_gyro_to_the_models_that_stabilise(tmp_path):
     assert model.camera_motion.given and model.camera_motion.omega[1] == pytest.approx(RATE / FPS)
     with pytest.raises(mlplc2.InputError, match=r"covers t = 0 to 0.1 s but the run's frames are at 0 to 0.166667"):
         mlplc2.run(src, "mlplc2", out=False, gyro=rows[:4], hfov_deg=60.0, quiet=True)
+    # a robot's epoch clock, not shifted to the video's: the message shows where the samples lie (it read
+    # 'covers t = 1.73325e+09 to 1.73325e+09 s', both ends alike)
+    epoch = rows + [1733250000.125, 0, 0, 0]
+    with pytest.raises(mlplc2.InputError, match=r"covers t = 1733250000\.125 to 1733250000\.292 s but the run's "
+                                                 r"frames are at 0 to 0\.166667 s"):
+        mlplc2.run(src, "mlplc2", out=False, gyro=epoch, hfov_deg=60.0, quiet=True)
 
 
 def test_cli_gyro_errors_are_one_line_and_write_nothing(tmp_path, capsys):

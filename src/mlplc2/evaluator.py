@@ -591,9 +591,12 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     for origin, (reason, n) in sc.incomplete.items():
         notes.append(f"{origin}: incomplete results ({reason}); scored as they are, "
                      f"{n} approaching object(s) outside the processed frames not scored")
+    for (origin, video), (end, contact) in sc.ended_early.items():
+        notes.append(f"{origin}: the results end at frame {end}, before the contact at frame {contact:g} of "
+                     f"{video}: a collision not warned of by then is scored as missed")
     if not sc.videos:
         _issue(notes)
-        raise _nothing_to_evaluate(problems, sc.skipped, truth)
+        raise _nothing_to_evaluate(problems, sc.skipped, truth, models)
     notes.extend(f"{p}; not scored" for p in problems)
     _issue(notes)
     order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
@@ -662,6 +665,8 @@ class _Scores:
     skipped: list[str] = field(default_factory=list)
     by_label: dict[str, ModelRun] = field(default_factory=dict)
     incomplete: dict[str, tuple[str, int]] = field(default_factory=dict)
+    # (origin, video) -> (last processed frame, contact frame) of a collision the run ended before, unwarned
+    ended_early: dict[tuple[str, str], tuple[int, float]] = field(default_factory=dict)
 
 
 def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *, radius: float,
@@ -696,21 +701,46 @@ def _score_runs(runs: list[ModelRun], truth: GroundTruth, problems: list[str], *
             wv, wo = score_warnings(r, t, radius=radius)
             sc.wvideos.append(wv)
             sc.wobjects.extend(wo)
+            last = r.start + r.n_frames
+            for rec in wo:
+                cf = rec["contact_frame"]
+                if cf is not None and last < math.ceil(cf) and not rec["warned"] and not rec["unplaced"]:
+                    sc.ended_early.setdefault((r.origin, t.key), (last - 1, cf))
         if r.incomplete is not None:
             reason, n = sc.incomplete.get(r.origin, (r.incomplete, 0))
             sc.incomplete[r.origin] = (reason, max(n, v["objects_outside"]))
     return sc
 
 
-def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundTruth) -> InputValueError:
+def _nothing_to_evaluate(problems: list[str], skipped: list[str], truth: GroundTruth,
+                         models: list[str] | None) -> InputValueError:
     """The error when no run was scored: the problems of the inputs, else the videos without truth."""
     if problems:
         return InputValueError(f"nothing to evaluate: {'; '.join(problems[:3])}"
                                f"{' ...' if len(problems) > 3 else ''}")
     if skipped:
         return InputValueError(f"no ground truth in {truth.source} for {', '.join(skipped[:3])}"
-                               f"{' ...' if len(skipped) > 3 else ''}")
+                               f"{' ...' if len(skipped) > 3 else ''}"
+                               f"{unnamed_source_hint(skipped[0]) or _one_key_hint(truth)}")
+    if models:
+        return InputValueError(f"nothing to evaluate: the results hold no output of {', '.join(models)}")
     return InputValueError("nothing to evaluate (no model output in the results)")
+
+
+def _one_key_hint(truth: GroundTruth) -> str:
+    """The key of a ground truth of one entry (its ``"video"``: what `mlplc2 stimulus` wrote it for), which the
+    run's video did not match; else ``""``."""
+    return f" (its one entry is for video {next(iter(truth))!r})" if len(truth) == 1 else ""
+
+
+def unnamed_source_hint(source: str) -> str:
+    """Why the run of ``source`` matches no ground-truth key when it was standard input (``-``) or a camera
+    (its index), which have no file name, and what to give instead (docs/evaluation.md); else ``""``."""
+    if source != "-" and not source.isdigit():
+        return ""
+    what = "standard input" if source == "-" else f"camera {source}"
+    return (f" (a run of {what} has no video name to match a key: give the clip's entry alone as the ground "
+            f"truth, without \"video\", and it applies to any run; docs/evaluation.md)")
 
 
 def _rank(r: ModelRun, label: str, order: list[str]) -> tuple:

@@ -8,6 +8,7 @@ import argparse
 import os
 import sys
 import warnings
+from pathlib import Path
 
 from .._validation import InputError
 from . import run, stimulus, studies, tools
@@ -55,6 +56,21 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
     warn(one_line(str(message)))
 
 
+def _os_error_line(exc: OSError) -> str:
+    """``PATH: REASON`` of an ``OSError``; a file where a folder is needed (an output folder, or a folder above
+    an output, that is a file) is said so instead of the system's "File exists" / "Not a directory"."""
+    if not (exc.strerror and exc.filename):
+        return str(exc) or type(exc).__name__
+    if isinstance(exc, (FileExistsError, NotADirectoryError)):
+        path = Path(os.fsdecode(exc.filename))
+        blocker = next((p for p in (path, *path.parents) if p.exists() and not p.is_dir()), None)
+        if blocker == path:
+            return f"{exc.filename}: is a file, where a folder is needed"
+        if blocker is not None:
+            return f"{exc.filename}: {blocker} is a file, not a folder"
+    return f"{exc.filename}: {exc.strerror}"
+
+
 def run_command(argv: list[str] | None = None) -> int:
     """:func:`mlplc2.cli.main` once its modules are loaded (it holds the signal handling): the
     exit code. Warnings are printed as one line each, ``mlplc2: warning: ...``."""
@@ -90,8 +106,7 @@ def _main(argv: list[str] | None) -> int:
         print(f"{PROG}: error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_INPUT
     except OSError as exc:
-        line = f"{exc.filename}: {exc.strerror}" if exc.strerror and exc.filename else str(exc) or type(exc).__name__
-        print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
+        print(f"{PROG}: error: {one_line(_os_error_line(exc))}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)

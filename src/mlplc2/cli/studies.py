@@ -42,7 +42,7 @@ def _add_evaluate(p: argparse.ArgumentParser) -> None:
 
 
 def _cmd_evaluate(args) -> int:
-    from ..evaluator import EvaluationWarning, evaluate
+    from ..evaluator import EvaluationWarning, evaluate, unnamed_source_hint
 
     models = resolve_names(args.model, what="--model") if args.model else None
     options = video_run_options(args)
@@ -53,7 +53,7 @@ def _cmd_evaluate(args) -> int:
     for w in ev.warnings:
         warn(w)
     for s in ev.skipped:
-        warn(f"{s}: no ground truth for it in {args.gt}; not scored")
+        warn(f"{s}: no ground truth for it in {args.gt}; not scored{unnamed_source_hint(s)}")
     say(args, ev.to_markdown(details=args.details))
     if args.out:
         files = ev.write(args.out)

@@ -632,7 +632,7 @@ def parse(data, source: str = "<dict>") -> GroundTruth:
             parsed[str(k)] = parse_entry(str(k), v, f"{source}: {top}[{k!r}]")
     if not tops:
         key = str(data.get("video") or "*")
-        parsed = {key: parse_entry(key, data, source)}
+        parsed = {key: parse_entry(key, data, f"{source}: entry")}
     return GroundTruth(parsed, source)
 
 

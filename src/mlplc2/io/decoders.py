@@ -328,6 +328,10 @@ def _image_files(source: str) -> tuple[list[str], str]:
     p = Path(source)
     if p.is_dir():
         files = [str(f) for f in p.iterdir() if f.is_file() and f.suffix.lower() in IMAGE_EXTENSIONS]
+        if [Path(f).name for f in files] == ["responses.png"] and (p / "fields.json").is_file():
+            raise InputValueError(f"{source}: an output folder of `mlplc2 run` (fields.json, responses.png), "
+                                  f"not a folder of frames: run the video it came from (\"video\" in its "
+                                  f"fields.json), or score it with `mlplc2 evaluate`")
         if not files:
             videos = any(f.suffix.lower() in VIDEO_EXTENSIONS for f in p.iterdir())
             hint = "; it holds videos: run them all with `mlplc2 batch`" if videos else ""

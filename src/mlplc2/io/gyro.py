@@ -70,8 +70,10 @@ class Gyro:
         header = [c.strip().lower() for c in rows[0]] if rows else []
         missing = [c for c in _COLUMNS if c not in header]
         if missing:
-            raise InputValueError(f"{path}: the gyro file needs a header with columns t, wx, wy, wz "
-                                  f"(missing: {', '.join(missing)})")
+            first = ",".join(rows[0]) if rows else ""
+            seen = f"; its first line: {first[:60]!r}" if first else ""
+            raise InputValueError(f"{path}: the gyro file needs a header line with the comma-separated columns "
+                                  f"t, wx, wy, wz (missing: {', '.join(missing)}{seen})")
         cols = [header.index(c) for c in _COLUMNS]
         values = np.empty((len(rows) - 1, 4))
         for i, row in enumerate(rows[1:]):
@@ -86,9 +88,11 @@ class Gyro:
         """Raise :class:`~mlplc2.InputError` unless the samples span ``first_s`` to ``last_s`` (None: unknown)."""
         slack = SLACK / fps
         if first_s < self.t[0] - slack or (last_s is not None and last_s > self.t[-1] + slack):
-            frames = (f"a frame is at {first_s:g} s" if last_s == first_s else
-                      f"the run's frames are at {first_s:g}" + ("" if last_s is None else f" to {last_s:g}") + " s")
-            raise InputValueError(f"{self.name}: the gyro covers t = {self.t[0]:g} to {self.t[-1]:g} s but {frames} "
+            frames = (f"a frame is at {_s(first_s)} s" if last_s == first_s else
+                      f"the run's frames start at {_s(first_s)} s" if last_s is None else
+                      f"the run's frames are at {_s(first_s)} to {_s(last_s)} s")
+            raise InputValueError(f"{self.name}: the gyro covers t = {_s(self.t[0])} to {_s(self.t[-1])} s "
+                                  f"but {frames} "
                                   f"(t is on the video's clock: frame i at i / fps, or its timestamp)")
 
     def at(self, t: float, fps: float) -> tuple[float, float, float]:
@@ -96,3 +100,9 @@ class Gyro:
         :class:`~mlplc2.InputError`."""
         self.check_covers(t, t, fps)
         return tuple(float(np.interp(t, self.t, self.rates[:, k])) for k in range(3))
+
+
+def _s(t: float) -> str:
+    """Seconds for a message: 6 significant digits, and the milliseconds of a clock past 10^5 s (a robot's
+    epoch time, 1.7e9 s, showed its first and last sample alike as 1.73325e+09)."""
+    return f"{t:g}" if abs(t) < 1e5 else f"{t:.3f}"
