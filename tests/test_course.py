@@ -918,6 +918,33 @@ def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
         assert (not began) if held else began[0] == cut
 
 
+def test_no_warning_begins_on_a_box_the_border_cuts_next_frame_with_exit_ahead():
+    # exit_ahead (on since session 20; docs/history.md, "A warning one frame before the border"): the static world
+    # 0.75 of its widths beside the heading (as above) whose time to contact falls within horizon_s one frame before
+    # its box is cut begins a warning there, on a box still inside, which cut_exit holds back on the next frame: a one-frame false warning.
+    # With exit_ahead the box moved and grown one frame on is cut, and no warning begins; an approach on a
+    # collision course begins on the same frame as without it
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+
+    def run(p, cx, static):
+        seen = []
+        _looming(cx, 19, contact=24, static=static, each=lambda t, k: seen.append(
+            (k, t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE))))
+        return seen
+
+    for cx, static in [(heading[0] - 15.0, True), (15.0, False)]:
+        cut = min(k for k, c, _ in run(TargetParams(), cx, static) if c)
+        kw = dict(alarm_warns=False, cut_onset_s=0.0, horizon_s=(24 - cut + 1) / FPS + 0.01)
+        off, on = TargetParams(**kw, exit_ahead=False), TargetParams(**kw)
+        assert on.exit_ahead                                        # the default
+        began = [k for k, _, o in run(off, cx, static) if o.warning]
+        ahead = [k for k, _, o in run(on, cx, static) if o.warning]
+        if static:
+            assert began == [cut - 1] and not ahead                 # one frame, on the box still inside
+        else:
+            assert began[0] == ahead[0] == cut - 1
+
+
 def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
     # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/history.md, "False warnings, session
     # 15"): an object 3.5 widths beside the heading that will pass 1.5 widths beside keeps 0.57 of its bearing

@@ -172,6 +172,24 @@ class Track:
         return (self.cx - self.w / 2.0 < border or self.cy - self.h / 2.0 < border
                 or self.cx + self.w / 2.0 > w - 1 - border or self.cy + self.h / 2.0 > h - 1 - border)
 
+    def cut_ahead(self, shape: tuple[int, int], border: float) -> bool:
+        """Whether the box, moved and grown one frame on as over its last two observations (the centre's shift, the
+        width's and height's ratios), reaches within ``border`` px of the edge of a frame of ``shape`` (h, w); as
+        :meth:`cut` with fewer than two observations."""
+        if len(self.history) < 2:
+            return self.cut(shape, border)
+        q0, q1 = self.history[-2], self.history[-1]
+        steps = max(q1.frame - q0.frame, EPS)
+        fw = (q1.width / max(q0.width, EPS)) ** (1.0 / steps)
+        h0 = q0.width if q0.height is None else q0.height
+        h1 = q1.width if q1.height is None else q1.height
+        fh = (h1 / max(h0, EPS)) ** (1.0 / steps)
+        cx, cy = self.cx + (q1.x - q0.x) / steps, self.cy + (q1.y - q0.y) / steps
+        w, h = self.w * max(fw, 1.0), self.h * max(fh, 1.0)
+        H, W = shape
+        return (cx - w / 2.0 < border or cy - h / 2.0 < border
+                or cx + w / 2.0 > W - 1 - border or cy + h / 2.0 > H - 1 - border)
+
     @property
     def size(self) -> float:
         return max(self.w, self.h)

@@ -335,6 +335,14 @@ def _leaves(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[fl
             and t.cut(shape, p.border) and not holds(t, heading))
 
 
+def _leaves_ahead(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
+                  miss: float | None) -> bool:
+    """``exit_ahead``: :func:`_leaves`'s test one frame ahead, on a box wholly inside the frame now
+    (:meth:`Track.cut_ahead`)."""
+    return (p.exit_ahead and p.cut_exit > 0 and miss is not None and miss > p.cut_exit
+            and not t.cut(shape, p.border) and t.cut_ahead(shape, p.border) and not holds(t, heading))
+
+
 def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
     """``flat_onset`` (docs/history.md, "A flat box across the path"): whether a warning that would begin this
     frame on track ``t`` is a roadside object's that runs along the path, so does not begin: the camera
@@ -501,7 +509,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... nor on a cut box off the heading whose course misses it (cut_exit_onset)
-    if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss):
+    if warning and not t.warned and p.cut_exit_onset and (_leaves(t, p, shape, heading, miss)
+                                                          or _leaves_ahead(t, p, shape, heading, miss)):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured, shape):
