@@ -892,6 +892,15 @@ def test_the_field_alarm_does_not_exempt_a_box_cut_by_a_side_border_from_path_dr
     assert off_path(cut, d, 24, heading, shape) and not off_path(low, d, 24, heading, shape)
 
 
+def _to_border(p: TargetParams, cx: float, static: bool) -> list:
+    """(frame, box cut by the border, target) of each frame of :func:`_looming` from ``cx`` (contact at frame 24):
+    the static world (``static``) or an approach on a collision course, whose box reaches the border as it grows."""
+    seen = []
+    _looming(cx, 19, contact=24, static=static, each=lambda t, k: seen.append(
+        (k, t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE))))
+    return seen
+
+
 def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
     # cut_exit_onset (on; docs/history.md, "False warnings, session 15"): the static world
     # 0.75 of its widths beside the heading of a camera driving forward (a course of 0.75, as in the test of
@@ -900,45 +909,33 @@ def test_no_warning_begins_on_a_cut_box_off_the_path_with_cut_exit_onset():
     # by cut_exit had it begun in view); an approach on a collision course (a course of 0) begins cut as before
     heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
 
-    def run(p, cx, static):
-        seen = []
-        _looming(cx, 19, contact=24, static=static, each=lambda t, k: seen.append(
-            (k, t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE))))
-        return seen
-
     for cx, static, held in [(heading[0] - 15.0, True, True), (15.0, False, False)]:
-        cut = min(k for k, c, _ in run(TargetParams(), cx, static) if c)
+        cut = min(k for k, c, _ in _to_border(TargetParams(), cx, static) if c)
         kw = dict(alarm_warns=False, cut_onset_s=0.0, horizon_s=(24 - cut) / FPS + 0.01)
         off, on = TargetParams(**kw, cut_exit_onset=False), TargetParams(**kw)
         assert on.cut_exit_onset                                    # the default
-        seen = run(off, cx, static)
+        seen = _to_border(off, cx, static)
         assert min(k for k, _, o in seen if o.warning) == cut       # it begins on its first cut frame
         assert abs(seen[cut - 1][2].miss - (0.75 if static else 0.0)) < 0.02
-        began = [k for k, _, o in run(on, cx, static) if o.warning]
+        began = [k for k, _, o in _to_border(on, cx, static) if o.warning]
         assert (not began) if held else began[0] == cut
 
 
 def test_no_warning_begins_on_a_box_the_border_cuts_next_frame_with_exit_ahead():
     # exit_ahead (on since session 20; docs/history.md, "A warning one frame before the border"): the static world
     # 0.75 of its widths beside the heading (as above) whose time to contact falls within horizon_s one frame before
-    # its box is cut begins a warning there, on a box still inside, which cut_exit holds back on the next frame: a one-frame false warning.
-    # With exit_ahead the box moved and grown one frame on is cut, and no warning begins; an approach on a
-    # collision course begins on the same frame as without it
+    # its box is cut begins a warning there, on a box still inside, which cut_exit holds back on the next frame: a
+    # one-frame false warning. With exit_ahead the box moved and grown one frame on is cut, and no warning begins;
+    # an approach on a collision course begins on the same frame as without it
     heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
 
-    def run(p, cx, static):
-        seen = []
-        _looming(cx, 19, contact=24, static=static, each=lambda t, k: seen.append(
-            (k, t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE))))
-        return seen
-
     for cx, static in [(heading[0] - 15.0, True), (15.0, False)]:
-        cut = min(k for k, c, _ in run(TargetParams(), cx, static) if c)
+        cut = min(k for k, c, _ in _to_border(TargetParams(), cx, static) if c)
         kw = dict(alarm_warns=False, cut_onset_s=0.0, horizon_s=(24 - cut + 1) / FPS + 0.01)
         off, on = TargetParams(**kw, exit_ahead=False), TargetParams(**kw)
         assert on.exit_ahead                                        # the default
-        began = [k for k, _, o in run(off, cx, static) if o.warning]
-        ahead = [k for k, _, o in run(on, cx, static) if o.warning]
+        began = [k for k, _, o in _to_border(off, cx, static) if o.warning]
+        ahead = [k for k, _, o in _to_border(on, cx, static) if o.warning]
         if static:
             assert began == [cut - 1] and not ahead                 # one frame, on the box still inside
         else:

@@ -106,6 +106,14 @@ class Observation(NamedTuple):
     height: float | None = None
 
 
+def _reaches(cx: float, cy: float, w: float, h: float, shape: tuple[int, int], border: float) -> bool:
+    """Whether the box (centre ``cx``, ``cy``, width ``w``, height ``h``) reaches within ``border`` px of the edge
+    of a frame of ``shape`` (h, w)."""
+    fh, fw = shape
+    return (cx - w / 2.0 < border or cy - h / 2.0 < border
+            or cx + w / 2.0 > fw - 1 - border or cy + h / 2.0 > fh - 1 - border)
+
+
 @dataclass
 class Track:
     """Mutable state of one target: box, accumulated log-scale and anisotropy, the recent
@@ -168,9 +176,7 @@ class Track:
 
     def cut(self, shape: tuple[int, int], border: float) -> bool:
         """Whether the box reaches within ``border`` px of the edge of a frame of ``shape`` (h, w)."""
-        h, w = shape
-        return (self.cx - self.w / 2.0 < border or self.cy - self.h / 2.0 < border
-                or self.cx + self.w / 2.0 > w - 1 - border or self.cy + self.h / 2.0 > h - 1 - border)
+        return _reaches(self.cx, self.cy, self.w, self.h, shape, border)
 
     def cut_ahead(self, shape: tuple[int, int], border: float) -> bool:
         """Whether the box, moved and grown one frame on as over its last two observations (the centre's shift, the
@@ -184,11 +190,8 @@ class Track:
         h0 = q0.width if q0.height is None else q0.height
         h1 = q1.width if q1.height is None else q1.height
         fh = (h1 / max(h0, EPS)) ** (1.0 / steps)
-        cx, cy = self.cx + (q1.x - q0.x) / steps, self.cy + (q1.y - q0.y) / steps
-        w, h = self.w * max(fw, 1.0), self.h * max(fh, 1.0)
-        H, W = shape
-        return (cx - w / 2.0 < border or cy - h / 2.0 < border
-                or cx + w / 2.0 > W - 1 - border or cy + h / 2.0 > H - 1 - border)
+        return _reaches(self.cx + (q1.x - q0.x) / steps, self.cy + (q1.y - q0.y) / steps,
+                        self.w * max(fw, 1.0), self.h * max(fh, 1.0), shape, border)
 
     @property
     def size(self) -> float:

@@ -327,20 +327,13 @@ def exits(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[floa
 
 
 def _leaves(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
-            miss: float | None) -> bool:
+            miss: float | None, ahead: bool = False) -> bool:
     """``cut_exit``'s test: track ``t``'s box is cut by the border of a frame of ``shape`` (h, w), does not hold
     ``heading`` (px) and its course ``miss`` (None: no test) exceeds ``cut_exit``; with ``cut_exit_onset`` no
-    warning begins on such a box either."""
+    warning begins on such a box either. With ``ahead`` (``exit_ahead``, at a warning's onset) a box that the
+    border cuts one frame on (:meth:`Track.cut_ahead`) counts as cut."""
     return (p.cut_exit > 0 and miss is not None and miss > p.cut_exit
-            and t.cut(shape, p.border) and not holds(t, heading))
-
-
-def _leaves_ahead(t: Track, p: TargetParams, shape: tuple[int, int], heading: tuple[float, float],
-                  miss: float | None) -> bool:
-    """``exit_ahead``: :func:`_leaves`'s test one frame ahead, on a box wholly inside the frame now
-    (:meth:`Track.cut_ahead`)."""
-    return (p.exit_ahead and p.cut_exit > 0 and miss is not None and miss > p.cut_exit
-            and not t.cut(shape, p.border) and t.cut_ahead(shape, p.border) and not holds(t, heading))
+            and (t.cut(shape, p.border) or (ahead and t.cut_ahead(shape, p.border))) and not holds(t, heading))
 
 
 def flat(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
@@ -509,8 +502,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and not cut_keeps_bearing(t, p, ttc, heading):
         warning = False
     # ... nor on a cut box off the heading whose course misses it (cut_exit_onset)
-    if warning and not t.warned and p.cut_exit_onset and (_leaves(t, p, shape, heading, miss)
-                                                          or _leaves_ahead(t, p, shape, heading, miss)):
+    if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss, p.exit_ahead):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured, shape):
