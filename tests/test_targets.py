@@ -1183,3 +1183,52 @@ def test_seed_shadow_shown_after_a_loss_keeps_the_lost_targets_id():
     disc = [[t.id for t in out if abs(t.x - 100) < 6 and abs(t.y - 70) < 6] for out in outs]
     assert disc[29] and not any(disc[33:36])        # seen before, lost while hidden
     assert disc[45] and set(disc[45]) == set(disc[29])
+
+
+def _dark_square_on_texture(n, side0=30.0, contact=30.0, at=(200, 110)):
+    """Grey frames of a uniform dark square approaching (side ``side0 S``, ``S = contact / (contact - k)``) over a
+    fixed texture."""
+    rng = np.random.default_rng(5)
+    texture = cv2.GaussianBlur(rng.uniform(60, 250, (240, 320)).astype(np.float32), (0, 0), 1.5)
+    frames = []
+    for k in range(n):
+        img = texture.copy()
+        half = side0 * contact / (contact - k) / 2.0
+        img[int(round(at[1] - half)):int(round(at[1] + half)), int(round(at[0] - half)):int(round(at[0] + half))] = 30.0
+        frames.append(img)
+    return frames
+
+
+@pytest.mark.parametrize("reseat", [True, False])
+def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(reseat):
+    # alarm_reseat (docs/history.md, "An alarm seed over a smaller track"): a target holds only a strip at the right
+    # edge of a uniform dark square (its edge was what moved); a field alarms on the square's lower half. The seed's box
+    # is the square, which holds the strip: the strip's target is put on the square and warns there; without the
+    # option it keeps its strip and the alarm, and nothing warns at the square's centre (contact at frame 30)
+    from types import SimpleNamespace
+
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.track import Observation as Obs
+
+    p = TargetParams(alarm_warns=True, alarm_reseat=reseat, seed_lm=0)     # no seeds but the field's
+    layer = TargetLayer(p, FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    frames = _dark_square_on_texture(16)
+    outs = []
+    for k, g in enumerate(frames):
+        if k == 9:                               # a strip target on the square's right edge
+            half = 30.0 * 30.0 / (30.0 - k) / 2.0
+            t = Track(layer._next, k - 1, 200 + half - 3.0, 110.0, 8.0, 2 * half, birth=k - 1,
+                      span=p.span(p.window - 1, FPS), keep=p.window)
+            t.history = deque([Obs(k - 1, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+            t.inside = deque(t.history)
+            layer._tracks.append(t)
+            layer._next += 1
+        fields = [SimpleNamespace(id=1, x=200, y=122, radius=40, response=1.0, collision=True)] if k >= 10 else []
+        outs.append(layer.step(g, lm, fields, k))
+    centred = [t for out in outs[10:] for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5]
+    assert bool(centred) == reseat
+    assert any(t.warning for t in centred) == reseat
+    assert len({t.id for out in outs[10:] for t in out}) == 1     # one target: the strip's, not a second

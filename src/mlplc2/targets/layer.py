@@ -221,6 +221,7 @@ class TargetLayer:
                 t = None
             if host is not None:          # a part of an object already tracked
                 if f is not None:
+                    self._seat_on_alarm(host, t, alarm)
                     self._own(host, f, now)
                 continue
             if t is None:
@@ -546,6 +547,19 @@ class TargetLayer:
             return False
         a, b = sorted((max(o.held[1], 1e-6), max(t.held[1], 1e-6)))
         return b >= k * a
+
+    def _seat_on_alarm(self, host: Track, box: Track, alarm: bool) -> None:
+        """``TargetParams.alarm_reseat``: the box found for the seed of a field in collision ``alarm`` is larger than
+        the track ``host`` that is a part of it (:meth:`_hosts`: most of the host lies in it) and is a uniform region's
+        box (a uniform object's whole extent, :func:`uniform_box`): the host, an edge or a strip of the object the field
+        alarms on, is put on that box (:meth:`Track.reseat`: its history carried with it, its growth its own) and
+        follows the region from then on (``Track.uniform``).
+        The field alarm's box is the object; without this the host kept the alarm with its own course, that of a
+        strip beside the object's centre, and vetoed it (docs/history.md, "An alarm seed over a smaller track")."""
+        if not (self.params.alarm_reseat and alarm and box.uniform) or host.w * host.h >= box.w * box.h:
+            return
+        host.reseat((box.cx, box.cy, box.w, box.h))
+        host.uniform = True
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform

@@ -393,6 +393,16 @@ class TargetParams(ParameterSet):
                              0.72, the standard suite and holdouts 17, 18, 20 unchanged, no collision, lead, real clip
                              or first warning of a re-encoded copy changed; docs/history.md, "A warning one frame
                              before the border").""", valid=Valid.boolean())
+    alarm_reseat: bool = param(True, """With ``alarm_warns``: when the box found for the seed of an attention field in
+                               collision alarm is a uniform region's (``uniform_tol``) and holds a smaller target
+                               (most of that target lies in it, so the seed is taken as a part of it), the target is
+                               put on the seed's box, its history carried with it
+                               (:meth:`~mlplc2.targets.track.Track.reseat`), and follows the region from then on
+                               (``uniform_reseat``): the field alarm's box is the object, the smaller target an edge
+                               or a strip of it, whose course beside the object's centre vetoed the alarm. False =
+                               off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
+                               frame added on six sets; docs/history.md, "An alarm seed over a smaller
+                               track").""", valid=Valid.boolean())
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
