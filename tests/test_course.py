@@ -1126,3 +1126,27 @@ def test_a_rise_counts_only_against_the_same_run_of_fits():
     assert t.streak_since == 12 and out.warning and not t.spent
     out, t = _rise(TargetParams(rise_streak=False), ttc - 0.3, 0.001)
     assert not out.warning and t.spent
+
+
+@pytest.mark.parametrize("hold", [False, True])
+def test_a_warning_goes_on_to_contact_over_a_box_cut_at_the_frame(hold):
+    # view_hold (docs/history.md, "A warning over an object that fills the view"): a collider warning at frame 12
+    # (contact at 40) whose box is cut at the frame's size once the object fills it (its height from frame 34, its
+    # width from 35: a uniform object's region ends at the frame's edges), so the box stops growing. Its fit then
+    # says the contact recedes and the warning ends before the contact; with view_hold the time to contact held
+    # before the box reached the frame counts down and the warning goes on to the contact
+    p = TargetParams(view_hold=hold)
+    t = _looming(80.0)
+    outs = {12: estimate(t, p, FPS, 12, SHAPE)}
+    for k in range(13, CONTACT):
+        side = 20.0 * CONTACT / (CONTACT - k)                     # the object's image
+        w, h = min(side, SHAPE[1]), min(side, SHAPE[0])
+        fx, fy = w / t.w, h / t.h
+        move = ((SHAPE[1] - 1) / 2.0 - t.cx if w == SHAPE[1] else 0.0, (SHAPE[0] - 1) / 2.0 - t.cy if h == SHAPE[0] else 0.0,
+                fx, fy, math.log(fx * fy) / 2.0, math.log(fx / fy) / 2.0)
+        assert t.follow(move, k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs[k] = estimate(t, p, FPS, k, SHAPE)
+    assert all(outs[k].warning for k in range(12, 34))             # warned while the box grew as the object
+    assert all(outs[k].warning for k in range(34, CONTACT)) == hold
+    if hold:
+        assert all(outs[k].ttc_s == pytest.approx((CONTACT - k) / FPS, abs=0.05) for k in range(34, CONTACT))

@@ -1232,3 +1232,33 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     assert bool(centred) == reseat
     assert any(t.warning for t in centred) == reseat
     assert len({t.id for out in outs[10:] for t in out}) == 1     # one target: the strip's, not a second
+
+
+@pytest.mark.parametrize("hold", [True, False])
+def test_a_warning_over_the_whole_view_runs_to_its_contact_and_the_target_then_goes(hold):
+    # view_hold (docs/history.md, "A warning over an object that fills the view"): a warning target whose box is the
+    # whole frame (a uniform object that fills the view) with 0.2 s to contact held, over frames of one grey level
+    # where its alignment fails: with view_hold it is kept and warns, its time to contact counted down, until the
+    # contact (frame 6), and is then dropped for good; without it the failed alignments drop it on the third frame
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.track import Observation as Obs
+
+    p = TargetParams(view_hold=hold)
+    layer = TargetLayer(p, FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    layer.step(np.full((240, 320), 40.0, np.float32), lm, [], 0)
+    t = Track(layer._next, 0, 159.5, 119.5, 320.0, 240.0, birth=0, span=p.span(p.window - 1, FPS), keep=p.window)
+    t.history = deque([Obs(0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+    t.warned = t.last_warned = True
+    t.held = (0, 0.2, 0.01, 0.1, (0.0, 0.0))
+    layer._tracks.append(t)
+    layer._next += 1
+    outs = [layer.step(np.full((240, 320), 40.0, np.float32), lm, [], k) for k in range(1, 12)]
+    warns = [[o for o in out if o.warning] for out in outs]
+    if hold:
+        assert all(len(w) == 1 and w[0].ttc_s == pytest.approx(0.2 - k / FPS, abs=1e-6) for k, w in zip(range(1, 6), warns))
+        assert not any(outs[5:])                                 # from frame 6 on: dropped, not refound
+    else:
+        assert not any(outs[3:])

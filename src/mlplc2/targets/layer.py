@@ -24,7 +24,7 @@ from .change import change_box, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate
+from .warning import blind_until, drift, estimate, spans_view
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -508,10 +508,16 @@ class TargetLayer:
 
     def _follow(self, levels, clock: float, interval: float, w: int, h: int, lm=None, gray=None) -> None:
         """Move and grow every track with the image alignment (between far frames, else its box
-        measured afresh, :meth:`_remeasure`); drop the lost ones."""
+        measured afresh, :meth:`_remeasure`); drop the lost ones. ``view_hold``: a warning track whose box is the
+        view (:func:`~mlplc2.targets.warning.spans_view`) is kept where its alignment fails, and dropped, not to be
+        refound, once the contact its time to contact held predicts has passed."""
         p = self.params
         kept = []
         for t in self._tracks:
+            if t.warned and spans_view(t, p, (h, w)) and t.held is not None \
+                    and t.held[1] <= (clock - t.held[0]) / self.fps:
+                continue                         # view_hold: over the view past the contact its time to contact held:
+                                                 # dropped, not to be refound (the object has reached the camera)
             half = p.margin * t.size / 2.0 + 3.0
             if self.measure is not None:         # another front end's growth evidence
                 move = self.measure(self._prev, levels, t, half, interval)
@@ -520,6 +526,9 @@ class TargetLayer:
                 move = None if al is None else (al.dx, al.dy, al.kx, al.ky, math.log(al.scale), al.anisotropy)
                 if move is None and gray is not None:
                     move = self._remeasure(lm, gray, t, interval)
+            if move is None and t.last_warned and spans_view(t, p, (h, w)):
+                kept.append(t)                   # view_hold: the view is the object, nothing to align; kept while it warns
+                continue
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
                     self._reseat_uniform(t, gray)

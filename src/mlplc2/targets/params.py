@@ -403,6 +403,17 @@ class TargetParams(ParameterSet):
                                off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
+    view_hold: bool = param(True, """A target whose warning runs and whose box is exactly as wide or as tall as the
+                            frame (within 1 px: the object fills the view and its box, a uniform region's, is cut at
+                            the frame's edges, so its growth is no longer the object's) takes no new time to contact
+                            from its fit: its last one is held and counted down (``hold_frames`` and
+                            ``warn_through`` waived), its warning goes on while that lasts (within ``horizon_s`` and
+                            ``reonset_miss``), and it is not lost when its alignment fails (the view is uniform).
+                            Once the contact that time to contact predicts has passed, a target that has warned and
+                            whose box is the view is dropped, not to be refound (``refind_frames``): the object has
+                            reached the camera. False = off (session 21: warnings lapsed 43 -> 39 on six sets, no
+                            collider, lead or false episode changed; docs/history.md, "A warning over an object
+                            that fills the view").""", valid=Valid.boolean())
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once

@@ -17,7 +17,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -371,24 +371,35 @@ def blind_until(targets, p: TargetParams, fps: float, now: float, shape: tuple[i
     return until
 
 
-def held(t: Track, p: TargetParams, fps: float, now: float) -> tuple:
+def spans_view(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
+    """``view_hold``: whether the box of track ``t`` is as wide or as tall as a frame of ``shape`` (h, w), within
+    1 px: the object fills the view (its box, a uniform region's, is cut at the frame's edges; its growth there is
+    no longer the object's). A box larger than the frame still measures its object's growth."""
+    h, w = shape
+    return p.view_hold and (abs(t.w - w) <= 1 or abs(t.h - h) <= 1)
+
+
+def held(t: Track, p: TargetParams, fps: float, now: float, view: bool = False) -> tuple:
     """(ttc_s, sigma_s, miss, miss_xy) of track ``t``'s last time to contact (``Track.held``) counted
-    down to clock ``now``, while it is at most ``hold_frames`` old and its contact has not passed
-    (as :func:`count_down` for a held frame); else four None. Reported, never a warning."""
-    if t.held is None or p.hold_frames == 0 or now - t.held[0] > p.span(p.hold_frames, fps) + _EPS:
+    down to clock ``now``, while it is at most ``hold_frames`` old (any age over the ``view``, :func:`spans_view`)
+    and its contact has not passed (as :func:`count_down` for a held frame); else four None. Reported, never a
+    warning."""
+    if t.held is None or p.hold_frames == 0 or (now - t.held[0] > p.span(p.hold_frames, fps) + _EPS and not view):
         return None, None, None, None
     left = t.held[1] - (now - t.held[0]) / fps
     return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
 
 
-def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None) -> bool:
+def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None,
+            view: bool = False) -> bool:
     """``warn_through`` (docs/history.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
     clock ``now``, where its own measurement does not (no fit, a fit not yet evident or too uncertain), on its time to
     contact ``ttc`` (s; without a fit the one held, :func:`held`) and course ``miss``: its last fit at most
     ``warn_through`` frames old, ``ttc`` within ``horizon_s`` and ``miss`` within ``reonset_miss`` (the course on which
-    a lapsed warning returns: a box that slid off its object, or a passing object's, straddles it and misses)."""
-    return (p.warn_through > 0 and ttc is not None and miss is not None and t.held is not None
-            and now - t.held[0] <= p.span(p.warn_through, fps) + _EPS and ttc <= p.horizon_s
+    a lapsed warning returns: a box that slid off its object, or a passing object's, straddles it and misses). Over
+    the ``view`` (``view_hold``, :func:`spans_view`) however old its last fit, ``warn_through`` 0 included."""
+    return ((p.warn_through > 0 or view) and ttc is not None and miss is not None and t.held is not None
+            and (view or now - t.held[0] <= p.span(p.warn_through, fps) + _EPS) and ttc <= p.horizon_s
             and miss <= p.reonset_miss)
 
 
@@ -454,7 +465,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if heading is None:
         heading = p.heading if p.heading is not None else ((w - 1) / 2.0, (h - 1) / 2.0)
     first = t.held is None                    # no time to contact before this frame (slow_onset)
-    fit = fit_contact(frames, [q.log_scale for q in t.history]) if fits(t.history, t.fit_span) else None
+    view = t.last_warned and spans_view(t, p, shape)  # view_hold: a warning over the view (its growth not the object's)
+    fit = None if view or not fits(t.history, t.fit_span) else fit_contact(frames, [q.log_scale for q in t.history])
     t.tries += fit is not None
     # an approaching object grows alike in both directions; the ground ahead (or a wall beside
     # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
@@ -521,9 +533,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.onset_cut = t.cut(shape, p.border)
     t.warned = t.warned or warning
     if ttc is None:
-        ttc, sigma, miss, miss_xy = held(t, p, fps, index)
-    # ... goes on through frames without a fit, on the time to contact held (warn_through)
-    if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss):
+        ttc, sigma, miss, miss_xy = held(t, p, fps, index, view)
+    # ... goes on through frames without a fit, on the time to contact held (warn_through; over the view, view_hold)
+    if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss, view):
         warning = True
     # ... goes on while cut by the border off the heading only on a course through its box (cut_exit)
     if warning and began and exits(t, p, shape, heading, miss):
