@@ -67,11 +67,19 @@ def test_dropped_frames_keep_time_to_contact(frames):
     kept = [i for i in range(len(frames)) if i % 4 != 3]
     dropped = _outputs("mlplc2", [frames[i] for i in kept], [i / FPS for i in kept])
     compared = 0
+    h, w = frames[0].shape[:2]
+
+    def fills(t):                     # a box as wide or as tall as the frame (TargetParams.view_hold)
+        return t.width >= w - 1 or t.height >= h - 1
+
     for i, o in zip(kept, dropped):
         a, b = full[i].most_urgent, o.most_urgent
         # compared while contact is more than one frame interval away: below that a tenth of a
-        # frame's rounding is more than 10 % (frame 45, 0.4 frames before contact: 0.0136 against 0.0170 s)
-        if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None and a.ttc_s > 1 / FPS:
+        # frame's rounding is more than 10 % (frame 45, 0.4 frames before contact: 0.0136 against 0.0170 s);
+        # and while neither box fills the frame: each then holds the time to contact of its last fit before
+        # (view_hold), which the two runs made a frame apart (frame 44: 0.045 against 0.054 s)
+        if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None and a.ttc_s > 1 / FPS \
+                and not (fills(a) or fills(b)):
             assert abs(b.ttc_s - a.ttc_s) <= 0.1 * a.ttc_s, (i, a.ttc_s, b.ttc_s)
             compared += 1
     assert compared >= 10
