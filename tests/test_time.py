@@ -75,12 +75,13 @@ def test_dropped_frames_keep_time_to_contact(frames):
     for i, o in zip(kept, dropped):
         a, b = full[i].most_urgent, o.most_urgent
         # compared while contact is more than one frame interval away: below that a tenth of a
-        # frame's rounding is more than 10 % (frame 45, 0.4 frames before contact: 0.0136 against 0.0170 s);
-        # and while neither box fills the frame: each then holds the time to contact of its last fit before
-        # (view_hold), which the two runs made a frame apart (frame 44: 0.045 against 0.054 s)
-        if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None and a.ttc_s > 1 / FPS \
-                and not (fills(a) or fills(b)):
-            assert abs(b.ttc_s - a.ttc_s) <= 0.1 * a.ttc_s, (i, a.ttc_s, b.ttc_s)
+        # frame's rounding is more than 10 % (frame 45, 0.4 frames before contact: 0.0136 against 0.0170 s).
+        # Where a box fills the frame, its run holds the time to contact of its last fit before (view_hold),
+        # which the two runs made a frame apart: there they agree within a third of a frame interval (frame
+        # 44: 0.045 against 0.054 s), a fit's scatter carried on, not 10 % of what is left
+        if a is not None and b is not None and a.ttc_s is not None and b.ttc_s is not None and a.ttc_s > 1 / FPS:
+            tol = 1 / (3 * FPS) if fills(a) or fills(b) else 0.1 * a.ttc_s
+            assert abs(b.ttc_s - a.ttc_s) <= tol, (i, a.ttc_s, b.ttc_s)
             compared += 1
     assert compared >= 10
     wf, wd = _first_warning(full), _first_warning(dropped)
