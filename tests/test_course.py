@@ -414,6 +414,35 @@ def test_a_warning_does_not_begin_on_a_flat_box_across_the_path():
     assert estimate(warned, on, FPS, last, SHAPE, heading=heading).warning
 
 
+def test_a_warning_does_not_begin_on_a_box_that_stretched_in_one_direction_since_its_birth():
+    # onset_isotropy: a box whose first 8 frames grew in width only (it slid along an edge, or over a passing
+    # object and its neighbour) and then alike in both directions: the fit's window (12 frames) sees an
+    # approach, and it warns without onset_isotropy; with it (0.5), its log-anisotropy since birth (0.45) is
+    # 0.64 of its log-scale (0.69), and no warning begins. A box that grew alike all its life warns, and
+    # one that has warned goes on
+    def track(stretch: int) -> Track:
+        p = TargetParams()
+        t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+        t.last_answer = 20
+        for k in range(1, 21):
+            s = (CONTACT - (k - 1)) / (CONTACT - k)
+            fx, fy = (s * s, 1.0) if k <= stretch else (s, s)
+            assert t.follow((0.0, 0.0, fx, fy, math.log(s), math.log(fy / fx)), k, FPS, SHAPE, p.max_fails,
+                            border=p.border)
+        return t
+
+    on, off = TargetParams(), TargetParams(onset_isotropy=0.0)
+    assert on.onset_isotropy == 0.5
+    stretched = track(8)
+    assert abs(stretched.aniso) > 0.5 * stretched.log_s
+    assert estimate(track(8), off, FPS, 20, SHAPE).warning
+    assert not estimate(stretched, on, FPS, 20, SHAPE).warning
+    assert estimate(track(0), on, FPS, 20, SHAPE).warning
+    warned = track(8)
+    warned.warned = True
+    assert estimate(warned, on, FPS, 20, SHAPE).warning
+
+
 def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
     # countdown_onset: an object on a collision course, 28 frames (0.93 s) from contact at frame 12, warns
     # when its time to contact 3 frames before (countdown_frames) was 0.1 s longer, as an approach's is;

@@ -107,6 +107,39 @@ def test_align_sees_anisotropy_and_flat_patches():
     assert align(pyramid(flat), pyramid(flat), 160.0, 120.0, 20.0, (10.0, 10.0)) is None
 
 
+def test_what_lies_at_the_heading_must_grow_as_the_box_says():
+    """heading_growth: a box over the heading whose time to contact is 0.5 s says that what lies at the heading
+    grows by log(1 + 0.133 / 0.5) over 4 frames (0.133 s). The patch scaled about the heading by that much
+    passes; the same patch not scaled (the far scene at the heading, while the box's near ground gave it its short
+    time to contact) fails, and so does one grown by a quarter of it. A uniform patch (the inside of a dark lead
+    vehicle), a uniform region's box, a box under heading_min and the test switched off are no test."""
+    from mlplc2.targets.warning import heading_grows
+
+    img = _texture(2)
+    heading = (170.0, 110.0)
+    seconds, ttc = 4 / 30.0, 0.5
+    k = 1 + seconds / ttc
+
+    def grown(image, k):
+        m = np.array([[k, 0, (1 - k) * heading[0]], [0, k, (1 - k) * heading[1]]], np.float32)
+        return cv2.warpAffine(image, m, (320, 240), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+
+    def grows(before, after, p=TargetParams(), box=(150.0, 130.0, 120.0, 100.0), uniform=False):
+        t = Track(1, 0, *box)
+        t.uniform = uniform
+        return heading_grows(t, p, ttc, heading, after, pyramid(before), pyramid(after), seconds)
+
+    assert grows(img, grown(img, k))
+    assert not grows(img, img)
+    assert not grows(img, grown(img, 1 + (k - 1) / 4))
+    assert grows(img, img, TargetParams(heading_growth=0.0))
+    assert grows(img, img, uniform=True)
+    assert grows(img, img, box=(165.0, 110.0, 20.0, 40.0))
+    dark = img.copy()
+    dark[70:150, 120:220] = 30.0
+    assert grows(dark, dark)
+
+
 def test_change_box_finds_a_small_growing_disc():
     a = np.full((120, 160), 200, np.float32)
     b = a.copy()

@@ -24,7 +24,7 @@ from .change import change_box, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate, spans_view
+from .warning import blind_until, drift, estimate, heading_grows, holds, spans_view
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -255,6 +255,9 @@ class TargetLayer:
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+            # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth)
+            if o.warning and not warned and not self._heading_grows(t, o):
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
             ids = {id(t) for t in shown}
@@ -331,6 +334,18 @@ class TargetLayer:
         if al is None or al.residual > p.max_residual or al.scale <= 0:
             return None
         return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
+
+    def _heading_grows(self, t: Track, o: Target) -> bool:
+        """``heading_growth``: from a translating camera (a measured heading), whether what lies at the heading in
+        the box of track ``t`` (target ``o``) grew since the oldest frame kept (``change_frames`` before,
+        :meth:`_reference`) as the target's time to contact says (:func:`heading_grows`); True (no test) where the
+        box does not hold the heading (:func:`holds`) or nothing is measured."""
+        ref = self._reference()
+        if self.heading is None or o.ttc_s is None or ref is None or self._now is None \
+                or not holds(t, self.heading):
+            return True
+        return heading_grows(t, self.params, o.ttc_s, self.heading, self._now[0], ref[0], self._now[1],
+                             float(ref[1]) / self.fps, self.align_kernel)
 
     def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square
@@ -569,6 +584,7 @@ class TargetLayer:
             return
         host.reseat((box.cx, box.cy, box.w, box.h))
         host.uniform = True
+        host.grown_from = (host.log_s, host.aniso)     # onset_isotropy: the strip's stretch is not the object's
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform

@@ -414,6 +414,40 @@ class TargetParams(ParameterSet):
                             reached the camera. False = off (session 21: warnings lapsed 43 -> 39 on six sets, no
                             collider, lead or false episode changed; docs/history.md, "A warning over an object
                             that fills the view").""", valid=Valid.boolean())
+    heading_growth: float = param(0.7, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
+                                  warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
+                                  where the patch about the heading (``heading_patch``) grew, over ``change_frames``,
+                                  by less than this fraction of what the box's time to contact predicts, within twice
+                                  its standard error (:func:`~mlplc2.targets.warning.heading_grows`): the point of the
+                                  static world that the camera will hit is the one at the heading, so what will hit
+                                  grows there. A box over the ground and the far scene above it, or over a passing
+                                  object and the ground beside it, expands about the heading with the near ground's
+                                  short time to contact (its course is short), while at the heading lies the far
+                                  scene, which does not grow. A uniform patch (a box that is a uniform region's, or a
+                                  patch whose grey levels vary by less than ``uniform_tol``: the inside of a dark lead
+                                  vehicle), a box under ``heading_min`` and a failed alignment are no test; a target that
+                                  has warned goes on. 0 = off (0.7, the default since session 22: alone, false episodes
+                                  per 1000 frames 0.41 -> 0.31 on holdout 22, 1.03 -> 0.41 on holdout 27, no collider or
+                                  lead changed on eight sets; docs/history.md, "What lies at the heading").""",
+                                  valid=Valid.real(minimum=0))
+    heading_patch: float = param(0.25, """The side of the patch about the heading (``heading_growth``) as a fraction of
+                                 the box's smaller side: small enough to hold what lies at the heading, not the box's
+                                 near ground.""", valid=Valid.real(minimum=0, maximum=1))
+    heading_min: float = param(24.0, """The smallest box (its smaller side) whose heading patch is measured
+                               (``heading_growth``): a smaller patch holds too few pixels to measure its growth.""",
+                               unit="px", valid=Valid.real(minimum=0))
+    onset_isotropy: float = param(0.5, """A warning does not begin on a box whose log-anisotropy accumulated since its
+                                  birth (``Track.aniso``, from every alignment; since ``alarm_reseat`` put it on its object, if it did:
+                                  ``Track.grown_from``) is more than this fraction of its log-scale accumulated since
+                                  then (``Track.log_s``): an approaching object grows alike
+                                  in both directions over its whole life, while a box that slid along an edge, over a
+                                  passing object and its neighbour, or over the ground stretched in one; the growth
+                                  test of the fit (``max_anisotropy``) sees only its window. A target that has warned
+                                  goes on. 0 = off (0.5, the default since session 22, with ``heading_growth``: false
+                                  episodes per 1000 frames 0.51 -> 0.41 on the standard suite, 0.62 -> 0.41 on holdout 21,
+                                  no collider lost on ten sets; 0.35 lost a collider whose only warning began on a ratio of
+                                  0.36; docs/history.md, "What lies at the heading").""",
+                                  valid=Valid.real(minimum=0))
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once

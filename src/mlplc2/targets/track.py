@@ -131,6 +131,7 @@ class Track:
     h: float
     log_s: float = 0.0
     aniso: float = 0.0                               # accumulated log(ky / kx)
+    grown_from: tuple = (0.0, 0.0)   # (log_s, aniso) where its box was put on its object (``onset_isotropy`` counts from there)
     history: deque = field(default_factory=deque)   # of Observation
     inside: deque = field(default_factory=deque)    # the last observations whose box was not cut
     fails: int = 0

@@ -11,13 +11,17 @@ from __future__ import annotations
 import math
 from dataclasses import replace
 
+import numpy as np
+
 from ..camera import bearing
+from .alignment import align
 from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "MIN_POINTS"]
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows",
+           "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
@@ -371,6 +375,29 @@ def blind_until(targets, p: TargetParams, fps: float, now: float, shape: tuple[i
     return until
 
 
+def heading_grows(t: Track, p: TargetParams, ttc: float, heading: tuple[float, float], gray: np.ndarray,
+                  prev: list[np.ndarray], cur: list[np.ndarray], seconds: float, kernel=None) -> bool:
+    """``heading_growth`` (docs/history.md, "What lies at the heading"): whether what lies at ``heading`` (px) in
+    the box of track ``t``, whose time to contact is ``ttc`` (s), grows as that time to contact says. The patch about
+    the heading (side ``heading_patch`` of the box's smaller one) is aligned (:func:`align`) from ``prev`` to ``cur``
+    (pyramids ``seconds`` apart; ``gray``: this frame); it grows ``log(1 + seconds / ttc)`` if it is what the box's
+    time to contact is of. False when it grew less than ``heading_growth`` of that, within twice the alignment's
+    standard error. True (no test) where the box is under ``heading_min``, a uniform region's (``Track.uniform``),
+    or the patch's grey levels vary by less than ``uniform_tol`` (nothing to align), or the alignment fails."""
+    if p.heading_growth <= 0 or ttc <= 0 or t.uniform or min(t.w, t.h) < p.heading_min:
+        return True
+    x, y = heading
+    r = max(p.heading_patch * min(t.w, t.h) / 2.0, 3.0)
+    x0, y0 = max(int(x - r), 0), max(int(y - r), 0)
+    patch = gray[y0:max(int(y + r) + 1, y0), x0:max(int(x + r) + 1, x0)]
+    if patch.size < 4 or float(patch.std()) < p.uniform_tol:
+        return True
+    al = align(prev, cur, x, y, p.margin * r + 3.0, (r, r), n=p.patch, iterations=p.iterations, kernel=kernel)
+    if al is None or al.residual > p.max_residual or al.scale <= 0:
+        return True
+    return math.log(al.scale) + 2.0 * al.sigma >= p.heading_growth * math.log1p(seconds / ttc)
+
+
 def spans_view(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
     """``view_hold``: whether the box of track ``t`` is as wide or as tall as a frame of ``shape`` (h, w), within
     1 px: the object fills the view (its box, a uniform region's, is cut at the frame's edges; its growth there is
@@ -524,6 +551,11 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
+        warning = False
+    # ... and only on a box that grew alike in both directions since its birth (onset_isotropy; since it was put on
+    # its object, alarm_reseat: Track.grown_from)
+    if warning and not t.warned and p.onset_isotropy > 0 and abs(t.aniso - t.grown_from[1]) \
+            > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
         warning = False
     # ... and only while its time to contact counts down, to any amount (countdown_onset)
     if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc):
