@@ -554,8 +554,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         warning = False
     # ... and only on a box that grew alike in both directions since its birth (onset_isotropy; since it was put on
     # its object, alarm_reseat: Track.grown_from)
-    if warning and not t.warned and p.onset_isotropy > 0 and abs(t.aniso - t.grown_from[1]) \
-            > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
+    stretch = abs(t.aniso - t.grown_from[1])
+    if warning and not t.warned and p.onset_isotropy > 0 and stretch > p.onset_stretch \
+            and stretch > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
         warning = False
     # ... and only while its time to contact counts down, to any amount (countdown_onset)
     if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc):
