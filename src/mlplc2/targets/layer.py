@@ -340,9 +340,10 @@ class TargetLayer:
         the box of track ``t`` (target ``o``) grew since the oldest frame kept (``change_frames`` before,
         :meth:`_reference`) as the target's time to contact says (:func:`heading_grows`); True (no test) where the
         box does not hold the heading (:func:`holds`) or nothing is measured."""
+        if self.heading is None or o.ttc_s is None or self._now is None or not holds(t, self.heading):
+            return True
         ref = self._reference()
-        if self.heading is None or o.ttc_s is None or ref is None or self._now is None \
-                or not holds(t, self.heading):
+        if ref is None:
             return True
         return heading_grows(t, self.params, o.ttc_s, self.heading, self._now[0], ref[0], self._now[1],
                              float(ref[1]) / self.fps, self.align_kernel)
