@@ -448,6 +448,15 @@ def test_a_warning_does_not_begin_on_a_box_that_stretched_in_one_direction_since
     assert estimate(young, on, FPS, 20, SHAPE).warning
     assert not estimate(track(8, fx_of=lambda s: s * s, fy_of=lambda s: 1.0), replace(on, onset_stretch=0.0), FPS,
                         20, SHAPE).warning
+    # a uniform region's box (Track.uniform: a lead vehicle's region, measured afresh as it nears) takes its aspect from
+    # its region, not from an alignment: its change of aspect is no stretch, and it warns (isotropy_uniform off)
+    assert not on.isotropy_uniform
+    region = track(8)
+    region.uniform = True
+    assert estimate(region, on, FPS, 20, SHAPE).warning
+    region = track(8)
+    region.uniform = True
+    assert not estimate(region, replace(on, isotropy_uniform=True), FPS, 20, SHAPE).warning
 
 
 def test_a_warning_begins_only_while_the_time_to_contact_counts_down():

@@ -456,6 +456,13 @@ class TargetParams(ParameterSet):
                                  copies' first warnings: 0.11-0.15 at log-scales of 0.08-0.14, 0.39 at 0.38; without
                                  this, three copies of ``crossing_car_strong_light`` never warned).""",
                                  valid=Valid.real(minimum=0))
+    isotropy_uniform: bool = param(False, """``onset_isotropy`` holds against a uniform region's box too
+                                   (``Track.uniform``). Off (the default since session 23): a uniform region's box
+                                   takes its aspect from its region measured afresh (``uniform_reseat``), not from
+                                   the alignment, and a lead vehicle's region re-measured as it nears changes its
+                                   aspect with no stretch of the object (holdout 30's ``drive_0_h30``: log-anisotropy
+                                   1.09, its warning 2 frames later with it on; docs/history.md, "A uniform region's
+                                   aspect").""", valid=Valid.boolean())
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once

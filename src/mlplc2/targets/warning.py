@@ -553,9 +553,11 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and flat(t, p, measured):
         warning = False
     # ... and only on a box that grew alike in both directions since its birth (onset_isotropy; since it was put on
-    # its object, alarm_reseat: Track.grown_from)
+    # its object, alarm_reseat: Track.grown_from); a uniform region's box takes its aspect from its region, measured
+    # afresh, and is not held (isotropy_uniform)
     stretch = abs(t.aniso - t.grown_from[1])
     if warning and not t.warned and p.onset_isotropy > 0 and stretch > p.onset_stretch \
+            and (p.isotropy_uniform or not t.uniform) \
             and stretch > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
         warning = False
     # ... and only while its time to contact counts down, to any amount (countdown_onset)
