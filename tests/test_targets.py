@@ -168,6 +168,78 @@ def test_change_box_on_a_still_textured_background_for_any_window():
         assert (cx, cy) == pytest.approx((100.3, 80.6), abs=1.0) and 9 <= w <= 14 and 9 <= h <= 14, radius
 
 
+def test_moving_extent_is_the_growing_object_not_its_box():
+    """onset_support: a textured square 20 px wide grows by 10 % about its centre over a still textured background.
+    In a box twice its width that grew as the square did, the part that moved with the box is the square, about
+    22 px on each axis, not the box's 40; in a box its own size, its own size; in a box that did not grow (the
+    still background's motion), the square's texture is not explained and little counts."""
+    from mlplc2.targets.change import moving_extent
+    rng = np.random.default_rng(7)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    cx, cy, half, k = 80.0, 60.0, 10.0, 1.1
+    yy, xx = np.mgrid[:120, :160].astype(np.float32)
+
+    def frame(scale):
+        # the square's texture scaled about (cx, cy): the point x of the first frame is seen at c + scale (x - c)
+        tex = cv2.remap(obj, (cx + (xx - cx) / scale).astype(np.float32), (cy + (yy - cy) / scale).astype(np.float32),
+                        cv2.INTER_LINEAR)
+        inside = (np.abs(xx - cx) <= half * scale) & (np.abs(yy - cy) <= half * scale)
+        return np.where(inside, tex, bg).astype(np.float32)
+
+    a, b = frame(1.0), frame(k)
+    w, h, n = moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))
+    assert 18 <= w <= 24 and 18 <= h <= 24 and n >= 100
+    w, h, _ = moving_extent(a, b, (cx, cy, 22.0, 22.0), (cx, cy, 20.0, 20.0))
+    assert 18 <= w <= 23 and 18 <= h <= 23
+    assert moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0, 40.0))[2] < n / 4   # a box that did not grow
+    assert moving_extent(a, a, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))[2] == 0   # nothing changed
+    assert moving_extent(a, b, (500.0, 60.0, 40.0, 40.0), (500.0, 60.0, 36.0, 36.0)) is None  # outside the frame
+
+
+def test_a_course_counted_in_the_extent_that_moves_with_the_box():
+    """onset_support, through the target layer: a textured square grows 3 % a frame over a still textured
+    background for five frames (change_frames 4 back is the reference frame), and the track's box grew with it.
+    A box twice its width with a course 0.7 box widths off the path holds an object whose course is about 1.5 of
+    its own widths off: no warning begins (onset_support 1.2). The square's own box with the same course, a box
+    twice its width on a course 0.3 off (0.6 of its own), a uniform region's box (measured afresh, not moved), a
+    track born after the reference frame, and the rule off, all let it begin."""
+    from mlplc2.targets import TargetLayer
+    rng = np.random.default_rng(7)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    cx, cy, half, g = 80.0, 60.0, 10.0, 1.03
+    yy, xx = np.mgrid[:120, :160].astype(np.float32)
+
+    def frame(scale):
+        tex = cv2.remap(obj, (cx + (xx - cx) / scale).astype(np.float32), (cy + (yy - cy) / scale).astype(np.float32),
+                        cv2.INTER_LINEAR)
+        inside = (np.abs(xx - cx) <= half * scale) & (np.abs(yy - cy) <= half * scale)
+        return np.where(inside, tex, bg).astype(np.float32)
+
+    layer = TargetLayer(TargetParams(), fps=30.0)
+    for i in range(5):
+        layer.step(frame(g ** i), None, (), i)
+
+    def supported(params, side, miss, born=0, uniform=False):
+        t = Track(1, born, cx, cy, side, side, history=deque(
+            Observation(k, k * math.log(g), cx, cy, side / g ** (4 - k), 0.0, False, side / g ** (4 - k))
+            for k in range(born, 5)))
+        t.uniform = uniform
+        layer.params = params
+        return layer._supported(t, Target(1, cx, cy, side, side, ttc_s=0.5, miss=miss, warning=True,
+                                          miss_xy=(miss, 0.0)))
+
+    on = TargetParams(onset_support=1.2)
+    w = 2 * half * g ** 4
+    assert not supported(on, 2 * w, 0.7)
+    assert supported(on, w, 0.7)
+    assert supported(on, 2 * w, 0.3)
+    assert supported(on, 2 * w, 0.7, uniform=True)
+    assert supported(on, 2 * w, 0.7, born=2)
+    assert supported(TargetParams(onset_support=0.0), 2 * w, 0.7)
+
+
 def test_change_box_does_not_depend_on_phase_correlate_windowing_its_inputs(monkeypatch):
     """OpenCV up to 5.0 multiplies phaseCorrelate's inputs by the window in place, 5.1 does not;
     the box was measured (and the models tuned) on the windowed change: both give the same boxes.

@@ -1,6 +1,8 @@
 """The box of the region that changed between two frames around a point (:func:`change_box`):
 the window's own image motion undone by phase correlation, then the connected region of large
-grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2).
+grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2); a uniform
+region's box (:func:`uniform_box`, :func:`uniform_region`); and the extent of the part of a box that moves
+with the box's own alignment (:func:`moving_extent`, ``TargetParams.onset_support``).
 """
 
 from __future__ import annotations
@@ -11,7 +13,7 @@ from functools import lru_cache
 import cv2
 import numpy as np
 
-__all__ = ["change_box", "uniform_box", "uniform_region"]
+__all__ = ["change_box", "moving_extent", "uniform_box", "uniform_region"]
 
 
 @lru_cache(maxsize=None)
@@ -203,3 +205,51 @@ def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, f
             bx, by, bw, bh = rect
             best, best_area = (bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)), n
     return best
+
+
+# moving_extent: a pixel belongs to the box's object where it changed since the reference frame by at least
+# SUPPORT_CHANGE grey levels and the box's own motion explains the change to within SUPPORT_EXPLAINED of it; both
+# differences are smoothed over SUPPORT_BLUR px (the 3 x 3 neighbourhood of the alignment's own presmoothing, about)
+SUPPORT_CHANGE = 6.0
+SUPPORT_EXPLAINED = 0.5
+SUPPORT_BLUR = 1.5
+
+
+def moving_extent(prev: np.ndarray, cur: np.ndarray, box: tuple[float, float, float, float],
+                  then: tuple[float, float, float, float]) -> tuple[float, float, int] | None:
+    """The extent (width, height px, and the number of pixels it counts) of the part of ``box`` (centre x, y,
+    width, height in ``cur``) that moves as the box moved since ``prev`` (the same camera's earlier frame,
+    compensated into ``cur``'s pixels: a still scene stays put), where it was ``then`` (centre x, y, width, height
+    in those pixels): a point of the box at ``c + u`` now was at ``c_then + u * (w_then / w, h_then / h)``.
+
+    A pixel of the box counts where its grey level changed since ``prev`` by at least :data:`SUPPORT_CHANGE`
+    (it moved) and the box's motion undoes that change to within :data:`SUPPORT_EXPLAINED` of it (it moved with
+    the box), both differences smoothed over :data:`SUPPORT_BLUR` px: the object's texture and edges, not the
+    still background beside it, which changed nowhere, nor a background moving otherwise. The extent is the span
+    of those pixels' coordinates from the 5th to the 95th percentile on each axis (the edge ring of a uniform
+    object spans it too). None when the box lies outside the frames or has no size."""
+    cx, cy, w, h = box
+    tx, ty, tw, th = then
+    hh, ww = cur.shape
+    x0, x1 = int(max(math.floor(cx - w / 2.0), 0)), int(min(math.ceil(cx + w / 2.0) + 1, ww))
+    y0, y1 = int(max(math.floor(cy - h / 2.0), 0)), int(min(math.ceil(cy + h / 2.0) + 1, hh))
+    if x1 - x0 < 2 or y1 - y0 < 2 or min(w, h, tw, th) <= 0:
+        return None
+    # the window with a margin for the smoothing, then the box's pixels of it
+    m = int(math.ceil(3 * SUPPORT_BLUR))
+    a0, a1, b0, b1 = max(x0 - m, 0), min(x1 + m, ww), max(y0 - m, 0), min(y1 + m, hh)
+    yy, xx = np.mgrid[b0:b1, a0:a1].astype(np.float32)
+    mx = (tx + (xx - cx) * (tw / w)).astype(np.float32)      # where each pixel was, moving with the box
+    my = (ty + (yy - cy) * (th / h)).astype(np.float32)
+    before = np.ascontiguousarray(prev, dtype=np.float32)
+    now = np.asarray(cur[b0:b1, a0:a1], dtype=np.float32)
+    moved = cv2.remap(before, mx, my, cv2.INTER_LINEAR, borderMode=cv2.BORDER_REPLICATE)
+    e_box = cv2.GaussianBlur(np.abs(now - moved), (0, 0), SUPPORT_BLUR)
+    e_still = cv2.GaussianBlur(np.abs(now - before[b0:b1, a0:a1]), (0, 0), SUPPORT_BLUR)
+    inside = (np.abs(xx - cx) <= w / 2.0) & (np.abs(yy - cy) <= h / 2.0)
+    on = inside & (e_still >= SUPPORT_CHANGE) & (e_box <= SUPPORT_EXPLAINED * e_still)
+    n = int(on.sum())
+    if n == 0:
+        return 0.0, 0.0, 0
+    xs, ys = xx[on], yy[on]
+    return (float(np.percentile(xs, 95) - np.percentile(xs, 5)), float(np.percentile(ys, 95) - np.percentile(ys, 5)), n)

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import change_box, uniform_box, uniform_region
+from .change import change_box, moving_extent, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -258,6 +258,9 @@ class TargetLayer:
             # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth)
             if o.warning and not warned and not self._heading_grows(t, o):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+            # ... nor on a box whose course, counted in the extent of what moves with it, misses (onset_support)
+            if o.warning and not warned and not self._supported(t, o):
+                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
             ids = {id(t) for t in shown}
@@ -347,6 +350,33 @@ class TargetLayer:
             return True
         return heading_grows(t, self.params, o.ttc_s, self.heading, self._now[0], ref[0], self._now[1],
                              float(ref[1]) / self.fps, self.align_kernel)
+
+    def _supported(self, t: Track, o: Target) -> bool:
+        """``onset_support``: whether the course of track ``t`` (target ``o``) still passes within ``onset_support``
+        when counted in the extent of the part of its box that moved as the box did since the frame ``change_frames``
+        before (:meth:`_reference`; :func:`moving_extent`, the box then from the track's own history) rather than in
+        the box's own extent: a box twice as wide as the passing object it holds puts a course 1.5 object widths off
+        the path at 0.75. The box's extent over that part's, per axis (at least 1: never a shorter course),
+        multiplies its course. True (no test) without a course, without a frame that old or an observation of the
+        track at it, on a uniform region's box (measured afresh, not moved: ``Track.uniform``), or where fewer than
+        ``support_min`` pixels moved with the box."""
+        p = self.params
+        if p.onset_support <= 0 or o.miss_xy is None or self._now is None or t.uniform:
+            return True
+        ref = self._reference()
+        if ref is None:
+            return True
+        then = self._clock - ref[1]
+        old = [q for q in t.history if q.frame <= then + _EPS]
+        if not old or then - old[-1].frame > 1.0 + _EPS:
+            return True
+        q = old[-1]
+        ext = moving_extent(ref[0][0], self._now[0], (t.cx, t.cy, t.w, t.h),
+                            (q.x + t.ox, q.y + t.oy, q.width, q.width if q.height is None else q.height))
+        if ext is None or ext[2] < p.support_min:
+            return True
+        rw, rh = max(t.w / max(ext[0], 1.0), 1.0), max(t.h / max(ext[1], 1.0), 1.0)
+        return math.hypot(o.miss_xy[0] * rw, o.miss_xy[1] * rh) <= p.onset_support
 
     def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square

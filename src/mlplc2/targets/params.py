@@ -463,6 +463,18 @@ class TargetParams(ParameterSet):
                                    aspect with no stretch of the object (holdout 30's ``drive_0_h30``: log-anisotropy
                                    1.09, its warning 2 frames later with it on; docs/history.md, "A uniform region's
                                    aspect").""", valid=Valid.boolean())
+    onset_support: float = param(1.2, """A warning does not begin on a target whose course, counted in the extent of
+                                 the part of its box that moved as the box did since the frame ``change_frames``
+                                 before (its texture and edges, not a still background beside it:
+                                 :func:`~mlplc2.targets.change.moving_extent`) rather than in the box's own extent,
+                                 misses by more than this (object extents, as ``max_miss``): a box twice its passing
+                                 object's size halves that object's course. 0 = off (1.2, the default since session
+                                 23: false episodes lower on five of twelve sets, no collider lost; docs/history.md,
+                                 "The course in its object's own extent").""",
+                                 valid=Valid.real(minimum=0))
+    support_min: int = param(100, """The fewest pixels of a box that must move with it for ``onset_support`` to
+                             test it (fewer: no test; a small or plain object's few pixels give no extent).""",
+                             valid=Valid.integer(1))
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
