@@ -168,26 +168,32 @@ def test_change_box_on_a_still_textured_background_for_any_window():
         assert (cx, cy) == pytest.approx((100.3, 80.6), abs=1.0) and 9 <= w <= 14 and 9 <= h <= 14, radius
 
 
+_SQUARE = (80.0, 60.0, 10.0)      # centre x, y and half-side (px) of the growing square of the onset_support tests
+
+
+def _growing_square(scale: float) -> np.ndarray:
+    """A 160 x 120 frame: a textured square (centre and half-side ``_SQUARE``) whose texture is scaled by ``scale``
+    about its centre (the point x of ``scale`` 1 is seen at c + scale (x - c)), over a still textured background."""
+    rng = np.random.default_rng(7)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    cx, cy, half = _SQUARE
+    yy, xx = np.mgrid[:120, :160].astype(np.float32)
+    tex = cv2.remap(obj, (cx + (xx - cx) / scale).astype(np.float32), (cy + (yy - cy) / scale).astype(np.float32),
+                    cv2.INTER_LINEAR)
+    inside = (np.abs(xx - cx) <= half * scale) & (np.abs(yy - cy) <= half * scale)
+    return np.where(inside, tex, bg).astype(np.float32)
+
+
 def test_moving_extent_is_the_growing_object_not_its_box():
     """onset_support: a textured square 20 px wide grows by 10 % about its centre over a still textured background.
     In a box twice its width that grew as the square did, the part that moved with the box is the square, about
     22 px on each axis, not the box's 40; in a box its own size, its own size; in a box that did not grow (the
     still background's motion), the square's texture is not explained and little counts."""
     from mlplc2.targets.change import moving_extent
-    rng = np.random.default_rng(7)
-    bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
-    obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
-    cx, cy, half, k = 80.0, 60.0, 10.0, 1.1
-    yy, xx = np.mgrid[:120, :160].astype(np.float32)
-
-    def frame(scale):
-        # the square's texture scaled about (cx, cy): the point x of the first frame is seen at c + scale (x - c)
-        tex = cv2.remap(obj, (cx + (xx - cx) / scale).astype(np.float32), (cy + (yy - cy) / scale).astype(np.float32),
-                        cv2.INTER_LINEAR)
-        inside = (np.abs(xx - cx) <= half * scale) & (np.abs(yy - cy) <= half * scale)
-        return np.where(inside, tex, bg).astype(np.float32)
-
-    a, b = frame(1.0), frame(k)
+    cx, cy, _ = _SQUARE
+    k = 1.1
+    a, b = _growing_square(1.0), _growing_square(k)
     w, h, n = moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))
     assert 18 <= w <= 24 and 18 <= h <= 24 and n >= 100
     w, h, _ = moving_extent(a, b, (cx, cy, 22.0, 22.0), (cx, cy, 20.0, 20.0))
@@ -205,21 +211,11 @@ def test_a_course_counted_in_the_extent_that_moves_with_the_box():
     twice its width on a course 0.3 off (0.6 of its own), a uniform region's box (measured afresh, not moved), a
     track born after the reference frame, and the rule off, all let it begin."""
     from mlplc2.targets import TargetLayer
-    rng = np.random.default_rng(7)
-    bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
-    obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
-    cx, cy, half, g = 80.0, 60.0, 10.0, 1.03
-    yy, xx = np.mgrid[:120, :160].astype(np.float32)
-
-    def frame(scale):
-        tex = cv2.remap(obj, (cx + (xx - cx) / scale).astype(np.float32), (cy + (yy - cy) / scale).astype(np.float32),
-                        cv2.INTER_LINEAR)
-        inside = (np.abs(xx - cx) <= half * scale) & (np.abs(yy - cy) <= half * scale)
-        return np.where(inside, tex, bg).astype(np.float32)
-
+    cx, cy, half = _SQUARE
+    g = 1.03
     layer = TargetLayer(TargetParams(), fps=30.0)
     for i in range(5):
-        layer.step(frame(g ** i), None, (), i)
+        layer.step(_growing_square(g ** i), None, (), i)
 
     def supported(params, side, miss, born=0, uniform=False):
         t = Track(1, born, cx, cy, side, side, history=deque(
