@@ -456,14 +456,18 @@ class TargetParams(ParameterSet):
                                  copies' first warnings: 0.11-0.15 at log-scales of 0.08-0.14, 0.39 at 0.38; without
                                  this, three copies of ``crossing_car_strong_light`` never warned).""",
                                  valid=Valid.real(minimum=0))
-    isotropy_uniform: bool = param(False, """``onset_isotropy`` holds against a uniform region's box too
+    isotropy_uniform: bool = param(False, """In short: whether the "box stretched one way since its birth, so no
+                                   warning begins" test (``onset_isotropy``) also applies to the box of a plain-coloured
+                                   region. In full: ``onset_isotropy`` holds against a uniform region's box too
                                    (``Track.uniform``). Off (the default since session 23): a uniform region's box
                                    takes its aspect from its region measured afresh (``uniform_reseat``), not from
                                    the alignment, and a lead vehicle's region re-measured as it nears changes its
                                    aspect with no stretch of the object (holdout 30's ``drive_0_h30``: log-anisotropy
                                    1.09, its warning 2 frames later with it on; docs/history.md, "A uniform region's
                                    aspect").""", valid=Valid.boolean())
-    onset_support: float = param(1.2, """A warning does not begin on a target whose course, counted in the extent of
+    onset_support: float = param(1.2, """In short: no warning begins where the object would miss by more than this many
+                                 of its own widths, its width taken from the part of the box that moves with it,
+                                 not the whole box. In full: a warning does not begin on a target whose course, counted in the extent of
                                  the part of its box that moved as the box did since the frame ``change_frames``
                                  before (its texture and edges, not a still background beside it:
                                  :func:`~mlplc2.targets.change.moving_extent`) rather than in the box's own extent,
