@@ -140,6 +140,26 @@ def test_run_mp4_several_models(data, tmp_path, capsys):
     assert not (out / "annotated.mp4").exists()
 
 
+def test_run_summary_names_each_warning_target(data, tmp_path, capsys):
+    # a robotics user reads the console first: the summary says which target warned, from which frame, where, how
+    # soon and on what course, as targets.csv has it at that frame (the square in front of the camera warns)
+    out = tmp_path / "summary"
+    assert main(["run", str(data["mp4"]), "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    _, rows = _read_csv(out / "targets.csv")
+    first = {}
+    for r in rows:
+        if r["warning"] == "1":
+            first.setdefault(r["target_id"], r)
+    assert first, "the looming square warns"
+    for tid, r in first.items():
+        line = next(ln for ln in text.splitlines() if ln.strip().startswith(f"T{tid} warned from frame "))
+        assert f"from frame {r['frame']} " in line
+        assert f"at ({float(r['x']):.0f}, {float(r['y']):.0f})" in line
+        if r["ttc_s"]:
+            assert f"time to contact {float(r['ttc_s']):.2f} s" in line
+
+
 def test_run_image_folder_default_out_and_fps(data, capsys):
     rc = main(["run", str(data["images"]), "--fps", "20", "--start", "5", "--quiet"])
     assert rc == 0

@@ -193,10 +193,16 @@ def _print_run_summary(args, result) -> None:
             lines.append(f"  {name}: no fields{first}")
         targets = result.target_summaries.get(name)
         if targets:
-            warned = [t for t in targets if t["first_warning_frame"] is not None]
+            warned = sorted((t for t in targets if t["first_warning_frame"] is not None),
+                            key=lambda t: t["first_warning_frame"])
             lines.append(f"  {name}: {len(targets)} target(s), {len(warned)} warned"
-                         + (f" (first warning at frame {min(t['first_warning_frame'] for t in warned)})"
-                            if warned else ""))
+                         + (f" (first warning at frame {warned[0]['first_warning_frame']})" if warned else ""))
+            for t in warned[:6]:                 # which targets warned, where, how soon, on what course
+                at = t["at_first_warning"] or {}
+                ttc = "" if at.get("ttc_s") is None else f", time to contact {at['ttc_s']:.2f} s"
+                miss = "" if at.get("miss") is None else f", course {at['miss']:.2f} extents off"
+                lines.append(f"    T{t['id']} warned from frame {t['first_warning_frame']} on {t['warning_frames']} "
+                             f"frame(s), at ({at.get('x', 0):.0f}, {at.get('y', 0):.0f}){ttc}{miss}")
     if result.skipped:
         lines.append(f"skipped {result.skipped} frame(s) of the live source: the models took the newest frame")
     held = max(result.repeated.values(), default=0)
