@@ -1,8 +1,8 @@
 """The box of the region that changed between two frames around a point (:func:`change_box`):
 the window's own image motion undone by phase correlation, then the connected region of large
 grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2); a uniform
-region's box (:func:`uniform_box`, :func:`uniform_region`); and the extent of the part of a box that moves
-with the box's own alignment (:func:`moving_extent`, ``TargetParams.onset_support``).
+region's box (:func:`uniform_box`, :func:`uniform_region`); and the extent of the part of a box that moved as the
+box did (:func:`moving_extent`, ``TargetParams.onset_support``).
 """
 
 from __future__ import annotations
@@ -209,7 +209,7 @@ def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, f
 
 # moving_extent: a pixel belongs to the box's object where it changed since the reference frame by at least
 # SUPPORT_CHANGE grey levels and the box's own motion explains the change to within SUPPORT_EXPLAINED of it; both
-# differences are smoothed over SUPPORT_BLUR px (the 3 x 3 neighbourhood of the alignment's own presmoothing, about)
+# differences are smoothed over SUPPORT_BLUR px (the grain of a codec's or a sensor's noise, not an object's edge)
 SUPPORT_CHANGE = 6.0
 SUPPORT_EXPLAINED = 0.5
 SUPPORT_BLUR = 1.5

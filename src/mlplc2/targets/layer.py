@@ -255,11 +255,9 @@ class TargetLayer:
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
-            # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth)
-            if o.warning and not warned and not self._heading_grows(t, o):
-                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
-            # ... nor on a box whose course, counted in the extent of what moves with it, misses (onset_support)
-            if o.warning and not warned and not self._supported(t, o):
+            # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth), nor on
+            # one whose course, counted in the extent of what moved with it, misses (onset_support)
+            if o.warning and not warned and not (self._heading_grows(t, o) and self._supported(t, o)):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
