@@ -97,8 +97,8 @@ def test_the_brake_consumer_of_robot_md_takes_a_warning_without_a_time_to_contac
     doc = (DOCS / "robot.md").read_text(encoding="utf-8")
     code = "# brake.py" + doc.split("```python\n# brake.py")[1].split("```")[0]
     target = {"model": "mlplc2", "id": 1, "x": 1, "y": 1, "width": 9, "height": 9, "ttc_s": None, "miss": None,
-              "azimuth_deg": None, "elevation_deg": None, "warning": True}
-    timed = dict(target, id=2, ttc_s=0.5, miss=0.1)
+              "azimuth_deg": None, "elevation_deg": None, "ttc_age_s": None, "warning": True}
+    timed = dict(target, id=2, ttc_s=0.5, miss=0.1, ttc_age_s=0.0)
     base = {"schema": 1, "time_s": 0.1, "skipped": 0, "warning": True, "models": {}}
     lines = [dict(base, frame=1, targets=[target]), dict(base, frame=2, targets=[target, timed]),
              dict(base, frame=3, targets=[])]

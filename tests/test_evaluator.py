@@ -664,7 +664,7 @@ def T(frame, tid, x, y, *, warn=False, ttc=None, w=8.0, h=8.0, miss=None):
     """One targets.csv row (as the runner writes them)."""
     return {"frame": frame, "model": None, "target_id": tid, "x": x, "y": y, "width": w, "height": h,
             "ttc_s": ttc, "miss": miss, "warning": int(warn), "fields": "", "azimuth_deg": None,
-            "elevation_deg": None}
+            "elevation_deg": None, "ttc_age_s": None if ttc is None else 0.0}
 
 
 def result(source, frames, *, targets=(), alarms=(), fields=None, model="mlplc2", size=SIZE, fps=WARN_FPS, scale=1.0):
@@ -1239,6 +1239,22 @@ def test_results_folder_scores_like_the_run_result(tmp_path):
     mem = evaluate(res, gt)
     assert ev.warning_objects == mem.warning_objects and ev.warning_videos == mem.warning_videos
     assert wobj(ev)["warning_frame"] == 8 and ev.models["mlplc2"]["warnings"] == mem.models["mlplc2"]["warnings"]
+
+
+def test_results_folder_with_a_targets_csv_from_before_ttc_age_s_scores_alike(tmp_path):
+    """A ``targets.csv`` written before its ``ttc_age_s`` column (the last one) loads and scores as a new one."""
+    assert TARGET_COLUMNS[-1] == "ttc_age_s"
+    gt, targets = _case()
+    res = result("a.mp4", 30, targets=targets)
+    _write_folder(tmp_path / "new", res)
+    _write_folder(tmp_path / "old", res)
+    with open(tmp_path / "old" / "targets.csv", "w", newline="") as f:
+        w = csv.DictWriter(f, fieldnames=TARGET_COLUMNS[:-1], extrasaction="ignore", lineterminator="\n")
+        w.writeheader()
+        w.writerows(res.targets)
+    old, new = evaluate(tmp_path / "old", gt), evaluate(tmp_path / "new", gt)
+    assert old.warning_objects == new.warning_objects and wobj(old)["warning_frame"] == 8
+    assert old.models["mlplc2"]["warnings"] == new.models["mlplc2"]["warnings"]
 
 
 def test_results_folder_without_targets_csv_is_scored_by_its_alarm(tmp_path):

@@ -430,7 +430,7 @@ def test_the_consumer_of_docs_robot_md_brakes_on_a_warning(tmp_path):
     code = "# brake.py" + doc.split("```python\n# brake.py")[1].split("```")[0]
     quiet = {"schema": 1, "frame": 3, "time_s": 0.1, "skipped": 0, "warning": False, "models": {}, "targets": []}
     target = {"model": "mlplc2", "id": 1, "x": 1, "y": 1, "width": 9, "height": 9, "ttc_s": 0.42, "miss": 0.1,
-              "azimuth_deg": None, "elevation_deg": None, "warning": True}
+              "azimuth_deg": None, "elevation_deg": None, "ttc_age_s": 0.0, "warning": True}
     loud = dict(quiet, frame=4, warning=True, targets=[target])
     proc = subprocess.run([sys.executable, "-c", code], input=f"{json.dumps(quiet)}\n{json.dumps(loud)}\n",
                           capture_output=True, text=True, timeout=60)
@@ -612,3 +612,68 @@ def test_an_avi_written_to_a_pipe_is_a_stream_of_unknown_length(data, tmp_path):
             assert src.frame_count is None and src.total is None
     res = mlplc2.run(str(tmp_path / "rec.avi"), ["lgmd1"], out=False, progress=False)
     assert res.n_frames == 60 and not res.truncated
+
+
+def _disc_hidden_for_three_frames(n=42, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
+    """RGB frames of a dark disc approaching at constant speed on grey (contact at frame ``contact``),
+    hidden during the frames of ``gap``: its track is lost and refound, showing the old time to contact
+    counted down until its own fit is back."""
+    import cv2
+
+    frames = []
+    for k in range(n):
+        img = np.full((240, 320), 150, np.uint8)
+        if not gap[0] <= k < gap[1]:
+            r = r0 * contact / (contact - k)
+            cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(np.repeat(img[:, :, None], 3, axis=2))
+    return frames
+
+
+def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):
+    """``ttc_age_s`` in the JSON lines (``mlplc2.stream``) and in ``targets.csv`` (its last column): 0 on a
+    frame whose fit measured ``ttc_s``; on the frames after the occlusion, where the time to contact shown is
+    the one measured before it counted down, the time since that frame (whole frames at 30 frames/s), and
+    ``ttc_s`` is the one shown then less it; null (empty) without ``ttc_s``. The lines and the file agree."""
+    import csv
+
+    from mlplc2.evaluation.record import TargetRow
+    from mlplc2.io import write_video
+
+    clip = write_video(tmp_path / "gap.avi", _disc_hidden_for_three_frames(), 30.0)
+    lines = list(mlplc2.stream(clip, "mlplc2", repeat_threshold=None))
+    mlplc2.run(clip, ["mlplc2"], out=tmp_path / "o", repeat_threshold=None, quiet=True)
+    with open(tmp_path / "o" / "targets.csv", newline="") as f:
+        reader = csv.DictReader(f)
+        assert reader.fieldnames[-1] == "ttc_age_s"
+        rows = {(int(r["frame"]), int(r["target_id"])): r for r in reader}
+    shown = {}                                    # (frame, id): the JSON target
+    for line in lines:
+        for t in line["targets"]:
+            assert "ttc_age_s" in t and (t["ttc_s"] is None) == (t["ttc_age_s"] is None)
+            row = rows[line["frame"], t["id"]]
+            assert row["ttc_age_s"] == ("" if t["ttc_age_s"] is None else str(t["ttc_age_s"]))
+            assert TargetRow.from_row(row).ttc_age_s == t["ttc_age_s"]
+            shown[line["frame"], t["id"]] = t
+    held = []
+    for (k, tid), t in shown.items():
+        if t["ttc_age_s"]:
+            ago = round(t["ttc_age_s"] * 30)
+            assert t["ttc_age_s"] == pytest.approx(ago / 30, abs=1e-4) and ago >= 1
+            then = shown[k - ago, tid]                # the frame of the fit it was held from
+            assert then["ttc_age_s"] == 0.0 and t["ttc_s"] == pytest.approx(then["ttc_s"] - t["ttc_age_s"], abs=2e-4)
+            held.append(k)
+    assert held and set(held) <= set(range(33, 42))   # only after the occlusion
+    assert sum(t["ttc_age_s"] == 0.0 for t in shown.values()) > 20
+
+
+def test_a_targets_csv_written_before_ttc_age_s_still_loads():
+    """An older ``targets.csv`` has no ``ttc_age_s`` column: its rows read with no age."""
+    from mlplc2.evaluation.record import TargetRow
+
+    old = {"frame": "5", "model": "mlplc2", "target_id": "2", "x": "10.5", "y": "20", "width": "8", "height": "8",
+           "ttc_s": "0.75", "miss": "0.1", "warning": "1", "fields": "3 4", "azimuth_deg": "", "elevation_deg": ""}
+    row = TargetRow.from_row(old)
+    assert (row.id, row.ttc_s, row.warning, row.fields, row.ttc_age_s) == (2, 0.75, True, (3, 4), None)
+    assert TargetRow.from_row(dict(old, ttc_age_s="0.0333")).ttc_age_s == pytest.approx(1 / 30, abs=1e-4)
+    assert TargetRow.from_row(dict(old, ttc_s="", ttc_age_s="")).ttc_age_s is None

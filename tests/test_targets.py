@@ -802,6 +802,27 @@ def test_brief_occlusion_keeps_one_id_and_its_time_to_contact(hold_frames, refin
         assert len(ids) == 2 or None in after
 
 
+@pytest.mark.parametrize("hold_frames", [15, 0])
+def test_the_time_to_contact_held_through_an_occlusion_says_how_old_it_is(hold_frames):
+    """The disc hidden for frames 30-32 (as above): its refound track shows the lost one's last time to
+    contact, counted down, until its own fit: on those frames ``ttc_age_s`` is the time since the frame of
+    that fit (a whole number of frames, at most ``hold_frames``) and ``ttc_s`` the one shown then less the
+    age; on a frame of its own fit the age is 0. Without ``hold_frames`` nothing is held: every age is 0."""
+    outs = _run_with_field(_disc_with_gap(), hold_frames=hold_frames, refind_frames=15)
+    on = {k: t for k in range(20, 46) for t in outs[k] if abs(t.x - 200) < 6 and abs(t.y - 110) < 6}
+    held = []
+    for k, t in on.items():
+        assert (t.ttc_s is None) == (t.ttc_age_s is None)
+        if t.ttc_age_s:
+            ago = t.ttc_age_s * FPS
+            assert ago == pytest.approx(round(ago), abs=1e-6) and 1 <= round(ago) <= hold_frames
+            fit = on[k - round(ago)]                       # the frame of the fit it was held from
+            assert fit.ttc_age_s == 0.0 and t.ttc_s == pytest.approx(fit.ttc_s - t.ttc_age_s, abs=1e-9)
+            held.append(k)
+    assert (len(held) >= 2 and set(held) <= set(range(33, 40))) if hold_frames else not held
+    assert any(t.ttc_age_s == 0.0 for k, t in on.items() if k > max(held or [0]))   # its own fit again
+
+
 @pytest.mark.parametrize("late", [45, 0])
 def test_a_far_object_found_again_late_where_it_was_keeps_its_id_only(late):
     """``refind_late`` (45 by default): a 10-px track lost at clock 10 (a warned one) and a 25-px box found at
@@ -1363,3 +1384,72 @@ def test_a_warning_over_the_whole_view_runs_to_its_contact_and_the_target_then_g
         assert not any(outs[5:])                                 # from frame 6 on: dropped, not refound
     else:
         assert not any(outs[3:])
+
+
+# ---------------------------------------------------------------------------
+# ttc_age_s: how old the time to contact shown is (0: this frame's fit; held: since its fit)
+# ---------------------------------------------------------------------------
+def _approach_history(t, last, contact, n=10):
+    """``t``'s history: the ``n`` frames up to ``last`` of an exact approach reaching the camera at frame ``contact``."""
+    frames = list(range(last - n + 1, last + 1))
+    t.history = deque(Observation(k, s, 159.5, 120.0, 20.0, 0.0)
+                      for k, s in zip(frames, log_sizes_of_approach(frames, contact)))
+    t.log_s = t.history[-1].log_scale
+
+
+def _stalled_history(t, last, n=10):
+    """``t``'s history: ``n`` frames up to ``last`` of a box that does not grow (the fit gives no time to contact)."""
+    t.history = deque(Observation(k, t.log_s, 159.5, 120.0, 20.0, 0.0) for k in range(last - n + 1, last + 1))
+
+
+def test_the_age_of_the_time_to_contact_is_zero_when_measured_and_grows_while_held():
+    """An exact approach (contact at frame 40) fitted at frame 9, then a box that stops growing for
+    frames 10-13 (no fit: the last time to contact is held and counted down), then fitted again at 14;
+    past ``hold_frames`` after a fit there is nothing to show. The age is 0 on a fitted frame, the frames
+    since the fit over the frame rate while held, and the held time to contact is the measured one
+    less its age; None with no time to contact."""
+    p = TargetParams(hold_frames=15)
+    t = Track(1, 0, 159.5, 120.0, 20.0, 20.0)
+    _approach_history(t, 9, 40.0)
+    o = mlplc2.targets.estimate(t, p, FPS, 9, (240, 320))
+    assert o.ttc_s == pytest.approx((40 - 9) / FPS, rel=1e-6) and o.ttc_age_s == 0.0
+    measured = o.ttc_s
+    for k in range(10, 14):
+        _stalled_history(t, k)
+        o = mlplc2.targets.estimate(t, p, FPS, k, (240, 320))
+        assert o.ttc_age_s == pytest.approx((k - 9) / FPS, abs=1e-9)
+        assert o.ttc_s + o.ttc_age_s == pytest.approx(measured, abs=1e-9)
+    _approach_history(t, 14, 40.0)
+    o = mlplc2.targets.estimate(t, p, FPS, 14, (240, 320))
+    assert o.ttc_s == pytest.approx((40 - 14) / FPS, rel=1e-6) and o.ttc_age_s == 0.0
+    _stalled_history(t, 14 + 15)
+    o = mlplc2.targets.estimate(t, p, FPS, 14 + 15, (240, 320))   # the last frame it is held
+    assert o.ttc_age_s == pytest.approx(15 / FPS) and o.ttc_s == pytest.approx((40 - 14 - 15) / FPS, abs=1e-9)
+    _stalled_history(t, 14 + 16)
+    o = mlplc2.targets.estimate(t, p, FPS, 14 + 16, (240, 320))
+    assert o.ttc_s is None and o.ttc_age_s is None
+
+
+def test_a_refound_tracks_held_time_to_contact_is_as_old_as_the_lost_ones_fit():
+    """A track refound at clock 12 shows the time to contact the lost one measured at 9 (``Track.held``,
+    not its own): its age counts from clock 9 all the same; a 60 fps clock's frames are 1/60 s."""
+    fps = 60.0
+    t = Track(1, 0, 159.5, 120.0, 20.0, 20.0, birth=12.0)
+    t.held = (9.0, 0.5, 0.02, 0.1, (0.1, 0.0))
+    _stalled_history(t, 14, n=3)
+    o = mlplc2.targets.estimate(t, TargetParams(), fps, 14.0, (240, 320))
+    assert o.ttc_age_s == pytest.approx(5 / fps) and o.ttc_s == pytest.approx(0.5 - 5 / fps)
+
+
+def test_a_repeated_frame_ages_the_time_to_contact_it_counts_down():
+    """``count_down`` (a repeated frame, ``elapsed`` s): the time to contact shown is that much older; one whose
+    contact has passed has none, and no age."""
+    from mlplc2.targets import count_down
+
+    fresh = Target(1, 10.0, 10.0, 5.0, 5.0, ttc_s=0.5, ttc_age_s=0.0)
+    held = Target(2, 50.0, 10.0, 5.0, 5.0, ttc_s=0.05, ttc_age_s=0.1)
+    none = Target(3, 90.0, 10.0, 5.0, 5.0)
+    out = {t.id: t for t in count_down((fresh, held, none), 0.1)}
+    assert out[1].ttc_s == pytest.approx(0.4) and out[1].ttc_age_s == pytest.approx(0.1)
+    assert out[2].ttc_s is None and out[2].ttc_age_s is None
+    assert out[3].ttc_s is None and out[3].ttc_age_s is None

@@ -120,24 +120,26 @@ class TargetRow:
     fields: tuple[int, ...] = ()
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
+    ttc_age_s: float | None = None
 
     @classmethod
     def from_row(cls, r) -> "TargetRow":
-        """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``)."""
+        """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``);
+        a file written before ``ttc_age_s`` (no such column) reads as None."""
         def num(v):
             return None if v in (None, "") else float(v)
 
         fields = r.get("fields") or ""
         return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
                    num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
-                   tuple(int(v) for v in str(fields).split()))
+                   tuple(int(v) for v in str(fields).split()), ttc_age_s=num(r.get("ttc_age_s")))
 
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
         return {"x": _px(self.x), "y": _px(self.y), "width": _px(self.width), "height": _px(self.height),
                 "ttc_s": _opt4(self.ttc_s), "miss": _opt4(self.miss), "warning": int(bool(self.warning)),
                 "fields": " ".join(map(str, self.fields)), "azimuth_deg": _opt4(self.azimuth_deg),
-                "elevation_deg": _opt4(self.elevation_deg)}
+                "elevation_deg": _opt4(self.elevation_deg), "ttc_age_s": _opt4(self.ttc_age_s)}
 
 
 @dataclass
@@ -301,7 +303,8 @@ class Recorder:
         x, y = self.to_input(t.x, t.y)
         x1, y1 = self.to_input(t.x + t.width, t.y + t.height)
         return TargetRow(t.id, float(x), float(y), float(x1 - x), float(y1 - y), t.ttc_s, t.miss, bool(t.warning),
-                         tuple(t.fields), getattr(t, "azimuth_deg", None), getattr(t, "elevation_deg", None))
+                         tuple(t.fields), getattr(t, "azimuth_deg", None), getattr(t, "elevation_deg", None),
+                         getattr(t, "ttc_age_s", None))
 
     def _update_targets(self, index: int, rec: Record, name: str, rows: list[TargetRow]) -> None:
         """Per target: life, frames, first estimate and first warning (with the estimate then)."""

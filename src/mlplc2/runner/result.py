@@ -17,9 +17,9 @@ __all__ = ["RunResult", "RunInterrupted", "COLUMNS", "TARGET_COLUMNS"]
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
 #: Columns of ``targets.csv``, in order (``docs/targets.md``): positions and sizes in input pixels,
-#: the bearing in degrees (empty without a field of view).
+#: the bearing in degrees (empty without a field of view), the age of ``ttc_s`` in s (0: measured this frame).
 TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
-                  "azimuth_deg", "elevation_deg")
+                  "azimuth_deg", "elevation_deg", "ttc_age_s")
 
 
 class RunInterrupted(KeyboardInterrupt):

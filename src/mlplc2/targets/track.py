@@ -64,6 +64,10 @@ class Target:
     miss_xy : (float, float) or None
         Where the object's centre passes the camera plane, from the heading point: right in
         object widths, down in object heights; ``miss`` is its length.
+    ttc_age_s : float or None
+        Seconds since ``ttc_s`` was measured: 0.0 when this frame's fit gave it; a time to contact
+        held through frames without a fit (``hold_frames``, counted down) or through a repeated
+        frame is as old as the time since the frame of its fit. None without ``ttc_s``.
     """
 
     id: int
@@ -82,6 +86,7 @@ class Target:
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
     miss_xy: tuple[float, float] | None = None
+    ttc_age_s: float | None = None
 
     def urgency(self) -> tuple:
         """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""

@@ -46,14 +46,16 @@ def fits(obs, span: float) -> bool:
 
 
 def count_down(targets, elapsed: float) -> tuple[Target, ...]:
-    """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down; an estimate
-    whose contact has passed becomes None and loses its warning; re-sorted by urgency."""
+    """``targets`` held ``elapsed`` seconds (a repeated frame): each ``ttc_s`` counts down (and its
+    ``ttc_age_s`` grows by as much); an estimate whose contact has passed becomes None and loses its
+    warning; re-sorted by urgency."""
     out = []
     for t in targets:
         if t.ttc_s is not None:
             left = t.ttc_s - elapsed
-            t = replace(t, ttc_s=left) if left > 0 else replace(t, ttc_s=None, miss=None, warning=False,
-                                                                 ttc_sigma_s=None, miss_xy=None)
+            age = None if t.ttc_age_s is None else t.ttc_age_s + elapsed
+            t = replace(t, ttc_s=left, ttc_age_s=age) if left > 0 else \
+                replace(t, ttc_s=None, miss=None, warning=False, ttc_sigma_s=None, miss_xy=None, ttc_age_s=None)
         out.append(t)
     return tuple(sorted(out, key=Target.urgency))
 
@@ -587,6 +589,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # its countdown starts from its own fit)
     own = t.held is None or t.held[0] >= t.birth
     t.ttcs.append((index, ttc if own else None, sigma if own else None))
+    # the age of the time to contact shown: 0 when this frame's fit gave it, else the time since the
+    # frame of the fit it was held from (Track.held; a refound track's too, own or not)
+    age = None if ttc is None or t.held is None else max(index - t.held[0], 0.0) / fps
     az = el = None
     if focal is not None:
         az, el = bearing(t.cx, t.cy, (h, w), focal)
@@ -596,4 +601,4 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     return Target(t.id, float(t.cx), float(t.cy), float(t.w), float(t.h), ttc_s=num(ttc), miss=num(miss),
                   warning=warning, fields=tuple(sorted(t.fields)), born=t.born, looming=looming,
                   expansion=num(t.rate), ttc_sigma_s=num(sigma), azimuth_deg=num(az), elevation_deg=num(el),
-                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])))
+                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])), ttc_age_s=num(age))
