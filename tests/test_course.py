@@ -1142,6 +1142,41 @@ def test_a_warning_is_not_held_longer_than_warn_through_frames_after_its_last_fi
     assert outs[0].warning and not outs[-1].warning
 
 
+def _lapsing_beside(p: TargetParams, alarm: bool, extra: int = 6) -> list:
+    """A track whose course passes 0.6 of its widths beside the heading (its image grows about the principal point,
+    0.6 widths from its centre), warning at frame 12; its box then grows four times an approach's rate in width
+    and its own in height for ``extra`` frames (its fit's isotropy test fails after a few), a field of it in
+    collision ``alarm`` on each of those frames or none: the targets of frames 12 on."""
+    t = _looming((SHAPE[1] - 1) / 2.0 + 0.6 * 20.0, static=True)
+    outs = [estimate(t, p, FPS, 12, SHAPE)]
+    rate = math.log((CONTACT - 12) / (CONTACT - 13))
+    for k in range(13, 13 + extra):
+        kx, ky = math.exp(4.0 * rate), math.exp(rate)    # about the principal point: 0.6 widths off it still
+        move = ((t.cx - (SHAPE[1] - 1) / 2.0) * (kx - 1), (t.cy - (SHAPE[0] - 1) / 2.0) * (ky - 1), kx, ky,
+                2.5 * rate, 1.5 * rate)
+        assert t.follow(move, k, FPS, SHAPE, p.max_fails, border=p.border)
+        if alarm:
+            t.last_alarm = k
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    return outs
+
+
+def test_a_running_warning_goes_on_through_a_fit_that_lapses_on_its_course_while_its_field_alarms():
+    # through_alarm (session 24): where the fit gives no time to contact, a running warning goes on, on the time to
+    # contact and the course held, only on a course within reonset_miss (0.4), unless a field of it is in collision
+    # alarm: then within max_miss. The course here, 0.6, lies between (night_rear_end's car: its part's box 0.54-0.57)
+    p = TargetParams(through_alarm=True)
+    quiet = _lapsing_beside(p, alarm=False)
+    assert quiet[0].warning and quiet[0].miss == pytest.approx(0.6, abs=0.02)
+    assert p.reonset_miss < quiet[0].miss <= p.max_miss
+    assert not all(o.warning for o in quiet)                           # lapsed where the fit did
+    alarmed = _lapsing_beside(p, alarm=True)
+    assert all(o.warning for o in alarmed)                             # held on the alarm's evidence
+    assert all(o.ttc_s is not None and o.miss == pytest.approx(quiet[0].miss, abs=0.05) for o in alarmed)
+    off = _lapsing_beside(TargetParams(through_alarm=False), alarm=True)
+    assert [o.warning for o in off] == [o.warning for o in quiet]      # as until session 24
+
+
 def _rise(p: TargetParams, old_ttc: float, old_sigma: float):
     """The target at frame 12 of a track whose warning runs, whose time to contact 3 frames before
     (``countdown_frames``) was ``old_ttc`` s with standard error ``old_sigma``."""

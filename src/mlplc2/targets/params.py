@@ -317,6 +317,12 @@ class TargetParams(ParameterSet):
                               warned later or not at all
                               (docs/history.md, "A warning held to contact").""", unit="frames",
                               valid=Valid.integer(0))
+    through_alarm: bool = param(True, """With ``warn_through``: a running warning goes on, where its own fit does not, on a
+                                course within ``max_miss`` (not ``reonset_miss``) while a field of it is in collision alarm
+                                this frame: the field alarm is evidence of its own (issue 22, item 4), and the box of a part
+                                of a large object that fills the view (its course counted in the part's extent) misses by
+                                more than ``reonset_miss`` while the object hits. False = ``reonset_miss`` always (as until
+                                session 24).""", valid=Valid.boolean())
     countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
                                   counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
                                   frames before (by any amount: there is no warning yet to keep through the fit's noise;

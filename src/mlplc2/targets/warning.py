@@ -429,7 +429,7 @@ def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None
     the ``view`` (``view_hold``, :func:`spans_view`) however old its last fit, ``warn_through`` 0 included."""
     return ((p.warn_through > 0 or view) and ttc is not None and miss is not None and t.held is not None
             and (view or now - t.held[0] <= p.span(p.warn_through, fps) + _EPS) and ttc <= p.horizon_s
-            and miss <= p.reonset_miss)
+            and miss <= (p.max_miss if p.through_alarm and t.last_alarm == now else p.reonset_miss))
 
 
 def slow(t: Track, p: TargetParams, fps: float, index: float, interval: float | None) -> bool:
