@@ -158,6 +158,22 @@ def test_run_summary_names_each_warning_target(data, tmp_path, capsys):
         assert f"at ({float(r['x']):.0f}, {float(r['y']):.0f})" in line
         if r["ttc_s"]:
             assert f"time to contact {float(r['ttc_s']):.2f} s" in line
+    # ... and on which frames: each run of frames it warned on, as targets.csv's warning column has them
+    summary = json.loads((out / "fields.json").read_text())["targets"]["mlplc2"]
+    for tid in first:
+        frames = sorted(int(r["frame"]) for r in rows if r["target_id"] == tid and r["warning"] == "1")
+        runs = []
+        for f in frames:
+            shown = [int(r["frame"]) for r in rows if r["target_id"] == tid and int(r["frame"]) < f]
+            if runs and shown and max(shown) == runs[-1][1]:
+                runs[-1][1] = f
+            else:
+                runs.append([f, f])
+        t = next(t for t in summary if str(t["id"]) == tid)
+        assert t["warning_runs"] == runs and sum(b - a + 1 for a, b in runs) == t["warning_frames"]
+        line = next(ln for ln in text.splitlines() if ln.strip().startswith(f"T{tid} warned from frame "))
+        spans = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs[:4])
+        assert f"({spans}" in line
 
 
 def test_run_image_folder_default_out_and_fps(data, capsys):

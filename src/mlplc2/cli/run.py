@@ -201,8 +201,10 @@ def _print_run_summary(args, result) -> None:
                 at = t["at_first_warning"] or {}
                 ttc = "" if at.get("ttc_s") is None else f", time to contact {at['ttc_s']:.2f} s"
                 miss = "" if at.get("miss") is None else f", course {at['miss']:.2f} extents off"
+                runs = t.get("warning_runs") or [[t["first_warning_frame"], t["first_warning_frame"]]]
+                spans = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs[:4]) + (", ..." if len(runs) > 4 else "")
                 lines.append(f"    T{t['id']} warned from frame {t['first_warning_frame']} on {t['warning_frames']} "
-                             f"frame(s), at ({at.get('x', 0):.0f}, {at.get('y', 0):.0f}){ttc}{miss}")
+                             f"frame(s) ({spans}), at ({at.get('x', 0):.0f}, {at.get('y', 0):.0f}){ttc}{miss}")
     if result.skipped:
         lines.append(f"skipped {result.skipped} frame(s) of the live source: the models took the newest frame")
     held = max(result.repeated.values(), default=0)

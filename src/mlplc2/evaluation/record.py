@@ -154,6 +154,7 @@ class TargetHistory:
     first_ttc_frame: int | None = None
     first_warning_frame: int | None = None
     warning_frames: int = 0
+    warning_runs: list[list[int]] = field(default_factory=list)   # [first, last] frame of each run of warnings
     at_first_warning: TargetRow | None = None
     fields: set[int] = field(default_factory=set)
     last_frame: int | None = None
@@ -162,7 +163,7 @@ class TargetHistory:
     def summary(self) -> dict:
         return {"id": self.id, "born": self.born, "died": self.died, "frames": self.frames,
                 "first_ttc_frame": self.first_ttc_frame, "first_warning_frame": self.first_warning_frame,
-                "warning_frames": self.warning_frames,
+                "warning_frames": self.warning_frames, "warning_runs": [list(r) for r in self.warning_runs],
                 "at_first_warning": None if self.at_first_warning is None else self.at_first_warning.values(),
                 "fields": sorted(self.fields), "last": {"frame": self.last_frame, **self.last.values()}}
 
@@ -320,6 +321,10 @@ class Recorder:
                 tt.first_ttc_frame = index
             if t.warning:
                 tt.warning_frames += 1
+                if tt.last is not None and tt.last.warning and tt.warning_runs:   # its last frame warned too
+                    tt.warning_runs[-1][1] = index
+                else:
+                    tt.warning_runs.append([index, index])
                 if tt.first_warning_frame is None:
                     tt.first_warning_frame, tt.at_first_warning = index, t
             tt.last_frame, tt.last = index, t

@@ -308,7 +308,8 @@ class TargetParams(ParameterSet):
     warn_through: int = param(15, """A running warning goes on through frames whose fit gives no time to contact (its
                               growth not significant or not isotropic for a while: a box re-seated, two colliders
                               overlapping), on the time to contact held (``hold_frames``: the last one counted down)
-                              and its course, within ``horizon_s`` and ``reonset_miss``, for up to this many frames after
+                              and its course, within ``horizon_s`` and ``reonset_miss`` (``max_miss`` while a field of it alarms:
+                              ``through_alarm``), for up to this many frames after
                               the last fit. 0 = off (as until session 19): a warning needs this frame's fit, and a
                               collider's warning lapsed for 0.7-1.2 s before its contact. 15 since session 20 (with
                               ``rise_sigma`` and ``rise_streak``): warned colliders silent for 0.2 s or more before
@@ -607,8 +608,9 @@ class TargetParams(ParameterSet):
                               field alarm's seed that does not loom").""", valid=Valid.boolean())
     hold_frames: int = param(15, """A target whose fit gives no time to contact this frame (the growth not
                              significant, not isotropic, a gap in its measurement) reports its last one
-                             counted down for up to this many frames after it (not a warning: a warning
-                             needs this frame's fit). 0 = off (``docs/targets.md``, step 8).""",
+                             counted down for up to this many frames after it (``Target.ttc_age_s``: its
+                             age). It begins no warning; a running one goes on through such frames on it
+                             (``warn_through``, ``through_alarm``). 0 = off (``docs/targets.md``, step 8).""",
                              unit="frames", valid=Valid.integer(0))
     refind_frames: int = param(15, """A new target whose centre lies in the last box (plus a quarter of its
                                size) of a target lost (dropped or merged) at most this many frames before,
