@@ -416,7 +416,7 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
                               f"got {options.draw_fields!r}")
     jsonl = options.jsonl
     if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and Path(jsonl).is_dir():
-        raise InputValueError(f"{jsonl}: is a folder; jsonl takes a file or -")
+        raise InputValueError(f"{jsonl}: is a folder; the JSON lines (--jsonl, jsonl=) go to a file or - (standard output)")
     if jsonl is not None and not hasattr(jsonl, "write") and jsonl != STDIN and is_the_input(source, jsonl):
         raise InputValueError(f"{jsonl}: is the input video, which the JSON lines would overwrite: write them to "
                               f"another file (e.g. {Path(jsonl).with_suffix('.jsonl').name})")
