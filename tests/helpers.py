@@ -83,3 +83,19 @@ def score_collision(outputs, truth, fps: float):
             warned |= near and t.warning
             false += (not near) and t.warning
     return errors, warned, false
+
+
+def disc_with_gap(n=46, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
+    """uint8 grey frames (240 x 320) of a dark disc approaching at constant speed (radius r0 * contact / (contact - k),
+    contact at frame ``contact``) on a plain background, hidden during the frames of ``gap`` (an occlusion: the
+    image alignment fails there, the track is lost and refound)."""
+    import cv2
+
+    frames = []
+    for k in range(n):
+        img = np.full((240, 320), 150, np.uint8)
+        if not gap[0] <= k < gap[1]:
+            r = r0 * contact / (contact - k)
+            cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
+        frames.append(img)
+    return frames

@@ -23,6 +23,8 @@ from mlplc2.io import FrameSource
 from mlplc2.io.decoders import Decoder
 from mlplc2.runner.live import Latency
 
+from .helpers import disc_with_gap
+
 
 @pytest.fixture
 def http_dir(tmp_path):
@@ -614,20 +616,10 @@ def test_an_avi_written_to_a_pipe_is_a_stream_of_unknown_length(data, tmp_path):
     assert res.n_frames == 60 and not res.truncated
 
 
-def _disc_hidden_for_three_frames(n=42, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
-    """RGB frames of a dark disc approaching at constant speed on grey (contact at frame ``contact``),
-    hidden during the frames of ``gap``: its track is lost and refound, showing the old time to contact
-    counted down until its own fit is back."""
-    import cv2
-
-    frames = []
-    for k in range(n):
-        img = np.full((240, 320), 150, np.uint8)
-        if not gap[0] <= k < gap[1]:
-            r = r0 * contact / (contact - k)
-            cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
-        frames.append(np.repeat(img[:, :, None], 3, axis=2))
-    return frames
+def _disc_hidden_for_three_frames(n=42):
+    """RGB frames of :func:`tests.helpers.disc_with_gap`: its track is lost and refound, showing the old time to
+    contact counted down until its own fit is back."""
+    return [np.repeat(img[:, :, None], 3, axis=2) for img in disc_with_gap(n=n)]
 
 
 def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):

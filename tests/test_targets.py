@@ -24,6 +24,8 @@ from mlplc2.targets import (Observation, Target, TargetParams, Track, align, bea
                             fit_contact, fit_course, focal_length, pyramid)
 from mlplc2.evaluation.truth import parse
 
+from .helpers import disc_with_gap
+
 FPS = 30.0
 
 
@@ -758,18 +760,9 @@ def test_alarming_field_on_the_roadside_does_not_warn_straight_ahead_does(r0):
         assert warned and warned[0] == 6
 
 
-def _disc_with_gap(n=46, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
-    """Grey frames of a dark disc approaching at constant speed (radius r0 * contact / (contact - k),
-    contact at frame ``contact``) on a plain background, hidden during the frames of ``gap`` (an
-    occlusion: the image alignment fails there)."""
-    frames = []
-    for k in range(n):
-        img = np.full((240, 320), 150, np.uint8)
-        if not gap[0] <= k < gap[1]:
-            r = r0 * contact / (contact - k)
-            cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
-        frames.append(img.astype(np.float32))
-    return frames
+def _disc_with_gap(**kw):
+    """:func:`tests.helpers.disc_with_gap` as float32 frames (the layer's input)."""
+    return [img.astype(np.float32) for img in disc_with_gap(**kw)]
 
 
 def _run_with_field(frames, at=(200, 110), **kw):
