@@ -425,8 +425,10 @@ def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None
     clock ``now``, where its own measurement does not (no fit, a fit not yet evident or too uncertain), on its time to
     contact ``ttc`` (s; without a fit the one held, :func:`held`) and course ``miss``: its last fit at most
     ``warn_through`` frames old, ``ttc`` within ``horizon_s`` and ``miss`` within ``reonset_miss`` (the course on which
-    a lapsed warning returns: a box that slid off its object, or a passing object's, straddles it and misses). Over
-    the ``view`` (``view_hold``, :func:`spans_view`) however old its last fit, ``warn_through`` 0 included."""
+    a lapsed warning returns: a box that slid off its object, or a passing object's, straddles it and misses), or
+    within ``max_miss`` while a field of it is in collision alarm this frame (``through_alarm``: the box of a part of
+    an object that fills the view misses by more, in its own extent, than the object). Over the ``view``
+    (``view_hold``, :func:`spans_view`) however old its last fit, ``warn_through`` 0 included."""
     return ((p.warn_through > 0 or view) and ttc is not None and miss is not None and t.held is not None
             and (view or now - t.held[0] <= p.span(p.warn_through, fps) + _EPS) and ttc <= p.horizon_s
             and miss <= (p.max_miss if p.through_alarm and t.last_alarm == now else p.reonset_miss))
