@@ -669,3 +669,13 @@ def test_a_targets_csv_written_before_ttc_age_s_still_loads():
     assert (row.id, row.ttc_s, row.warning, row.fields, row.ttc_age_s) == (2, 0.75, True, (3, 4), None)
     assert TargetRow.from_row(dict(old, ttc_age_s="0.0333")).ttc_age_s == pytest.approx(1 / 30, abs=1e-4)
     assert TargetRow.from_row(dict(old, ttc_s="", ttc_age_s="")).ttc_age_s is None
+
+
+def test_a_targets_csv_row_reads_back_every_cell_it_was_written_with():
+    """``mlplc2 evaluate`` reads ``targets.csv`` back: a row read and written again is the row (the bearing too)."""
+    from mlplc2.evaluation.record import TargetRow
+
+    row = {"x": "10.5", "y": "20.0", "width": "8.0", "height": "6.0", "ttc_s": "0.75", "miss": "0.1", "warning": "1",
+           "fields": "3 4", "azimuth_deg": "12.5", "elevation_deg": "-3.25", "ttc_age_s": "0.0333"}
+    again = TargetRow.from_row(dict(row, frame="5", model="mlplc2", target_id="2")).values()
+    assert {k: ("" if v is None else str(v)) for k, v in again.items()} == row

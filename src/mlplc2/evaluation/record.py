@@ -124,15 +124,16 @@ class TargetRow:
 
     @classmethod
     def from_row(cls, r) -> "TargetRow":
-        """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``);
-        a file written before ``ttc_age_s`` (no such column) reads as None."""
+        """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``): every cell
+        :meth:`values` writes; a file written before ``ttc_age_s`` (no such column) reads as None."""
         def num(v):
             return None if v in (None, "") else float(v)
 
         fields = r.get("fields") or ""
         return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
                    num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
-                   tuple(int(v) for v in str(fields).split()), ttc_age_s=num(r.get("ttc_age_s")))
+                   tuple(int(v) for v in str(fields).split()), azimuth_deg=num(r.get("azimuth_deg")),
+                   elevation_deg=num(r.get("elevation_deg")), ttc_age_s=num(r.get("ttc_age_s")))
 
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
