@@ -173,11 +173,14 @@ def test_change_box_on_a_still_textured_background_for_any_window():
 _SQUARE = (80.0, 60.0, 10.0)      # centre x, y and half-side (px) of the growing square of the onset_support tests
 
 
-def _growing_square(scale: float) -> np.ndarray:
+def _growing_square(scale: float, plain: bool = False) -> np.ndarray:
     """A 160 x 120 frame: a textured square (centre and half-side ``_SQUARE``) whose texture is scaled by ``scale``
-    about its centre (the point x of ``scale`` 1 is seen at c + scale (x - c)), over a still textured background."""
+    about its centre (the point x of ``scale`` 1 is seen at c + scale (x - c)), over a still textured background
+    (``plain``: a plain grey one)."""
     rng = np.random.default_rng(7)
     bg = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
+    if plain:
+        bg = np.full_like(bg, 128.0)
     obj = cv2.GaussianBlur(rng.uniform(0, 255, (120, 160)).astype(np.float32), (0, 0), 1.2)
     cx, cy, half = _SQUARE
     yy, xx = np.mgrid[:120, :160].astype(np.float32)
@@ -196,13 +199,65 @@ def test_moving_extent_is_the_growing_object_not_its_box():
     cx, cy, _ = _SQUARE
     k = 1.1
     a, b = _growing_square(1.0), _growing_square(k)
-    w, h, n = moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))
-    assert 18 <= w <= 24 and 18 <= h <= 24 and n >= 100
-    w, h, _ = moving_extent(a, b, (cx, cy, 22.0, 22.0), (cx, cy, 20.0, 20.0))
-    assert 18 <= w <= 23 and 18 <= h <= 23
-    assert moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0, 40.0))[2] < n / 4   # a box that did not grow
-    assert moving_extent(a, a, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))[2] == 0   # nothing changed
+    e = moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))
+    assert 18 <= e.width <= 24 and 18 <= e.height <= 24 and e.pixels >= 100
+    assert abs(e.x - cx) <= 1.5 and abs(e.y - cy) <= 1.5
+    n = e.pixels
+    e = moving_extent(a, b, (cx, cy, 22.0, 22.0), (cx, cy, 20.0, 20.0))
+    assert 18 <= e.width <= 23 and 18 <= e.height <= 23
+    assert moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0, 40.0)).pixels < n / 4   # a box that did not grow
+    assert moving_extent(a, a, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k)).pixels == 0   # nothing changed
     assert moving_extent(a, b, (500.0, 60.0, 40.0, 40.0), (500.0, 60.0, 36.0, 36.0)) is None  # outside the frame
+
+
+def test_the_background_beside_a_growing_object_is_seen_to_stay_still_where_it_has_texture():
+    """support_still: in a box twice the width of a textured square that grew 10 % as the box did, most of the box
+    beyond the square is seen to stay still over a textured background (the box's motion would have changed it,
+    and nothing changed); over a plain background none of it is (nothing there could show a motion)."""
+    from mlplc2.targets.change import moving_extent
+    cx, cy, _ = _SQUARE
+    k = 1.1
+    for plain in (False, True):
+        a, b = _growing_square(1.0, plain), _growing_square(k, plain)
+        e = moving_extent(a, b, (cx, cy, 40.0, 40.0), (cx, cy, 40.0 / k, 40.0 / k))
+        assert 18 <= e.width <= 24 and min(e.beyond) > 400          # the square; the ring of background around it
+        share = [s / n for s, n in zip(e.still, e.beyond)]
+        assert (min(share) > 0.6) if not plain else (max(share) < 0.05), (plain, share)
+
+
+def test_a_box_grown_over_the_background_is_put_on_its_object():
+    """support_reseat, through the target layer: a textured square grows 3 % a frame for five frames and a track's
+    box, twice its width, grew with it. Over a still textured background the box is put on the square (its width
+    within 20 % of the square's) once the track has had a time to contact of its own. It stays as it was over a plain
+    background (nothing there is seen to stay still), on a track with no time to contact yet, where another
+    track's box is the square already (the part that moves is that track's object), and once put (once a track)."""
+    from mlplc2.targets import TargetLayer
+    cx, cy, half = _SQUARE
+    g = 1.03
+    side = 2 * half * g ** 4                      # the square's width now
+
+    def reseated(plain=False, held=True, other=False):
+        layer = TargetLayer(TargetParams(), fps=30.0)
+        for i in range(5):
+            layer.step(_growing_square(g ** i, plain), None, (), i)
+        t = Track(1, 0, cx, cy, 2 * side, 2 * side, history=deque(
+            Observation(k, k * math.log(g), cx, cy, 2 * side / g ** (4 - k), 0.0, False, 2 * side / g ** (4 - k))
+            for k in range(5)))
+        t.held = (4.0, 1.0) if held else None
+        layer._tracks = [t] + ([Track(2, 0, cx, cy, side, side)] if other else [])
+        layer._reseat_support(t)
+        return layer, t
+
+    layer, t = reseated()
+    assert t.supported and abs(t.w - side) <= 0.2 * side and abs(t.h - side) <= 0.2 * side
+    assert abs(t.cx - cx) <= 1.5 and abs(t.cy - cy) <= 1.5
+    _, fresh = reseated(held=False)               # once a track: the same box and history again, not put again
+    t.cx, t.cy, t.w, t.h, t.history = cx, cy, 2 * side, 2 * side, fresh.history
+    layer._reseat_support(t)
+    assert (t.w, t.h) == (2 * side, 2 * side)
+    for kw in ({"plain": True}, {"held": False}, {"other": True}):
+        _, t = reseated(**kw)
+        assert not t.supported and (t.w, t.h) == (2 * side, 2 * side), kw
 
 
 def test_a_course_counted_in_the_extent_that_moves_with_the_box():

@@ -9,11 +9,12 @@ from __future__ import annotations
 
 import math
 from functools import lru_cache
+from typing import NamedTuple
 
 import cv2
 import numpy as np
 
-__all__ = ["change_box", "moving_extent", "uniform_box", "uniform_region"]
+__all__ = ["Support", "change_box", "moving_extent", "uniform_box", "uniform_region"]
 
 
 @lru_cache(maxsize=None)
@@ -208,26 +209,45 @@ def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, f
 
 
 # moving_extent: a pixel belongs to the box's object where it changed since the reference frame by at least
-# SUPPORT_CHANGE grey levels and the box's own motion explains the change to within SUPPORT_EXPLAINED of it; both
-# differences are smoothed over SUPPORT_BLUR px (the grain of a codec's or a sensor's noise, not an object's edge)
+# SUPPORT_CHANGE grey levels and the box's own motion explains the change to within SUPPORT_EXPLAINED of it; it is
+# seen to stay still where the box's motion would have changed it by that much and the still scene explains that
+# to within SUPPORT_EXPLAINED; both differences are smoothed over SUPPORT_BLUR px (the grain of a codec's or a
+# sensor's noise, not an object's edge). The box put on the moving part (TargetParams.support_reseat) spans
+# SUPPORT_PAD times its 5th-95th percentile span (which leaves out a tenth of it).
 SUPPORT_CHANGE = 6.0
 SUPPORT_EXPLAINED = 0.5
 SUPPORT_BLUR = 1.5
+SUPPORT_PAD = 1.1
+
+
+class Support(NamedTuple):
+    """:func:`moving_extent`'s answer: the part of a box that moves with it, and what lies beyond that part."""
+
+    width: float        #: the part's 5th-95th percentile span on x (px)
+    height: float       #: ... on y
+    pixels: int         #: how many pixels it counts
+    x: float            #: the centre of that span on x
+    y: float            #: ... on y
+    beyond: tuple[int, int]   #: the box's pixels more than 1 px beyond the part's own box (SUPPORT_PAD times its span) on x, on y
+    still: tuple[int, int]    #: of those, the ones seen to stay still (the still scene, not the box's motion, explains them)
 
 
 def moving_extent(prev: np.ndarray, cur: np.ndarray, box: tuple[float, float, float, float],
-                  then: tuple[float, float, float, float]) -> tuple[float, float, int] | None:
-    """The extent (width, height px, and the number of pixels it counts) of the part of ``box`` (centre x, y,
-    width, height in ``cur``) that moves as the box moved since ``prev`` (the same camera's earlier frame,
-    compensated into ``cur``'s pixels: a still scene stays put), where it was ``then`` (centre x, y, width, height
-    in those pixels): a point of the box at ``c + u`` now was at ``c_then + u * (w_then / w, h_then / h)``.
+                  then: tuple[float, float, float, float]) -> Support | None:
+    """The part of ``box`` (centre x, y, width, height in ``cur``) that moves as the box moved since ``prev`` (the
+    same camera's earlier frame, compensated into ``cur``'s pixels: a still scene stays put), where it was ``then``
+    (centre x, y, width, height in those pixels): a point of the box at ``c + u`` now was at
+    ``c_then + u * (w_then / w, h_then / h)``.
 
     A pixel of the box counts where its grey level changed since ``prev`` by at least :data:`SUPPORT_CHANGE`
     (it moved) and the box's motion undoes that change to within :data:`SUPPORT_EXPLAINED` of it (it moved with
     the box), both differences smoothed over :data:`SUPPORT_BLUR` px: the object's texture and edges, not the
     still background beside it, which changed nowhere, nor a background moving otherwise. The extent is the span
     of those pixels' coordinates from the 5th to the 95th percentile on each axis (the edge ring of a uniform
-    object spans it too). None when the box lies outside the frames or has no size."""
+    object spans it too). A pixel is seen to stay still where the box's motion would change it by at least
+    :data:`SUPPORT_CHANGE` and the still scene explains it to within :data:`SUPPORT_EXPLAINED`: textured
+    background, not a plain one (nor a uniform object's plain inside), which says nothing either way
+    (:class:`Support`, ``still``). None when the box lies outside the frames or has no size."""
     cx, cy, w, h = box
     tx, ty, tw, th = then
     hh, ww = cur.shape
@@ -250,6 +270,12 @@ def moving_extent(prev: np.ndarray, cur: np.ndarray, box: tuple[float, float, fl
     on = inside & (e_still >= SUPPORT_CHANGE) & (e_box <= SUPPORT_EXPLAINED * e_still)
     n = int(on.sum())
     if n == 0:
-        return 0.0, 0.0, 0
+        return Support(0.0, 0.0, 0, cx, cy, (0, 0), (0, 0))
     xs, ys = xx[on], yy[on]
-    return (float(np.percentile(xs, 95) - np.percentile(xs, 5)), float(np.percentile(ys, 95) - np.percentile(ys, 5)), n)
+    (xa, xb), (ya, yb) = np.percentile(xs, [5, 95]), np.percentile(ys, [5, 95])
+    still = inside & (e_box >= SUPPORT_CHANGE) & (e_still <= SUPPORT_EXPLAINED * e_box)
+    half = (SUPPORT_PAD - 1.0) / 2.0              # the part's box reaches this share of its span beyond it
+    px, py = half * (xb - xa) + 1.0, half * (yb - ya) + 1.0
+    bx, by = inside & ((xx < xa - px) | (xx > xb + px)), inside & ((yy < ya - py) | (yy > yb + py))
+    return Support(float(xb - xa), float(yb - ya), n, float(xa + xb) / 2.0, float(ya + yb) / 2.0,
+                   (int(bx.sum()), int(by.sum())), (int((still & bx).sum()), int((still & by).sum())))

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import change_box, moving_extent, uniform_box, uniform_region
+from .change import SUPPORT_PAD, Support, change_box, moving_extent, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -30,6 +30,8 @@ __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
+#: ``support_reseat``: the box put on the part that moves with it is at least this many px on a side
+_MIN_SIDE = 6.0
 
 
 class TargetLayer:
@@ -170,6 +172,9 @@ class TargetLayer:
         self._before = None if self._prev is None else self._clock
         self._clock = clock
         now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
+        if p.support_reseat > 0:
+            for t in self._tracks:
+                self._reseat_support(t)
         self._merge(now)
         seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
         for f in fields:
@@ -359,22 +364,61 @@ class TargetLayer:
         track at it, on a uniform region's box (measured afresh, not moved: ``Track.uniform``), or where fewer than
         ``support_min`` pixels moved with the box."""
         p = self.params
-        if p.onset_support <= 0 or o.miss_xy is None or self._now is None or t.uniform:
+        if p.onset_support <= 0 or o.miss_xy is None:
             return True
+        ext = self._support(t)
+        if ext is None or ext.pixels < p.support_min:
+            return True
+        rw, rh = max(t.w / max(ext.width, 1.0), 1.0), max(t.h / max(ext.height, 1.0), 1.0)
+        return math.hypot(o.miss_xy[0] * rw, o.miss_xy[1] * rh) <= p.onset_support
+
+    def _support(self, t: Track) -> Support | None:
+        """:func:`moving_extent` of track ``t``'s box against the frame ``change_frames`` before (:meth:`_reference`;
+        the box then from the track's own history); None without a frame that old, an observation of the track at
+        it, or on a uniform region's box (measured afresh, not moved: ``Track.uniform``)."""
+        if self._now is None or t.uniform:
+            return None
         ref = self._reference()
         if ref is None:
-            return True
+            return None
         then = self._clock - ref[1]
         old = [q for q in t.history if q.frame <= then + _EPS]
         if not old or then - old[-1].frame > 1.0 + _EPS:
-            return True
+            return None
         q = old[-1]
-        ext = moving_extent(ref[0][0], self._now[0], (t.cx, t.cy, t.w, t.h),
-                            (q.x + t.ox, q.y + t.oy, q.width, q.width if q.height is None else q.height))
-        if ext is None or ext[2] < p.support_min:
-            return True
-        rw, rh = max(t.w / max(ext[0], 1.0), 1.0), max(t.h / max(ext[1], 1.0), 1.0)
-        return math.hypot(o.miss_xy[0] * rw, o.miss_xy[1] * rh) <= p.onset_support
+        return moving_extent(ref[0][0], self._now[0], (t.cx, t.cy, t.w, t.h),
+                             (q.x + t.ox, q.y + t.oy, q.width, q.width if q.height is None else q.height))
+
+    def _reseat_support(self, t: Track) -> None:
+        """``support_reseat``: put the box of track ``t`` on the part of it that moves with it (:meth:`_support`), on
+        each axis where the box is more than ``support_reseat`` times that part's span and at least
+        ``support_still`` of the box beyond that part is seen to stay still (textured background the box's
+        motion does not explain; a plain one, or a dark object's plain body, says nothing). Once per track, on a
+        track that has had a time to contact of its own (a box that grew over the background beside its object
+        measures a wrong one; a track without one warns of nothing), not on a box cut by the border, only where
+        at least twice ``support_min`` pixels moved with the box, and never onto a part of another track (the
+        part that moves is then that track's object: :meth:`_merge` would make the two one and keep this one's
+        history, the background's)."""
+        p = self.params
+        if t.supported or self._size is None or t.held is None or t.held[0] < t.birth \
+                or t.cut((self._size[1], self._size[0]), p.border):
+            return
+        ext = self._support(t)
+        if ext is None or ext.pixels < 2 * p.support_min:
+            return
+        k, share = p.support_reseat, p.support_still
+        cx, cy, w, h = t.cx, t.cy, t.w, t.h
+        if w > k * max(ext.width, 1.0) and ext.still[0] >= share * ext.beyond[0]:
+            cx, w = ext.x, max(SUPPORT_PAD * ext.width, _MIN_SIDE)
+        if h > k * max(ext.height, 1.0) and ext.still[1] >= share * ext.beyond[1]:
+            cy, h = ext.y, max(SUPPORT_PAD * ext.height, _MIN_SIDE)
+        if (w, h) == (t.w, t.h):
+            return
+        part = Track(-1, 0, cx, cy, w, h)
+        if any(o is not t and not o.shadow and o.overlap(part) >= 0.5 for o in self._tracks):
+            return
+        t.reseat((cx, cy, w, h))
+        t.supported = True
 
     def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square

@@ -486,6 +486,22 @@ class TargetParams(ParameterSet):
     support_min: int = param(100, """The fewest pixels of a box that must move with it for ``onset_support`` to
                              test it (fewer: no test; a small or plain object's few pixels give no extent).""",
                              valid=Valid.integer(1))
+    support_reseat: float = param(1.5, """A box more than this many times as wide (or as tall) as the part of it that moves
+                                  with it (``onset_support``'s measurement, :func:`~mlplc2.targets.change.moving_extent`,
+                                  at least twice ``support_min`` pixels) is put on that part, on that axis (its span times
+                                  1.1, the 5th-95th percentile's), its history carried (:meth:`Track.reseat`), where at least
+                                  ``support_still`` of the box beyond that part is seen to stay still: a box grown over the
+                                  background beside its object measures neither the object's growth nor its course.
+                                  Once per target, on a target that has had a time to contact of its own, not on a uniform
+                                  region's box nor on one cut by the border, and never onto a part of another target.
+                                  0 = off (as until session 25).""",
+                                  valid=Valid.real(minimum=0))
+    support_still: float = param(0.5, """``support_reseat`` cuts a box down on an axis only where at least this share of
+                                 the box's pixels beyond the part that moves with it are seen to stay still (the still
+                                 scene, not the box's motion, explains them: textured background). A plain background
+                                 or a dark object's plain body says nothing either way and is not cut (a night car whose
+                                 lights alone move, a uniform disc whose edge moves on one side only).""",
+                                 valid=Valid.real(minimum=0, maximum=1))
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
