@@ -393,15 +393,14 @@ class TargetLayer:
         """``support_reseat``: put the box of track ``t`` on the part of it that moves with it (:meth:`_support`), on
         each axis where the box is more than ``support_reseat`` times that part's span and at least
         ``support_still`` of the box beyond that part is seen to stay still (textured background the box's
-        motion does not explain; a plain one, or a dark object's plain body, says nothing). Once per track, on a
-        track that has had a time to contact of its own (a box that grew over the background beside its object
-        measures a wrong one; a track without one warns of nothing), not on a box cut by the border, only where
-        at least twice ``support_min`` pixels moved with the box, and never onto a part of another track (the
-        part that moves is then that track's object: :meth:`_merge` would make the two one and keep this one's
-        history, the background's)."""
+        motion does not explain; a plain one, or a dark object's plain body, says nothing). Only on a track that
+        has had a time to contact of its own (a box that grew over the background beside its object measures a
+        wrong one; a track without one warns of nothing), not on a box cut by the border, only where at least
+        twice ``support_min`` pixels moved with the box, and never onto a part of another track (the part that
+        moves is then that track's object: :meth:`_merge` would make the two one and keep this one's history,
+        the background's). Any frame the box has grown over the background again."""
         p = self.params
-        if t.supported or self._size is None or t.held is None or t.held[0] < t.birth \
-                or t.cut((self._size[1], self._size[0]), p.border):
+        if self._size is None or t.held is None or t.held[0] < t.birth or t.cut((self._size[1], self._size[0]), p.border):
             return
         ext = self._support(t)
         if ext is None or ext.pixels < 2 * p.support_min:
@@ -418,7 +417,6 @@ class TargetLayer:
         if any(o is not t and not o.shadow and o.overlap(part) >= 0.5 for o in self._tracks):
             return
         t.reseat((cx, cy, w, h))
-        t.supported = True
 
     def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square

@@ -492,8 +492,8 @@ class TargetParams(ParameterSet):
                                   1.1, the 5th-95th percentile's), its history carried (:meth:`Track.reseat`), where at least
                                   ``support_still`` of the box beyond that part is seen to stay still: a box grown over the
                                   background beside its object measures neither the object's growth nor its course.
-                                  Once per target, on a target that has had a time to contact of its own, not on a uniform
-                                  region's box nor on one cut by the border, and never onto a part of another target.
+                                  Only on a target that has had a time to contact of its own, not on a uniform region's box
+                                  nor on one cut by the border, and never onto a part of another target; on any frame.
                                   0 = off (as until session 25).""",
                                   valid=Valid.real(minimum=0))
     support_still: float = param(0.5, """``support_reseat`` cuts a box down on an axis only where at least this share of

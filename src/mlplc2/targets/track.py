@@ -141,7 +141,6 @@ class Track:
     inside: deque = field(default_factory=deque)    # the last observations whose box was not cut
     fails: int = 0
     last_answer: float = -(10 ** 9)    # clock of the frame an attention field of it last answered
-    supported: bool = False            # support_reseat: put on the part of its box that moves with it (once)
     last_alarm: float = -(10 ** 9)     # clock of the frame a field of it was last in collision alarm
     alarm_run: int = 0                 # processed frames in a row, up to ``last_alarm``, with a field of it in collision alarm
     alarm_courses: int = 0             # of those frames, the ones on which its fit gave a course (``alarm_onset_course``)
