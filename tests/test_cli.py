@@ -600,6 +600,53 @@ def test_a_file_where_a_folder_is_needed_is_said_so(data, tmp_path, capsys, argv
     assert f.read_text() == "x\n"
 
 
+def test_an_output_folder_that_cannot_be_written_points_to_out(data, tmp_path, monkeypatch, capsys):
+    """The default output folder lies beside the input, which may be a read-only data folder: the one error
+    line names the folder and says how to write elsewhere (a user's trial, session 26)."""
+    import errno
+    from pathlib import Path
+
+    clip = tmp_path / "clip.avi"
+    clip.write_bytes(data["avi"].read_bytes())
+    mkdir = Path.mkdir
+
+    def read_only(self, *a, **k):
+        if self.name == "clip_mlplc2":
+            raise OSError(errno.EROFS, "Read-only file system", str(self))
+        return mkdir(self, *a, **k)
+
+    monkeypatch.setattr(Path, "mkdir", read_only)
+    assert main(["run", str(clip), "--end", "6", "-q"]) == 2
+    line = _one_error_line(capsys.readouterr().err)
+    assert line == f"mlplc2: error: {tmp_path / 'clip_mlplc2'}: Read-only file system " \
+                   "(write the outputs elsewhere with --out DIR)", line
+
+
+def test_run_params_file_reaches_the_models_and_is_recorded(data, tmp_path, capsys):
+    """`mlplc2 run --params FILE.json` (the format of `batch --params`): a collision threshold no response reaches
+    silences the looming square's alarms, the LGMD2 section reaches LGMD2, and fields.json records what each
+    model ran with (a user's trial, session 26: the option was refused)."""
+    def alarms(out):
+        rows = (out / "responses.csv").read_text().splitlines()[1:]
+        return sum(1 for r in rows if r.split(",")[2] == "mlplc2" and r.split(",")[7] == "1")
+
+    plain, quiet = tmp_path / "plain", tmp_path / "quiet"
+    assert main(["run", str(data["avi"]), "--out", str(plain), "-m", "mlplc2,lgmd2", "-q"]) == 0
+    assert alarms(plain) > 0
+    assert json.loads((plain / "fields.json").read_text())["params"] == {"mlplc2": {}, "lgmd2": {}}
+    f = tmp_path / "p.json"
+    f.write_text(json.dumps({"alarm_threshold": 1e12, "lgmd2": {"n_ts": 3}}))
+    assert main(["run", str(data["avi"]), "--out", str(quiet), "-m", "mlplc2,lgmd2", "--params", str(f),
+                 "--horizon", "2", "-q"]) == 0
+    assert alarms(quiet) == 0
+    assert json.loads((quiet / "fields.json").read_text())["params"] == {
+        "mlplc2": {"alarm_threshold": 1e12, "targets": {"horizon_s": 2.0}}, "lgmd2": {"n_ts": 3}}
+    f.write_text(json.dumps({"alarm_treshold": 5}))
+    assert main(["run", str(data["avi"]), "--out", str(tmp_path / "bad"), "--params", str(f), "-q"]) == 2
+    assert "unknown parameter 'alarm_treshold'" in _one_error_line(capsys.readouterr().err)
+    assert not (tmp_path / "bad").exists()
+
+
 def test_an_output_folder_given_as_the_input_is_refused(data, tmp_path, capsys):
     """`mlplc2 run OUT` on a run's own output folder ran its responses.png as a one-frame video (exit 0,
     'no fields, no alarm'); it is one error line, and nothing is written."""

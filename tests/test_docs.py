@@ -15,6 +15,7 @@ import pytest
 
 import mlplc2
 from mlplc2 import cli
+from mlplc2.models.flow import FlowParams
 from mlplc2.models.lgmd import LGMD1Params, LGMD2Params
 from mlplc2.params import Params, parameter_table
 from mlplc2.targets import TargetParams
@@ -44,7 +45,8 @@ def _generated(text: str, command: str) -> str:
 
 @pytest.mark.parametrize("doc, args, cls", [("model.md", [], Params), ("targets.md", ["--targets"], TargetParams),
                                              ("model.md", ["--lgmd2"], LGMD2Params),
-                                             ("model.md", ["--lgmd1"], LGMD1Params)])
+                                             ("model.md", ["--lgmd1"], LGMD1Params),
+                                             ("flow.md", ["--flow"], FlowParams)])
 def test_parameter_table_in_docs_is_the_generated_one(doc, args, cls, capsys):
     """Regenerate with the command named in the markers (``mlplc2 params --markdown``)."""
     command = " ".join(["mlplc2 params", *args, "--markdown"])

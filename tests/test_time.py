@@ -56,6 +56,15 @@ def test_timestamps_must_increase(frames):
     assert (out.frame, out.time_s) == (1, 1.0 + 1 / FPS)
 
 
+def test_a_camera_clock_out_of_order_is_named_with_all_its_digits(frames):
+    """An epoch clock (s since 1970) that steps back by 50 ms: the error gives both times in full, not
+    ``1.76e+09 s after 1.76e+09 s`` (a user's trial, session 26)."""
+    m = REGISTRY["lgmd2"](fps=FPS)
+    m.step(frames[0], 1760000000.6)
+    with pytest.raises(InputError, match=r"t = 1760000000\.55 s after 1760000000\.6 s"):
+        m.step(frames[1], 1760000000.55)
+
+
 def _first_warning(outs):
     return next((o for o in outs if o.warning), None)
 

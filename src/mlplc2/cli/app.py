@@ -5,6 +5,7 @@ parser built from :data:`SUBCOMMANDS`, the exit codes of errors (the package doc
 from __future__ import annotations
 
 import argparse
+import errno
 import os
 import sys
 import warnings
@@ -54,6 +55,10 @@ def _quiet_decoders() -> None:
 def _show_warning(message, category, filename, lineno, file=None, line=None) -> None:  # noqa: ARG001
     """``warnings.showwarning`` of the CLI: one line, ``mlplc2: warning: ...``."""
     warn(one_line(str(message)))
+
+
+#: The errors of a folder that cannot be written (no permission, a read-only file system).
+_NOT_WRITABLE = (errno.EACCES, errno.EPERM, errno.EROFS)
 
 
 def _os_error_line(exc: OSError) -> str:
@@ -106,7 +111,10 @@ def _main(argv: list[str] | None) -> int:
         print(f"{PROG}: error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_INPUT
     except OSError as exc:
-        print(f"{PROG}: error: {one_line(_os_error_line(exc))}", file=sys.stderr)
+        line = _os_error_line(exc)
+        if exc.errno in _NOT_WRITABLE and "out" in vars(args):   # the default output folder lies beside the input
+            line += " (write the outputs elsewhere with --out DIR)"
+        print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
         print(f"{PROG}: interrupted", file=sys.stderr)

@@ -31,6 +31,9 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                    help="output folder (default: <stem>_mlplc2/ next to the input)")
     p.add_argument("--fps", type=pos_float, metavar="F",
                    help="frame rate to assume (default: the video's; images: 30)")
+    p.add_argument("--params", metavar="FILE.json",
+                   help="JSON object of Params fields overriding the defaults, with {\"lgmd2\": {...}} sections for "
+                        "other models (the format of 'mlplc2 batch --params'; 'mlplc2 params' lists the fields)")
     size = p.add_mutually_exclusive_group()
     size.add_argument("--resize", type=frame_size, metavar="WxH",
                       help="resize frames before the models (e.g. 320x240); coordinates in the "
@@ -118,7 +121,8 @@ def _run(args, jsonl) -> int:
                              hfov_deg=args.hfov, keep_rows=False, repeat_threshold=repeat_threshold_option(args),
                              decoder=args.decoder, draw_fields="all" if args.all_fields else "responding" if args.fields else "auto",
                              target_params=_target_params(args), jsonl=jsonl, live=args.live,
-                             max_frames=args.max_frames, duration_s=args.duration, gyro=args.gyro, **stabilise)
+                             max_frames=args.max_frames, duration_s=args.duration, gyro=args.gyro,
+                             params=_model_params(args.params, models), **stabilise)
         except RunInterrupted as exc:
             return _report_interrupt(exc)
         except InputError as exc:
@@ -135,6 +139,18 @@ def _run(args, jsonl) -> int:
         warn(result.message)
         return EXIT_TRUNCATED
     return EXIT_OK
+
+
+def _model_params(path, models: list[str]) -> dict | None:
+    """``--params FILE.json`` as the run's ``params``: each model's parameter object where the file changes one of
+    its parameters (:func:`mlplc2.batch.param_sets`, checked against every model of the run first; None: none)."""
+    if path is None:
+        return None
+    from ..batch import model_params, param_sets
+
+    pset = param_sets(path, None, models)[0]
+    params = {m: model_params(pset, m) for m in models}
+    return {m: p for m, p in params.items() if p is not None} or None
 
 
 def _target_params(args) -> dict | None:

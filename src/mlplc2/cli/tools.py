@@ -21,16 +21,19 @@ def _add_params(p: argparse.ArgumentParser) -> None:
                        help="the target estimators' TargetParams instead of the model's Params")
     which.add_argument("--lgmd2", action="store_true", help="the LGMD2 baseline's LGMD2Params")
     which.add_argument("--lgmd1", action="store_true", help="the LGMD1 baseline's LGMD1Params")
+    which.add_argument("--flow", action="store_true", help="the flow baseline's FlowParams")
     p.add_argument("--markdown", action="store_true",
                    help="as the Markdown table of docs/model.md (docs/targets.md with --targets)")
 
 
 def _cmd_params(args) -> int:
+    from ..models.flow import FlowParams
     from ..models.lgmd import LGMD1Params, LGMD2Params
     from ..params import Params, parameter_table
     from ..targets import TargetParams
 
-    cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else Params
+    cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else \
+        FlowParams if args.flow else Params
     out(parameter_table(cls, markdown=args.markdown), end="")
     return EXIT_OK
 

@@ -340,8 +340,8 @@ class Model(abc.ABC):
         if self._t_last is None:
             return 0, t
         if not t > self._t_last:
-            raise InputValueError(f"frame {self._frame}: timestamps must increase, got t = {t:g} s after "
-                                  f"{self._t_last:g} s")
+            raise InputValueError(f"frame {self._frame}: timestamps must increase, got t = {t!r} s after "
+                                  f"{self._t_last!r} s")   # repr: all the digits a camera's epoch clock needs
         raw = (t - self._t0) * self.fps
         whole = round(raw)
         clock = whole if abs(raw - whole) <= CLOCK_TOLERANCE else raw

@@ -445,8 +445,22 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        repeated={m.name: 0 for m in built},
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
-                                     None))
+                                     None), params={m.name: _changed(m) for m in built})
     return src, built, result
+
+
+def _changed(model: Model) -> dict:
+    """The parameters ``model`` runs with that differ from its defaults (``fields.json`` ``"params"``); those of its
+    target layer under ``"targets"``."""
+    def diff(p) -> dict:
+        default = type(p)().to_dict()
+        return {k: v for k, v in p.to_dict().items() if default.get(k) != v}
+
+    out = diff(model.params)
+    targets = getattr(model, "target_params", None) if model.has_targets else None
+    if targets is not None and diff(targets):
+        out["targets"] = diff(targets)
+    return out
 
 
 #: Frames of a video :func:`run` looks at first to tell whether its frames were duplicated.

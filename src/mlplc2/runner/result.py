@@ -104,6 +104,10 @@ class RunResult:
     deliver, whose rows the CSV files still hold (``n_frames`` counts it); not :attr:`complete`."""
     latency: dict[str, float] = field(default_factory=dict)
     """From a frame's decoding to the end of its outputs (its JSON line): ``median_ms``, ``p99_ms``, ``max_ms``."""
+    params: dict[str, dict] = field(default_factory=dict)
+    """Per model, the parameters it ran with that differ from its defaults (``{}``: the defaults), in the format
+    of ``mlplc2 run --params`` (and ``batch``); a model with targets adds those of its ``TargetParams`` under
+    ``"targets"``."""
     duplicated: bool | None = False
     """The video repeats its frames: its first frames looked duplicated (so the models with
     ``repeat_threshold="auto"`` held the copies from the start, :data:`mlplc2.runner.PRESCAN_FRAMES`),
@@ -148,4 +152,5 @@ class RunResult:
             "dropped": self.dropped,
             "reader_gone": self.reader_gone,
             "latency_ms": self.latency,
+            "params": self.params,
         }
