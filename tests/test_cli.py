@@ -620,6 +620,14 @@ def test_an_output_folder_that_cannot_be_written_points_to_out(data, tmp_path, m
     line = _one_error_line(capsys.readouterr().err)
     assert line == f"mlplc2: error: {tmp_path / 'clip_mlplc2'}: Read-only file system " \
                    "(write the outputs elsewhere with --out DIR)", line
+    import cv2
+
+    def unreadable(path, *a, **k):       # an input that cannot be read is not an output's fault
+        raise PermissionError(errno.EACCES, "Permission denied", str(clip))
+
+    monkeypatch.setattr(cv2, "VideoCapture", unreadable)
+    assert main(["run", str(clip), "--out", str(tmp_path / "o"), "-q"]) == 2
+    assert _one_error_line(capsys.readouterr().err) == f"mlplc2: error: {clip}: Permission denied"
 
 
 def test_run_params_file_reaches_the_models_and_is_recorded(data, tmp_path, capsys):

@@ -61,6 +61,14 @@ def _show_warning(message, category, filename, lineno, file=None, line=None) -> 
 _NOT_WRITABLE = (errno.EACCES, errno.EPERM, errno.EROFS)
 
 
+def _is_input(args, filename) -> bool:
+    """Whether ``filename`` (an OSError's) names one of the command's inputs (``SOURCE``, ``INPUTS``), not an output."""
+    if filename is None:
+        return False
+    given = [getattr(args, "source", None), *(getattr(args, "inputs", None) or [])]
+    return any(g is not None and os.fsdecode(filename) == str(g) for g in given)
+
+
 def _os_error_line(exc: OSError) -> str:
     """``PATH: REASON`` of an ``OSError``; a file where a folder is needed (an output folder, or a folder above
     an output, that is a file) is said so instead of the system's "File exists" / "Not a directory"."""
@@ -112,8 +120,8 @@ def _main(argv: list[str] | None) -> int:
         return EXIT_INPUT
     except OSError as exc:
         line = _os_error_line(exc)
-        if exc.errno in _NOT_WRITABLE and "out" in vars(args):   # the default output folder lies beside the input
-            line += " (write the outputs elsewhere with --out DIR)"
+        if exc.errno in _NOT_WRITABLE and "out" in vars(args)  and not _is_input(args, exc.filename):
+            line += " (write the outputs elsewhere with --out DIR)"   # the default output folder lies beside the input
         print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
         return EXIT_INPUT
     except KeyboardInterrupt:
