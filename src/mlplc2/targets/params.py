@@ -576,22 +576,6 @@ class TargetParams(ParameterSet):
                               over its offset from the heading: ``ground_forward_4_h8``'s collider, a course of 0.12,
                               drifted by 0.15 and warned 0.33 s later with 0; the drive's false boxes: courses
                               0.24-0.78).""", unit="object extents", valid=Valid.real(minimum=0))
-    drift_cut: bool = param(True, """``path_drift``'s exemption for a target with a field in collision alarm this
-                            frame holds only for a box wholly inside the frame (not cut by the border,
-                            ``border``; with ``drift_side``, not cut by its left or right border): a roadside
-                            object or the ground sweeping out of view through the border beside the path alarms
-                            as it goes, and its fit's course is no object's (a cut box gives neither the object's
-                            centre nor its size). False = off (on, with ``drift_side``, since session 14: false
-                            episodes per 1000 frames holdout 2 0.41 -> 0.21, holdout 3 0.62 -> 0.51, the standard
-                            suite and holdout 1 as before, no collision, lead or real clip changed; without
-                            ``drift_side`` a collider cut by the bottom border, ``ground_forward_4_h1``'s, warns
-                            0.13 s later; docs/history.md, "The fit's onset the field alarm exempts").""",
-                            valid=Valid.boolean())
-    drift_side: bool = param(True, """With ``drift_cut``: only a box cut by the left or right border loses the
-                             exemption (the static world beside the path leaves the view through the sides; an object
-                             low in the view, on the ground ahead, is cut by the bottom border as it nears). False =
-                             every cut box loses it (session 14: docs/history.md, "The fit's onset the field alarm
-                             exempts").""", valid=Valid.boolean())
     alarm_frames: int = param(2, """From a translating camera (a measured heading), the field alarm without a
                               course (no fit yet) begins a warning on a box that does not hold the heading only
                               once a field of the target has been in collision alarm this many processed

@@ -175,8 +175,7 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
     return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
 
 
-def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None,
-             shape: tuple[int, int] | None = None) -> bool:
+def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None) -> bool:
     """``path_drift`` (docs/history.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -185,12 +184,8 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     more than ``path_drift`` of the static world's drift (:func:`drift`), or, where the static world
     would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
     world beside the path expands about the heading, while an object on a collision course keeps its
-    bearing. With ``drift_cut``, the field alarm exempts only a box wholly inside a frame of ``shape``
-    (h, w; None: no test): the static world beside the path sweeps out of view through the border
-    and its field alarm there is the sweep's (docs/history.md, "The fit's onset the field alarm exempts")."""
-    if p.path_drift <= 0 or heading is None or holds(t, heading):
-        return False
-    if t.last_alarm == index and not (shape is not None and p.drift_cut and _cut_at(t, p, shape)):
+    bearing."""
+    if p.path_drift <= 0 or heading is None or holds(t, heading) or t.last_alarm == index:
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
@@ -217,16 +212,6 @@ def fresh(t: Track, p: TargetParams, fps: float, index: float, measured: tuple[f
         return False
     ratio = drift(t, measured, away=True)
     return ratio is not None and ratio > p.fresh_drift
-
-
-def _cut_at(t: Track, p: TargetParams, shape: tuple[int, int]) -> bool:
-    """``drift_cut``: whether track ``t``'s box is cut by the border of a frame of ``shape`` (h, w), with
-    ``drift_side`` only by its left or right border (where the static world beside the path leaves
-    the view)."""
-    if not p.drift_side:
-        return t.cut(shape, p.border)
-    w = shape[1]
-    return t.cx - t.w / 2.0 < p.border or t.cx + t.w / 2.0 > w - 1 - p.border
 
 
 def wide(p: TargetParams, miss: float) -> bool:
@@ -548,7 +533,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss, p.exit_ahead):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured, shape):
+    if warning and not t.warned and off_path(t, p, index, measured):
         warning = False
     # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
     if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
