@@ -105,8 +105,8 @@ class RunResult:
     latency: dict[str, float] = field(default_factory=dict)
     """From a frame's decoding to the end of its outputs (its JSON line): ``median_ms``, ``p99_ms``, ``max_ms``."""
     params: dict[str, dict] = field(default_factory=dict)
-    """Per model, the parameters it ran with that differ from its defaults (``{}``: the defaults), in the format
-    of ``mlplc2 run --params`` (and ``batch``); a model with targets adds those of its ``TargetParams`` under
+    """Per model, the parameters it ran with that differ from its defaults (``{}``: the defaults): the fields of its
+    own parameter set (``Params`` for the LPLC2 family); a model with targets adds those of its ``TargetParams`` under
     ``"targets"``."""
     duplicated: bool | None = False
     """The video repeats its frames: its first frames looked duplicated (so the models with
