@@ -1214,3 +1214,33 @@ def test_a_warning_goes_on_to_contact_over_a_box_cut_at_the_frame(hold):
     assert all(outs[k].warning for k in range(34, CONTACT)) == hold
     if hold:
         assert all(outs[k].ttc_s == pytest.approx((CONTACT - k) / FPS, abs=0.05) for k in range(34, CONTACT))
+
+
+def _streak_then_lapse(p: TargetParams, frames: int, lapse: int = 6) -> list:
+    """An approach straight at the camera, fitted every frame for ``frames`` frames with its contact 32 frames (1.07 s)
+    after the last: no warning yet; then for ``lapse`` frames its box widens fast and narrows in height (it slides off
+    its object), and the fit's isotropy test fails: the targets of every frame."""
+    contact = frames + 32
+    outs = []
+    t = _looming(80.0, frames, contact=contact, each=lambda t, k: outs.append(estimate(t, p, FPS, k, SHAPE)))
+    rate = math.log((contact - frames) / (contact - frames - 1))
+    for k in range(frames + 1, frames + 1 + lapse):
+        move = (0.0, 0.0, math.exp(12.0 * rate), math.exp(-2.0 * rate), 5.0 * rate, 7.0 * rate)
+        assert t.follow(move, k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    return outs
+
+
+def test_a_warning_begins_on_the_time_to_contact_held_after_a_long_streak_of_fits():
+    # held_onset (session 26): a collider's box slides off it as it nears and the fit lapses just before its time to
+    # contact enters the horizon (drone_4_h26's square). After a streak of at least held_onset fits, the time to contact
+    # held, counted down, begins the warning once within the horizon; without it, or after a short streak, never.
+    on = TargetParams(held_onset=15)
+    long = _streak_then_lapse(on, 24)
+    assert not any(o.warning for o in long[:24])                     # fitted: 1.07 s and more, beyond the horizon
+    fitted = [o.ttc_s for o in long[:24] if o.ttc_s is not None]
+    assert len(fitted) >= 15 and min(fitted) > on.horizon_s
+    warned = [o for o in long[24:] if o.warning]
+    assert warned and all(o.ttc_s <= on.horizon_s for o in warned)  # on the held time to contact, counted down
+    assert not any(o.warning for o in _streak_then_lapse(TargetParams(held_onset=0), 24))
+    assert not any(o.warning for o in _streak_then_lapse(on, 12))   # a streak of fewer than 15 fits

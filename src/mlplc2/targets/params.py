@@ -305,6 +305,17 @@ class TargetParams(ParameterSet):
                               the time to contact held through the gap. False = compared with any (as until session
                               19; on since session 20: docs/history.md, "A warning held to contact").""",
                               valid=Valid.boolean())
+    held_onset: int = param(15, """A warning may begin on a frame whose fit gives no time to contact, on the one held
+                            (``hold_frames``: the last one counted down, shown as ``ttc_s`` with its ``ttc_age_s``),
+                            when the fit lapsed after a streak of at least this many fits in a row: once the held time
+                            to contact is within ``horizon_s``, on a course held within ``onset_miss``, on a box not cut
+                            by the border, not off the path (``path_drift``) and not flat (``flat_onset``). A collider's
+                            box that slides off it as it nears (a drone's over a textured ground) loses its fit just
+                            before its time to contact enters the horizon, and warned never. 0 = off (as until session
+                            26). 15 since session 26: over fifteen sets two colliders gained (``drone_4_h26``'s), one
+                            false episode added (``ground_static_4_h30``); 5 added seven (docs/history.md, "The box on
+                            what moves with it, on a cut box and from a moving camera").""", unit="fits",
+                            valid=Valid.integer(0))
     warn_through: int = param(15, """A running warning goes on through frames whose fit gives no time to contact (its
                               growth not significant or not isotropic for a while: a box re-seated, two colliders
                               overlapping), on the time to contact held (``hold_frames``: the last one counted down)

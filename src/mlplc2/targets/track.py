@@ -146,6 +146,7 @@ class Track:
     alarm_courses: int = 0             # of those frames, the ones on which its fit gave a course (``alarm_onset_course``)
     last_estimate: float = -(10 ** 9)  # clock of its last time to contact
     streak: int = 0
+    held_streak: int = 0               # the length of the streak of fits that last ended (``held_onset``)
     streak_since: float = 0.0          # clock of the first estimate of the streak
     birth: float = 0.0                 # clock of its creation (``born``: its frame index)
     span: float = math.inf             # the window (``TargetParams.window``) in clock units

@@ -404,6 +404,19 @@ def held(t: Track, p: TargetParams, fps: float, now: float, view: bool = False) 
     return (left, *t.held[2:]) if left > 0 else (None, None, None, None)
 
 
+def held_onset(t: Track, p: TargetParams, index: float, ttc: float | None, miss: float | None,
+               shape: tuple[int, int], measured: tuple[float, float] | None) -> bool:
+    """``held_onset`` (docs/history.md, "The box on what moves with it, on a cut box and from a moving camera"):
+    whether a warning begins on track ``t``'s time to contact held, ``ttc`` (s, :func:`held`), this frame (clock
+    ``index``) whose fit gave none: its last streak of fits was at least ``held_onset`` long, ``ttc`` is within
+    ``horizon_s``, the course held ``miss`` within ``onset_miss`` (:func:`wide`), the box is not cut by the border
+    of a frame of ``shape`` (h, w), not off the path (:func:`off_path`, against the ``measured`` heading) and not
+    flat (:func:`flat`), and the track's warning was not spent."""
+    return (p.held_onset > 0 and t.streak == 0 and t.held_streak >= p.held_onset and ttc is not None
+            and ttc <= p.horizon_s and miss is not None and not wide(p, miss) and not t.spent
+            and not t.cut(shape, p.border) and not off_path(t, p, index, measured) and not flat(t, p, measured))
+
+
 def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None,
             view: bool = False) -> bool:
     """``warn_through`` (docs/history.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
@@ -508,6 +521,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         if t.first_ttc is None:
             t.first_ttc = ttc
     else:
+        if t.streak:
+            t.held_streak = t.streak
         t.streak = 0
     looming = ttc is not None and _evident(t, p, fps, index, heading, interval)
     # without a course (its box cut by the border), a cut box that keeps its bearing (cut_course)
@@ -558,6 +573,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     t.warned = t.warned or warning
     if ttc is None:
         ttc, sigma, miss, miss_xy = held(t, p, fps, index, view)
+    # ... or begins on the time to contact held, after a long streak of fits (held_onset)
+    if not warning and not began and held_onset(t, p, index, ttc, miss, shape, measured):
+        warning = t.warned = True
     # ... goes on through frames without a fit, on the time to contact held (warn_through; over the view, view_hold)
     if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss, view):
         warning = True
