@@ -120,7 +120,7 @@ def _main(argv: list[str] | None) -> int:
         return EXIT_INPUT
     except OSError as exc:
         line = _os_error_line(exc)
-        if exc.errno in _NOT_WRITABLE and "out" in vars(args)  and not _is_input(args, exc.filename):
+        if exc.errno in _NOT_WRITABLE and "out" in vars(args) and not _is_input(args, exc.filename):
             line += " (write the outputs elsewhere with --out DIR)"   # the default output folder lies beside the input
         print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)
         return EXIT_INPUT

@@ -458,9 +458,8 @@ def _changed(model: Model) -> dict:
 
     out = diff(model.params)
     targets = getattr(model, "target_params", None) if model.has_targets else None
-    if targets is not None and diff(targets):
-        out["targets"] = diff(targets)
-    return out
+    changed = {} if targets is None else diff(targets)
+    return {**out, "targets": changed} if changed else out
 
 
 #: Frames of a video :func:`run` looks at first to tell whether its frames were duplicated.
