@@ -480,6 +480,58 @@ def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
     assert estimate(track(ttc - 0.01), off, FPS, 12, SHAPE).warning
 
 
+def _steady(p: TargetParams, frames: int = 40, then: int = 0) -> list:
+    """A box whose growth rate rises slowly, its time to contact at that rate 1.3 s at frame 1 and 1.1 s at frame
+    ``frames``: the fitted time to contact hardly falls (an object that brakes to keep its distance, or the ground a
+    box slides along as the camera nears); then, for ``then`` frames, an approach at a constant speed from 1.1 s. The
+    targets of frames 1-``frames + then``."""
+    t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    outs = []
+    for k in range(1, frames + then + 1):
+        rate = 1.0 / ((1.3 - 0.2 * (k - 1) / (frames - 1)) * FPS) if k <= frames else \
+            math.log((1.1 * FPS - (k - frames - 1)) / (1.1 * FPS - (k - frames)))
+        t.last_answer = k                                  # an attention field answered: looming evidence
+        assert t.follow((0.0, 0.0, math.exp(rate), math.exp(rate), rate, 0.0), k, FPS, SHAPE, p.max_fails,
+                        border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    return outs
+
+
+def test_a_warning_begins_only_on_a_time_to_contact_that_falls_as_an_approach_does():
+    # onset_fall: a box whose time to contact falls at less than 0.3 s per s as it enters the horizon is no approach
+    # (an approach at a constant speed falls at 1): without the rule it warns, with it never. An approach at a
+    # constant speed warns on the same frame either way; a warning the rule holds back is not ended (not spent)
+    on, off = TargetParams(onset_fall=0.3, stall_hold=0), TargetParams(onset_fall=0.0, stall_hold=0)
+    slow = _steady(off)
+    k = next(k for k, o in enumerate(slow) if o.warning)
+    assert slow[k].ttc_s <= off.horizon_s < slow[k - 6].ttc_s < slow[k].ttc_s + 0.3 * 6 / FPS
+    assert not any(o.warning for o in _steady(on))
+    # stall_hold: once held back on 5 frames, it never begins a warning, even when its time to contact then falls as an
+    # approach's does (the ground's box as it nears the border); without it, it warns then
+    assert any(o.warning for o in _steady(on, then=20)[40:])
+    assert not any(o.warning for o in _steady(replace(on, stall_hold=5), then=20))
+    first = {}
+    for name, p in (("on", on), ("off", off)):
+        outs = []
+        _looming(80.0, 40, contact=60, each=lambda t, k, p=p, outs=outs: outs.append(estimate(t, p, FPS, k, SHAPE)))
+        first[name] = next(k for k, o in enumerate(outs, 1) if o.warning)
+    assert first["on"] == first["off"]
+    ttc = (CONTACT - 12) / FPS
+
+    def fitted_since(frame, before):
+        t = _looming(80.0)
+        t.streak, t.streak_since = 12 - frame, float(frame)   # a run of fits since ``frame``
+        t.ttcs.append((6, before, None))
+        return t
+
+    t = fitted_since(5, ttc + 0.03)                       # 6 frames before: 0.03 s longer (a fall of 0.15 s per s)
+    assert not estimate(t, on, FPS, 12, SHAPE).warning
+    assert not t.spent and not t.warned
+    assert estimate(fitted_since(5, ttc + 6 / FPS), on, FPS, 12, SHAPE).warning   # an approach's: 0.2 s longer
+    # an estimate of an earlier run of fits (another box, before a gap) is not compared with
+    assert estimate(fitted_since(8, ttc + 0.03), on, FPS, 12, SHAPE).warning
+
+
 def test_a_lapsed_warning_begins_again_only_on_a_short_course():
     # reonset_miss: a target that has warned and whose last frame was no warning (its box slid off its
     # object) over a patch that expands about the principal point 0.83 of its widths right of it (a still

@@ -346,6 +346,25 @@ class TargetParams(ParameterSet):
                                   0.62 with ``flat_onset``, no collision, lead or real clip changed; docs/history.md,
                                   "A flat box across the path").""",
                                   valid=Valid.boolean())
+    onset_fall: float = param(0.3, """A warning begins only on a time to contact that falls at least this fast (s per s): a
+                              frame whose ``ttc_s`` lies above the one the target had ``fall_frames`` frames (at
+                              ``nominal_fps``) before, in the same run of fits, less this rate times the time between
+                              them, does not begin a warning; it is held back, not ended. An approach at a constant
+                              speed falls at 1 (tau-dot = -1); one that brakes to stop short of the camera at 0.5 or
+                              less (Lee 1976); the ground beside the path, followed by a box that slides along it as
+                              the camera nears, holds a time to contact that hardly falls. 0 = off (as until session
+                              27). 0.3 since session 27, with ``stall_hold``: over sixteen sets three false episodes
+                              fewer, no collider lost, two warned a frame or two later (docs/history.md, "A time to
+                              contact that does not fall").""", unit="s/s",
+                              valid=Valid.real(minimum=0, maximum=1))
+    stall_hold: int = param(5, """A target whose warning was held back on this many frames as its time to contact did not
+                            fall (``onset_fall``, ``countdown_onset``) never begins one: a time to contact that stayed
+                            within the horizon without falling is no approach, even where it falls later (the ground's
+                            box as it nears the frame's border). 0 = off (as until session 27; ``onset_fall`` alone
+                            delays those warnings but removes none).""", unit="frames", valid=Valid.integer(0))
+    fall_frames: int = param(6, """The frames (at ``nominal_fps``) over which ``onset_fall`` compares a target's time to
+                             contact with its own older one (its newest estimate at least that old, of its own fits or
+                             held from them); none: no test.""", unit="frames", valid=Valid.integer(1))
     cut_exit: float = param(0.5, """Once a target has warned, a frame on which its box is cut by the image's border
                             (``border``) while it does not hold the heading (the measured heading, else ``heading`` or
                             the principal point: :func:`~mlplc2.targets.warning.holds`) and its course misses by more

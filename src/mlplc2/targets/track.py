@@ -147,6 +147,7 @@ class Track:
     last_estimate: float = -(10 ** 9)  # clock of its last time to contact
     streak: int = 0
     held_streak: int = 0               # the length of the streak of fits that last ended (``held_onset``)
+    stalls: int = 0                    # frames a warning was held back as its time to contact did not fall (``stall_hold``)
     streak_since: float = 0.0          # clock of the first estimate of the streak
     birth: float = 0.0                 # clock of its creation (``born``: its frame index)
     span: float = math.inf             # the window (``TargetParams.window``) in clock units
