@@ -530,6 +530,14 @@ def test_a_warning_begins_only_on_a_time_to_contact_that_falls_as_an_approach_do
     assert estimate(fitted_since(5, ttc + 6 / FPS), on, FPS, 12, SHAPE).warning   # an approach's: 0.2 s longer
     # an estimate of an earlier run of fits (another box, before a gap) is not compared with
     assert estimate(fitted_since(8, ttc + 0.03), on, FPS, 12, SHAPE).warning
+    # stall_sigma: an older estimate 0.03 s longer but uncertain by 0.2 s (a fit across a box re-seated) cannot say that
+    # the time to contact did not fall; without stall_sigma it does
+    t = fitted_since(5, ttc + 0.03)
+    t.ttcs[-1] = (6, ttc + 0.03, 0.2)
+    assert estimate(t, replace(on, stall_sigma=True), FPS, 12, SHAPE).warning
+    t = fitted_since(5, ttc + 0.03)
+    t.ttcs[-1] = (6, ttc + 0.03, 0.2)
+    assert not estimate(t, replace(on, stall_sigma=False), FPS, 12, SHAPE).warning
 
 
 def test_a_lapsed_warning_begins_again_only_on_a_short_course():

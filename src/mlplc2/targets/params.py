@@ -353,15 +353,21 @@ class TargetParams(ParameterSet):
                               speed falls at 1 (tau-dot = -1); one that brakes to stop short of the camera at 0.5 or
                               less (Lee 1976); the ground beside the path, followed by a box that slides along it as
                               the camera nears, holds a time to contact that hardly falls. 0 = off (as until session
-                              27). 0.3 since session 27, with ``stall_hold``: over sixteen sets three false episodes
-                              fewer, no collider lost, two warned a frame or two later (docs/history.md, "A time to
-                              contact that does not fall").""", unit="s/s",
+                              27). 0.3 since session 27, with ``stall_hold`` and ``stall_sigma``: over eighteen sets
+                              four false episodes fewer, no collider lost, one warned a frame later (docs/history.md,
+                              "A time to contact that does not fall").""", unit="s/s",
                               valid=Valid.real(minimum=0, maximum=1))
     stall_hold: int = param(5, """A target whose warning was held back on this many frames as its time to contact did not
                             fall (``onset_fall``, ``countdown_onset``) never begins one: a time to contact that stayed
                             within the horizon without falling is no approach, even where it falls later (the ground's
                             box as it nears the frame's border). 0 = off (as until session 27; ``onset_fall`` alone
                             delays those warnings but removes none).""", unit="frames", valid=Valid.integer(0))
+    stall_sigma: bool = param(True, """With ``onset_fall``: a time to contact stalls only where it lies above the older one less
+                              ``onset_fall`` times the time between them by more than the standard error of their
+                              difference (both estimates' ``ttc_sigma_s`` combined): a fit across a box re-seated is
+                              too uncertain to say. False = by any amount (over eighteen sets a collider 0.33 s later,
+                              two others a frame or two; docs/history.md, "A time to contact that does not fall").""",
+                              valid=Valid.boolean())
     fall_frames: int = param(6, """The frames (at ``nominal_fps``) over which ``onset_fall`` compares a target's time to
                              contact with its own older one (its newest estimate at least that old, of its own fits or
                              held from them); none: no test.""", unit="frames", valid=Valid.integer(1))

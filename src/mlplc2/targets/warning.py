@@ -241,20 +241,23 @@ def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
     return ttc > old[0] + (math.hypot(sigma, old[1]) if both else (sigma or 0.0))
 
 
-def stalls(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None) -> bool:
+def stalls(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
+           sigma: float | None = None) -> bool:
     """``onset_fall``: whether track ``t``'s time to contact ``ttc`` (s) at clock ``index`` lies above its own of
     ``fall_frames`` frames (at ``nominal_fps``) before (its newest estimate at least that old, ``Track.ttcs``, of the
-    same run of fits, ``Track.streak_since``) less ``onset_fall`` times the time between them: it does not fall as an
+    same run of fits, ``Track.streak_since``) less ``onset_fall`` times the time between them, by more than the standard
+    error of their difference (``sigma`` and the older one's combined, where both are known): it does not fall as an
     approach's does. False when either is unknown or the rule is off."""
     if p.onset_fall <= 0 or ttc is None:
         return False
     then = index - p.span(p.fall_frames, fps) + _EPS
     if then < t.streak_since - _EPS:
         return False                # the fit's run began after ``then``: nothing of its own to compare with
-    old = next(((clock, v) for clock, v, _ in reversed(t.ttcs) if clock <= then), None)
+    old = next(((clock, v, sd) for clock, v, sd in reversed(t.ttcs) if clock <= then), None)
     if old is None or old[1] is None:
         return False
-    return ttc > old[1] - p.onset_fall * (index - old[0]) / fps
+    margin = math.hypot(sigma, old[2]) if sigma is not None and old[2] is not None else 0.0
+    return ttc > old[1] - p.onset_fall * (index - old[0]) / fps + margin
 
 
 def fleeting(t: Track, p: TargetParams, heading: tuple[float, float] | None) -> bool:
@@ -586,7 +589,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         t.stalls += 1
     # ... and only while its time to contact falls as an approach's does (onset_fall), and never once held back on
     # stall_hold frames for a time to contact that did not fall (with countdown_onset's)
-    if warning and not t.warned and (0 < p.stall_hold <= t.stalls or stalls(t, p, fps, index, ttc)):
+    if warning and not t.warned and (0 < p.stall_hold <= t.stalls
+                                     or stalls(t, p, fps, index, ttc, sigma if p.stall_sigma else None)):
         warning = False
         t.stalls += 1
     began = t.warned
