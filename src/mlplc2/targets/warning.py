@@ -222,6 +222,18 @@ def wide(p: TargetParams, miss: float) -> bool:
     return 0 < p.onset_miss < miss
 
 
+def _older(t: Track, then: float, own_run: bool) -> tuple[float, float, float | None] | None:
+    """Track ``t``'s newest estimate (clock, time to contact in s, its standard error) at clock ``then`` or before
+    (``Track.ttcs``), the older one :func:`rises` and :func:`stalls` compare with; None where it has no time to
+    contact, or (``own_run``) the fit's run of estimates began after ``then`` (``Track.streak_since``: nothing of its
+    own to compare with)."""
+    then += _EPS
+    if own_run and then < t.streak_since - _EPS:
+        return None
+    old = next(((clock, v, sd) for clock, v, sd in reversed(t.ttcs) if clock <= then), None)
+    return None if old is None or old[1] is None else old
+
+
 def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
           sigma: float | None = None) -> bool:
     """``countdown_frames`` (docs/history.md, "A course that crosses max_miss"): whether track ``t``'s
@@ -231,14 +243,11 @@ def rises(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
     between them. False when either is unknown or the rule is off."""
     if p.countdown_frames <= 0 or ttc is None:
         return False
-    then = index - p.span(p.countdown_frames, fps) + _EPS
-    if p.rise_streak and sigma is not None and then < t.streak_since - _EPS:
-        return False                # the fit's run began after ``then``: nothing of its own to compare with
-    old = next(((v, sd) for clock, v, sd in reversed(t.ttcs) if clock <= then), None)
-    if old is None or old[0] is None:
+    old = _older(t, index - p.span(p.countdown_frames, fps), p.rise_streak and sigma is not None)
+    if old is None:
         return False
-    both = p.rise_sigma and sigma is not None and old[1] is not None
-    return ttc > old[0] + (math.hypot(sigma, old[1]) if both else (sigma or 0.0))
+    both = p.rise_sigma and sigma is not None and old[2] is not None
+    return ttc > old[1] + (math.hypot(sigma, old[2]) if both else (sigma or 0.0))
 
 
 def stalls(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
@@ -250,11 +259,8 @@ def stalls(t: Track, p: TargetParams, fps: float, index: int, ttc: float | None,
     approach's does. False when either is unknown or the rule is off."""
     if p.onset_fall <= 0 or ttc is None:
         return False
-    then = index - p.span(p.fall_frames, fps) + _EPS
-    if then < t.streak_since - _EPS:
-        return False                # the fit's run began after ``then``: nothing of its own to compare with
-    old = next(((clock, v, sd) for clock, v, sd in reversed(t.ttcs) if clock <= then), None)
-    if old is None or old[1] is None:
+    old = _older(t, index - p.span(p.fall_frames, fps), True)
+    if old is None:
         return False
     margin = math.hypot(sigma, old[2]) if sigma is not None and old[2] is not None else 0.0
     return ttc > old[1] - p.onset_fall * (index - old[0]) / fps + margin
