@@ -1046,6 +1046,21 @@ def test_fragmentation_counts_distinct_targets_while_the_object_covers_at_most_h
     assert warn_summary(ev)["fragmentation"] == pytest.approx(1.5)
 
 
+def test_one_target_a_frame_stands_for_an_object_the_one_that_stood_for_it_before():
+    """Fragmentation counts the targets that stood for the object, one a frame (CLEAR MOT's correspondence): its
+    own target, while it lasts, even where a target of the background passes nearer its centre within the match
+    radius (not a second target of it: a false target, scored by its warnings, if any); when its own is lost the
+    nearest one takes over, and is a second."""
+    gt = {"videos": {"a.mp4": video_truth([colliding()], frames=22)}}
+    own = [T(f, 1, 56, 50) for f in range(2, 12)]                          # 6 px right of its centre
+    passing = [T(f, 4, 30 + 4 * (f - 4), 52) for f in range(4, 10)]      # x 30-50: through the centre
+    ev = evaluate(result("a.mp4", 22, targets=own + passing), gt)
+    assert wobj(ev)["targets"] == 1
+    later = [T(f, 9, 48, 50) for f in range(13, 18)]                       # the object's after its own is lost
+    ev = evaluate(result("a.mp4", 22, targets=own + passing + later), gt)
+    assert wobj(ev)["targets"] == 2
+
+
 
 def test_a_target_on_a_neighbour_is_the_neighbours_not_a_fragment_of_the_collision_object():
     """A target counts for the one object it lies nearest: the target on a passing car 15 px beside

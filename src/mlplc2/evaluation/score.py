@@ -457,7 +457,7 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
            "ttc_at_warning_s": None, "warning_distance_px": None, "unplaced": False, "unplaced_frame": None,
            "unplaced_lead_s": None, "alarm_frame": None, "alarm_lead_s": None, "warning_kept": None,
            "warning_gap_s": None, "targets": None, "ttc_frames": 0, "ttc_estimated": 0, "ttc_errors": []}
-    ids = set()
+    ids, held = set(), None   # held: the target (field) that stood for the object last (_standing)
     blind = rules.blind and o is collider   # its position is unknown: no warning can be placed on it
     for f in range(start, stop):
         if blind and not rec["unplaced"] and (rules.early_before is None or f >= rules.early_before) \
@@ -491,8 +491,9 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
             # the targets this object stands for: each target counts for the one object it lies
             # nearest (a target on a neighbour within the radius is the neighbour's, not a fragment)
             on = [t for t in run.frame_targets.get(f, ()) if rules.nearest(t.x, t.y, f, truth) is o]
-            if fits:
-                ids.update(t.id for t in on)
+            if fits and on:
+                held = _standing([(t.id, t.x, t.y) for t in on], held, o.center_at(f))
+                ids.add(held)
             true = o.ttc_at(f, fps)
             if o is not collider and width is not None and width >= MIN_TTC_WIDTH and true is not None \
                     and true > 0:
@@ -504,11 +505,27 @@ def _score_collider(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _Wa
                     rec["ttc_estimated"] += 1
                     rec["ttc_errors"].append((round(true, 4), round(t.ttc_s, 4)))
         elif run.localises and fits:
-            ids.update(fid for fid, x, y, _ in run.fields_at(f) if rules.nearest(x, y, f, truth) is o)
+            on = [(fid, x, y) for fid, x, y, _ in run.fields_at(f) if rules.nearest(x, y, f, truth) is o]
+            if on:
+                held = _standing(on, held, o.center_at(f))
+                ids.add(held)
     rec["targets"] = len(ids) if (run.has_targets or run.localises) else None
     if rec["warned"] and cf is not None:
         rec["warning_kept"], rec["warning_gap_s"] = _kept(run, truth, o, rules, rec["warning_frame"], stop)
     return rec
+
+
+def _standing(on: list[tuple], held, centre) -> object:
+    """The one target (field) that stands for an object in a frame, of those ``on`` it ((id, x, y), each lying
+    nearest it within the match radius): the one that stood for it last (``held``) while it still lies on it,
+    else the one nearest its ``centre`` (CLEAR MOT's correspondence, Bernardin & Stiefelhagen 2008). Its targets
+    (fragmentation) are the ids that stood for it: a second target beside its own, or one of the background that
+    passes within the match radius while its own stands, is none of them."""
+    if any(i == held for i, _, _ in on):
+        return held
+    if centre is None:
+        return on[0][0]
+    return min(on, key=lambda t: math.hypot(t[1] - centre[0], t[2] - centre[1]))[0]
 
 
 def _kept(run: ModelRun, truth: VideoTruth, o: ObjectTruth, rules: _WarningRules, first: int,
