@@ -225,6 +225,87 @@ def test_the_background_beside_a_growing_object_is_seen_to_stay_still_where_it_h
         assert (min(share) > 0.6) if not plain else (max(share) < 0.05), (plain, share)
 
 
+def _flying_frames(other: bool = False) -> tuple[np.ndarray, np.ndarray, tuple[float, float, float]]:
+    """Two 240 x 240 frames 4 frames apart of a camera that flies forward over a textured ground: the ground grows
+    by 6 % about a point 110 px above the object, and a textured square (its own texture) grows from 10 to 13 px at
+    (130, 150). ``other``: a band of another surface, 29 px wide, 44 px left of the square, slides 4 px down (a
+    nearer object beside it: no one affine motion of the window is the background's). Returns the frames and the
+    square (centre x, y, side now)."""
+    rng = np.random.default_rng(11)
+
+    def texture():
+        t = cv2.GaussianBlur(rng.uniform(0, 255, (240, 240)).astype(np.float32), (0, 0), 2.0)
+        return (t - t.min()) / (t.max() - t.min()) * 160 + 40
+
+    ground, obj, band = texture(), texture(), texture()
+    ox, oy = 130.0, 150.0
+    frames = []
+    for k, (s, side) in enumerate(((1.0, 10.0), (1.06, 13.0))):
+        m = np.array([[s, 0, 120 * (1 - s)], [0, s, 40 * (1 - s)]], np.float32)
+        img = cv2.warpAffine(ground, m, (240, 240), flags=cv2.INTER_LINEAR, borderMode=cv2.BORDER_REFLECT)
+        if other:
+            img[112:193, 86:115] = np.roll(band, 4 * k, axis=0)[112:193, 86:115]
+        y0, x0 = int(oy - side / 2), int(ox - side / 2)
+        img[y0:y0 + int(side), x0:x0 + int(side)] = obj[y0:y0 + int(side), x0:x0 + int(side)]
+        frames.append(img.astype(np.float32))
+    return frames[0], frames[1], (ox, oy, 13.0)
+
+
+def test_the_affine_change_box_holds_the_object_where_the_ground_fills_the_shift_box():
+    """affine_change_box: over a ground that grows about a point outside the window (a camera flying forward), the
+    change box that undoes only a shift takes most of its window; once the window's affine motion is undone the
+    region left is the object's (its centre within its side of the square's, at most twice its side on each axis:
+    where it is and where the ground's motion would have carried its earlier image). Where a band of another surface
+    slides beside it, fewer than 0.8 of the window's corners fit one affine motion: with ``inliers`` 0.8 there is
+    no box, with 0 the same object's."""
+    from mlplc2.targets.change import affine_change_box
+    prev, cur, (ox, oy, side) = _flying_frames()
+    shift = change_box(prev, cur, 126, 152, 40)
+    assert shift is not None and min(shift[2], shift[3]) > 50
+    box = affine_change_box(prev, cur, 126, 152, 40, inliers=0.8)
+    assert box is not None
+    assert abs(box[0] - ox) <= side and abs(box[1] - oy) <= side
+    assert box[2] <= 2 * side and box[3] <= 2 * side
+    prev, cur, _ = _flying_frames(other=True)
+    assert affine_change_box(prev, cur, 126, 152, 40, inliers=0.8) is None
+    box = affine_change_box(prev, cur, 126, 152, 40, inliers=0.0)
+    assert box is not None and abs(box[0] - ox) <= side and abs(box[1] - oy) <= side
+
+
+def test_a_young_box_grown_over_a_moving_ground_is_put_on_its_object():
+    """affine_reseat, through the target layer: a track born with a box of 60 px about a 13-px object over a ground
+    that grows as under a camera flying forward is put on the object (its centre within the object's side, its
+    width at most twice the side); once only. It stays as it was on a track with a time to contact, on a uniform
+    region's box, where another track's box is the object already, where the region is more times smaller than
+    ``affine_reseat_max`` allows (here 1.6: the 60-px box against the region of 13-26 px) and with the rule off."""
+    from mlplc2.targets import TargetLayer
+    prev, cur, (ox, oy, side) = _flying_frames()
+
+    def put(params=TargetParams(), held=False, uniform=False, other=False, twice=False):
+        layer = TargetLayer(params, fps=30.0)
+        layer.step(prev, None, (), 0)
+        layer._keep_past(4.0)
+        t = Track(1, 0, ox - 4, oy + 2, 60.0, 60.0, history=deque([Observation(0, 0.0, ox - 4, oy + 2, 60.0, 0.0)]))
+        t.held = (4.0, 1.0) if held else None
+        t.uniform = uniform
+        layer._tracks = [t] + ([Track(2, 0, ox, oy + 3, side, 2 * side)] if other else [])
+        if params.affine_reseat > 0:
+            layer._reseat_affine(t, cur)
+            if twice:
+                t.cx, t.w = t.cx + 20.0, 60.0
+                layer._reseat_affine(t, cur)
+        return t
+
+    t = put()
+    assert abs(t.cx - ox) <= side and abs(t.cy - oy) <= side and t.w <= 2 * side and t.affine_put
+    assert t.history[-1].width == t.w            # its history carried with it
+    assert put(twice=True).w == 60.0             # once only
+    for kw in ({"held": True}, {"uniform": True}, {"other": True}, {"params": TargetParams(affine_reseat=0.0)},
+               {"params": TargetParams(affine_reseat_max=1.6)}):     # a region too small for the box: a part
+        t = put(**kw)
+        assert (t.cx, t.cy, t.w, t.h) == (ox - 4, oy + 2, 60.0, 60.0), kw
+
+
 def test_a_box_grown_over_the_background_is_put_on_its_object():
     """support_reseat, through the target layer: a textured square grows 3 % a frame for five frames and a track's
     box, twice its width, grew with it. Over a still textured background the box is put on the square (its width

@@ -1,8 +1,9 @@
 """The box of the region that changed between two frames around a point (:func:`change_box`):
 the window's own image motion undone by phase correlation, then the connected region of large
 grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2); a uniform
-region's box (:func:`uniform_box`, :func:`uniform_region`); and the extent of the part of a box that moved as the
-box did (:func:`moving_extent`, ``TargetParams.onset_support``).
+region's box (:func:`uniform_box`, :func:`uniform_region`); the extent of the part of a box that moved as the
+box did (:func:`moving_extent`, ``TargetParams.onset_support``); and the region that changed once the window's
+affine motion is undone (:func:`affine_change_box`, ``TargetParams.affine_reseat``).
 """
 
 from __future__ import annotations
@@ -14,7 +15,7 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-__all__ = ["Support", "change_box", "moving_extent", "uniform_box", "uniform_region"]
+__all__ = ["Support", "affine_change_box", "change_box", "moving_extent", "uniform_box", "uniform_region"]
 
 
 @lru_cache(maxsize=None)
@@ -92,6 +93,80 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
     mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), _DILATION)
     best, best_d = _nearest(mask, x - x0, y - y0)
     return _boxed(best, best_d, x0, y0, x1, y1, w, h, radius)
+
+
+# affine_change_box: the corners followed (Shi-Tomasi, at most AFFINE_CORNERS, at least AFFINE_SPACING px apart; at
+# least AFFINE_FOLLOWED of them followed by pyramidal Lucas-Kanade, AFFINE_WINDOW px, 2 levels), their affine motion
+# fitted with RANSAC (AFFINE_RANSAC px); the change within AFFINE_MARGIN px of the window's border is not counted
+# (what the warp brought in from beyond it), and a region is an object's only at least AFFINE_MIN px across. The
+# corners that fit the map span at least AFFINE_SPREAD of the window on each axis: over a plain background they lie
+# on the object alone, and their map is its own growth.
+AFFINE_SPREAD = 0.6
+AFFINE_CORNERS = 60
+AFFINE_SPACING = 4
+AFFINE_FOLLOWED = 8
+AFFINE_WINDOW = 9
+AFFINE_RANSAC = 1.0
+AFFINE_MARGIN = 4
+AFFINE_MIN = 4
+
+
+def affine_change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *, min_change: float = 3.0,
+                      rel: float = 0.2, inliers: float = 0.0) -> tuple[float, float, float, float] | None:
+    """Box ``(cx, cy, w, h)`` of the region that changed between two frames around (x, y) once the window's affine
+    motion is undone (``TargetParams.affine_reseat``).
+
+    :func:`change_box` undoes a shift of its window: the background seen by a camera that moves forward (the
+    ground under a drone) also grows and shears there, and its change fills the window. Here the background's
+    motion is the affine map that most corners of the earlier window follow (corners of ``prev`` within
+    ``radius`` px of (x, y), followed into ``cur`` by Lucas-Kanade, the map fitted by RANSAC: an object's own
+    corners are its outliers); ``prev`` is warped by it, and the pixels that still changed by at least
+    ``max(min_change, rel x`` the largest change``)`` are joined (3 x 3 dilation) and the connected region nearest
+    (x, y) is taken, within a quarter of ``radius``. None where fewer than :data:`AFFINE_FOLLOWED` corners are
+    followed, where fewer than ``inliers`` of them fit the map (a scene whose depth varies across the window: no
+    one background motion), where those that fit span less than :data:`AFFINE_SPREAD` of the window on either
+    axis (they lie on one thing: an object over a plain background), where nothing changed, where the region reaches within :data:`AFFINE_MARGIN` px of the
+    window's border, or is under :data:`AFFINE_MIN` px across."""
+    h, w = cur.shape
+    x0, x1 = max(x - radius, 0), min(x + radius + 1, w)
+    y0, y1 = max(y - radius, 0), min(y + radius + 1, h)
+    if x1 - x0 < 16 or y1 - y0 < 16:
+        return None
+    a = np.ascontiguousarray(prev[y0:y1, x0:x1], dtype=np.float32)
+    b = np.ascontiguousarray(cur[y0:y1, x0:x1], dtype=np.float32)
+    pts = cv2.goodFeaturesToTrack(a, AFFINE_CORNERS, 0.01, AFFINE_SPACING)
+    if pts is None or len(pts) < AFFINE_FOLLOWED:
+        return None
+    q, st, _ = cv2.calcOpticalFlowPyrLK(np.clip(a, 0, 255).astype(np.uint8), np.clip(b, 0, 255).astype(np.uint8),
+                                        pts, None, winSize=(AFFINE_WINDOW, AFFINE_WINDOW), maxLevel=2)
+    ok = st.ravel() == 1
+    if ok.sum() < AFFINE_FOLLOWED:
+        return None
+    m, fit = cv2.estimateAffine2D(pts[ok], q[ok], ransacReprojThreshold=AFFINE_RANSAC)
+    if m is None or fit.mean() < inliers:
+        return None
+    on = pts[ok][fit.ravel() == 1].reshape(-1, 2)
+    if np.ptp(on[:, 0]) < AFFINE_SPREAD * (x1 - x0) or np.ptp(on[:, 1]) < AFFINE_SPREAD * (y1 - y0):
+        return None                          # the corners that fit lie on one thing, not over the background
+    d = cv2.absdiff(b, cv2.warpAffine(a, m, (a.shape[1], a.shape[0]), flags=cv2.INTER_LINEAR,
+                                      borderMode=cv2.BORDER_REPLICATE))
+    e = AFFINE_MARGIN
+    d[:e] = 0
+    d[-e:] = 0
+    d[:, :e] = 0
+    d[:, -e:] = 0
+    top = float(d.max())
+    if top < min_change:
+        return None
+    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), _DILATION)
+    best, best_d = _nearest(mask, x - x0, y - y0)
+    if best is None or best_d > radius / 4.0:
+        return None
+    bx, by, bw, bh = best
+    if bx < e or by < e or bx + bw > d.shape[1] - e or by + bh > d.shape[0] - e or min(bw, bh) - 2 < AFFINE_MIN:
+        return None
+    # the dilation added a pixel on each side
+    return x0 + bx + bw / 2.0 - 0.5, y0 + by + bh / 2.0 - 0.5, float(bw - 2), float(bh - 2)
 
 
 def _nearest(mask: np.ndarray, sx: int, sy: int):

@@ -20,7 +20,7 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import SUPPORT_PAD, Support, change_box, moving_extent, uniform_box, uniform_region
+from .change import SUPPORT_PAD, Support, affine_change_box, change_box, moving_extent, uniform_box, uniform_region
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -175,6 +175,9 @@ class TargetLayer:
         if p.support_reseat > 0:
             for t in self._tracks:
                 self._reseat_support(t)
+        if p.affine_reseat > 0 and self._past:
+            for t in self._tracks:
+                self._reseat_affine(t, gray)
         self._merge(now)
         seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
         for f in fields:
@@ -417,6 +420,33 @@ class TargetLayer:
         if any(o is not t and not o.shadow and o.overlap(part) >= 0.5 for o in self._tracks):
             return
         t.reseat((cx, cy, w, h))
+
+    def _reseat_affine(self, t: Track, gray: np.ndarray) -> None:
+        """``affine_reseat``: put the box of young track ``t`` (no time to contact yet) on the region that changed
+        since the oldest kept frame (``change_frames`` before) about its centre once the window's affine motion is
+        undone (:func:`affine_change_box`, at least ``affine_inliers`` of its corners fitting that motion), where
+        that region is ``affine_reseat`` to ``affine_reseat_max`` times smaller than the box (the square root of the
+        areas), its centre lies in the box and it is no part of another track; once per track (``Track.affine_put``).
+        Not on a uniform region's box (measured afresh), a shadow, a box cut by the border or one wider than the
+        window."""
+        p = self.params
+        if t.uniform or t.shadow or t.warned or t.held is not None or t.affine_put \
+                or t.size > 2 * p.max_shift or t.cut(gray.shape, p.border):
+            return
+        box = affine_change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
+                                inliers=p.affine_inliers)
+        if box is None:
+            return
+        cx, cy, w, h = box
+        shrink = math.sqrt(t.w * t.h / (w * h))      # how many times smaller the region is
+        if abs(cx - t.cx) > t.w / 2.0 or abs(cy - t.cy) > t.h / 2.0 or shrink < p.affine_reseat \
+                or 0 < p.affine_reseat_max < shrink:
+            return
+        part = Track(-1, 0, cx, cy, w, h)
+        if any(o is not t and not o.shadow and o.overlap(part) >= 0.5 for o in self._tracks):
+            return
+        t.affine_put = True
+        t.reseat(box)
 
     def _claim(self, t: Track) -> tuple:
         """The seed zone of track ``t`` (x, y, half-side): its box and ``claim`` px beyond, a square

@@ -538,6 +538,30 @@ class TargetParams(ParameterSet):
                                  or a dark object's plain body says nothing either way and is not cut (a night car whose
                                  lights alone move, a uniform disc whose edge moves on one side only).""",
                                  valid=Valid.real(minimum=0, maximum=1))
+    affine_reseat: float = param(1.5, """A young target's box (no time to contact yet; not a uniform region's, a shadow's
+                                 or one cut by the border; at most twice ``max_shift`` across) is put, once, on the
+                                 region that changed since ``change_frames`` before about its centre once the window's
+                                 affine motion is undone (:func:`~mlplc2.targets.change.affine_change_box`, within
+                                 ``max_shift``), its history carried (:meth:`Track.reseat`), where that region is this
+                                 many times smaller (the square root of the areas), its centre lies in the box and it is
+                                 no part of another target. The change box (step 2) undoes a shift of its window; under
+                                 a camera that moves forward the background grows and shears there, and a small object's
+                                 box takes much of it (a drone's collider 11 px wide in a box of 66 x 54 px: the box
+                                 grows as the ground does, its time to contact 3 s at a true 0.9 s). On since session 29
+                                 (docs/history.md, "The affine re-seat, bounded"; measured first in session 28, "A change
+                                 box that undoes the window's affine motion"); 0 = off.""",
+                                 valid=Valid.real(minimum=0))
+    affine_reseat_max: float = param(4.0, """``affine_reseat`` puts no box on a region more than this many times
+                                     smaller than the box (the square root of the areas): the region is then a part of
+                                     the object that changed most, not the object (``ground_forward_3_h36``'s collider,
+                                     39 x 74 px, put on 7 x 5 px and not warned; the drones' boxes that it fixes are 2-3
+                                     times their region). 0 = no bound (docs/history.md, "The affine re-seat, bounded").""",
+                                     valid=Valid.real(minimum=0))
+    affine_inliers: float = param(0.8, """``affine_reseat`` puts a box only where at least this share of the corners
+                                  followed fit one affine motion of the window: where depth varies across it (a
+                                  dashcam's road, cars and roadside) no one motion is the background's, and the change
+                                  left is no object's (the real clip ``sudden_turning_vehicle``'s collider lost at 0).""",
+                                  valid=Valid.real(minimum=0, maximum=1))
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once
