@@ -81,18 +81,25 @@ def change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius: int, *
         border = 0
     if kernel is not None:                   # the compiled last steps, the same box
         return _compiled(kernel, a, b, border, x, y, x0, y0, x1, y1, w, h, radius, min_change, rel)
-    d = cv2.absdiff(b, a)
-    if border:                               # the replicated margin is not a change
-        d[:border] = 0
-        d[-border:] = 0
-        d[:, :border] = 0
-        d[:, -border:] = 0
+    # the replicated margin (border) is not a change
+    found = _changed(cv2.absdiff(b, a), border, x - x0, y - y0, min_change, rel)
+    return None if found is None else _boxed(*found, x0, y0, x1, y1, w, h, radius)
+
+
+def _changed(d: np.ndarray, margin: int, sx: int, sy: int, min_change: float, rel: float):
+    """(box, distance) of the region of large change in ``d`` nearest (``sx``, ``sy``) (:func:`_nearest`): the
+    pixels that changed by at least ``max(min_change, rel x`` the largest change``)``, joined by a 3 x 3 dilation, none
+    within ``margin`` px of the border; None where nothing changed by ``min_change``."""
+    if margin:
+        d[:margin] = 0
+        d[-margin:] = 0
+        d[:, :margin] = 0
+        d[:, -margin:] = 0
     top = float(d.max())
     if top < min_change:
         return None
     mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), _DILATION)
-    best, best_d = _nearest(mask, x - x0, y - y0)
-    return _boxed(best, best_d, x0, y0, x1, y1, w, h, radius)
+    return _nearest(mask, sx, sy)
 
 
 # affine_change_box: the corners followed (Shi-Tomasi, at most AFFINE_CORNERS, at least AFFINE_SPACING px apart; at
@@ -151,18 +158,10 @@ def affine_change_box(prev: np.ndarray, cur: np.ndarray, x: int, y: int, radius:
     d = cv2.absdiff(b, cv2.warpAffine(a, m, (a.shape[1], a.shape[0]), flags=cv2.INTER_LINEAR,
                                       borderMode=cv2.BORDER_REPLICATE))
     e = AFFINE_MARGIN
-    d[:e] = 0
-    d[-e:] = 0
-    d[:, :e] = 0
-    d[:, -e:] = 0
-    top = float(d.max())
-    if top < min_change:
+    found = _changed(d, e, x - x0, y - y0, min_change, rel)
+    if found is None or found[1] > radius / 4.0:          # nothing changed, or no region near (x, y)
         return None
-    mask = cv2.dilate((d >= max(min_change, rel * top)).astype(np.uint8), _DILATION)
-    best, best_d = _nearest(mask, x - x0, y - y0)
-    if best is None or best_d > radius / 4.0:
-        return None
-    bx, by, bw, bh = best
+    bx, by, bw, bh = found[0]
     if bx < e or by < e or bx + bw > d.shape[1] - e or by + bh > d.shape[0] - e or min(bw, bh) - 2 < AFFINE_MIN:
         return None
     # the dilation added a pixel on each side
