@@ -1025,6 +1025,17 @@ def test_ttc_errors_per_bin_and_coverage():
     assert s["ttc_mid_0-1s"] == pytest.approx(1541.5, abs=0.06)
 
 
+def test_a_frame_a_hair_before_the_contact_gives_no_ttc_error():
+    """A frame whose true time to contact is positive but under the 0.1 ms the errors are recorded to
+    (holdout 40's scenes had one) is not scored: no relative error divides by a true 0."""
+    gt = {"videos": {"a.mp4": video_truth([colliding(contact=20)])}}
+    gt["videos"]["a.mp4"]["objects"][0]["track"][19][5] = 2e-5      # frame 19: 0.00002 s to contact
+    targets = [T(18, 1, 50, 50, ttc=0.3), T(19, 1, 50, 50, ttc=0.05)]    # true 0.2 at frame 18: 50 % late
+    ev = evaluate(result("a.mp4", 30, targets=targets), gt)
+    assert [tuple(e) for e in wobj(ev)["ttc_errors"]] == [(0.2, 0.3)]
+    assert warn_summary(ev)["ttc_rte_pct_0-1s"] == pytest.approx(50.0)
+
+
 # ---------------------------------------------------------------------------
 # fragmentation: distinct targets per collision object
 # ---------------------------------------------------------------------------
