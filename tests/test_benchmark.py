@@ -168,6 +168,8 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
                            "target_params": None, "stabilise": None, "progress": False, "force": False,
                            "settings": None, "holdout": 0, "hfov_deg": None}
     assert main(["benchmark", "--out", "o"]) == 0 and seen[-1][1]["real"] == "auto"
+    # a range or list of holdouts: pooled in one report
+    assert main(["benchmark", "--out", "o", "--holdout", "3, 21-23"]) == 0 and seen[-1][1]["holdout"] == [3, 21, 22, 23]
     assert main(["benchmark", "--out", "o", "--no-stabilise"]) == 0 and seen[-1][1]["stabilise"] is False
 
 
@@ -179,6 +181,8 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     (["benchmark", "--out", "o", "-m", "nope"], "unknown model 'nope'"),
     (["benchmark", "--out", "o", "--settings", "drive,highway"], "unknown benchmark setting(s) highway"),
     (["benchmark", "--out", "o", "--holdout", "-1"], "--holdout"),
+    (["benchmark", "--out", "o", "--holdout", "25-21"], "--holdout: expected N, a range A-B or a comma-separated"),
+    (["benchmark", "--out", "o", "--holdout", "21,x"], "--holdout: expected N, a range A-B or a comma-separated"),
     (["benchmark", "--out", "o", "--hfov", "180", "--no-real"], "--hfov: expected degrees in (0, 180)"),
     (["run", "v.mp4", "--horizon", "1e40"], "horizon_s"),
     (["batch", "v.mp4", "--out", "o", "--max-miss", "nan"], "--max-miss: expected a number >= 0, got 'nan'"),
@@ -235,7 +239,7 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)
 
 
-@pytest.mark.parametrize("extra", [["--settings", "drive"], ["--settings", "drivee"], ["--holdout", "1"],
+@pytest.mark.parametrize("extra", [["--settings", "drive"], ["--settings", "drivee"], ["--holdout", "1"], ["--holdout", "1-2"],
                                    ["--hfov", "90"]])
 def test_quick_with_settings_or_holdout_is_a_one_line_error(extra, tmp_path, monkeypatch, capsys):
     """``--quick`` has its own four scenes: ``--settings`` and ``--holdout`` (which choose among the

@@ -10,6 +10,7 @@ import cv2
 import numpy as np
 import pytest
 
+from mlplc2._validation import InputValueError
 from mlplc2.benchmark import REAL_USE, by_setting, suite
 from mlplc2.evaluation.truth import load
 from mlplc2.io import read_video, write_lossless_video
@@ -118,6 +119,19 @@ def test_a_holdout_suite_draws_the_same_settings_with_other_seeds():
     # drive_0: another draw of the same kind of road (its first 2 s of 5: the seeds are the scenes')
     a, b = (dataclasses.replace(s, duration_s=2.0).generate() for s in (std[5], held[5]))
     assert a.frames.shape == b.frames.shape and not np.array_equal(a.frames[0], b.frames[0])
+
+
+def test_holdouts_pooled_are_each_holdouts_scenes_in_turn():
+    """``holdout=[0, 1, 2]`` (``--holdout 0-2``): the standard suite's scenes, then holdout 1's, then 2's, each as
+    drawn alone (names and seeds), so one report pools them; a holdout named twice counts once."""
+    one = [suite(settings=["drone"], holdout=h) for h in (0, 1, 2)]
+    pooled = suite(settings=["drone"], holdout=[0, 1, 2, 1])
+    assert [(s.name, s.seed) for s in pooled] == [(s.name, s.seed) for part in one for s in part]
+    assert len({s.name for s in pooled}) == 15
+    with pytest.raises(InputValueError, match="holdout must be"):
+        suite(holdout=[])
+    with pytest.raises(InputValueError, match="holdout must be"):
+        suite(holdout=[3, -1])
 
 
 def test_by_setting_separates_still_and_moving_cameras():

@@ -27,6 +27,7 @@ the test suite runs it.
 from __future__ import annotations
 
 import json
+import numbers
 import time
 import warnings
 from collections.abc import Sequence
@@ -92,7 +93,7 @@ _KINDS = (("collision",), ("collision", "pass"), ("pass", "static", "translate")
           ("collision", "collision", "pass"))
 
 
-def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: int = 0,
+def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: int | Sequence[int] = 0,
           hfov_deg: float | None = None) -> list[Scene]:
     """The generated scenes: 30 (every background and camera motion of :data:`_SETTINGS` with
     dark, bright, textured and mixed objects, the objects of :data:`_KINDS`, 5-10 s, sensor
@@ -101,7 +102,8 @@ def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: i
 
     ``settings`` keeps only those settings (names as in :func:`setting_names`); ``holdout`` > 0
     draws every scene with other seeds (``seed + 1000 * holdout``, named ``..._hN``: other textures,
-    speeds, turns and object paths in the same settings), for checking a figure on scenes nothing was tuned on.
+    speeds, turns and object paths in the same settings), for checking a figure on scenes nothing was tuned on;
+    a sequence of holdouts gives each one's scenes in turn (0 the standard suite's), to pool them in one report.
     ``hfov_deg`` (None: :data:`SUITE_HFOV`, 60 degrees) renders every scene through a camera of that horizontal
     field of view (the same draws; named ``..._fD`` when it is not 60): a check of the defaults, set at 60, on the
     lenses of real cameras. The settings of real use place their objects in metres, so they are the same worlds
@@ -133,8 +135,8 @@ def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: i
                                 index=k))
     if settings is not None:
         scenes = [sc for sc in scenes if _setting_of(sc) in settings]
-    if holdout:
-        scenes = [replace(sc, name=f"{sc.name}_h{holdout}", seed=sc.seed + 1000 * int(holdout)) for sc in scenes]
+    scenes = [sc if not h else replace(sc, name=f"{sc.name}_h{h}", seed=sc.seed + 1000 * h)
+              for h in _holdouts(holdout) for sc in scenes]
     from .camera import check_hfov
 
     hfov = check_hfov(SUITE_HFOV if hfov_deg is None else hfov_deg)
@@ -146,6 +148,14 @@ def suite(quick: bool = False, settings: Sequence[str] | None = None, holdout: i
 def setting_names() -> list[str]:
     """The settings of the full suite, in table order (``plain_static`` ... ``handheld``)."""
     return [f"{bg}_{cam}" for bg, cam in _SETTINGS] + list(REAL_USE)
+
+
+def _holdouts(holdout: int | Sequence[int]) -> list[int]:
+    """``holdout`` as the list of holdouts it names (each once, in order; 0 the standard suite)."""
+    hs = [holdout] if isinstance(holdout, numbers.Integral) else list(holdout)
+    if not hs or any(isinstance(h, bool) or not isinstance(h, numbers.Integral) or h < 0 for h in hs):
+        raise InputValueError(f"holdout must be an integer >= 0 or a non-empty list of them, got {holdout!r}")
+    return list(dict.fromkeys(int(h) for h in hs))
 
 
 def _generate(scenes: Sequence[Scene], folder: Path, progress: bool) -> tuple[list[Path], Path]:
@@ -416,8 +426,9 @@ def _stabilise(stabilise) -> bool:
 
 def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = None, real="auto",
               scheduler: str | None = None, workers: int | None = None, target_params=None,
-              stabilise: bool | None = None, settings: Sequence[str] | None = None, holdout: int = 0,
-              hfov_deg: float | None = None, progress: bool = True, force: bool = False) -> BenchmarkResult:
+              stabilise: bool | None = None, settings: Sequence[str] | None = None,
+              holdout: int | Sequence[int] = 0, hfov_deg: float | None = None, progress: bool = True,
+              force: bool = False) -> BenchmarkResult:
     """Run the benchmark into folder ``out`` (see the module docstring).
 
     Parameters
@@ -441,8 +452,9 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
         (:attr:`mlplc2.runner.RunOptions.stabilise`).
     settings : list of str, optional
         Only these settings of the generated suite (:func:`setting_names`; default all). Not with ``quick``.
-    holdout : int
-        0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`). Not with ``quick``.
+    holdout : int or sequence of int
+        0 for the standard suite; N > 0 draws every scene with other seeds (:func:`suite`); a sequence pools the
+        scenes of those holdouts in one report (each setting's figures over all of them). Not with ``quick``.
     hfov_deg : float, optional
         Render the generated scenes through a camera of this horizontal field of view (degrees, in (0, 180);
         None: :data:`SUITE_HFOV`, 60) and give it to the models (``hfov_deg`` of :func:`mlplc2.run`, as a user who
@@ -459,7 +471,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     from .targets import TargetParams
 
     t0 = time.perf_counter()
-    if quick and (settings is not None or holdout or hfov_deg is not None):   # the full suite's scenes
+    holds = _holdouts(holdout)
+    if quick and (settings is not None or holds != [0] or hfov_deg is not None):   # the full suite's scenes
         raise InputValueError("--settings, --holdout and --hfov choose among the full suite's scenes: not with "
                               "--quick (its own four scenes)")
     from .camera import check_hfov
@@ -479,7 +492,7 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
     if real == "auto" and not quick and real_dir is None:
         warnings.warn(f"no labelled real clips found ({REAL_DIR} from here, nor beside the checkout): the report "
                       "has none; --real DIR gives them, --no-real leaves them out", BenchmarkWarning, stacklevel=2)
-    scenes = suite(quick, settings=settings, holdout=holdout, hfov_deg=hfov)
+    scenes = suite(quick, settings=settings, holdout=holds, hfov_deg=hfov)
     videos, suite_gt = _generate(scenes, out / "scenes", progress)
     clips, real_gt = _real_inputs(real_dir)
     run_options = {}
@@ -519,7 +532,8 @@ def benchmark(out, *, quick: bool = False, models: Sequence[str] | str | None = 
                              time.perf_counter() - t0,
                              settings={"quick": quick, "frames": frames, "models": models,
                                        "target_params": run_options.get("target_params", {}),
-                                       "stabilise": _stabilise(stabilise), "holdout": int(holdout),
+                                       "stabilise": _stabilise(stabilise),
+                                       "holdout": holds[0] if len(holds) == 1 else holds,
                                        "hfov_deg": SUITE_HFOV if hfov is None else hfov,
                                        "settings": None if settings is None else list(settings),
                                        "real": None if real_dir is None else str(real_dir),

@@ -186,6 +186,23 @@ hfov_degrees = number_type(float, lambda v: math.isfinite(v) and 0 < v < 180, "d
 nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a number >= 0")
 
 
+def holdouts(text: str) -> int | list[int]:
+    """An argparse ``type`` for ``--holdout``: ``'N'`` -> N, or a list of holdouts to pool,
+    ``'21-25'`` or ``'3,7,21-25'`` -> ``[3, 7, 21, 22, 23, 24, 25]`` (integers >= 0, each once, in order)."""
+    out: list[int] = []
+    try:
+        for part in text.replace(" ", "").split(","):
+            lo, sep, hi = part.partition("-")
+            a, b = int(lo), int(hi) if sep else int(lo)
+            if a < 0 or b < a:
+                raise ValueError
+            out += [v for v in range(a, b + 1) if v not in out]
+    except ValueError:
+        raise argparse.ArgumentTypeError(f"expected N, a range A-B or a comma-separated list of them "
+                                         f"(integers >= 0), got {text!r}") from None
+    return out[0] if len(out) == 1 and "-" not in text and "," not in text else out
+
+
 def point_xy(text: str) -> tuple[float, float]:
     """An argparse ``type`` for ``--heading``: ``'X,Y'`` -> ``(X, Y)``, two finite numbers (pixels)."""
     parts = text.replace(" ", "").split(",")

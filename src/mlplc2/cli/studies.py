@@ -12,8 +12,8 @@ import warnings
 from .._validation import InputValueError
 from ..models.base import resolve_names
 from .common import (EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand, add_repeat_options,
-                     add_stabilise_option, add_warning_options, frame_size, hfov_degrees, nonneg_int, one_line, pos_float, say,
-                     target_options, video_run_options, warn)
+                     add_stabilise_option, add_warning_options, frame_size, hfov_degrees, holdouts, nonneg_int, one_line,
+                     pos_float, say, target_options, video_run_options, warn)
 
 
 # ---------------------------------------------------------------------------
@@ -145,9 +145,11 @@ def _add_benchmark(p: argparse.ArgumentParser) -> None:
     p.add_argument("--settings", metavar="NAMES",
                    help="only these settings of the generated suite, comma-separated (e.g. drive,drone; "
                         "default all: plain_static ... handheld, docs/benchmark.md)")
-    p.add_argument("--holdout", type=nonneg_int, default=0, metavar="N",
+    p.add_argument("--holdout", type=holdouts, default=0, metavar="N",
                    help="N > 0: draw every scene with other seeds (other textures, speeds, turns), to check "
-                        "a figure on scenes nothing was tuned on (default 0, the standard suite)")
+                        "a figure on scenes nothing was tuned on (default 0, the standard suite); a range or "
+                        "list (21-40, 3,7,21-25) pools those holdouts in one report, each setting's figures "
+                        "over all of them")
     p.add_argument("--hfov", type=hfov_degrees, metavar="DEG",
                    help="render the generated scenes through a camera of this horizontal field of view (default "
                         "60, the value the defaults were set at) and give it to the models, as a user who knows "
