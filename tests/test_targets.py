@@ -1481,6 +1481,48 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     assert len({t.id for out in outs[10:] for t in out}) == 1     # one target: the strip's, not a second
 
 
+@pytest.mark.parametrize("case", ["split", "off", "off the path"])
+def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_its_own(case):
+    # alarm_split (issue 22 item 4; docs/history.md, "An alarm seed with its own box"): a target's box lies over a
+    # uniform dark square and the texture right of it (150 px, centred 30 px right of the square), with no time to
+    # contact yet; a field alarms on the square from frame 10 (contact at frame 30). With the option (the default) the
+    # field's seed takes the square's box, replaces the larger target and warns there on every frame to the contact,
+    # its time to contact counting down; without it, or where the square is off the camera's path (a heading measured
+    # at the frame's left edge: a passing object's alarm, which the owner's course vetoes), the larger box keeps the
+    # alarm, slides off the square and its warning stops
+    from types import SimpleNamespace
+
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.track import Observation as Obs
+
+    p = TargetParams(alarm_warns=True, seed_lm=0, **({"alarm_split": 0.0} if case == "off" else {}))
+    assert p.alarm_split == (0.0 if case == "off" else 3.0)
+    layer = TargetLayer(p, FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    outs = []
+    for k, g in enumerate(_dark_square_on_texture(28)):
+        if case == "off the path":
+            layer.see_heading((10.0, 120.0), 1.0)
+        if k == 9:
+            t = Track(layer._next, k - 1, 230.0, 110.0, 150.0, 150.0, birth=k - 1, span=p.span(p.window - 1, FPS),
+                      keep=p.window)
+            t.history = deque([Obs(k - 1, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+            t.inside = deque(t.history)
+            layer._tracks.append(t)
+            layer._next += 1
+        fields = [SimpleNamespace(id=1, x=200, y=112, radius=40, response=1.0, collision=True)] if k >= 10 else []
+        outs.append(layer.step(g, lm, fields, k))
+    centred = [[t for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5] for out in outs[10:27]]
+    if case == "split":                                               # frames 10-26 (the box fills 180 px from 25)
+        assert all(len(c) == 1 and c[0].warning for c in centred) and len({t.id for out in outs[10:] for t in out}) == 1
+        ttcs = [c[0].ttc_s for c in centred[4:]]                      # frames 14-26: 16-4 frames to contact
+        assert all(a > b for a, b in zip(ttcs, ttcs[1:])) and ttcs[0] == pytest.approx(16 / FPS, rel=0.25)
+    else:
+        assert not any(centred[2:]) and not any(t.warning for out in outs[12:] for t in out)
+
+
 @pytest.mark.parametrize("hold", [True, False])
 def test_a_warning_over_the_whole_view_runs_to_its_contact_and_the_target_then_goes(hold):
     # view_hold (docs/history.md, "A warning over an object that fills the view"): a warning target whose box is the

@@ -180,10 +180,16 @@ class TargetLayer:
                 self._reseat_affine(t, gray)
         self._merge(now)
         seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
+        split: dict = {}             # alarm_split: field id -> the owner its seed may replace
         for f in fields:
             owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not t.shadow]
             if owners:
-                self._own(min(owners, key=lambda t: t.size), f, now)
+                owner = min(owners, key=lambda t: t.size)
+                if self._splits(owner, f):
+                    split[f.id] = owner
+                    seeds.append((int(f.x), int(f.y), f))
+                else:
+                    self._own(owner, f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
         if lm is not None and p.seed_lm > 0 and self._count() + len(seeds) < p.max_targets:
@@ -213,14 +219,17 @@ class TargetLayer:
             if self._count() >= p.max_targets:
                 break
             hide = p.seed_shadow and f is None and (x, y) in extra   # seed_shadow: a shadow target, if any
+            owner = None if f is None else split.get(f.id)              # alarm_split: the owner it may replace
+            if owner is not None and not any(o is owner for o in self._tracks):
+                owner = None                     # replaced already by another of its fields
             if any(t.contains(x, y) for t in self._tracks
-                   if not ((f is None and self._opened(t, now)) or (t.shadow and not hide))):
+                   if t is not owner and not ((f is None and self._opened(t, now)) or (t.shadow and not hide))):
                 continue
             alarm = self._alarming(f)
             t = host = None
             for box, swept in self._boxes(lm, gray, x, y, f, alarm, every=far):
                 t = Track(self._next, index, *box, birth=now, span=p.span(p.window - 1, self.fps), keep=p.window)
-                host = next((o for o in self._tracks if self._hosts(o, t)
+                host = next((o for o in self._tracks if o is not owner and self._hosts(o, t)
                              and not (f is None and self._opened(o, now)) and (hide or not o.shadow)), None)
                 t.uniform = swept is None or (hide and p.shadow_uniform)   # shadow_uniform: a shadow's region too
                 focus = f is None and (x, y) in extra
@@ -232,8 +241,14 @@ class TargetLayer:
                     self._seat_on_alarm(host, t, alarm)
                     self._own(host, f, now)
                 continue
+            if owner is not None and (t is None or owner.size < p.alarm_split * t.size
+                                      or (self.heading is not None and not holds(t, self.heading))):
+                self._own(owner, f, now)         # alarm_split: no box of its own, not much smaller, or off the path
+                continue
             if t is None:
                 continue
+            if owner is not None:                # alarm_split: the seed's box replaces its owner
+                self._tracks = [o for o in self._tracks if o is not owner]
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
             t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
@@ -324,6 +339,15 @@ class TargetLayer:
                 move = self._seed_move(t)
                 if move is not None:
                     t.seed_move, t.seed_skew = move[:3], move[3]
+
+    def _splits(self, t: Track, f) -> bool:
+        """``TargetParams.alarm_split``: whether field ``f``, which track ``t`` would own, is a seed of its own: it is in
+        collision alarm (:meth:`_alarming`) and ``t`` has not warned and has no time to contact within ``horizon_s``
+        (none yet, or its last one beyond). The seed's box then replaces ``t`` in :meth:`step` where it grows, holds
+        the measured heading (where one is) and ``t`` is at least ``alarm_split`` times its size."""
+        p = self.params
+        return p.alarm_split > 0 and self._alarming(f) and not t.warned and not t.shadow \
+            and (t.held is None or t.held[1] is None or t.held[1] > p.horizon_s)
 
     def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest

@@ -446,6 +446,20 @@ class TargetParams(ParameterSet):
                                off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
+    alarm_split: float = param(3.0, """With ``alarm_warns``: a field in collision alarm whose owner (the smallest
+                               track whose box holds it) has not warned and has no time to contact within
+                               ``horizon_s`` (none, or its last one beyond) is a seed of its own (issue 22 item 4: a
+                               seed with its own box). When the box found for it grows (:meth:`_grows`, with the
+                               alarm), lies on the camera's path (it holds the measured heading, :func:`holds`; any
+                               box where no heading is measured) and its owner is at least this many times its size,
+                               the owner is dropped and the seed's box is a new target that owns the field. A box over
+                               the alarm's object and its surround (a lead vehicle with its neighbours, a strip
+                               across the road) has a time to contact and a course that are neither's and vetoes
+                               the alarm; off the path the owner's veto stands (a passing object's alarm). 0 = off
+                               (3, the default since session 30: over twenty-four sets 1041 -> 1044 of 1072
+                               colliders warned, none lost, false episodes 111 -> 114; docs/history.md, "An alarm
+                               seed with its own box").""",
+                               unit="x the seed's box", valid=Valid.real(minimum=0))
     view_hold: bool = param(True, """A target whose warning runs and whose box is exactly as wide or as tall as the
                             frame (within 1 px: the object fills the view and its box, a uniform region's, is cut at
                             the frame's edges, so its growth is no longer the object's) takes no new time to contact
