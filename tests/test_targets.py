@@ -1446,6 +1446,19 @@ def _dark_square_on_texture(n, side0=30.0, contact=30.0, at=(200, 110)):
     return frames
 
 
+def _put_track(layer, frame, box):
+    """A target of ``layer`` born at ``frame`` on ``box`` (cx, cy, w, h), one observation old, as the layer makes them."""
+    from mlplc2.targets.track import Observation as Obs
+
+    p = layer.params
+    t = Track(layer._next, frame, *box, birth=frame, span=p.span(p.window - 1, FPS), keep=p.window)
+    t.history = deque([Obs(frame, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+    t.inside = deque(t.history)
+    layer._tracks.append(t)
+    layer._next += 1
+    return t
+
+
 @pytest.mark.parametrize("reseat", [True, False])
 def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(reseat):
     # alarm_reseat (docs/history.md, "An alarm seed over a smaller track"): a target holds only a strip at the right
@@ -1456,7 +1469,6 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
 
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
-    from mlplc2.targets.track import Observation as Obs
 
     p = TargetParams(alarm_warns=True, alarm_reseat=reseat, seed_lm=0)     # no seeds but the field's
     layer = TargetLayer(p, FPS)
@@ -1467,12 +1479,7 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     for k, g in enumerate(frames):
         if k == 9:                               # a strip target on the square's right edge
             half = 30.0 * 30.0 / (30.0 - k) / 2.0
-            t = Track(layer._next, k - 1, 200 + half - 3.0, 110.0, 8.0, 2 * half, birth=k - 1,
-                      span=p.span(p.window - 1, FPS), keep=p.window)
-            t.history = deque([Obs(k - 1, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
-            t.inside = deque(t.history)
-            layer._tracks.append(t)
-            layer._next += 1
+            _put_track(layer, k - 1, (200 + half - 3.0, 110.0, 8.0, 2 * half))
         fields = [SimpleNamespace(id=1, x=200, y=122, radius=40, response=1.0, collision=True)] if k >= 10 else []
         outs.append(layer.step(g, lm, fields, k))
     centred = [t for out in outs[10:] for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5]
@@ -1494,7 +1501,6 @@ def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_it
 
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
-    from mlplc2.targets.track import Observation as Obs
 
     p = TargetParams(alarm_warns=True, seed_lm=0, **({"alarm_split": 0.0} if case == "off" else {}))
     assert p.alarm_split == (0.0 if case == "off" else 3.0)
@@ -1506,12 +1512,7 @@ def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_it
         if case == "off the path":
             layer.see_heading((10.0, 120.0), 1.0)
         if k == 9:
-            t = Track(layer._next, k - 1, 230.0, 110.0, 150.0, 150.0, birth=k - 1, span=p.span(p.window - 1, FPS),
-                      keep=p.window)
-            t.history = deque([Obs(k - 1, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
-            t.inside = deque(t.history)
-            layer._tracks.append(t)
-            layer._next += 1
+            _put_track(layer, k - 1, (230.0, 110.0, 150.0, 150.0))
         fields = [SimpleNamespace(id=1, x=200, y=112, radius=40, response=1.0, collision=True)] if k >= 10 else []
         outs.append(layer.step(g, lm, fields, k))
     centred = [[t for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5] for out in outs[10:27]]
