@@ -173,6 +173,16 @@ def test_benchmark_options_reach_benchmark(monkeypatch, tmp_path, capsys):
     assert main(["benchmark", "--out", "o", "--no-stabilise"]) == 0 and seen[-1][1]["stabilise"] is False
 
 
+@pytest.mark.parametrize("holdout, line", [
+    (0, "Generated suite: 2 scenes (60 frames); real clips: 0; 1 s."),
+    (7, "Generated suite: 2 scenes (60 frames, holdout 7); real clips: 0; 1 s."),
+    ([0, 21, 22, 23, 30], "Generated suite: 2 scenes (60 frames, holdouts 0, 21-23, 30); real clips: 0; 1 s."),
+])
+def test_the_report_names_the_holdouts_its_scenes_were_drawn_from(holdout, line):
+    res = benchmark_module.BenchmarkResult([], None, ["a", "b"], [], 1.0, settings={"frames": 60, "holdout": holdout})
+    assert res.to_markdown().splitlines()[0] == line
+
+
 @pytest.mark.parametrize("args, expect", [
     (["benchmark"], "the following arguments are required: --out"),
     (["benchmark", "--out", "o", "--real", "r", "--no-real"], "not allowed with argument"),

@@ -313,9 +313,23 @@ def _fmt(v, digits: int = 2) -> str:
     return f"{v:.{digits}f}" if isinstance(v, float) else str(v)
 
 
+def _holdout_text(holdout: int | list[int]) -> str:
+    """``holdout`` as the report names it: ``7``, or runs of consecutive holdouts, ``0, 21-43``."""
+    hs = [holdout] if isinstance(holdout, int) else sorted(holdout)
+    runs: list[list[int]] = []
+    for h in hs:
+        if runs and h == runs[-1][1] + 1:
+            runs[-1][1] = h
+        else:
+            runs.append([h, h])
+    return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
+
+
 def _markdown(res: BenchmarkResult) -> str:
     st = res.settings
-    lines = [f"Generated suite: {len(res.scenes)} scenes ({st.get('frames', 0)} frames); real clips: "
+    hold = st.get("holdout") or 0
+    drawn = "" if hold == 0 else f", holdout{'s' if isinstance(hold, list) else ''} {_holdout_text(hold)}"
+    lines = [f"Generated suite: {len(res.scenes)} scenes ({st.get('frames', 0)} frames{drawn}); real clips: "
              f"{len(res.clips)}; {res.seconds:.0f} s.", "",
              "| model | warned | lead median (s) | lead p10 (s) | lapsed | false episodes /1000 fr | false frames (%) "
              "| pass / distractor / background (episodes /1000) | TTC error 0-1 s | 1-3 s | 3-6 s "
