@@ -449,10 +449,11 @@ class TargetParams(ParameterSet):
     alarm_split: float = param(3.0, """With ``alarm_warns``: a field in collision alarm whose owner (the smallest
                                track whose box holds it) has not warned and has no time to contact within
                                ``horizon_s`` (none, or its last one beyond) is a seed of its own (issue 22 item 4: a
-                               seed with its own box). When the box found for it grows (:meth:`_grows`, with the
-                               alarm), lies on the camera's path (it holds the measured heading, :func:`holds`; any
-                               box where no heading is measured) and its owner is at least this many times its size,
-                               the owner is dropped and the seed's box is a new target that owns the field. A box over
+                               seed with its own box). When the box found for it grows (the growth test with the
+                               alarm), lies on the camera's path (it holds the measured heading,
+                               :func:`~mlplc2.targets.warning.holds`; any box where no heading is measured) and its
+                               owner is at least this many times its size, the owner is dropped and the seed's box
+                               is a new target that owns the field. A box over
                                the alarm's object and its surround (a lead vehicle with its neighbours, a strip
                                across the road) has a time to contact and a course that are neither's and vetoes
                                the alarm; off the path the owner's veto stands (a passing object's alarm). 0 = off
