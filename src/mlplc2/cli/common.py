@@ -187,8 +187,8 @@ nonneg_float = number_type(float, lambda v: math.isfinite(v) and v >= 0, "a numb
 
 
 def holdouts(text: str) -> int | list[int]:
-    """An argparse ``type`` for ``--holdout``: ``'N'`` -> N, or a list of holdouts to pool,
-    ``'21-25'`` or ``'3,7,21-25'`` -> ``[3, 7, 21, 22, 23, 24, 25]`` (integers >= 0, each once, in order)."""
+    """An argparse ``type`` for ``--holdout``: ``'N'`` -> N, or the holdouts to pool, ``'21-25'`` or ``'3,7,21-25'``
+    -> ``[3, 7, 21, 22, 23, 24, 25]`` (integers >= 0, each once, in order; one holdout however written is N)."""
     out: list[int] = []
     try:
         for part in text.replace(" ", "").split(","):
@@ -200,7 +200,7 @@ def holdouts(text: str) -> int | list[int]:
     except ValueError:
         raise argparse.ArgumentTypeError(f"expected N, a range A-B or a comma-separated list of them "
                                          f"(integers >= 0), got {text!r}") from None
-    return out[0] if len(out) == 1 and "-" not in text and "," not in text else out
+    return out[0] if len(out) == 1 else out
 
 
 def point_xy(text: str) -> tuple[float, float]:
