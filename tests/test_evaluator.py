@@ -790,6 +790,28 @@ def test_a_warning_that_goes_on_through_contact_stays_the_objects_for_late_s():
     assert v["false_episodes"] == 2
 
 
+def test_a_warning_anywhere_while_the_collider_fills_the_view_is_not_false():
+    """A collider seen by a panning camera has a corner behind the camera plane a frame before its
+    contact (its tracked width is not finite, mlplc2.stimuli.world): it fills the view, so a target
+    over the whole view warning then, or a frame later, is the hit, not a false warning; the same
+    warning two frames before, off the object's box, is false."""
+    from mlplc2.stimuli.world.scenes import ApproachObject, approach
+
+    stim = approach([ApproachObject.collision(ttc_s=0.301, at=(20, 20))], size=(160, 120), camera="pan",
+                    camera_speed=30, supersample=1)
+    vt = stim.truth()
+    last = vt.objects[0].track[-1]                  # frame 9, contact at 9.03
+    assert last.width is None and vt.objects[0].contact_frame - 1 <= last.frame
+    gt = {"videos": {"a.mp4": vt.to_dict()}}
+    n = stim.frames.shape[0]
+    corner = [T(f, 1, 150, 110, warn=True) for f in (last.frame, last.frame + 1)]   # 170 px from its centre
+    v = wvid(evaluate(result("a.mp4", n, targets=corner, size=(160, 120), fps=stim.fps), gt), "a.mp4")
+    assert v["false_frames"] == 0
+    early = [T(last.frame - 3, 2, 150, 110, warn=True)]
+    v = wvid(evaluate(result("a.mp4", n, targets=early, size=(160, 120), fps=stim.fps), gt), "a.mp4")
+    assert v["false_episodes_by_cause"] == {"background": 1}
+
+
 def test_a_false_warning_that_changes_cause_is_one_episode():
     """A target's false warning that slides from a passing object onto the background without a
     break is one episode (the user saw one false warning), counted for the cause of its first

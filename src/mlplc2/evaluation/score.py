@@ -602,13 +602,24 @@ def _false_cause(x: float | None, y: float | None, f: int, truth: VideoTruth, ru
 
 
 def _just_hit(x: float | None, y: float | None, f: int, rules: _WarningRules) -> bool:
-    """A warning up to LATE_S after a collision object's contact, where it last was."""
+    """A warning up to LATE_S after a collision object's contact, where it last was, or anywhere
+    from a frame before its contact while it fills the view (:func:`_fills_view`)."""
     for o in rules.colliders:
         cf = o.contact_frame
-        if cf is not None and cf <= f <= cf + rules.late \
-                and (x is None or on_object(x, y, o, min(f, cf), rules.radius)):
+        if cf is None or not cf - 1 <= f <= cf + rules.late:
+            continue
+        if _fills_view(o, min(f, cf)) or (cf <= f and (x is None or on_object(x, y, o, min(f, cf), rules.radius))):
             return True
     return False
+
+
+def _fills_view(obj: ObjectTruth, frame: float) -> bool:
+    """Whether a tracked object's size at ``frame`` is not finite: a corner of it lies at or
+    behind the camera plane (3-D truth, :mod:`mlplc2.stimuli.world`; a clip's label without a size
+    is not), so its image spreads over the view and has no box: a collision object does so in the
+    last frame before its contact."""
+    p = obj.point_at(frame) if obj.track else None
+    return p is not None and p.width is None and p.ttc_s is not None     # ttc_s: 3-D truth, not a label
 
 
 # ---------------------------------------------------------------------------
