@@ -600,6 +600,21 @@ def test_a_file_where_a_folder_is_needed_is_said_so(data, tmp_path, capsys, argv
     assert f.read_text() == "x\n"
 
 
+def test_an_output_folder_that_cannot_be_made_is_said_so(data, tmp_path, monkeypatch, capsys):
+    """An output folder the system cannot make (ENOENT from mkdir, as under /proc): 'cannot create PATH:
+    REASON', not the bare 'PATH: No such file or directory' of a missing input (a user's trial, session 31)."""
+    import errno
+    from pathlib import Path
+
+    def refuse(self, *a, **k):
+        raise FileNotFoundError(errno.ENOENT, "No such file or directory", str(self))
+
+    monkeypatch.setattr(Path, "mkdir", refuse)
+    out = tmp_path / "nope" / "o"
+    assert main(["run", str(data["avi"]), "--out", str(out), "-q"]) == 2
+    assert _one_error_line(capsys.readouterr().err) == f"mlplc2: error: cannot create {out}: No such file or directory"
+
+
 def test_an_output_folder_that_cannot_be_written_points_to_out(data, tmp_path, monkeypatch, capsys):
     """The default output folder lies beside the input, which may be a read-only data folder: the one error
     line names the folder and says how to write elsewhere (a user's trial, session 26)."""
@@ -618,7 +633,7 @@ def test_an_output_folder_that_cannot_be_written_points_to_out(data, tmp_path, m
     monkeypatch.setattr(Path, "mkdir", read_only)
     assert main(["run", str(clip), "--end", "6", "-q"]) == 2
     line = _one_error_line(capsys.readouterr().err)
-    assert line == f"mlplc2: error: {tmp_path / 'clip_mlplc2'}: Read-only file system " \
+    assert line == f"mlplc2: error: cannot create {tmp_path / 'clip_mlplc2'}: Read-only file system " \
                    "(write the outputs elsewhere with --out DIR)", line
     import cv2
 

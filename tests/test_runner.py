@@ -25,6 +25,21 @@ def test_truncated_video_warns_in_python(data, tmp_path):
     assert res.truncated and 0 < res.n_frames < T
 
 
+def test_a_resize_that_stretches_the_frames_warns(data):
+    """resize= (--resize) that changes the frames' aspect ratio distorts every object's growth: one warning that
+    says so and how to keep the shape; a resize that keeps it (within 5 %), none."""
+    import warnings
+
+    from .conftest import H, W
+
+    w, h = W, H
+    with pytest.warns(UserWarning, match=rf"resizing {w}x{h} frames to {w}x{h // 2} changes their aspect ratio"):
+        run(data["avi"], out=False, quiet=True, resize=(w, h // 2), max_frames=2)
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        run(data["avi"], out=False, quiet=True, resize=(w // 2, h // 2), max_frames=2)
+
+
 def test_run_api_without_outputs_and_dataframe(data, tmp_path):
     res = run(str(data["images"]), ["mlplc2", "lplc2"], out=False, progress=False)
     assert res.out is None and res.files == {} and res.n_frames == 40

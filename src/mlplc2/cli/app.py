@@ -69,9 +69,10 @@ def _is_input(args, filename) -> bool:
     return any(g is not None and os.fsdecode(filename) == str(g) for g in given)
 
 
-def _os_error_line(exc: OSError) -> str:
+def _os_error_line(exc: OSError, output: bool = False) -> str:
     """``PATH: REASON`` of an ``OSError``; a file where a folder is needed (an output folder, or a folder above
-    an output, that is a file) is said so instead of the system's "File exists" / "Not a directory"."""
+    an output, that is a file) is said so instead of the system's "File exists" / "Not a directory"; an
+    ``output`` path that does not exist could not be made: ``cannot create PATH: REASON``."""
     if not (exc.strerror and exc.filename):
         return str(exc) or type(exc).__name__
     if isinstance(exc, (FileExistsError, NotADirectoryError)):
@@ -81,6 +82,8 @@ def _os_error_line(exc: OSError) -> str:
             return f"{exc.filename}: is a file, where a folder is needed"
         if blocker is not None:
             return f"{exc.filename}: {blocker} is a file, not a folder"
+    if output and not os.path.lexists(exc.filename):
+        return f"cannot create {os.fsdecode(exc.filename)}: {exc.strerror}"
     return f"{exc.filename}: {exc.strerror}"
 
 
@@ -119,7 +122,7 @@ def _main(argv: list[str] | None) -> int:
         print(f"{PROG}: error: {one_line(str(exc))}", file=sys.stderr)
         return EXIT_INPUT
     except OSError as exc:
-        line = _os_error_line(exc)
+        line = _os_error_line(exc, output=not _is_input(args, exc.filename))
         if exc.errno in _NOT_WRITABLE and "out" in vars(args) and not _is_input(args, exc.filename):
             line += " (write the outputs elsewhere with --out DIR)"   # the default output folder lies beside the input
         print(f"{PROG}: error: {one_line(line)}", file=sys.stderr)

@@ -36,8 +36,9 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "other models (the format of 'mlplc2 batch --params'; 'mlplc2 params' lists the fields)")
     size = p.add_mutually_exclusive_group()
     size.add_argument("--resize", type=frame_size, metavar="WxH",
-                      help="resize frames before the models (e.g. 320x240); coordinates in the "
-                           "outputs stay in input pixels")
+                      help="resize frames before the models (e.g. 320x240; not needed for size: wider frames "
+                           "are reduced to 320 px, keeping their shape); coordinates in the outputs stay in input "
+                           "pixels")
     size.add_argument("--scale", type=pos_float, metavar="S", help="resize by a factor (e.g. 0.5)")
     p.add_argument("--start", type=nonneg_int, default=0, metavar="N", help="first frame (0-based)")
     p.add_argument("--end", type=nonneg_int, metavar="N", help="stop before this frame")

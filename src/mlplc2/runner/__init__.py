@@ -196,7 +196,7 @@ def _run_options(options: RunOptions | None, keywords: Mapping[str, Any], caller
     """``options`` with the fields given as keywords changed (no ``options``: the defaults)."""
     unknown = [k for k in keywords if k not in _OPTION_NAMES]
     if unknown:
-        close = difflib.get_close_matches(unknown[0], _OPTION_NAMES, n=1)
+        close = difflib.get_close_matches(unknown[0], _OPTION_NAMES + ("models",), n=1)
         hint = f"did you mean {close[0]!r}?" if close else "the keywords are mlplc2.runner.RunOptions' fields"
         raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r} ({hint})")
     if options is not None and not isinstance(options, RunOptions):
@@ -300,12 +300,30 @@ def _check_frame_size(src: FrameSource, models: Sequence[Model]) -> None:
                               f"the models need at least {need}x{need}")
 
 
+#: :func:`_check_aspect`: the largest change of the frames' aspect ratio (relative) that ``resize`` makes unremarked
+ASPECT_TOLERANCE = 0.05
+
+
+def _check_aspect(src: FrameSource) -> None:
+    """A warning when ``resize`` stretches the frames (their aspect ratio changes by more than
+    ``ASPECT_TOLERANCE``): an object's growth differs across the axes then, its box, course and bearing are
+    distorted and the warnings change (a user's trial, session 31: the 426x240 dashcam clip resized to 320x240
+    lost its only warning). The models reduce a frame to their working width themselves, keeping its shape."""
+    (w, h), (ow, oh) = src.size, src.out_size
+    if w and h and ow and oh and abs((ow / oh) / (w / h) - 1.0) > ASPECT_TOLERANCE:
+        keep = max(int(round(h * ow / w)), 1)
+        warnings.warn(f"{src.name}: resizing {w}x{h} frames to {ow}x{oh} changes their aspect ratio "
+                      f"({w / h:.2f} -> {ow / oh:.2f}), which distorts the objects' growth and the warnings; "
+                      f"keep it (e.g. {ow}x{keep}) or leave the resizing to the models", stacklevel=4)
+
+
 def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
     """The run's models, and whether the first frames looked duplicated (:func:`_prescan_changes`:
     the models with ``repeat_threshold="auto"`` are then primed to hold duplicates from the first frame on);
     None when no model is left to find out (every model's ``repeat_threshold`` set)."""
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
+    _check_aspect(src)
     refusals = [m.gyro_refusal() for m in built]
     if options.gyro is not None and None not in refusals:   # no model takes it: the first one says why
         raise InputValueError(f"{options.gyro.name}: {refusals[0]}")
@@ -377,13 +395,13 @@ def run(source, models: Sequence[str | Model] | str = ("mlplc2",), *, out=None, 
         return _loop(src, built, result, result.out, options)
 
 
-def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, options: RunOptions | None = None,
+def stream(source, models: Sequence[str | Model] | str | Model = "mlplc2", *, options: RunOptions | None = None,
            **keywords) -> Iterator[dict]:
     """Run models over a source and yield each frame's results as it is done.
 
     The same as ``mlplc2 run SOURCE --jsonl -`` from Python: each item is the dict of one JSON
     line (schema 1, docs/robot.md: ``frame``, ``time_s``, ``skipped``, ``warning``, ``models``,
-    ``targets``). ``source``, ``model`` and the keywords are those of :func:`run` (``source`` may
+    ``targets``). ``source``, ``models`` and the keywords are those of :func:`run` (``source`` may
     also be an opened :class:`~mlplc2.io.FrameSource`); nothing is written. Stop by breaking out
     of the loop (or ``max_frames`` / ``duration_s``): closing the generator (a ``for`` loop over
     ``stream(...)`` drops it at the ``break``; one kept in a name: its ``close()``) closes the
@@ -395,7 +413,7 @@ def stream(source, model: Sequence[str | Model] | str | Model = "mlplc2", *, opt
     """
     options = replace(_run_options(options, keywords, "stream"), video=False, keep_rows=False)
     with workers():
-        src, built, result = _open(source, model, options, False)
+        src, built, result = _open(source, models, options, False)
         frames = _Frames(src, built, result, options)
         t0 = time.perf_counter()
         try:
