@@ -32,12 +32,11 @@ def test_a_resize_that_stretches_the_frames_warns(data):
 
     from .conftest import H, W
 
-    w, h = W, H
-    with pytest.warns(UserWarning, match=rf"resizing {w}x{h} frames to {w}x{h // 2} changes their aspect ratio"):
-        run(data["avi"], out=False, quiet=True, resize=(w, h // 2), max_frames=2)
+    with pytest.warns(UserWarning, match=rf"resizing {W}x{H} frames to {W}x{H // 2} changes their aspect ratio"):
+        run(data["avi"], out=False, quiet=True, resize=(W, H // 2), max_frames=2)
     with warnings.catch_warnings():
         warnings.simplefilter("error")
-        run(data["avi"], out=False, quiet=True, resize=(w // 2, h // 2), max_frames=2)
+        run(data["avi"], out=False, quiet=True, resize=(W // 2, H // 2), max_frames=2)
 
 
 def test_run_api_without_outputs_and_dataframe(data, tmp_path):
