@@ -99,3 +99,15 @@ def disc_with_gap(n=46, contact=70, r0=6.0, gap=(30, 33), at=(200, 110)):
             cv2.circle(img, (at[0] * 16, at[1] * 16), int(round(r * 16)), 30, -1, lineType=cv2.LINE_AA, shift=4)
         frames.append(img)
     return frames
+
+
+#: the JSON lines' keys of the computer's clock (docs/robot.md): they differ between any two runs
+CLOCK_KEYS = ("wall_s", "latency_ms")
+
+
+def jsonl_results(text: str) -> list[dict]:
+    """The JSON lines in ``text`` without their clock keys (:data:`CLOCK_KEYS`): what two runs on the same frames
+    must share."""
+    lines = [json.loads(line) for line in text.splitlines()]
+    return [{k: v for k, v in line.items() if k not in CLOCK_KEYS} for line in lines]
+

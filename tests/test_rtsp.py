@@ -26,6 +26,8 @@ import mlplc2
 from mlplc2.cli import main
 from mlplc2.io import decoders
 
+from .helpers import jsonl_results
+
 av = pytest.importorskip("av")
 
 SDP = ("v=0\r\no=- 0 0 IN IP4 127.0.0.1\r\ns=clip\r\nc=IN IP4 0.0.0.0\r\nt=0 0\r\n"
@@ -190,7 +192,7 @@ def serve(rtsp_clip):
 
 
 def _lines(path):
-    return [json.loads(line) for line in path.read_text().splitlines()]
+    return jsonl_results(path.read_text())
 
 
 def test_rtsp_gives_the_results_of_the_file(rtsp_clip, serve, tmp_path, capsys):

@@ -25,6 +25,41 @@ def test_truncated_video_warns_in_python(data, tmp_path):
     assert res.truncated and 0 < res.n_frames < T
 
 
+def test_stream_says_when_its_source_was_cut_short_and_leaves_no_file_open(data, tmp_path):
+    """``stream`` over a file cut in half yields the frames before the cut, then warns as ``run`` does (a robot must
+    tell a camera that died from a stream that ended); a complete file warns nothing, and no spill file of the
+    recorder is left open (``ResourceWarning``)."""
+    import gc
+    import warnings
+
+    cut = tmp_path / "cut.avi"
+    raw = data["avi"].read_bytes()
+    cut.write_bytes(raw[: int(len(raw) * 0.5)])
+    with pytest.warns(TruncatedInputWarning, match="stopped at frame"):
+        lines = list(mlplc2.stream(cut))
+    assert 0 < len(lines) < T
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        assert len(list(mlplc2.stream(data["avi"]))) == T
+        gc.collect()
+
+
+def test_a_heading_outside_the_frame_warns(data):
+    """``--heading`` / ``TargetParams.heading`` is in the input's pixels: a point off the frame (most often one in
+    another frame's pixels) gets one warning that says the frame's range; one inside it, none."""
+    import warnings
+
+    from mlplc2.targets import TargetParams
+
+    from .conftest import H, W
+
+    with pytest.warns(UserWarning, match=rf"heading \(1000, 1000\) lies outside the {W}x{H} frame"):
+        run(data["avi"], out=False, quiet=True, max_frames=2, target_params=TargetParams(heading=(1000.0, 1000.0)))
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        run(data["avi"], out=False, quiet=True, max_frames=2, target_params=TargetParams(heading=(W / 2, H / 2)))
+
+
 def test_a_resize_that_stretches_the_frames_warns(data):
     """resize= (--resize) that changes the frames' aspect ratio distorts every object's growth: one warning that
     says so and how to keep the shape; a resize that keeps it (within 5 %), none."""
@@ -324,3 +359,41 @@ def test_full_disk_on_a_csv_or_the_json_lines_names_it_and_keeps_the_rest(failin
     assert err.strip().splitlines() == [f"mlplc2: error: {cli_path}: No space left on device; the other outputs "
                                         f"cover the {json.loads((tmp_path / 'cli' / 'fields.json').read_text())['n_frames']}"
                                         f" frames before"], err
+
+
+def _colour_loom(w=480, h=270, n=40):
+    """A colour clip wider than the working width: a textured background and a red square that grows."""
+    import cv2
+
+    rng = np.random.default_rng(3)
+    bg = cv2.GaussianBlur(rng.uniform(0, 255, (h, w, 3)).astype(np.float32), (0, 0), 3)
+    bg = cv2.normalize(bg, None, 40, 230, cv2.NORM_MINMAX).astype(np.uint8)
+    for i in range(n):
+        f = bg.copy()
+        side = 0 if i < 5 else 6 * (i - 5) + 4
+        if side:
+            cv2.rectangle(f, (w // 2 - side // 2, h // 2 - side // 2), (w // 2 + side // 2, h // 2 + side // 2),
+                          (200, 30, 60), -1)
+        yield f
+
+
+def test_a_step_loop_over_wide_frames_gives_what_run_and_stream_give(tmp_path):
+    """``mlplc2 run`` and ``stream`` reduce a clip wider than the working width in their decoding thread, as 8-bit
+    colour frames; a user's own loop of ``Model.step`` over the full-size frames must give the same outputs (a
+    reduction after the grey conversion differs by the rounding to 8 bits, which moved a real clip's warnings by
+    15-20 frames)."""
+    from mlplc2.io import open_source
+    from mlplc2.io.writer import write_video
+
+    path = write_video(tmp_path / "wide.avi", _colour_loom(), 30.0)
+    wide = [f for _, f in open_source(path)]
+    src = open_source(path)
+    src.reduce_to((320, 180))                     # what run() does with a 480x270 clip
+    small = [f for _, f in src]
+    assert wide[0].shape == (270, 480, 3) and small[0].shape == (180, 320, 3)
+    own, runs = mlplc2.MLPLC2(fps=30.0), mlplc2.MLPLC2(fps=30.0)
+    a = [own.step(f) for f in wide]
+    b = [runs.step(f) for f in small]
+    assert any(o.response > 0 for o in b)         # the square looms: the responses test the frames' values
+    assert [(o.response, o.collision, len(o.fields), o.warning) for o in a] == \
+        [(o.response, o.collision, len(o.fields), o.warning) for o in b]

@@ -207,6 +207,28 @@ def test_a_fast_object_is_followed_between_distant_frames():
     assert ttc is not None and 0 < ttc < 1.0
 
 
+def test_a_long_gap_in_the_frames_times_carries_no_motion_past_what_an_alignment_holds():
+    """A camera that pauses (1000 s between two frames): the track's own motion carried over the gap would move and
+    scale its box without bound (an overflow in the alignment's samples); it is no start for the alignment then,
+    and the step goes on without a warning of NumPy's."""
+    import warnings
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    rng = np.random.default_rng(1)
+    texture = cv2.GaussianBlur(rng.uniform(0, 120, (200, 200)).astype(np.float32), (0, 0), 4) * 2
+    layer = TargetLayer(fps=FPS)
+    for k in range(4):
+        side = 24 * 1.4 / (1.4 - 4 * k / FPS)
+        cx, cy = 260 - 22 * k, 150 - 5.5 * k
+        seed = SimpleNamespace(id=1, x=cx, y=cy, radius=40, response=1.0, box=(cx, cy, side, side), collision=True)
+        clock = 4 * k if k < 3 else 8 + 1000 * FPS
+        with warnings.catch_warnings():
+            warnings.simplefilter("error")
+            layer.step(_textured_square(cx, cy, side, texture), None, [seed] if k == 0 else [], clock, clock)
+
+
 def test_a_frame_seeds_once_per_nominal_interval_it_stands_for():
     """The LM seeds a frame may give count time, not frames: one per nominal frame (30 fps) since the
     last frame, at least one, at most change_frames (a long gap is not a flood of candidates)."""

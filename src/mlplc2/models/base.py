@@ -25,6 +25,15 @@ __all__ = ["Output", "Model", "REGISTRY", "REPEAT_THRESHOLD", "MAX_REPEATS", "CL
            "REPEAT_WINDOW"]
 
 
+def _eight_bit(frame, min_size: int) -> bool:
+    """Whether ``frame`` is an 8-bit image that :func:`~mlplc2._validation.as_gray` accepts as it is (a ``uint8``
+    array, (H, W) or (H, W, 1, 3 or 4), at least ``min_size`` px each way): :meth:`Model.step` then reduces it to
+    the working width before making it grey, as the decoding thread of ``mlplc2 run`` does."""
+    return (type(frame) is np.ndarray and frame.dtype == np.uint8
+            and (frame.ndim == 2 or (frame.ndim == 3 and frame.shape[2] in (1, 3, 4)))
+            and min(frame.shape[:2]) >= min_size)
+
+
 @dataclass(frozen=True)
 class Output:
     """What a model returns for one frame.
@@ -413,27 +422,35 @@ class Model(abc.ABC):
         A rejected frame raises :class:`~mlplc2.InputError` (a ``ValueError`` or
         ``TypeError``) before any state changes, so the model can go on.
         """
-        gray = as_gray(frame, min_size=self.min_size)
+        # an 8-bit frame wider than the working width is reduced as it is (its channels), then made grey: what
+        # ``mlplc2 run`` and ``stream`` do in their decoding thread, so that a loop of step() on the same frames
+        # gives their outputs (the other order differs by the rounding to 8 bits, which moves warnings)
+        raw = _eight_bit(frame, self.min_size)
+        gray = None if raw else as_gray(frame, min_size=self.min_size)
+        shape = frame.shape[:2] if raw else gray.shape
         clock, time_s = self._advance(t)
         rate = self._check_gyro(gyro)
-        if not self._scale_warned:
-            self._scale_warned = check_unit_scale(frame, gray)
         if self._shape is None:
-            self._shape = gray.shape
-            h, w = gray.shape
+            h, w = shape
             if self.work_width is not None and w > self.work_width:
                 self._work = (self.work_width, max(int(round(h * self.work_width / w)), self.min_size))
-        elif gray.shape != self._shape:
+            self._shape = shape
+        elif shape != self._shape:
             h0, w0 = self._shape
-            h, w = gray.shape
+            h, w = shape
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
+        if raw:
+            gray = as_gray(frame if self._work is None else cv2.resize(frame, self._work, interpolation=cv2.INTER_AREA),
+                           min_size=self.min_size)
+        elif not self._scale_warned:
+            self._scale_warned = check_unit_scale(frame, gray)
         first = self._t_last is None
         self._integrate_gyro(rate, None if first else time_s - self._t_last)
         self.clock, self._t_last = clock, time_s
         if first:
             self._t0 = time_s
-        if self._work is not None:
+        if self._work is not None and not raw:
             gray = cv2.resize(gray, self._work, interpolation=cv2.INTER_AREA)
         if self._is_repeat(gray):
             self._repeats += 1

@@ -317,6 +317,19 @@ def _check_aspect(src: FrameSource) -> None:
                       f"keep it (e.g. {ow}x{keep}) or leave the resizing to the models", stacklevel=4)
 
 
+def _check_heading(src: FrameSource, built: list[Model]) -> None:
+    """A warning when a given heading (``TargetParams.heading``, ``--heading``) lies outside the input's frame: a
+    camera may look sideways to where it goes, but a point off the frame is most often one in another frame's pixels
+    (a robotics user's trial, session 32: ``--heading 1000,1000`` on a 426x240 clip, taken silently)."""
+    w, h = src.size
+    for m in built:
+        heading = getattr(getattr(m, "target_params", None), "heading", None)
+        if heading is not None and w and h and not (0 <= heading[0] <= w - 1 and 0 <= heading[1] <= h - 1):
+            warnings.warn(f"{src.name}: the heading ({heading[0]:g}, {heading[1]:g}) lies outside the {w}x{h} frame; "
+                          f"it is taken in the input's pixels (x from 0 to {w - 1}, y from 0 to {h - 1})", stacklevel=4)
+            return
+
+
 def _prepare_models(source, models: list, src: FrameSource, options: RunOptions) -> tuple[list[Model], bool | None]:
     """The run's models, and whether the first frames looked duplicated (:func:`_prescan_changes`:
     the models with ``repeat_threshold="auto"`` are then primed to hold duplicates from the first frame on);
@@ -324,6 +337,7 @@ def _prepare_models(source, models: list, src: FrameSource, options: RunOptions)
     built = _build_models(models, src.fps, options)
     _check_frame_size(src, built)  # before any output exists: a bad size writes nothing
     _check_aspect(src)
+    _check_heading(src, built)
     refusals = [m.gyro_refusal() for m in built]
     if options.gyro is not None and None not in refusals:   # no model takes it: the first one says why
         raise InputValueError(f"{options.gyro.name}: {refusals[0]}")
@@ -421,8 +435,23 @@ def stream(source, models: Sequence[str | Model] | str | Model = "mlplc2", *, op
                 yield frames.step(item)
                 if options.done(result.n_frames, time.perf_counter() - t0):
                     break
+            else:
+                _warn_ended(src)
         finally:
             src.close()
+            frames.recorder.close()      # its spill files
+
+
+def _warn_ended(src: FrameSource) -> None:
+    """What :func:`stream` says when its source ran out (``run`` records it in its result and ``fields.json``): a
+    stream that stopped on an error or a file cut short (:class:`TruncatedInputWarning`), frames that could not be
+    decoded and were skipped."""
+    if src.truncated or src.dropped:
+        warnings.warn(src.message or f"{src.name}: the input stopped early", TruncatedInputWarning, stacklevel=3)
+    if src.damaged:
+        shown = ", ".join(map(str, src.damaged[:5])) + (", ..." if len(src.damaged) > 5 else "")
+        warnings.warn(f"{src.name}: {len(src.damaged)} damaged frame(s) could not be decoded ({shown}); skipped",
+                      TruncatedInputWarning, stacklevel=3)
 
 
 def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[Model], RunResult]:
@@ -602,7 +631,8 @@ class _Frames:
                 result.repeated[name] += 1
             target_rows.extend({"frame": index, "model": name, "target_id": t.id, **t.values()}
                                for t in self.recorder.update(index, name, out))
-        record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows)
+        record = frame_record(index, time_s, src.skipped, self.built, outputs, target_rows, wall_s=time.time(),
+                              latency_ms=1e3 * (time.perf_counter() - src.decoded_at))
         if self.lines is not None:
             try:
                 delivered = self.lines.write(record)

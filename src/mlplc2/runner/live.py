@@ -27,12 +27,15 @@ SCHEMA = 1
 _TARGET_KEYS = ("x", "y", "width", "height", "ttc_s", "miss", "azimuth_deg", "elevation_deg", "ttc_age_s")
 
 
-def frame_record(index: int, time_s: float, skipped: int, models, outputs, target_rows) -> dict:
+def frame_record(index: int, time_s: float, skipped: int, models, outputs, target_rows, *,
+                 wall_s: float | None = None, latency_ms: float | None = None) -> dict:
     """One frame's results as a JSON-able dict (schema :data:`SCHEMA`).
 
     ``models`` the run's models, ``outputs`` their :class:`~mlplc2.Output` s for the frame,
     ``target_rows`` the frame's ``targets.csv`` rows (input pixels). A model warns with its
-    targets' warning, a model without targets with its alarm (``Output.collision``).
+    targets' warning, a model without targets with its alarm (``Output.collision``). ``wall_s`` (the computer's
+    clock, Unix time in s, when the line was made) and ``latency_ms`` (from the frame's decoding to the line), when
+    given, follow ``skipped``: a consumer can tell how old a line is on its own clock.
     """
     per_model = {}
     for m, out in zip(models, outputs):
@@ -41,7 +44,10 @@ def frame_record(index: int, time_s: float, skipped: int, models, outputs, targe
                              "warning": warns}
     targets = [{"model": r["model"], "id": r["target_id"], **{k: r[k] for k in _TARGET_KEYS},
                 "warning": bool(r["warning"])} for r in target_rows]
-    return {"schema": SCHEMA, "frame": index, "time_s": time_s, "skipped": skipped,
+    clock = {} if wall_s is None else {"wall_s": round(wall_s, 3)}
+    if latency_ms is not None:
+        clock["latency_ms"] = round(latency_ms, 1)
+    return {"schema": SCHEMA, "frame": index, "time_s": time_s, "skipped": skipped, **clock,
             "warning": any(v["warning"] for v in per_model.values()), "models": per_model, "targets": targets}
 
 

@@ -852,8 +852,12 @@ class TargetLayer:
         box = (t.w / 2.0, t.h / 2.0)
         al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
                    kernel=self.align_kernel)
-        if (al is None or al.residual > p.max_residual) and t.motion is not None and self._far(interval):
-            dx, dy, g = (v * interval for v in t.motion)
+        carried = None if t.motion is None else tuple(v * interval for v in t.motion)
+        # ... a motion carried beyond what the iteration can hold (a log-scale of 1, a shift past the patch: a long gap
+        # in the frames' times) is no start
+        if (al is None or al.residual > p.max_residual) and carried is not None and self._far(interval) \
+                and abs(carried[2]) < 1.0 and math.hypot(carried[0], carried[1]) < 2.0 * half:
+            dx, dy, g = carried
             al = align(self._prev, levels, t.cx, t.cy, half, box, n=p.patch, iterations=p.iterations,
                        kernel=self.align_kernel, guess=(math.exp(g), dx, dy))
         if al is None or al.residual > p.max_residual:
