@@ -6,6 +6,7 @@ whose true rotation per frame is known (``stimulus.camera["omega"]``): the expec
 rendered camera's, not output of the code under test.
 """
 
+import json
 import math
 from fractions import Fraction
 
@@ -168,6 +169,35 @@ def test_run_gives_the_gyro_to_the_models_that_stabilise(tmp_path):
     with pytest.raises(mlplc2.InputError, match=r"covers t = 1733250000\.125 to 1733250000\.292 s but the run's "
                                                  r"frames are at 0 to 0\.166667 s"):
         mlplc2.run(src, "mlplc2", out=False, gyro=epoch, hfov_deg=60.0, quiet=True)
+
+
+def test_a_live_gyro_is_asked_each_frames_rate_and_gives_what_its_samples_give(tmp_path):
+    """A robot's IMU read as the frames come: ``stream(..., gyro=rate)`` asks ``rate(t)`` once per frame with the
+    frame's time and gives the models what the same rates given as samples give; None leaves a frame to the images;
+    anything but three finite numbers is one clear error that names the frame's time."""
+    from .helpers import jsonl_results
+
+    st, rates = _pan(frames=6, size=(160, 120))
+    src = _folder(tmp_path, st.frames)
+    rows = np.column_stack([np.arange(6) / FPS, rates])
+    asked = []
+
+    def rate(t):
+        asked.append(t)
+        return tuple(rates[int(round(t * FPS))])
+
+    live = mlplc2.MLPLC2(fps=FPS, stabilise=True)
+    lines = list(mlplc2.stream(src, [live], gyro=rate, hfov_deg=60.0))
+    assert asked == pytest.approx(list(np.arange(6) / FPS), abs=1e-6)
+    assert live.camera_motion.given and live.camera_motion.omega[1] == pytest.approx(RATE / FPS)
+    sampled = mlplc2.MLPLC2(fps=FPS, stabilise=True)
+    strip = lambda ls: jsonl_results("\n".join(json.dumps(line) for line in ls))     # noqa: E731
+    assert strip(lines) == strip(mlplc2.stream(src, [sampled], gyro=rows, hfov_deg=60.0))
+    images = mlplc2.MLPLC2(fps=FPS, stabilise=True)
+    list(mlplc2.stream(src, [images], gyro=lambda t: None, hfov_deg=60.0))
+    assert not images.camera_motion.given
+    with pytest.raises(mlplc2.InputError, match=r"gave \(0\.1, nan, 0\.0\) at t = 0 s; expected three finite"):
+        list(mlplc2.stream(src, "mlplc2", gyro=lambda t: (0.1, float("nan"), 0.0), hfov_deg=60.0))
 
 
 def test_cli_gyro_errors_are_one_line_and_write_nothing(tmp_path, capsys):

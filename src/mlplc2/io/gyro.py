@@ -18,7 +18,7 @@ import numpy as np
 
 from .._validation import InputTypeError, InputValueError
 
-__all__ = ["Gyro", "SLACK"]
+__all__ = ["Gyro", "LiveGyro", "SLACK"]
 
 #: How far (in frame intervals) beyond its first or last sample a gyro's rate is held.
 SLACK = 1.0
@@ -42,13 +42,16 @@ class Gyro:
                                   f"follows t = {self.t[bad[0]]:g} s")
 
     @classmethod
-    def load(cls, value) -> "Gyro":
+    def load(cls, value) -> "Gyro | LiveGyro":
         """A :class:`Gyro` from a CSV path (module docstring), an (N, 4) array of rows ``t, wx, wy, wz``,
-        or a :class:`Gyro` (returned as is)."""
-        if isinstance(value, Gyro):
+        or a :class:`Gyro` (returned as is); a callable ``rate(t)`` gives a :class:`LiveGyro` (a robot's IMU read as
+        the frames come)."""
+        if isinstance(value, (Gyro, LiveGyro)):
             return value
         if isinstance(value, (str, Path)):
             return cls._read_csv(Path(value))
+        if callable(value):
+            return LiveGyro(value)
         try:
             a = np.asarray(value, dtype=np.float64)
         except (TypeError, ValueError):
@@ -100,6 +103,37 @@ class Gyro:
         :class:`~mlplc2.InputError`."""
         self.check_covers(t, t, fps)
         return tuple(float(np.interp(t, self.t, self.rates[:, k])) for k in range(3))
+
+
+class LiveGyro:
+    """A gyro read as the frames come (``stream(source, gyro=rate)``, ``run(..., gyro=rate)``): ``rate(t)`` is called
+    once per frame with the frame's time (seconds, on the source's clock, as ``time_s`` of the JSON lines) and gives
+    the camera's angular velocity then, ``(wx, wy, wz)`` rad/s about its x (right), y (down) and z (forward) axes (the
+    robot's latest IMU reading, or one interpolated at ``t``), or None for a frame without one (its rotation is then
+    the images' estimate)."""
+
+    def __init__(self, rate, name: str | None = None):
+        self.rate = rate
+        self.name = name or f"gyro {getattr(rate, '__name__', type(rate).__name__)}"
+
+    def check_covers(self, first_s: float, last_s: float | None, fps: float) -> None:
+        """Nothing to check before the run: each frame asks for its own rate."""
+
+    def at(self, t: float, fps: float) -> tuple[float, float, float] | None:
+        """``rate(t)`` as three floats; :class:`~mlplc2.InputError` for anything else than three finite numbers or
+        None."""
+        value = self.rate(t)
+        if value is None:
+            return None
+        try:
+            w = tuple(float(v) for v in value)
+        except (TypeError, ValueError):
+            raise InputTypeError(f"{self.name}: gave {value!r} at t = {_s(t)} s; expected (wx, wy, wz) in rad/s "
+                                 f"or None") from None
+        if len(w) != 3 or not all(np.isfinite(w)):
+            raise InputValueError(f"{self.name}: gave {value!r} at t = {_s(t)} s; expected three finite numbers "
+                                  f"(wx, wy, wz) in rad/s or None")
+        return w
 
 
 def _s(t: float) -> str:

@@ -113,10 +113,12 @@ class RunOptions:
         estimated every frame and compensated before the front end (docs/model.md, "Camera
         motion"). True (the default, here only: every run, stream, batch and benchmark takes it
         from this field); False: the paper's model (as ``mlplc2 reproduce`` and the model classes).
-    gyro : path, (N, 4) array or Gyro, optional
+    gyro : path, (N, 4) array, Gyro or callable, optional
         The camera's angular velocity: a CSV with columns ``t, wx, wy, wz`` (s on the video's clock,
         rad/s in the camera's axes) or its rows (:class:`mlplc2.io.gyro.Gyro`), interpolated at each
-        frame's time and given to the models that stabilise instead of the estimated rotation; needs
+        frame's time and given to the models that stabilise instead of the estimated rotation; or, for a
+        live source, a callable ``rate(t)`` asked once per frame with the frame's time, returning
+        ``(wx, wy, wz)`` or None (:class:`mlplc2.io.gyro.LiveGyro`); needs
         ``hfov_deg`` (docs/robot.md, "Frame rate, field of view and a gyro").
     video : bool
         Also write ``annotated.mp4``: the input frames with the targets (or fields) of the
@@ -432,7 +434,11 @@ def stream(source, models: Sequence[str | Model] | str | Model = "mlplc2", *, op
         t0 = time.perf_counter()
         try:
             for item in src:
-                yield frames.step(item)
+                try:
+                    line = frames.step(item)
+                except _GyroEnded as exc:    # the gyro gave out (a file's samples end, a live gyro's bad value)
+                    raise InputValueError(f"{exc}; the lines cover the {result.n_frames} frames before") from None
+                yield line
                 if options.done(result.n_frames, time.perf_counter() - t0):
                     break
             else:
@@ -568,9 +574,9 @@ class _OutputFailed(Exception):
 
 class _GyroEnded(Exception):
     """The gyro's samples end before a frame's time (a source of unknown length, e.g. stdin, whose
-    span could not be checked before the run): the run stops before that frame, :func:`_loop` writes
-    the summaries of the frames done (``error``: the message; not complete), then raises it as an
-    :class:`~mlplc2.InputError`."""
+    span could not be checked before the run), or a live gyro (:class:`~mlplc2.io.gyro.LiveGyro`) gave no rate:
+    the run stops before that frame, :func:`_loop` writes the summaries of the frames done (``error``: the message;
+    not complete), then raises it as an :class:`~mlplc2.InputError` (:func:`stream` too)."""
 
 
 class _Frames:
