@@ -24,7 +24,7 @@ import pytest
 
 import mlplc2
 from mlplc2.cli import main
-from mlplc2.io import decoders
+from mlplc2.io import TruncatedInputWarning, decoders
 
 from .helpers import jsonl_results
 
@@ -215,13 +215,15 @@ def test_rtsp_gives_the_results_of_the_file(rtsp_clip, serve, tmp_path, capsys):
 
 def test_a_live_rtsp_stream_faster_than_its_consumer_skips_to_the_newest_frame(serve):
     """The server sends all 60 frames at once; a consumer taking 20 ms a line gets the newest
-    frame each time, and the frames in between are counted as skipped."""
+    frame each time, and the frames in between are counted as skipped. The server then ends the stream, which
+    ``stream`` says as ``run`` does (a camera that went away)."""
     server = serve()
     src = mlplc2.io.open_source(server.url)
     lines = []
-    for line in mlplc2.stream(src, "mlplc2", repeat_threshold=None):
-        lines.append(line)
-        time.sleep(0.02)
+    with pytest.warns(TruncatedInputWarning, match=r"the stream stopped after 60 frames"):
+        for line in mlplc2.stream(src, "mlplc2", repeat_threshold=None):
+            lines.append(line)
+            time.sleep(0.02)
     frames = [line["frame"] for line in lines]
     skipped = [line["skipped"] for line in lines]
     assert frames[-1] == 59 and len(frames) + sum(skipped) == 60 and sum(skipped) > 0
