@@ -441,8 +441,9 @@ class Model(abc.ABC):
             raise InputValueError(
                 f"frame {self._frame} is {w}x{h} but earlier frames were {w0}x{h0}; call reset() to change size")
         if raw:
-            gray = as_gray(frame if self._work is None else cv2.resize(frame, self._work, interpolation=cv2.INTER_AREA),
-                           min_size=self.min_size)
+            small = frame if self._work is None else cv2.resize(np.ascontiguousarray(frame), self._work,
+                                                               interpolation=cv2.INTER_AREA)
+            gray = as_gray(small, min_size=self.min_size)
         elif not self._scale_warned:
             self._scale_warned = check_unit_scale(frame, gray)
         first = self._t_last is None
