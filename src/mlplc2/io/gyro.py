@@ -126,6 +126,8 @@ class LiveGyro:
         if value is None:
             return None
         try:
+            if isinstance(value, (str, bytes)):
+                raise TypeError(value)
             w = tuple(float(v) for v in value)
         except (TypeError, ValueError):
             raise InputTypeError(f"{self.name}: gave {value!r} at t = {_s(t)} s; expected (wx, wy, wz) in rad/s "
