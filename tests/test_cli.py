@@ -664,6 +664,11 @@ def test_run_params_file_reaches_the_models_and_is_recorded(data, tmp_path, caps
     assert alarms(quiet) == 0
     assert json.loads((quiet / "fields.json").read_text())["params"] == {
         "mlplc2": {"alarm_threshold": 1e12, "targets": {"horizon_s": 2.0}}, "lgmd2": {"n_ts": 3}}
+    # a file that changes only another model's parameters (a researcher's trial, session 32: taken silently)
+    capsys.readouterr()
+    assert main(["run", str(data["avi"]), "--out", str(tmp_path / "other"), "-m", "lgmd1", "--params", str(f),
+                 "-q", "--end", "3"]) == 0
+    assert f"{f}: changes none of the parameters of lgmd1" in capsys.readouterr().err
     f.write_text(json.dumps({"alarm_treshold": 5}))
     assert main(["run", str(data["avi"]), "--out", str(tmp_path / "bad"), "--params", str(f), "-q"]) == 2
     assert "unknown parameter 'alarm_treshold'" in _one_error_line(capsys.readouterr().err)

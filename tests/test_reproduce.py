@@ -356,6 +356,8 @@ def test_params_of_default_values_are_the_defaults(tmp_path, recorded):
     ("{not json", "not valid JSON"),
     ("[1, 2]", "expected a JSON object"),
     ('{"no_such": 1}', "unknown parameter 'no_such'"),
+    # the paper's symbol in capitals: the field is named, and reproduce has no --sweep to suggest (session 32)
+    ('{"T_a": 12}', r"unknown parameter 'T_a' \(did you mean 't_a'\?\); Params fields: .*\{\"lgmd2\": \{\.\.\.\}\}$"),
     ('{"beta": -1}', "Params.beta must be >= 0, got -1"),
     ('{"t_a": "x"}', "t_a must be a number"),
     ('{"n_c": 2.5}', "Params.n_c must be an integer >= 1, got 2.5"),

@@ -7,6 +7,7 @@ sweeps (``NAME=V1,V2,...``: their Cartesian product), the overrides that apply t
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import functools
 import hashlib
 import itertools
@@ -222,6 +223,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
         if not isinstance(base, Mapping):
             raise InputValueError("--params: expected a JSON object {name: value}")
         base = {k: (dict(v) if isinstance(v, Mapping) else v) for k, v in base.items()}
+    sweeping = sweep is not None
     sweep = parse_sweep(sweep)
     names = list(sweep)
     sets = []
@@ -241,9 +243,12 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
                 if k not in available_models():
                     raise InputValueError(f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
             elif k not in pnames:
-                raise InputValueError(f"parameters: unknown parameter {k!r} (Params fields: see help(mlplc2.Params); "
-                                      f"other models' parameters go in a section {{\"lgmd2\": {{...}}}} or "
-                                      f"--sweep lgmd2.NAME=...)")
+                close = difflib.get_close_matches(str(k).lower(), sorted(pnames), n=1)
+                raise InputValueError(f"parameters: unknown parameter {k!r}"
+                                      + (f" (did you mean {close[0]!r}?)" if close else "")
+                                      + "; Params fields: 'mlplc2 params' or help(mlplc2.Params); other models' "
+                                      "parameters go in a section {\"lgmd2\": {...}}"
+                                      + (" or --sweep lgmd2.NAME=..." if sweeping else ""))
         flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
         _check_types(Params, flat)
         if flat:  # Params fields are checked even when no LPLC2-family model runs

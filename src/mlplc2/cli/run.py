@@ -151,6 +151,9 @@ def _model_params(path, models: list[str]) -> dict | None:
 
     pset = param_sets(path, None, models)[0]
     params = {m: model_params(pset, m) for m in models}
+    if pset and all(p is None for p in params.values()):   # it changes parameters, but of none of these models
+        warn(f"{path}: changes none of the parameters of {', '.join(models)} (its fields are other models'; "
+             f"'mlplc2 params', with --lgmd2, --lgmd1 or --flow, lists them)")
     return {m: p for m, p in params.items() if p is not None} or None
 
 

@@ -36,6 +36,7 @@ its files, is in :mod:`mlplc2.runner.result` (re-exported here).
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
 import json
 import logging
@@ -502,12 +503,26 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
     return src, built, result
 
 
+def _params_dict(p) -> dict:
+    """A model's parameters as a dict: a :class:`~mlplc2.params.ParameterSet`'s ``to_dict()``, a plain dataclass's
+    fields (a user's own model, docs/testing.md), else nothing (None, or an object the run cannot read)."""
+    if hasattr(p, "to_dict"):
+        return p.to_dict()
+    if dataclasses.is_dataclass(p) and not isinstance(p, type):
+        return dataclasses.asdict(p)
+    return {}
+
+
 def _changed(model: Model) -> dict:
     """The parameters ``model`` runs with that differ from its defaults (``fields.json`` ``"params"``); those of its
-    target layer under ``"targets"``."""
+    target layer under ``"targets"``. A model whose parameter class has no defaults: all of them."""
     def diff(p) -> dict:
-        default = type(p)().to_dict()
-        return {k: v for k, v in p.to_dict().items() if default.get(k) != v}
+        values = _params_dict(p)
+        try:
+            default = _params_dict(type(p)())
+        except Exception:  # noqa: BLE001 - a user's parameter class that needs arguments: no defaults to compare
+            return values
+        return {k: v for k, v in values.items() if default.get(k) != v}
 
     out = diff(model.params)
     targets = getattr(model, "target_params", None) if model.has_targets else None
