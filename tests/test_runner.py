@@ -397,3 +397,42 @@ def test_a_step_loop_over_wide_frames_gives_what_run_and_stream_give(tmp_path):
     assert any(o.response > 0 for o in b)         # the square looms: the responses test the frames' values
     assert [(o.response, o.collision, len(o.fields), o.warning) for o in a] == \
         [(o.response, o.collision, len(o.fields), o.warning) for o in b]
+
+
+def test_a_model_of_ones_own_runs_beside_the_packages(data, tmp_path):
+    """A model written as docs/testing.md shows (its parameters a plain frozen dataclass) and one without parameters
+    run in ``run`` and ``stream`` beside the package's models, and the run records what each ran with: the runner read
+    parameters with ``ParameterSet.to_dict`` and crashed on them (a researcher's trial, session 32)."""
+    from dataclasses import dataclass
+
+    from mlplc2.models import Model, Output
+
+    @dataclass(frozen=True)
+    class DarkeningParams:
+        threshold: float = 2.0
+
+    class Darkening(Model):
+        def __init__(self, fps=30.0, params=None, **kwargs):
+            super().__init__(fps=fps, params=DarkeningParams() if params is None else params, **kwargs)
+
+        def _reset(self):
+            pass
+
+        def _step(self, gray, index):
+            return Output(frame=index, response=float(gray.mean()), collision=bool(gray.mean() < self.params.threshold))
+
+    class Bare(Model):
+        def _reset(self):
+            pass
+
+        def _step(self, gray, index):
+            return Output(frame=index, response=float(gray.max()))
+
+    Darkening.name, Bare.name = "darkening", "bare"
+    result = run(data["avi"], ["lgmd2", Darkening(params=DarkeningParams(threshold=3.0)), Bare()], out=False,
+                 quiet=True, end=5)
+    assert result.n_frames == 5
+    assert result.params == {"lgmd2": {}, "darkening": {"threshold": 3.0}, "bare": {}}
+    lines = list(mlplc2.stream(data["avi"], [Darkening(), Bare()], end=5))
+    assert len(lines) == 5 and set(lines[0]["models"]) == {"darkening", "bare"}
+

@@ -15,7 +15,7 @@ Examples
 >>> [check.__name__ for check in check_model(mlplc2.LGMD1)][:3]
 ['check_outputs', 'check_run_equals_step', 'check_reset']
 >>> len(run_checks(lambda: mlplc2.LGMD1(fps=30.0)))
-14
+13
 """
 
 from __future__ import annotations
@@ -362,29 +362,9 @@ def check_unit_scale_warning(make, frames, **_):
         fresh.step((frame * 255).astype(np.uint8) // 255)           # integers: none
 
 
-def check_in_a_run(make, frames, **_):
-    """``mlplc2.run`` and ``mlplc2.stream`` (what ``mlplc2 run`` does) take the model as it is: a line per frame of a
-    clip, and the model's parameters recorded in the run's result (a user's model with a plain dataclass, or
-    no parameters, crashed there while it passed every other check: session 32)."""
-    import tempfile
-
-    from .runner import run, stream
-
-    model = make()
-    with tempfile.TemporaryDirectory() as folder:
-        for i, f in enumerate(frames):
-            cv2.imwrite(f"{folder}/{i:03d}.png", cv2.cvtColor(f, cv2.COLOR_RGB2BGR) if f.ndim == 3 else f)
-        lines = list(stream(folder, [model], repeat_threshold=None))
-        _expect(len(lines) == len(frames) and all(model.name in line["models"] for line in lines),
-                f"stream() gave {len(lines)} lines for {len(frames)} frames, or lines without {model.name!r}")
-        result = run(folder, [make()], out=False, quiet=True, repeat_threshold=None)
-        _expect(result.n_frames == len(frames) and isinstance(result.params.get(model.name), dict),
-                f"run() took {result.n_frames} of {len(frames)} frames, or recorded no parameters")
-
-
 CHECKS = (check_outputs, check_run_equals_step, check_reset, check_deterministic, check_pickle,
           check_construction, check_input_not_modified, check_memory_layouts, check_channels,
-          check_bad_input, check_frame_size, check_minimum_size, check_unit_scale_warning, check_in_a_run)
+          check_bad_input, check_frame_size, check_minimum_size, check_unit_scale_warning)
 
 
 def check_model(model_factory: Callable[[], Model], *, responds: bool = True,
