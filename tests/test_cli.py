@@ -645,6 +645,15 @@ def test_an_output_folder_that_cannot_be_written_points_to_out(data, tmp_path, m
     assert _one_error_line(capsys.readouterr().err) == f"mlplc2: error: {clip}: Permission denied"
 
 
+def test_params_says_whose_equation_numbers_it_cites(capsys):
+    """`mlplc2 params` cites docs/model.md's equation numbers, one higher than the compiled paper's from Eq. 4 on:
+    its last line says so (a researcher's trial, session 32: easy to mis-cite); the baselines' tables do not need it."""
+    assert main(["params"]) == 0
+    assert capsys.readouterr().out.strip().splitlines()[-1].endswith("Eq. 5-16 are the paper's Eq. 4-15.")
+    assert main(["params", "--lgmd2"]) == 0
+    assert "Eq. 5-16" not in capsys.readouterr().out
+
+
 def test_run_params_file_reaches_the_models_and_is_recorded(data, tmp_path, capsys):
     """`mlplc2 run --params FILE.json` (the format of `batch --params`): a collision threshold no response reaches
     silences the looming square's alarms, the LGMD2 section reaches LGMD2, and fields.json records what each

@@ -35,6 +35,9 @@ def _cmd_params(args) -> int:
     cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else \
         FlowParams if args.flow else Params
     out(parameter_table(cls, markdown=args.markdown), end="")
+    if cls is Params and not args.markdown:   # the descriptions cite docs/model.md's numbers (a researcher's trial)
+        out("Equation numbers are docs/model.md's (NOTES.md's): they count the vDoG subtraction as Eq. 4, so their "
+            "Eq. 5-16 are the paper's Eq. 4-15.")
     return EXIT_OK
 
 
