@@ -103,7 +103,7 @@ def _cmd_run(args) -> int:
 
 
 def _run(args, jsonl) -> int:
-    from ..runner import RunInterrupted, TruncatedInputWarning, run
+    from ..runner import RunInterrupted, TruncatedInputWarning, damaged_message, run
 
     models = resolve_names(args.model or ["mlplc2"], what="--model")
     resize = args.resize
@@ -132,8 +132,7 @@ def _run(args, jsonl) -> int:
             raise type(exc)(_cli_names(str(exc))) from None
     _print_run_summary(args, result)
     if result.damaged:
-        shown = ", ".join(map(str, result.damaged[:5])) + (", ..." if len(result.damaged) > 5 else "")
-        warn(f"{result.source}: {len(result.damaged)} damaged frame(s) could not be decoded ({shown}); skipped")
+        warn(damaged_message(result.source, result.damaged))
     if result.dropped or (result.message and not result.truncated):  # a dropped stream, a closed --jsonl pipe
         print(f"{PROG}: {result.message}", file=sys.stderr)
     elif result.truncated:

@@ -456,9 +456,14 @@ def _warn_ended(src: FrameSource) -> None:
     if src.truncated or src.dropped:
         warnings.warn(src.message or f"{src.name}: the input stopped early", TruncatedInputWarning, stacklevel=3)
     if src.damaged:
-        shown = ", ".join(map(str, src.damaged[:5])) + (", ..." if len(src.damaged) > 5 else "")
-        warnings.warn(f"{src.name}: {len(src.damaged)} damaged frame(s) could not be decoded ({shown}); skipped",
-                      TruncatedInputWarning, stacklevel=3)
+        warnings.warn(damaged_message(src.name, src.damaged), TruncatedInputWarning, stacklevel=3)
+
+
+def damaged_message(name: str, damaged: list[int]) -> str:
+    """The line that names the frames of ``name`` that could not be decoded and were skipped (``damaged``: their
+    indices; the CLI's warning after a run, :func:`stream`'s)."""
+    shown = ", ".join(map(str, damaged[:5])) + (", ..." if len(damaged) > 5 else "")
+    return f"{name}: {len(damaged)} damaged frame(s) could not be decoded ({shown}); skipped"
 
 
 def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[Model], RunResult]:
