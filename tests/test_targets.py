@@ -1432,18 +1432,30 @@ def test_seed_shadow_shown_after_a_loss_keeps_the_lost_targets_id():
     assert disc[45] and set(disc[45]) == set(disc[29])
 
 
-def _dark_square_on_texture(n, side0=30.0, contact=30.0, at=(200, 110)):
+def _dark_square_on_texture(n, side0=30.0, contact=30.0, at=(200, 110), away=None):
     """Grey frames of a uniform dark square approaching (side ``side0 S``, ``S = contact / (contact - k)``) over a
-    fixed texture."""
+    fixed texture; with ``away = (hx, hy, a)`` its centre moves away from ``(hx, hy)`` as ``S ** a`` (``a = 1``: as the
+    static world at the square's depth expands about a heading there; ``a = 0``: it keeps its bearing)."""
     rng = np.random.default_rng(5)
     texture = cv2.GaussianBlur(rng.uniform(60, 250, (240, 320)).astype(np.float32), (0, 0), 1.5)
     frames = []
     for k in range(n):
         img = texture.copy()
-        half = side0 * contact / (contact - k) / 2.0
-        img[int(round(at[1] - half)):int(round(at[1] + half)), int(round(at[0] - half)):int(round(at[0] + half))] = 30.0
+        scale = contact / (contact - k)
+        half = side0 * scale / 2.0
+        x, y = _square_centre(k, contact, at, away)
+        img[int(round(y - half)):int(round(y + half)), int(round(x - half)):int(round(x + half))] = 30.0
         frames.append(img)
     return frames
+
+
+def _square_centre(k, contact=30.0, at=(200, 110), away=None):
+    """The centre of :func:`_dark_square_on_texture`'s square at frame ``k``."""
+    if away is None:
+        return at
+    hx, hy, a = away
+    grow = (contact / (contact - k)) ** a
+    return hx + (at[0] - hx) * grow, hy + (at[1] - hy) * grow
 
 
 def _put_track(layer, frame, box):
@@ -1488,35 +1500,43 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     assert len({t.id for out in outs[10:] for t in out}) == 1     # one target: the strip's, not a second
 
 
-@pytest.mark.parametrize("case", ["split", "off", "off the path"])
+@pytest.mark.parametrize("case", ["split", "off", "keeps its bearing", "split_bearing off", "drifts"])
 def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_its_own(case):
     # alarm_split (issue 22 item 4; docs/history.md, "An alarm seed with its own box"): a target's box lies over a
     # uniform dark square and the texture right of it (150 px, centred 30 px right of the square), with no time to
     # contact yet; a field alarms on the square from frame 10 (contact at frame 30). With the option (the default) the
     # field's seed takes the square's box, replaces the larger target and warns there on every frame to the contact,
-    # its time to contact counting down; without it, or where the square is off the camera's path (a heading measured
-    # at the frame's left edge: a passing object's alarm, which the owner's course vetoes), the larger box keeps the
-    # alarm, slides off the square and its warning stops
+    # its time to contact counting down; without it the larger box keeps the alarm, slides off the square and its
+    # warning stops. Off the camera's path (a heading measured 80 px left of the square) the seed's box splits only
+    # where the square keeps its bearing, as an object on a collision course does (split_bearing, docs/history.md, "The
+    # ground and the roadside, session 32"); not without split_bearing, and not where its centre moves away from the
+    # heading at 0.6 of the static world's rate (bearing_drift 0.4): a passing object's alarm, which the owner keeps
     from types import SimpleNamespace
 
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
 
-    p = TargetParams(alarm_warns=True, seed_lm=0, **({"alarm_split": 0.0} if case == "off" else {}))
-    assert p.alarm_split == (0.0 if case == "off" else 3.0)
+    options = {"off": {"alarm_split": 0.0}, "split_bearing off": {"split_bearing": False}}.get(case, {})
+    p = TargetParams(alarm_warns=True, seed_lm=0, **options)
+    assert p.alarm_split == (0.0 if case == "off" else 3.0) and p.split_bearing == (case != "split_bearing off")
+    heading = None if case in ("split", "off") else (120.0, 110.0)
+    away = (*heading, 0.6) if case == "drifts" else None
+    n = 21 if case == "drifts" else 28                               # (the drifting square leaves the frame at 21)
     layer = TargetLayer(p, FPS)
     zero = np.zeros((240, 320), np.float32)
     lm = LocalMotion(zero, zero, zero, zero, zero)
     outs = []
-    for k, g in enumerate(_dark_square_on_texture(28)):
-        if case == "off the path":
-            layer.see_heading((10.0, 120.0), 1.0)
+    for k, g in enumerate(_dark_square_on_texture(n, away=away)):
+        if heading is not None:
+            layer.see_heading(heading, 1.0)
         if k == 9:
             _put_track(layer, k - 1, (230.0, 110.0, 150.0, 150.0))
-        fields = [SimpleNamespace(id=1, x=200, y=112, radius=40, response=1.0, collision=True)] if k >= 10 else []
+        x, y = _square_centre(k, away=away)
+        fields = [SimpleNamespace(id=1, x=x, y=y + 2, radius=40, response=1.0, collision=True)] if k >= 10 else []
         outs.append(layer.step(g, lm, fields, k))
-    centred = [[t for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5] for out in outs[10:27]]
-    if case == "split":                                               # frames 10-26 (the box fills 180 px from 25)
+    centred = [[t for t in out if abs(t.x - _square_centre(k, away=away)[0]) < 5 and abs(t.y - 110) < 5]
+               for k, out in enumerate(outs[10:27], 10)]
+    if case in ("split", "keeps its bearing"):                       # frames 10-26 (the box fills 180 px from 25)
         assert all(len(c) == 1 and c[0].warning for c in centred) and len({t.id for out in outs[10:] for t in out}) == 1
         ttcs = [c[0].ttc_s for c in centred[4:]]                      # frames 14-26: 16-4 frames to contact
         assert all(a > b for a, b in zip(ttcs, ttcs[1:])) and ttcs[0] == pytest.approx(16 / FPS, rel=0.25)

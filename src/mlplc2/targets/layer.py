@@ -24,7 +24,7 @@ from .change import SUPPORT_PAD, Support, affine_change_box, change_box, moving_
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate, heading_grows, holds, spans_view
+from .warning import MIN_DRIFT_PX, blind_until, drift, estimate, heading_grows, holds, spans_view
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -242,7 +242,8 @@ class TargetLayer:
                     self._own(host, f, now)
                 continue
             if owner is not None and (t is None or owner.size < p.alarm_split * t.size
-                                      or (self.heading is not None and not holds(t, self.heading))):
+                                      or (self.heading is not None and not holds(t, self.heading)
+                                          and not self._seed_keeps_bearing(t))):
                 self._own(owner, f, now)         # alarm_split: no box of its own, not much smaller, or off the path
                 continue
             if t is None:
@@ -348,6 +349,23 @@ class TargetLayer:
         p = self.params
         return p.alarm_split > 0 and self._alarming(f) and not t.warned and not t.shadow \
             and (t.held is None or t.held[1] is None or t.held[1] > p.horizon_s)
+
+    def _seed_keeps_bearing(self, t: Track) -> bool:
+        """``split_bearing``: whether the box of a new seed ``t`` kept its bearing over ``change_frames`` (its own
+        alignment, :meth:`_seed_move`): its centre drifted from the heading by at most ``bearing_drift`` of what the
+        static world's would, as an object on a collision course off the path does."""
+        p = self.params
+        if not p.split_bearing or self.heading is None:
+            return False
+        move = self._seed_move(t)
+        if move is None:
+            return False
+        dx, dy, growth = move[:3]
+        hx, hy = self.heading
+        r0 = math.hypot(t.cx - dx - hx, t.cy - dy - hy)
+        r1 = math.hypot(t.cx - hx, t.cy - hy)
+        static = r0 * math.expm1(growth)
+        return growth > 0 and static >= MIN_DRIFT_PX and (r1 - r0) / static <= p.bearing_drift
 
     def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest

@@ -489,6 +489,8 @@ class TargetParams(ParameterSet):
                                   27, no collider or lead changed on ten sets; docs/history.md, "What lies at the
                                   heading").""",
                                   valid=Valid.real(minimum=0))
+    split_bearing: bool = param(True, """``alarm_split``'s seed off the heading gets its own box when it keeps its bearing
+                                (its own alignment over ``change_frames``, ``bearing_drift``).""", valid=Valid.boolean())
     heading_patch: float = param(0.25, """The side of the patch about the heading (``heading_growth``) as a fraction of
                                  the box's smaller side: small enough to hold what lies at the heading, not the box's
                                  near ground.""", valid=Valid.real(minimum=0, maximum=1))
