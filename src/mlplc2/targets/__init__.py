@@ -19,9 +19,9 @@ from the course (:func:`fit_course`); and the warning rule (:func:`estimate`,
 Bearings follow the convention of :mod:`mlplc2.camera`.
 
 The layer's modules, bottom up: :mod:`.params` (:class:`TargetParams`); :mod:`.extent` (the
-edges of the local motion), :mod:`.align` (the image alignment), :mod:`.change` (the changed
-region), :mod:`.contact` (time to contact and course); :mod:`.track` (what is kept of each object and frame), :mod:`.layer` (the tracker and the
-warning rule). The compiled kernels, :mod:`._fast_extent` and :mod:`._fast_align`, are chosen
+edges of the local motion), :mod:`.alignment` (the image alignment), :mod:`.change` (the changed
+region), :mod:`.contact` (time to contact and course); :mod:`.track` (what is kept of each object and frame), :mod:`.warning` (the warning rule),
+:mod:`.layer` (the tracker). The compiled kernels, :mod:`._fast_extent` and :mod:`._fast_align`, are chosen
 by :mod:`mlplc2.backend`.
 """
 
