@@ -24,7 +24,7 @@ from .change import SUPPORT_PAD, Support, affine_change_box, change_box, moving_
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import MIN_DRIFT_PX, blind_until, drift, estimate, heading_grows, holds, spans_view
+from .warning import blind_until, drift, estimate, heading_grows, holds, keeps_bearing, spans_view
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -352,20 +352,16 @@ class TargetLayer:
 
     def _seed_keeps_bearing(self, t: Track) -> bool:
         """``split_bearing``: whether the box of a new seed ``t`` kept its bearing over ``change_frames`` (its own
-        alignment, :meth:`_seed_move`): its centre drifted from the heading by at most ``bearing_drift`` of what the
-        static world's would, as an object on a collision course off the path does."""
+        alignment, :meth:`_seed_move`, kept as ``Track.seed_move`` for the warning rule): :func:`keeps_bearing` with
+        ``bearing_drift``, as an object on a collision course off the path does."""
         p = self.params
         if not p.split_bearing or self.heading is None:
             return False
         move = self._seed_move(t)
         if move is None:
             return False
-        dx, dy, growth = move[:3]
-        hx, hy = self.heading
-        r0 = math.hypot(t.cx - dx - hx, t.cy - dy - hy)
-        r1 = math.hypot(t.cx - hx, t.cy - hy)
-        static = r0 * math.expm1(growth)
-        return growth > 0 and static >= MIN_DRIFT_PX and (r1 - r0) / static <= p.bearing_drift
+        t.seed_move, t.seed_skew = move[:3], move[3]
+        return keeps_bearing(t, self.heading, p.bearing_drift)
 
     def _seed_move(self, t: Track) -> tuple[float, float, float, float] | None:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest
