@@ -283,6 +283,8 @@ class TargetLayer:
             # one whose course, counted in the extent of what moved with it, misses (onset_support)
             if o.warning and not warned and not (self._heading_grows(t, o) and self._supported(t, o)):
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+            if o.warning:
+                t.last_warning = now
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
             ids = {id(t) for t in shown}
@@ -343,12 +345,16 @@ class TargetLayer:
 
     def _splits(self, t: Track, f) -> bool:
         """``TargetParams.alarm_split``: whether field ``f``, which track ``t`` would own, is a seed of its own: it is in
-        collision alarm (:meth:`_alarming`) and ``t`` has not warned and has no time to contact within ``horizon_s``
-        (none yet, or its last one beyond). The seed's box then replaces ``t`` in :meth:`step` where it grows, holds
-        the measured heading (where one is) and ``t`` is at least ``alarm_split`` times its size."""
+        collision alarm (:meth:`_alarming`) and ``t`` has not warned (``split_warned``: not for more than
+        ``warn_through`` frames) and has no time to contact within ``horizon_s`` (none yet, or its last one beyond;
+        ``split_course``: or on a course that misses). The seed's box then replaces ``t`` in :meth:`step` where it
+        grows, holds the measured heading (where one is) and ``t`` is at least ``alarm_split`` times its size."""
         p = self.params
-        return p.alarm_split > 0 and self._alarming(f) and not t.warned and not t.shadow \
-            and (t.held is None or t.held[1] is None or t.held[1] > p.horizon_s)
+        quiet = not t.warned or (p.split_warned and not t.last_warned
+                                 and self._clock - t.last_warning > p.span(p.warn_through, self.fps) + _EPS)
+        return p.alarm_split > 0 and self._alarming(f) and quiet and not t.shadow \
+            and (t.held is None or t.held[1] is None or t.held[1] > p.horizon_s
+                 or (p.split_course and t.held[3] is not None and t.held[3] > p.max_miss))
 
     def _seed_keeps_bearing(self, t: Track) -> bool:
         """``split_bearing``: whether the box of a new seed ``t`` kept its bearing over ``change_frames`` (its own
@@ -839,7 +845,7 @@ class TargetLayer:
                     and max(t.size / o.size, o.size / t.size) <= 3.0:
                 self._lost.remove((c, o))
                 t.id, t.born, t.held, t.order = o.id, o.born, o.held, o.order
-                t.warned, t.last_warned, t.onset_cut = o.warned, o.last_warned, o.onset_cut
+                t.warned, t.last_warned, t.onset_cut, t.last_warning = o.warned, o.last_warned, o.onset_cut, o.last_warning
                 t.first_ttc = o.first_ttc if o.first_ttc is not None else t.first_ttc   # the object's (fresh_ttc)
                 if self.params.refind_drift > 0 and self.heading is not None:   # refind_drift
                     seen = [v for v in (drift(o, self.heading), o.lost_drift) if v is not None]

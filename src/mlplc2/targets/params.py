@@ -447,8 +447,9 @@ class TargetParams(ParameterSet):
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
     alarm_split: float = param(3.0, """With ``alarm_warns``: a field in collision alarm whose owner (the smallest
-                               track whose box holds it) has not warned and has no time to contact within
-                               ``horizon_s`` (none, or its last one beyond) is a seed of its own (issue 22 item 4: a
+                               track whose box holds it) has not warned (``split_warned``: lately) and has no
+                               time to contact within ``horizon_s`` (none, or its last one beyond; ``split_course``: or
+                               one on a course that misses) is a seed of its own (issue 22 item 4: a
                                seed with its own box). When the box found for it grows (the growth test with the
                                alarm), lies on the camera's path (it holds the measured heading,
                                :func:`~mlplc2.targets.warning.holds`, or keeps its bearing, ``split_bearing``; any box
@@ -499,6 +500,19 @@ class TargetParams(ParameterSet):
                                 with a measured heading of thirty sets one collider more (warned 1.72 s ahead), one
                                 false episode fewer, no real clip changed; docs/history.md, "An alarm seed that keeps
                                 its bearing".""", valid=Valid.boolean())
+    split_course: bool = param(True, """``alarm_split`` also where the owner's last time to contact is within
+                               ``horizon_s`` but its course misses (its last miss beyond ``max_miss``): a target that
+                               will not warn vetoes the alarm inside it with a course that may be neither object's.
+                               On since session 34 with ``split_warned``; docs/history.md, "An alarm seed under a target
+                               that will not warn".""", valid=Valid.boolean())
+    split_warned: bool = param(True, """``alarm_split`` also under an owner that warned before but not for more than
+                               ``warn_through`` frames (``Track.last_warning``; without it, any owner that ever warned
+                               keeps every alarm inside it): a box left over the view after its object's contact
+                               (``drone_4_h29``: 206 x 236 px around a 12-20 px collider, 31 frames after its last
+                               warning) no longer hides the next collider, while one that has just warned keeps the
+                               alarm, which may still be its own object's. On since session 34 with ``split_course``:
+                               thirty-three sets, two colliders more, as many false episodes; docs/history.md, "An
+                               alarm seed under a target that will not warn".""", valid=Valid.boolean())
     heading_patch: float = param(0.25, """The side of the patch about the heading (``heading_growth``) as a fraction of
                                  the box's smaller side: small enough to hold what lies at the heading, not the box's
                                  near ground.""", valid=Valid.real(minimum=0, maximum=1))
