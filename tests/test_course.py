@@ -1304,3 +1304,45 @@ def test_a_warning_begins_on_the_time_to_contact_held_after_a_long_streak_of_fit
     assert warned and all(o.ttc_s <= on.horizon_s for o in warned)  # on the held time to contact, counted down
     assert not any(o.warning for o in _streak_then_lapse(TargetParams(held_onset=0), 24))
     assert not any(o.warning for o in _streak_then_lapse(on, 12))   # a streak of fewer than 15 fits
+
+
+def _streak_then_cut(p: TargetParams, static: bool, frames: int = 24, lapse: int = 8) -> list:
+    """An approach fitted every frame for ``frames`` frames, its contact 32 frames (1.07 s) after the last, its box
+    below the measured heading (80, 40) in a 160 x 120 frame; then for ``lapse`` frames its box grows on past the
+    bottom border, wider than tall (cut; the fit's isotropy test fails). ``static``: a box over the heading whose image
+    expands about the heading, as the static world's does (the road ahead of a camera driving forward), not about its
+    own centre: its centre drifts away from the heading. The (cut, target) of every frame, judged against that
+    heading."""
+    heading = (80.0, 40.0)
+    contact = frames + 32
+    t = Track(1, 0, 80.0, 58.5 if static else 72.5, 50.0, 50.0, history=deque(maxlen=p.window))   # cut from frame 25
+    outs = []
+    for k in range(1, frames + 1 + lapse):
+        t.last_answer = k                                 # an attention field answered: looming evidence
+        s = (contact - (k - 1)) / (contact - k)
+        dy = (t.cy - heading[1]) * (s - 1) if static else 0.0
+        fx = s if k <= frames else s ** 3
+        assert t.follow((0.0, dy, fx, s, math.log(s), 0.0 if k <= frames else 7.0 * math.log(s)), k, FPS, SHAPE,
+                        p.max_fails, border=p.border)
+        outs.append((t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE, heading=heading)))
+    return outs
+
+
+@pytest.mark.parametrize("static", [False, True])
+def test_a_cut_box_that_keeps_its_bearing_warns_on_its_time_to_contact_held(static):
+    # held_cut (session 34, drive_4_h43's lead vehicle): a box is fitted for 24 frames with its time to contact just
+    # beyond the horizon, then grows past the bottom border: its fit lapses. Where it keeps its bearing (an object on
+    # the path), its time to contact held begins the warning once within the horizon; with held_cut off, never. Where
+    # its centre drifts away from the heading as the static world's does, never either: the bearing test
+    # (cut_drift, 0.2) holds it back (at 2.0 it warns).
+    on = TargetParams()
+    outs = _streak_then_cut(on, static)
+    assert not any(o.warning for _, o in outs[:24])
+    assert all(cut for cut, _ in outs[24:]) and not any(cut for cut, _ in outs[:24])
+    warned = [o for _, o in outs[24:] if o.warning]
+    if static:
+        assert not warned
+        assert any(o.warning for _, o in _streak_then_cut(TargetParams(cut_drift=2.0), static))
+    else:
+        assert warned and all(o.ttc_s <= on.horizon_s for o in warned)
+    assert not any(o.warning for _, o in _streak_then_cut(TargetParams(held_cut=False, cut_drift=2.0), static))

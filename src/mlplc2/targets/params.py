@@ -309,13 +309,23 @@ class TargetParams(ParameterSet):
                             (``hold_frames``: the last one counted down, shown as ``ttc_s`` with its ``ttc_age_s``),
                             when the fit lapsed after a streak of at least this many fits in a row: once the held time
                             to contact is within ``horizon_s``, on a course held within ``onset_miss``, on a box not cut
-                            by the border, not off the path (``path_drift``) and not flat (``flat_onset``). A collider's
+                            by the border (``held_cut``: or one that keeps its bearing), not off the path (``path_drift``) and not flat (``flat_onset``). A collider's
                             box that slides off it as it nears (a drone's over a textured ground) loses its fit just
                             before its time to contact enters the horizon, and warned never. 0 = off (as until session
                             26). 15 since session 26: over fifteen sets two colliders gained (``drone_4_h26``'s), one
                             false episode added (``ground_static_4_h30``); 5 added seven (docs/history.md, "The box on
                             what moves with it, on a cut box and from a moving camera").""", unit="fits",
                             valid=Valid.integer(0))
+    held_cut: bool = param(True, """``held_onset`` also on a box cut by the border that keeps its bearing against the
+                           measured heading (:func:`~mlplc2.targets.warning.cut_keeps_bearing`: drifted from the
+                           heading by at most ``cut_drift`` of the static world's drift, the test a fit's warning on a
+                           cut box passes under ``cut_onset_s``): a lead vehicle's box that reaches the border as it
+                           nears grows wider than tall and loses its fit with its time to contact held just beyond the
+                           horizon (``drive_4_h43``: 52 fits, 1.04-1.06 s, the truth 1.11-0.97 s, a course missing by
+                           0.13-0.18), and warned never. The static world that sweeps out through the border drifts
+                           with it. Off: never on a cut box (as until session 34). On since session 34: over
+                           thirty-six sets that collider gained (0.84 s ahead), nothing else moved; docs/history.md,
+                           "A cut box's time to contact held".""", valid=Valid.boolean())
     warn_through: int = param(15, """A running warning goes on through frames whose fit gives no time to contact (its
                               growth not significant or not isotropic for a while: a box re-seated, two colliders
                               overlapping), on the time to contact held (``hold_frames``: the last one counted down)

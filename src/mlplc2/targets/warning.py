@@ -435,11 +435,14 @@ def held_onset(t: Track, p: TargetParams, index: float, ttc: float | None, miss:
     whether a warning begins on track ``t``'s time to contact held, ``ttc`` (s, :func:`held`), this frame (clock
     ``index``) whose fit gave none: its last streak of fits was at least ``held_onset`` long, ``ttc`` is within
     ``horizon_s``, the course held ``miss`` within ``onset_miss`` (:func:`wide`), the box is not cut by the border
-    of a frame of ``shape`` (h, w), not off the path (:func:`off_path`, against the ``measured`` heading) and not
+    of a frame of ``shape`` (h, w) (``held_cut``: or keeps its bearing, :func:`cut_keeps_bearing`, against the
+    ``measured`` heading), not off the path (:func:`off_path`, against the ``measured`` heading) and not
     flat (:func:`flat`), and the track's warning was not spent."""
     return (p.held_onset > 0 and t.streak == 0 and t.held_streak >= p.held_onset and ttc is not None
             and ttc <= p.horizon_s and miss is not None and not wide(p, miss) and not t.spent
-            and not t.cut(shape, p.border) and not off_path(t, p, index, measured) and not flat(t, p, measured))
+            and (not t.cut(shape, p.border)
+                 or (p.held_cut and measured is not None and cut_keeps_bearing(t, p, ttc, measured)))
+            and not off_path(t, p, index, measured) and not flat(t, p, measured))
 
 
 def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None,
