@@ -309,9 +309,10 @@ class TargetParams(ParameterSet):
                             (``hold_frames``: the last one counted down, shown as ``ttc_s`` with its ``ttc_age_s``),
                             when the fit lapsed after a streak of at least this many fits in a row: once the held time
                             to contact is within ``horizon_s``, on a course held within ``onset_miss``, on a box not cut
-                            by the border (``held_cut``: or one that keeps its bearing), not off the path (``path_drift``) and not flat (``flat_onset``). A collider's
-                            box that slides off it as it nears (a drone's over a textured ground) loses its fit just
-                            before its time to contact enters the horizon, and warned never. 0 = off (as until session
+                            by the border (``held_cut``: or one that keeps its bearing), not off the path
+                            (``path_drift``) and not flat (``flat_onset``). A collider's box that slides off it as it
+                            nears (a drone's over a textured ground) loses its fit just before its time to contact
+                            enters the horizon, and warned never. 0 = off (as until session
                             26). 15 since session 26: over fifteen sets two colliders gained (``drone_4_h26``'s), one
                             false episode added (``ground_static_4_h30``); 5 added seven (docs/history.md, "The box on
                             what moves with it, on a cut box and from a moving camera").""", unit="fits",
