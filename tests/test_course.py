@@ -1346,3 +1346,40 @@ def test_a_cut_box_that_keeps_its_bearing_warns_on_its_time_to_contact_held(stat
     else:
         assert warned and all(o.ttc_s <= on.horizon_s for o in warned)
     assert not any(o.warning for _, o in _streak_then_cut(TargetParams(held_cut=False, cut_drift=2.0), static))
+
+
+def _streak_lapse_resume(p: TargetParams, lapse: int, contact: int, frames: int = 16, after: int = 14) -> list:
+    """An approach straight at the camera fitted every frame for ``frames`` frames (no attention field answers: its
+    growth streak is its only looming evidence), then for ``lapse`` frames its box widens and flattens (the fit's
+    isotropy test fails until those frames leave the fit's window), then ``after`` frames of growth alike in both
+    directions again, the contact at frame ``contact``: the targets of every frame (frame k at index k - 1)."""
+    outs = []
+    t = _looming(80.0, frames, contact=contact, each=lambda t, k: outs.append(estimate(t, p, FPS, k, SHAPE)))
+    t.last_answer = -1000
+    for k in range(frames + 1, frames + 1 + lapse + after):
+        s = (contact - (k - 1)) / (contact - k)
+        r = math.log(s)
+        move = (0.0, 0.0, s ** 6, s ** -2, 2.0 * r, 4.0 * r) if k <= frames + lapse else (0.0, 0.0, s, s, r, 0.0)
+        assert t.follow(move, k, FPS, SHAPE, p.max_fails, border=p.border)
+        outs.append(estimate(t, p, FPS, k, SHAPE))
+    return outs
+
+
+def test_a_streak_that_lapsed_briefly_keeps_its_looming_evidence_with_evidence_bridge():
+    # evidence_bridge (docs/history.md, "A streak of fits that lapses"): 16 fits in a row, then a lapse of the fit
+    # (frames 17-29: the box's anisotropic frames in the fit's window) and fits again from frame 30, 0.67 s before
+    # contact. With the option the growth seen before the lapse still counts and the warning begins on the first fit
+    # after it; without it the new streak needs confirm_frames (6) fits first, beyond frame 34. A lapse longer than
+    # evidence_bridge (the fit back at frame 38, 22 frames after the last) starts afresh either way
+    on, off = TargetParams(evidence_bridge=15), TargetParams(evidence_bridge=0)
+
+    def first(p, lapse, contact):
+        outs = _streak_lapse_resume(p, lapse, contact)
+        fitted = [k for k, o in enumerate(outs, 1) if o.ttc_age_s == 0.0 and k > 16]
+        return fitted[0], next((k for k, o in enumerate(outs, 1) if o.warning), None)
+
+    assert first(on, 4, 50) == (30, 30)
+    assert first(off, 4, 50) == (30, None)
+    assert first(on, 12, 58) == (38, None) and first(off, 12, 58) == (38, None)
+    looming = [o.looming for o in _streak_lapse_resume(TargetParams(evidence_bridge=30), 12, 58)]
+    assert looming[37] and not any(looming[16:37])          # with a bridge of 30 frames the evidence comes back at 38

@@ -541,7 +541,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
-        if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
+        bridged = (p.evidence_bridge > 0 and t.held is not None and t.held[0] >= t.birth
+                   and t.held_streak >= p.confirm_frames and index - t.held[0] <= p.span(p.evidence_bridge, fps) + _EPS)
+        if t.streak == 0 and not bridged:   # confirm_birth: the growth test before its birth and every fit since
             t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
         t.streak += 1
         t.last_estimate = index
