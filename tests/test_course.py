@@ -1371,7 +1371,8 @@ def test_a_streak_that_lapsed_briefly_keeps_its_looming_evidence_with_evidence_b
     # contact. With the option the growth seen before the lapse still counts and the warning begins on the first fit
     # after it; without it the new streak needs confirm_frames (6) fits first, beyond frame 34. A lapse longer than
     # evidence_bridge (the fit back at frame 38, 22 frames after the last) starts afresh either way
-    on, off = TargetParams(evidence_bridge=15), TargetParams(evidence_bridge=0)
+    on, off = TargetParams(), TargetParams(evidence_bridge=0)
+    assert on.evidence_bridge == 15                                  # the default
 
     def first(p, lapse, contact):
         outs = _streak_lapse_resume(p, lapse, contact)

@@ -206,10 +206,12 @@ class TargetParams(ParameterSet):
                                  answered within this many frames ...""", unit="frames", valid=Valid.integer(0))
     confirm_frames: int = param(6, "... or its growth has been significant for this many frames in a row.",
                                 unit="frames", valid=Valid.integer(0))
-    evidence_bridge: int = param(0, """... and a streak of at least ``confirm_frames`` fits that lapsed for at most this
+    evidence_bridge: int = param(15, """... and a streak of at least ``confirm_frames`` fits that lapsed for at most this
                                  many frames (its time to contact held meanwhile) goes on where the fit resumes: the
-                                 growth seen before the lapse still counts. 0 = off (session 35, measured).""",
-                                 unit="frames", valid=Valid.integer(0))
+                                 growth seen before the lapse still counts (a lead vehicle's box that stretched for ten
+                                 frames; ``warn_through``'s span). 0 = off (on since session 35: holdouts 59-64 two
+                                 colliders more, one false episode; FIGS39; docs/history.md, "A streak of fits that
+                                 lapses").""", unit="frames", valid=Valid.integer(0))
     confirm_birth: bool = param(True, """... counted from the target's birth when the growth test made it a target
                                 (``min_growth`` over ``change_frames``, not a field alarm) and its fit has given a
                                 time to contact on every frame since the first it could (``min_frames``): the

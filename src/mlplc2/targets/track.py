@@ -149,6 +149,7 @@ class Track:
     held_streak: int = 0               # the length of the streak of fits that last ended (``held_onset``)
     stalls: int = 0                    # frames a warning was held back as its time to contact did not fall (``stall_hold``)
     streak_since: float = 0.0          # clock of the first estimate of the streak
+    evidence_since: float = 0.0        # ... or of the streak it bridged (``evidence_bridge``): the growth streak's start
     birth: float = 0.0                 # clock of its creation (``born``: its frame index)
     span: float = math.inf             # the window (``TargetParams.window``) in clock units
     keep: int = 0                      # ... which keeps at least this many observations

@@ -484,7 +484,8 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
              interval: float | None = None) -> bool:
     """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
     or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
-    ``nominal_fps``: :meth:`TargetParams.span`), counted from its birth (``confirm_birth``) when its streak
+    ``nominal_fps``: :meth:`TargetParams.span`; a streak that resumed after a short lapse counts from
+    the streak it bridged, ``evidence_bridge``, ``Track.evidence_since``), counted from its birth (``confirm_birth``) when its streak
     began on its first fit after the growth test and its box holds ``heading`` (px) or drifted away
     from it by at most ``confirm_birth_drift`` of the static world's drift, or (``slow_evidence``, its
     newest observation far from the one before, :func:`slow`) its log-scale rose at every observation
@@ -494,7 +495,7 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
     if p.confirm_frames == 0:
         return True
     span = p.span(p.confirm_frames - 1, fps)
-    since = t.streak_since
+    since = t.evidence_since
     if t.early and heading is not None:
         ratio = drift(t, heading)
         if holds(t, heading) or (ratio is not None and ratio <= p.confirm_birth_drift):
@@ -541,10 +542,14 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
         miss_xy = course(t, heading, fit.ttc, t.fit_span)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
-        bridged = (p.evidence_bridge > 0 and t.held is not None and t.held[0] >= t.birth
-                   and t.held_streak >= p.confirm_frames and index - t.held[0] <= p.span(p.evidence_bridge, fps) + _EPS)
-        if t.streak == 0 and not bridged:   # confirm_birth: the growth test before its birth and every fit since
-            t.streak_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
+        if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
+            t.streak_since = index
+            # evidence_bridge: after a short lapse of a long enough streak the growth seen before it still counts
+            bridged = (p.evidence_bridge > 0 and t.held is not None and t.held[0] >= t.birth
+                       and t.held_streak >= p.confirm_frames
+                       and index - t.held[0] <= p.span(p.evidence_bridge, fps) + _EPS)
+            if not bridged:
+                t.evidence_since, t.early = index, p.confirm_birth and t.grown and t.tries == 1
         t.streak += 1
         t.last_estimate = index
         t.held = (index, ttc, sigma, miss, miss_xy)
