@@ -485,7 +485,8 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
     """Looming evidence of track ``t`` at clock ``now``: a field of it answered within ``evidence_frames``,
     or its growth has been significant over ``confirm_frames`` frames in a row (spans of time at
     ``nominal_fps``: :meth:`TargetParams.span`; a streak that resumed after a short lapse counts from
-    the streak it bridged, ``evidence_bridge``, ``Track.evidence_since``), counted from its birth (``confirm_birth``) when its streak
+    the streak it bridged, ``evidence_bridge``, ``Track.evidence_since``), counted from its birth
+    (``confirm_birth``) when its streak
     began on its first fit after the growth test and its box holds ``heading`` (px) or drifted away
     from it by at most ``confirm_birth_drift`` of the static world's drift, or (``slow_evidence``, its
     newest observation far from the one before, :func:`slow`) its log-scale rose at every observation
