@@ -210,8 +210,8 @@ class TargetParams(ParameterSet):
                                  many frames (its time to contact held meanwhile) goes on where the fit resumes: the
                                  growth seen before the lapse still counts (a lead vehicle's box that stretched for ten
                                  frames; ``warn_through``'s span). 0 = off (on since session 35: holdouts 59-64 two
-                                 colliders more, one false episode; FIGS39; docs/history.md, "A streak of fits that
-                                 lapses").""", unit="frames", valid=Valid.integer(0))
+                                 colliders more, one false episode; thirty-nine sets one collider more, 23 leads longer,
+                                 six false episodes more; docs/history.md, "A streak of fits that lapses").""", unit="frames", valid=Valid.integer(0))
     confirm_birth: bool = param(True, """... counted from the target's birth when the growth test made it a target
                                 (``min_growth`` over ``change_frames``, not a field alarm) and its fit has given a
                                 time to contact on every frame since the first it could (``min_frames``): the
