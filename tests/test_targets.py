@@ -1500,6 +1500,38 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     assert len({t.id for out in outs[10:] for t in out}) == 1     # one target: the strip's, not a second
 
 
+@pytest.mark.parametrize("adopt", [True, False])
+def test_a_target_on_a_strip_of_a_uniform_object_is_put_on_the_object(adopt):
+    # uniform_adopt (docs/history.md, "A strip of a uniform object"): a target holds only a strip at the right edge of a
+    # uniform dark square approaching over a still texture (as where the square came into view through the border and
+    # only its edge changed); no field, no alarm. With the option the target is put on the square from its next frame:
+    # its box is the square's (within 10 %) and its time to contact within 15 % of the truth on every frame it has one
+    # from frame 16 to 24 (contact at 30); without it the box stays a strip that grows one way only
+    from mlplc2.neuropils.lobula_plate import LocalMotion
+    from mlplc2.targets import TargetLayer
+
+    p = TargetParams(uniform_adopt=adopt, seed_lm=0, seed_change=0)       # no seeds: the strip's target alone
+    assert TargetParams().uniform_adopt
+    layer = TargetLayer(p, FPS)
+    zero = np.zeros((240, 320), np.float32)
+    lm = LocalMotion(zero, zero, zero, zero, zero)
+    got = []
+    for k, g in enumerate(_dark_square_on_texture(25)):
+        side = 30.0 * 30.0 / (30.0 - k)
+        if k == 3:
+            _put_track(layer, k - 1, (200 + side / 2.0 - 3.0, 110.0, 8.0, side))
+        out = layer.step(g, lm, [], k)
+        if k >= 4:
+            assert len(out) == 1
+            got.append((k, out[0].width / side, out[0].height / side, out[0].ttc_s, (30.0 - k) / FPS))
+    if adopt:
+        assert all(0.9 <= w <= 1.1 and 0.9 <= h <= 1.1 for _, w, h, _, _ in got), got
+        ttcs = [(t, true) for k, _, _, t, true in got if k >= 16 and t is not None]
+        assert len(ttcs) >= 6 and all(abs(t / true - 1) < 0.15 for t, true in ttcs), got
+    else:
+        assert all(w < 0.6 for _, w, _, _, _ in got), got
+
+
 @pytest.mark.parametrize("case", ["split", "off", "keeps its bearing", "split_bearing off", "drifts"])
 def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_its_own(case):
     # alarm_split (issue 22 item 4; docs/history.md, "An alarm seed with its own box"): a target's box lies over a

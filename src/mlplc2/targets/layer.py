@@ -691,6 +691,7 @@ class TargetLayer:
                 continue
             if t.follow(move, clock, self.fps, (h, w), p.max_fails, interval=interval, border=p.border):
                 if move is not None and gray is not None:
+                    self._adopt_uniform(t, gray)
                     self._reseat_uniform(t, gray)
                 kept.append(t)
             else:
@@ -730,6 +731,24 @@ class TargetLayer:
         host.reseat((box.cx, box.cy, box.w, box.h))
         host.uniform = True
         host.grown_from = (host.log_s, host.aniso)     # onset_isotropy: the strip's stretch is not the object's
+
+    def _adopt_uniform(self, t: Track, gray: np.ndarray) -> None:
+        """``TargetParams.uniform_adopt``: a track that is an edge or a strip of a uniform object (its centre on a
+        compact uniform region wholly in view, larger than its box and holding most of it) is put on that region and
+        follows it from then on (``Track.uniform``), as :meth:`_seat_on_alarm` does for an alarm's box."""
+        p = self.params
+        if not (p.uniform_adopt and p.uniform_tol > 0) or t.uniform or t.shadow or t.warned:
+            return
+        box = uniform_region(gray, t.cx, t.cy, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect, cut=False)
+        if box is None or box[2] * box[3] <= t.w * t.h:
+            return
+        ix = min(t.cx + t.w / 2.0, box[0] + box[2] / 2.0) - max(t.cx - t.w / 2.0, box[0] - box[2] / 2.0)
+        iy = min(t.cy + t.h / 2.0, box[1] + box[3] / 2.0) - max(t.cy - t.h / 2.0, box[1] - box[3] / 2.0)
+        if ix <= 0 or iy <= 0 or ix * iy < 0.5 * t.w * t.h:
+            return
+        t.reseat(box)
+        t.uniform = True
+        t.grown_from = (t.log_s, t.aniso)        # onset_isotropy: the strip's stretch is not the object's
 
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform

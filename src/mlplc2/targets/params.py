@@ -463,6 +463,15 @@ class TargetParams(ParameterSet):
                                off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
+    uniform_adopt: bool = param(True, """A target that is not a uniform region's (``uniform_tol``), and has not warned, whose
+                                centre lies on a uniform region that is a compact object (``uniform_fill``,
+                                ``uniform_aspect``; not touching the frame's border) larger than its box and holding
+                                most of it, is put on that region, its history carried with it
+                                (:meth:`~mlplc2.targets.track.Track.reseat`), and follows the region from then on
+                                (``uniform_reseat``): its box was an edge or a strip of a uniform object, seeded
+                                where only that edge changed (an object that came into view through the border,
+                                whose region was cut then), and grew one way only. False = off (session 36;
+                                docs/history.md, "A strip of a uniform object").""", valid=Valid.boolean())
     alarm_split: float = param(3.0, """With ``alarm_warns``: a field in collision alarm whose owner (the smallest
                                track whose box holds it) has not warned (``split_warned``: lately) and has no
                                time to contact within ``horizon_s`` (none, or its last one beyond; ``split_course``: or
