@@ -1482,7 +1482,8 @@ def test_an_alarm_over_a_strip_of_its_object_puts_the_target_on_the_object(resea
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
 
-    p = TargetParams(alarm_warns=True, alarm_reseat=reseat, seed_lm=0)     # no seeds but the field's
+    p = TargetParams(alarm_warns=True, alarm_reseat=reseat, seed_lm=0,     # no seeds but the field's
+                     uniform_adopt=False)                                  # (which would put the strip on it too)
     layer = TargetLayer(p, FPS)
     zero = np.zeros((240, 320), np.float32)
     lm = LocalMotion(zero, zero, zero, zero, zero)
