@@ -470,8 +470,9 @@ class TargetParams(ParameterSet):
                                 (:meth:`~mlplc2.targets.track.Track.reseat`), and follows the region from then on
                                 (``uniform_reseat``): its box was an edge or a strip of a uniform object, seeded
                                 where only that edge changed (an object that came into view through the border,
-                                whose region was cut then), and grew one way only. False = off (session 36;
-                                docs/history.md, "A strip of a uniform object").""", valid=Valid.boolean())
+                                whose region was cut then), and grew one way only. False = off (on since session
+                                36: thirty-nine sets three colliders more, the same false episodes; docs/history.md,
+                                "A strip of a uniform object, and a cut box's bearing").""", valid=Valid.boolean())
     alarm_split: float = param(3.0, """With ``alarm_warns``: a field in collision alarm whose owner (the smallest
                                track whose box holds it) has not warned (``split_warned``: lately) and has no
                                time to contact within ``horizon_s`` (none, or its last one beyond; ``split_course``: or
