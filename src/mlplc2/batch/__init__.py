@@ -540,9 +540,14 @@ def _run_jobs(state: _BatchState, scheduler, workers, client, sequential: bool, 
     bar = progress_bar(total=len(tasks), initial=len(tasks) - len(jobs), disable=not progress, unit="task",
                        desc="batch")
     prepared = False
+    local = not (sequential or not jobs) and not scheduler and client is None
+    if local:                            # start_local_cluster: the workers and this process ignore Ctrl-C meanwhile
+        bar.set_description_str("batch: starting workers (Ctrl-C is ignored until they run)")
     try:
         with contextlib.nullcontext((None, "sync")) if sequential or not jobs else \
                 _client(scheduler, workers, client) as (c, state.used):
+            if local:
+                bar.set_description_str("batch")
             out.mkdir(parents=True, exist_ok=True)  # once the cluster is up: nothing is written before
             for pid, pset in state.plan.ids.items():  # what each parameter set id stands for
                 write_json(out / f"param_set_{pid}.json", pset)

@@ -104,7 +104,8 @@ def _cmd_bench(args) -> int:
     return EXIT_OK
 
 
-PARAMS = Subcommand("params", "print the parameters: Table I symbol, unit, default, valid values, description",
+PARAMS = Subcommand("params", "print the parameters: Table I symbol, unit, default, valid values (--markdown: "
+                    "and the description of each)",
                     _add_params, _cmd_params)
 BENCH = Subcommand("bench", "time the LPLC2 models per frame size: ms/frame, reference, bandwidth probe, memory",
                    _add_bench, _cmd_bench)
