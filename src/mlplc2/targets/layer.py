@@ -14,6 +14,7 @@ from __future__ import annotations
 import math
 from collections import deque
 from dataclasses import replace
+from types import SimpleNamespace
 
 import cv2
 import numpy as np
@@ -742,9 +743,7 @@ class TargetLayer:
         box = uniform_region(gray, t.cx, t.cy, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect, cut=False)
         if box is None or box[2] * box[3] <= t.w * t.h:
             return
-        ix = min(t.cx + t.w / 2.0, box[0] + box[2] / 2.0) - max(t.cx - t.w / 2.0, box[0] - box[2] / 2.0)
-        iy = min(t.cy + t.h / 2.0, box[1] + box[3] / 2.0) - max(t.cy - t.h / 2.0, box[1] - box[3] / 2.0)
-        if ix <= 0 or iy <= 0 or ix * iy < 0.5 * t.w * t.h:
+        if t.overlap(SimpleNamespace(cx=box[0], cy=box[1], w=box[2], h=box[3])) < 0.5:    # of the smaller: t's box
             return
         t.reseat(box)
         t.uniform = True
