@@ -1335,6 +1335,19 @@ def test_extra_window_seeds_a_small_object_the_ground_outchanges():
     assert _first_on(on, (100, 70)) is not None
 
 
+def test_the_extra_seeds_look_on_when_the_frames_first_seed_finds_nothing():
+    """Without any local motion the frame's first seed (the change against the frame's mean change) finds
+    nothing: the sliding ground changes everywhere. The extra seeds, which measure the change against its
+    surround's (``extra_window``), still look, and find the approaching disc as they do when the first seed
+    finds a candidate; with one seed a frame it is never found."""
+    frames = _ground_and_disc()
+    kw = dict(seed_shadow=True, seed_focus=0.25, extra_change=4.0, extra_window=48.0)
+    assert _first_on(_zero_lm_run(frames, lm_seeds=1), (100, 70)) is None
+    alone = _first_on(_zero_lm_run(frames, lm_seeds=2, **kw), (100, 70))
+    assert alone is not None
+    assert alone == _first_on(_zero_lm_run(frames, peak=(160, 205), lm_seeds=2, **kw), (100, 70))
+
+
 def test_seed_shadow_shows_an_extra_seeds_target_with_its_time_to_contact():
     """An extra seed's target on the disc is output from its birth, without a time to contact; a shadow
     (``seed_shadow``) is output only from its first time to contact on, and it keeps that target's id."""

@@ -203,7 +203,10 @@ class TargetLayer:
             hidden = [self._claim(t) for t in self._tracks    # seed_shadow: claimed from the extra seeds only
                       if t.shadow and not self._opened(t, now)]
             n = self._seeds(interval)
+            found = True                 # the first seeds' search found a candidate; once it finds none, the
             for i in range(n):
+                if i < n // p.lm_seeds and not found:    # ... extra seeds still look (their own contrast)
+                    continue
                 if i >= n // p.lm_seeds and hidden is not None:
                     zones, hidden = zones + hidden, None
                 more = i >= n // p.lm_seeds and p.extra_change > 0     # TargetParams.extra_change: a change seed
@@ -211,7 +214,10 @@ class TargetLayer:
                 if cand is None or not cand[2] > max(p.seed_lm, p.seed_contrast * float(lm.magnitude.mean())):
                     cand = self._change_seed(levels, zones, *((p.extra_change, p.extra_window) if more else (0.0, 0.0)))
                 if cand is None:
-                    break
+                    if more or p.extra_change <= 0:
+                        break
+                    found = False
+                    continue
                 seeds.append((cand[0], cand[1], None))
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
                 if i >= n // p.lm_seeds:         # an extra seed: TargetParams.seed_focus tests it

@@ -64,11 +64,12 @@ class TargetParams(ParameterSet):
     lm_seeds: int = param(2, """LM seeds (``seed_lm``, else ``seed_change``) per nominal frame interval: the strongest
                           point outside every target, field and seed tried before it (``claim``), that many
                           times; the seeds beyond the first are the extra seeds (``extra_change``, ``seed_focus``,
-                          ``seed_shadow``). 2 (the default since session 18, with ``seed_shadow``: TTC coverage
-                          69.3 -> 74.9 % on the standard suite, up 3.4-8.0 points on each of holdouts 1-10
-                          (71.7-81.6 %), no collision lost: docs/history.md, "Shadow targets, session 18"); 1 = the strongest only
-                          (main's before); 3 without ``seed_focus`` measured, not adopted ("Where TTC coverage is
-                          lost"; with it, "A seed's own focus").""",
+                          ``seed_shadow``), tried also when the first finds nothing (since session 37). 2 (the
+                          default since session 18, with ``seed_shadow``: TTC coverage 69.3 -> 74.9 % on the
+                          standard suite, up 3.4-8.0 points on each of holdouts 1-10 (71.7-81.6 %), no collision
+                          lost: docs/history.md, "Shadow targets, session 18"); 1 = the strongest only (main's
+                          before); 3 without ``seed_focus`` measured, not adopted ("Where TTC coverage is lost"; with
+                          it, "A seed's own focus").""",
                           unit="seeds", valid=Valid.integer(1))
     seed_focus: float = param(0.25, """An extra LM seed (beyond the first per nominal frame interval:
                               ``lm_seeds`` > 1) becomes a
@@ -98,7 +99,10 @@ class TargetParams(ParameterSet):
     extra_change: float = param(4.0, """The extra seeds of each nominal frame interval (``lm_seeds`` > 1) are change seeds
                                 (``seed_change``) whose change is at least this many times the frame's mean change,
                                 not LM seeds: a small object that grows at the heading changes its grey levels
-                                where its LM is the frame's least. 4 (the default since session 18, with
+                                where its LM is the frame's least. They are tried also on a frame whose first seed
+                                finds nothing: until session 37 they were not, and a small object that grows
+                                slowly where nothing else stands out got no seed at all (docs/history.md, "The extra
+                                seeds when the first finds nothing"). 4 (the default since session 18, with
                                 ``seed_shadow``; 4-5 measured in session 17: docs/history.md, "Shadow targets"); 0 = LM
                                 seeds, as the first.""", unit="x mean change", valid=Valid.real(minimum=0))
     extra_window: float = param(48.0, """With ``extra_change``, an extra seed's change is measured against the mean change
