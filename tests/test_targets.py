@@ -1725,3 +1725,69 @@ def test_a_repeated_frame_ages_the_time_to_contact_it_counts_down():
     assert out[1].ttc_s == pytest.approx(0.4) and out[1].ttc_age_s == pytest.approx(0.1)
     assert out[2].ttc_s is None and out[2].ttc_age_s is None
     assert out[3].ttc_s is None and out[3].ttc_age_s is None
+
+
+# -- ground_change: the road carried as the ground plane ---------------------------------------------------------
+
+def _driving(speed: float, height: float, depth: float = 14.0, frames: int = 9):
+    """A camera that drives forward at ``speed`` (m/s) ``height`` m over a textured ground plane (30 fps, 60 degrees,
+    320 x 240; its heading, the principal point, on the horizon), and a textured 1-m square standing on the ground
+    2.5 m left of its path, ``depth`` m ahead at frame 0 (it passes). The rendered frames and the square's truth."""
+    obj = ApproachObject("pass", shape="square", appearance="textured", width_m=1.0, start=(-2.5, height - 0.5, depth),
+                         velocity=(0.0, 0.0, 0.0))
+    st = approach([obj], background="ground", camera="forward", camera_speed=speed, camera_height_m=height,
+                  frames=frames, seed=5)
+    return st.frames.astype(np.float32), st.objects[0]
+
+
+@pytest.mark.parametrize("speed, height", [(10.0, 1.2), (20.0, 1.5)])
+def test_the_ground_plane_is_found_as_the_camera_drives_over_it(speed, height):
+    """ground_kappa: between two frames 4 apart of a camera driving over a ground plane, the ground's scaling is the
+    distance driven over the camera's height and focal length, ``kappa = 4 v / (fps f h)`` (the plane's geometry,
+    not the code's): found within 15 %, the horizon within 3 px of the heading's row; the ground carried by it
+    (ground_reference) changes less than a third as much below the horizon, and above it the frame is left as it
+    was. Two equal frames (a still camera) give no ground motion."""
+    from mlplc2.camera import focal_length
+    from mlplc2.targets.change import ground_kappa, ground_reference
+    fr, _ = _driving(speed, height)
+    prev, cur = fr[0], fr[4]
+    heading = (159.5, 119.5)
+    kappa, (_, row) = ground_kappa(prev, cur, heading)
+    want = 4 * speed / 30.0 / (focal_length(320, 60.0) * height)
+    assert abs(kappa - want) <= 0.15 * want and abs(row - heading[1]) <= 3.0, (kappa, want, row)
+    ref = ground_reference(prev, kappa, (heading[0], row))
+    below = slice(int(row) + 3, None)
+    assert np.abs(cur - ref)[below].mean() < np.abs(cur - prev)[below].mean() / 3
+    assert np.array_equal(ref[:int(row) - 1], prev[:int(row) - 1])
+    assert ground_kappa(prev, prev, heading) == (0.0, heading)
+
+
+def test_a_young_box_grown_over_the_road_is_put_on_what_stands_on_it():
+    """ground_change, through the target layer's re-seat (``affine_reseat``): a young track's box three times the
+    width of a passing square that stands on the road (the road's motion is no one affine map of the window: the
+    horizon crosses it) is put on the square, its centre within the square's side and its width at most 1.5 times
+    it, once the change is measured against the earlier frame with its ground carried; with ``ground_change`` off, or
+    without a measured heading, it stays as it was."""
+    from mlplc2.targets import TargetLayer
+    fr, obj = _driving(12.0, 1.2)
+    prev, cur = fr[4], fr[8]
+    p = obj.point_at(8)
+    side = p.width
+
+    def put(params=TargetParams(), heading=(159.5, 119.5)):
+        layer = TargetLayer(params, fps=30.0)
+        layer.step(prev, None, (), 0)
+        layer._keep_past(4.0)
+        layer.heading = heading
+        layer._levels, layer._ground = layer._pyramid(cur), {}
+        x, y = p.x + 10, p.y + 12
+        t = Track(1, 0, x, y, 3 * side, 3 * side, history=deque([Observation(0, 0.0, x, y, 3 * side, 0.0)]))
+        layer._tracks = [t]
+        layer._reseat_affine(t, cur)
+        return t
+
+    t = put()
+    assert abs(t.cx - p.x) <= side and abs(t.cy - p.y) <= side and t.w <= 1.5 * side, (t.cx, t.cy, t.w, p)
+    for kw in ({"params": TargetParams(ground_change=False)}, {"heading": None}):
+        t = put(**kw)
+        assert t.w == 3 * side and not t.affine_put, kw

@@ -353,3 +353,82 @@ def moving_extent(prev: np.ndarray, cur: np.ndarray, box: tuple[float, float, fl
     bx, by = inside & ((xx < xa - px) | (xx > xb + px)), inside & ((yy < ya - py) | (yy > yb + py))
     return Support(float(xb - xa), float(yb - ya), n, float(xa + xb) / 2.0, float(ya + yb) / 2.0,
                    (int(bx.sum()), int(by.sum())), (int((still & bx).sum()), int((still & by).sum())))
+
+
+def ground_matrix(kappa: float, heading: tuple[float, float]) -> np.ndarray:
+    """The homography (this frame's pixels -> an earlier frame's) of the ground plane under a camera that
+    translates parallel to it towards ``heading`` (px; its row is the horizon, the ground plane's vanishing
+    line): a ground point at ``p`` now was at ``h + (p - h) / (1 + kappa (y - y_h))``, ``kappa`` the distance
+    driven over the camera's height and focal length (1/px). Above the horizon it is not the ground's."""
+    hx, hy = heading
+    k = float(kappa)
+    return np.array([[1.0, k * hx, -k * hx * hy], [0.0, 1.0 + k * hy, -k * hy * hy], [0.0, k, 1.0 - k * hy]])
+
+
+#: :func:`ground_kappa`: the ground's scaling searched (the most over the frame's bottom row, ``kappa (H - y_h)``)
+GROUND_MAX_SCALE = 1.5
+#: :func:`ground_kappa`: how much the ground warp must lower the ground's mean change to be taken
+GROUND_GAIN = 0.8
+#: :func:`ground_kappa`: the horizon's rows searched about the heading's (px of the frame searched)
+GROUND_ROWS = (-3, -2, -1, 0, 1, 2, 3)
+#: :func:`ground_kappa`: a change counts up to this many grey levels (an object on the ground is not the ground)
+GROUND_CLIP = 40.0
+
+
+def ground_kappa(prev: np.ndarray, cur: np.ndarray, heading: tuple[float, float], *, steps: int = 12,
+                 margin: int = 2) -> tuple[float, tuple[float, float]]:
+    """The ground's ``kappa`` and horizon (:func:`ground_matrix`) between ``prev`` and ``cur`` (same size;
+    ``heading`` in their pixels): the pair that makes the mean absolute change (clipped at ``GROUND_CLIP``: an
+    object on the ground is not the ground) ``margin`` px and more below the horizon least, searched over
+    ``steps`` values in ``(0, GROUND_MAX_SCALE / (H - y_h)]`` on the heading's row, then the rows
+    ``GROUND_ROWS`` about it at the best value and a step either side, then half a step either side of the
+    best value and half a row either side of the best row; ``(0, heading)`` where the best lowers the change by less than ``GROUND_GAIN`` times (no ground, or
+    one that does not move as the plane)."""
+    h, w = cur.shape
+    top = int(math.ceil(heading[1] + max(GROUND_ROWS))) + margin
+    if top >= h - 4 or top < 0:
+        return 0.0, heading
+    below = np.asarray(cur, np.float32)[top:]
+    src = np.asarray(prev, np.float32)
+    shift = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, float(top)], [0.0, 0.0, 1.0]])   # only the rows below
+
+    def cost(k: float, hy: float) -> float:
+        back = cv2.warpPerspective(src, ground_matrix(k, (heading[0], hy)) @ shift, (w, h - top),
+                                   flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
+        return float(np.minimum(cv2.absdiff(back, below), GROUND_CLIP).mean())
+
+    step = GROUND_MAX_SCALE / max(h - heading[1], 1.0) / steps
+    still = cost(0.0, heading[1])
+    best, best_cost = (0.0, heading[1]), still
+
+    def tries(pairs):
+        nonlocal best, best_cost
+        for k, hy in pairs:
+            if k > 0:
+                c = cost(k, hy)
+                if c < best_cost:
+                    best, best_cost = (k, hy), c
+
+    tries((i * step, heading[1]) for i in range(1, steps + 1))
+    k0 = best[0]
+    tries((k, heading[1] + r) for r in GROUND_ROWS if r for k in (k0 - step, k0, k0 + step))
+    tries((best[0] + d, best[1]) for d in (-step / 2, step / 2))
+    tries((best[0], best[1] + d) for d in (-0.5, 0.5))
+    if best_cost > GROUND_GAIN * still:
+        return 0.0, heading
+    return float(best[0]), (heading[0], float(best[1]))
+
+
+def ground_reference(prev: np.ndarray, kappa: float, heading: tuple[float, float]) -> np.ndarray:
+    """``prev`` with its ground (below the horizon, ``heading``'s row) carried into the later frame's pixels
+    (:func:`ground_matrix`), the rest as it was."""
+    h, w = prev.shape
+    src = np.asarray(prev, np.float32)
+    if kappa <= 0:
+        return src
+    back = cv2.warpPerspective(src, ground_matrix(kappa, heading), (w, h),
+                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
+    top = min(max(int(math.ceil(heading[1])), 0), h)
+    out = src.copy()
+    out[top:] = back[top:]
+    return out

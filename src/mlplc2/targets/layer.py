@@ -21,7 +21,8 @@ import numpy as np
 
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
-from .change import SUPPORT_PAD, Support, affine_change_box, change_box, moving_extent, uniform_box, uniform_region
+from .change import (SUPPORT_PAD, Support, affine_change_box, change_box, ground_kappa, ground_reference, moving_extent,
+                     uniform_box, uniform_region)
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -73,6 +74,8 @@ class TargetLayer:
     def reset(self) -> None:
         self._settle()
         self._hot: tuple[list[int], list[int]] = ([], [])   # levels read last frame: of the last and the oldest frame
+        self._ground: dict = {}                  # ground_change: this frame's ground-carried references, by level
+        self._levels = None
         self._tracks: list[Track] = []
         self._lost: list[tuple[float, Track]] = []   # (clock, track) of the tracks lost lately (:meth:`_refind`)
         self._next = 1
@@ -164,6 +167,7 @@ class TargetLayer:
         levels = self._pyramid(gray)
         h, w = gray.shape
         self._size = (w, h)
+        self._ground, self._levels = {}, levels
         self._keep_past(clock)
         last, oldest = self._prev, (self._past[0] if self._past else None)
         if self._prev is not None:
@@ -330,6 +334,22 @@ class TargetLayer:
             return None
         return self._past[0], self._clock - self._past_t[0]
 
+    def _oldest(self, level: int) -> np.ndarray:
+        """Level ``level`` of the oldest kept frame (:meth:`_reference`), with ``ground_change`` its ground carried
+        into this frame's pixels (:func:`~mlplc2.targets.change.ground_kappa`, found once a frame at level 1,
+        about the measured heading): what changed there is what does not lie on the ground plane."""
+        past = self._past[0][level]
+        if not self.params.ground_change or self.heading is None or self._levels is None:
+            return past
+        if level not in self._ground:
+            if "kappa" not in self._ground:
+                hx, hy = self.heading
+                self._ground["kappa"] = ground_kappa(self._past[0][1], self._levels[1], (hx / 2.0, hy / 2.0))
+            k, (hx, hy) = self._ground["kappa"]
+            scale = 2.0 ** (1 - level)          # level 1 -> this level's pixels
+            self._ground[level] = ground_reference(past, k / scale, (hx * scale, hy * scale))
+        return self._ground[level]
+
     def _own(self, t: Track, f, index: float) -> None:
         """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
         looming evidence, its collision alarm (the paper's fatal field) the alarm evidence of
@@ -486,6 +506,10 @@ class TargetLayer:
             return
         box = affine_change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
                                 inliers=p.affine_inliers)
+        if box is None and p.ground_change and self.heading is not None and t.cy + t.h / 2.0 > self.heading[1]:
+            # ground_change: the change against the oldest frame with its ground carried (a box over the road)
+            box = change_box(self._oldest(0), gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
+                             kernel=self.change_kernel)
         if box is None:
             return
         cx, cy, w, h = box

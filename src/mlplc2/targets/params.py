@@ -467,6 +467,11 @@ class TargetParams(ParameterSet):
                                off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
+    ground_change: bool = param(True, """The change a change box (:func:`change_box`) and a change seed measure is the change
+                                against the oldest kept frame with its ground (below the heading's row) carried
+                                into this frame's pixels as the ground plane moves under a camera that translates
+                                towards the heading (:func:`~mlplc2.targets.change.ground_kappa`): the road does not
+                                change, what stands on it does. Off: the frame as kept.""", valid=Valid.boolean())
     uniform_adopt: bool = param(True, """A target that is not a uniform region's (``uniform_tol``), and has not warned, whose
                                 centre lies on a uniform region that is a compact object (``uniform_fill``,
                                 ``uniform_aspect``; not touching the frame's border) larger than its box and holding
