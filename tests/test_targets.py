@@ -1774,7 +1774,7 @@ def test_a_young_box_grown_over_the_road_is_put_on_what_stands_on_it():
     p = obj.point_at(8)
     side = p.width
 
-    def put(params=TargetParams(), heading=(159.5, 119.5)):
+    def put(params=TargetParams(ground_change=True), heading=(159.5, 119.5)):
         layer = TargetLayer(params, fps=30.0)
         layer.step(prev, None, (), 0)
         layer._keep_past(4.0)
@@ -1791,3 +1791,35 @@ def test_a_young_box_grown_over_the_road_is_put_on_what_stands_on_it():
     for kw in ({"params": TargetParams(ground_change=False)}, {"heading": None}):
         t = put(**kw)
         assert t.w == 3 * side and not t.affine_put, kw
+
+
+def test_a_box_on_the_road_is_told_from_what_stands_on_it():
+    """ground_alarm (``TargetLayer._grounded``): under a camera driving over a ground plane, a box on the road alone
+    changes much less once the earlier frame's ground is carried (a patch of the road: grounded); a box on a square
+    that stands on the road does not (its change is its own); with ``ground_change`` off, or no measured heading, no
+    box is grounded. A grounded track's field alarm without a course is no evidence (``alarm_warns``), and the same
+    track not grounded warns where it lies on the path."""
+    from mlplc2.targets import TargetLayer
+    from mlplc2.targets.warning import alarm_warns
+    fr, obj = _driving(12.0, 1.2)
+    prev, cur = fr[4], fr[8]
+    p = obj.point_at(8)
+
+    def grounded(x, y, side, params=TargetParams(ground_change=True, ground_alarm=0.5), heading=(159.5, 119.5)):
+        layer = TargetLayer(params, fps=30.0)
+        layer.step(prev, None, (), 0)
+        layer._keep_past(4.0)
+        layer.heading = heading
+        layer._levels, layer._ground = layer._pyramid(cur), {}
+        return layer._grounded(Track(1, 0, x, y, side, side), cur)
+
+    assert grounded(200.0, 180.0, 40.0)                  # the road ahead and to the right
+    assert not grounded(p.x, p.y, p.width)               # the square on it
+    assert not grounded(200.0, 180.0, 40.0, params=TargetParams(ground_change=False, ground_alarm=0.5))
+    assert not grounded(200.0, 180.0, 40.0, heading=None)
+    t = Track(1, 0, 160.0, 150.0, 40.0, 40.0, history=deque([Observation(0, 0.0, 160.0, 150.0, 40.0, 0.0)]))
+    t.last_alarm = 5
+    shape, heading = (240, 320), (159.5, 130.0)
+    assert alarm_warns(t, TargetParams(), 5, None, None, heading, shape)          # on the path: the alarm warns
+    t.grounded = True
+    assert not alarm_warns(t, TargetParams(), 5, None, None, heading, shape)

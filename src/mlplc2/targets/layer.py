@@ -277,6 +277,8 @@ class TargetLayer:
         alive = {f.id for f in fields}
         out, shown = [], []
         for t in self._tracks:
+            t.grounded = p.ground_alarm > 0 and t.last_alarm == index and self._grounded(t, gray)
+        for t in self._tracks:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
@@ -349,6 +351,32 @@ class TargetLayer:
             scale = 2.0 ** (1 - level)          # level 1 -> this level's pixels
             self._ground[level] = ground_reference(past, k / scale, (hx * scale, hy * scale))
         return self._ground[level]
+
+    def _ground_found(self) -> bool:
+        """``ground_change``: whether this frame's ground moved as the plane (:meth:`_oldest`: ``kappa`` > 0); where it
+        did not (no ground in view, or one that is no plane), the carried frame is the kept one and says nothing."""
+        self._oldest(0)
+        return "kappa" in self._ground and self._ground["kappa"][0] > 0
+
+    def _grounded(self, t: Track, gray: np.ndarray) -> bool:
+        """``ground_alarm``: whether the change of track ``t``'s box below the horizon, against the oldest kept frame
+        with its ground carried (:meth:`_oldest`), is less than ``ground_alarm`` times its change against that frame
+        as kept: a patch of the road (at least half the box below the horizon)."""
+        if not self.params.ground_change or self.heading is None or not self._past:
+            return False
+        if not self._ground_found():
+            return False
+        ref = self._oldest(0)
+        hy = self._ground["kappa"][1][1] * 2.0        # level 1 -> this frame's pixels
+        h, w = gray.shape
+        x0, x1 = max(int(t.cx - t.w / 2), 0), min(int(math.ceil(t.cx + t.w / 2)), w)
+        y0, y1 = max(int(t.cy - t.h / 2), int(math.ceil(hy)) + 2, 0), min(int(math.ceil(t.cy + t.h / 2)), h)
+        if x1 - x0 < 4 or y1 - y0 < max(4, t.h / 2):
+            return False
+        now = gray[y0:y1, x0:x1]
+        kept = float(np.abs(now - self._past[0][0][y0:y1, x0:x1]).mean())
+        carried = float(np.abs(now - ref[y0:y1, x0:x1]).mean())
+        return carried < self.params.ground_alarm * kept
 
     def _own(self, t: Track, f, index: float) -> None:
         """Track ``t`` owns attention field ``f`` this frame: its answer (``response`` > 0) is
@@ -506,7 +534,8 @@ class TargetLayer:
             return
         box = affine_change_box(self._past[0][0], gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
                                 inliers=p.affine_inliers)
-        if box is None and p.ground_change and self.heading is not None and t.cy + t.h / 2.0 > self.heading[1]:
+        if box is None and p.ground_change and self.heading is not None and t.cy + t.h / 2.0 > self.heading[1] \
+                and self._ground_found():
             # ground_change: the change against the oldest frame with its ground carried (a box over the road)
             box = change_box(self._oldest(0), gray, int(round(t.cx)), int(round(t.cy)), int(p.max_shift),
                              kernel=self.change_kernel)

@@ -467,11 +467,6 @@ class TargetParams(ParameterSet):
                                off (session 21: holdout 22's missed lead vehicle warned 2.21 s ahead, no false
                                frame added on six sets; docs/history.md, "An alarm seed over a smaller
                                track").""", valid=Valid.boolean())
-    ground_change: bool = param(True, """The change a change box (:func:`change_box`) and a change seed measure is the change
-                                against the oldest kept frame with its ground (below the heading's row) carried
-                                into this frame's pixels as the ground plane moves under a camera that translates
-                                towards the heading (:func:`~mlplc2.targets.change.ground_kappa`): the road does not
-                                change, what stands on it does. Off: the frame as kept.""", valid=Valid.boolean())
     uniform_adopt: bool = param(True, """A target that is not a uniform region's (``uniform_tol``), and has not warned, whose
                                 centre lies on a uniform region that is a compact object (``uniform_fill``,
                                 ``uniform_aspect``; not touching the frame's border) larger than its box and holding
@@ -637,6 +632,22 @@ class TargetParams(ParameterSet):
                                   dashcam's road, cars and roadside) no one motion is the background's, and the change
                                   left is no object's (the real clip ``sudden_turning_vehicle``'s collider lost at 0).""",
                                   valid=Valid.real(minimum=0, maximum=1))
+    ground_change: bool = param(False, """With ``affine_reseat``, where the window's affine motion finds no box (the horizon
+                                crosses it: the backdrop stands still above, the road streams below), a young
+                                target's box that reaches below the heading's row is put on what changed against the
+                                oldest kept frame with its ground carried into this frame's pixels, the ground plane
+                                as it moves under a camera that translates towards the heading (one unknown, the
+                                distance driven over the camera's height: :func:`~mlplc2.targets.change.ground_kappa`,
+                                once a frame): the road does not change, what stands on it does; under the same bounds.
+                                Where no ``kappa`` lowers the ground's change (no plane in view), nothing. Measured in
+                                session 38, not adopted yet (docs/history.md, "The road carried as the ground plane");
+                                off: the affine map alone.""", valid=Valid.boolean())
+    ground_alarm: float = param(0.0, """With ``ground_change``, the field alarm without a course (no fit yet,
+                                :func:`~mlplc2.targets.warning.alarm_warns`) is no evidence on a box at least half below
+                                the horizon whose change there falls to less than this share of it once the oldest
+                                kept frame's ground is carried: a patch of the road. 0.5 measured in session 38, not
+                                adopted (it gave ``UAV_outdoor_1`` a false warning); 0 = off (the default).""",
+                                valid=Valid.real(minimum=0, maximum=1))
     flat_onset: float = param(1.8, """From a translating camera (a measured heading, ``CameraMotion.heading``), a
                               warning does not begin on a box that holds the heading (:func:`~mlplc2.targets.warning.holds`)
                               and is more than this many times wider than tall (:func:`~mlplc2.targets.warning.flat`); once

@@ -179,6 +179,7 @@ class Track:
     order: int = 0                     # refound late (``refind_late``): the id it was created with, its age in :meth:`TargetLayer._merge`
     uniform: bool = False              # seeded on a uniform region's box (``TargetParams.uniform_reseat``)
     affine_put: bool = False           # its box was put on what moved against the background (``affine_reseat``)
+    grounded: bool = False             # its box's change is the ground plane's this frame (``ground_alarm``)
     shadow: bool = False               # a shadow target (``TargetParams.seed_shadow``): no time to contact yet
     region: tuple | None = None        # (w, h, log-scale, log-anisotropy) at its last uniform region (``uniform_growth``)
 

@@ -88,7 +88,7 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
                 and (t.alarm_courses > 0 if p.alarm_onset_course else t.alarm_run > 1):
             return False
         return miss <= p.max_miss
-    if heading is None or shape is None or t.cut(shape, p.border):
+    if heading is None or shape is None or t.cut(shape, p.border) or t.grounded:
         return False
     return on_path(t, p, heading) or keeps_bearing(t, heading, p.bearing_drift)
 
