@@ -382,8 +382,8 @@ def ground_kappa(prev: np.ndarray, cur: np.ndarray, heading: tuple[float, float]
     object on the ground is not the ground) ``margin`` px and more below the horizon least, searched over
     ``steps`` values in ``(0, GROUND_MAX_SCALE / (H - y_h)]`` on the heading's row, then the rows
     ``GROUND_ROWS`` about it at the best value and a step either side, then half a step either side of the
-    best value and half a row either side of the best row; ``(0, heading)`` where the best lowers the change by less than ``GROUND_GAIN`` times (no ground, or
-    one that does not move as the plane)."""
+    best value and half a row either side of the best row; ``(0, heading)`` where the best lowers the change by
+    less than ``GROUND_GAIN`` times (no ground, or one that does not move as the plane)."""
     h, w = cur.shape
     top = int(math.ceil(heading[1] + max(GROUND_ROWS))) + margin
     if top >= h - 4 or top < 0:

@@ -278,7 +278,6 @@ class TargetLayer:
         out, shown = [], []
         for t in self._tracks:
             t.grounded = p.ground_alarm > 0 and t.last_alarm == index and self._grounded(t, gray)
-        for t in self._tracks:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
@@ -336,34 +335,39 @@ class TargetLayer:
             return None
         return self._past[0], self._clock - self._past_t[0]
 
+    def _ground_motion(self) -> tuple[float, tuple[float, float]] | None:
+        """``ground_change``: this frame's ground motion, ``(kappa, horizon point)`` at level 1
+        (:func:`~mlplc2.targets.change.ground_kappa` between the oldest kept frame and this one, about the measured
+        heading; found once a frame); None where the option is off or no heading is measured."""
+        if not self.params.ground_change or self.heading is None or self._levels is None or not self._past:
+            return None
+        if "kappa" not in self._ground:
+            hx, hy = self.heading
+            self._ground["kappa"] = ground_kappa(self._past[0][1], self._levels[1], (hx / 2.0, hy / 2.0))
+        return self._ground["kappa"]
+
+    def _ground_found(self) -> bool:
+        """Whether this frame's ground moved as the plane (:meth:`_ground_motion`: ``kappa`` > 0); where it did not (no
+        ground in view, or one that is no plane) the carried frame would be the kept one and say nothing."""
+        motion = self._ground_motion()
+        return motion is not None and motion[0] > 0
+
     def _oldest(self, level: int) -> np.ndarray:
-        """Level ``level`` of the oldest kept frame (:meth:`_reference`), with ``ground_change`` its ground carried
-        into this frame's pixels (:func:`~mlplc2.targets.change.ground_kappa`, found once a frame at level 1,
-        about the measured heading): what changed there is what does not lie on the ground plane."""
+        """Level ``level`` of the oldest kept frame (:meth:`_reference`) with its ground carried into this frame's
+        pixels (:meth:`_ground_motion`; as kept where none is found): what changed there does not lie on the ground."""
         past = self._past[0][level]
-        if not self.params.ground_change or self.heading is None or self._levels is None:
+        if not self._ground_found():
             return past
         if level not in self._ground:
-            if "kappa" not in self._ground:
-                hx, hy = self.heading
-                self._ground["kappa"] = ground_kappa(self._past[0][1], self._levels[1], (hx / 2.0, hy / 2.0))
             k, (hx, hy) = self._ground["kappa"]
             scale = 2.0 ** (1 - level)          # level 1 -> this level's pixels
             self._ground[level] = ground_reference(past, k / scale, (hx * scale, hy * scale))
         return self._ground[level]
 
-    def _ground_found(self) -> bool:
-        """``ground_change``: whether this frame's ground moved as the plane (:meth:`_oldest`: ``kappa`` > 0); where it
-        did not (no ground in view, or one that is no plane), the carried frame is the kept one and says nothing."""
-        self._oldest(0)
-        return "kappa" in self._ground and self._ground["kappa"][0] > 0
-
     def _grounded(self, t: Track, gray: np.ndarray) -> bool:
         """``ground_alarm``: whether the change of track ``t``'s box below the horizon, against the oldest kept frame
         with its ground carried (:meth:`_oldest`), is less than ``ground_alarm`` times its change against that frame
-        as kept: a patch of the road (at least half the box below the horizon)."""
-        if not self.params.ground_change or self.heading is None or not self._past:
-            return False
+        as kept: a patch of the road (at least half the box below the horizon; a ground found this frame)."""
         if not self._ground_found():
             return False
         ref = self._oldest(0)
