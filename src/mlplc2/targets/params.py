@@ -632,16 +632,17 @@ class TargetParams(ParameterSet):
                                   dashcam's road, cars and roadside) no one motion is the background's, and the change
                                   left is no object's (the real clip ``sudden_turning_vehicle``'s collider lost at 0).""",
                                   valid=Valid.real(minimum=0, maximum=1))
-    ground_change: bool = param(False, """With ``affine_reseat``, where the window's affine motion finds no box (the horizon
+    ground_change: bool = param(True, """With ``affine_reseat``, where the window's affine motion finds no box (the horizon
                                 crosses it: the backdrop stands still above, the road streams below), a young
                                 target's box that reaches below the heading's row is put on what changed against the
                                 oldest kept frame with its ground carried into this frame's pixels, the ground plane
                                 as it moves under a camera that translates towards the heading (one unknown, the
                                 distance driven over the camera's height: :func:`~mlplc2.targets.change.ground_kappa`,
                                 once a frame): the road does not change, what stands on it does; under the same bounds.
-                                Where no ``kappa`` lowers the ground's change (no plane in view), nothing. Measured in
-                                session 38, not adopted yet (docs/history.md, "The road carried as the ground plane");
-                                off: the affine map alone.""", valid=Valid.boolean())
+                                Where no ``kappa`` lowers the ground's change (no plane in view), nothing. On since
+                                session 39 (docs/history.md, "The road carried as the ground plane" and "The road
+                                carried, adopted"): the drive's false episodes over thirty-nine sets 104 -> 90; off:
+                                the affine map alone.""", valid=Valid.boolean())
     ground_alarm: float = param(0.0, """With ``ground_change``, the field alarm without a course (no fit yet,
                                 :func:`~mlplc2.targets.warning.alarm_warns`) is no evidence on a box at least half below
                                 the horizon whose change there falls to less than this share of it once the oldest
