@@ -470,6 +470,7 @@ def test_a_warning_begins_only_while_the_time_to_contact_counts_down():
 
     def track(before):
         t = _looming(80.0)
+        t.streak, t.streak_since = 7, 5.0            # one run of fits since frame 5 (countdown_sigma compares within it)
         t.ttcs.append((9, before, None))
         return t
 
@@ -538,6 +539,30 @@ def test_a_warning_begins_only_on_a_time_to_contact_that_falls_as_an_approach_do
     t = fitted_since(5, ttc + 0.03)
     t.ttcs[-1] = (6, ttc + 0.03, 0.2)
     assert not estimate(t, replace(on, stall_sigma=False), FPS, 12, SHAPE).warning
+
+
+def test_a_rise_of_the_time_to_contact_within_its_noise_does_not_hold_a_warning_back():
+    # countdown_sigma: an approach whose time to contact, 3 frames before (countdown_frames), was 0.02 s shorter with a
+    # standard error of 0.05 s (an early fit that underestimated it, settling) has not risen: it warns. Without
+    # countdown_sigma the rise by any amount holds it back (and counts towards stall_hold); a rise of 0.2 s, beyond
+    # the noise, holds it back either way
+    on = TargetParams()
+    off = replace(on, countdown_sigma=False)
+    assert on.countdown_sigma and on.countdown_onset and on.countdown_frames == 3
+    ttc = (CONTACT - 12) / FPS
+
+    def settling(rise, sd=0.05):
+        t = _looming(80.0)
+        t.streak, t.streak_since = 7, 5.0            # a run of fits since frame 5
+        t.ttcs.append((9, ttc - rise, sd))            # its estimate 3 frames before
+        return t
+
+    assert estimate(settling(0.02), on, FPS, 12, SHAPE).warning
+    t = settling(0.02)
+    assert not estimate(t, off, FPS, 12, SHAPE).warning
+    assert t.stalls == 1 and not t.spent
+    assert not estimate(settling(0.2), on, FPS, 12, SHAPE).warning
+    assert not estimate(settling(0.2), off, FPS, 12, SHAPE).warning
 
 
 def test_a_lapsed_warning_begins_again_only_on_a_short_course():

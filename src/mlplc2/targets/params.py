@@ -358,15 +358,24 @@ class TargetParams(ParameterSet):
                                 session 24).""", valid=Valid.boolean())
     countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
                                   counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
-                                  frames before (by any amount: there is no warning yet to keep through the fit's noise;
-                                  :func:`~mlplc2.targets.warning.rises` without its standard error) does not begin a
-                                  warning; it is held back, not ended.
+                                  frames before (:func:`~mlplc2.targets.warning.rises`; by more than their standard
+                                  error with ``countdown_sigma``, else by any amount) does not begin a warning; it is
+                                  held back, not ended.
                                   The ground beside the path as it nears the frame's foot holds a time to contact near
                                   ``horizon_s`` that does not fall, while an approach's falls by a frame's time each frame.
                                   False = off (on since session 13: holdout 3's false episodes per 1000 frames 0.72 ->
                                   0.62 with ``flat_onset``, no collision, lead or real clip changed; docs/history.md,
                                   "A flat box across the path").""",
                                   valid=Valid.boolean())
+    countdown_sigma: bool = param(True, """With ``countdown_onset``: the time to contact rises only where it exceeds the
+                                  older one by more than the standard error of their difference (both estimates'
+                                  ``ttc_sigma_s`` combined, as ``rise_sigma``) and within one run of fits (as
+                                  ``rise_streak``): a fit that underestimated an approach's time to contact early (a
+                                  box that grew over its background at first) rises within its own noise as it
+                                  settles, and each such frame counted towards ``stall_hold`` until the target could
+                                  never warn (``texture_pan_1_h74``'s collider, its fit within 0.05 s of the truth
+                                  over its last second, never warned). False = by any amount (until session
+                                  39; docs/history.md, "A rise within the fit's noise").""", valid=Valid.boolean())
     onset_fall: float = param(0.3, """A warning begins only on a time to contact that falls at least this fast (s per s): a
                               frame whose ``ttc_s`` lies above the one the target had ``fall_frames`` frames (at
                               ``nominal_fps``) before, in the same run of fits, less this rate times the time between

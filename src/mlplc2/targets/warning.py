@@ -600,8 +600,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
             and (p.isotropy_uniform or not t.uniform) \
             and stretch > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
         warning = False
-    # ... and only while its time to contact counts down, to any amount (countdown_onset)
-    if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc):
+    # ... and only while its time to contact counts down (countdown_onset; beyond its standard error: countdown_sigma)
+    if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc, sigma if p.countdown_sigma else None):
         warning = False
         t.stalls += 1
     # ... and only while its time to contact falls as an approach's does (onset_fall), and never once held back on
