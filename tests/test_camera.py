@@ -67,6 +67,31 @@ def test_heading_of_a_camera_driving_forward_is_the_principal_point():
     assert all(max(abs(v) for v in m.omega) < 1e-3 for m in ms)  # no turn
 
 
+@pytest.mark.parametrize("hfov", [60.0, 90.0])
+def test_the_heading_of_a_fast_drive_is_measured_through_a_wide_lens(hfov):
+    """At 15 m/s over the ground the points near the camera move too far to be followed, and through a
+    90-degree lens the rest of the ground moves under the tracking precision: a share of 0.15-0.3 of the
+    followed points shows the expansion (``camera.FAST_EXPANDING_SHARE``, fast: ``FAST_EXPANSION``), every one
+    about the principal point (the truth of a forward drive)."""
+    frames = stimuli.approach([], size=(320, 240), fps=FPS, hfov_deg=hfov, frames=16, background="ground",
+                              camera="forward", camera_speed=15.0, noise_std=2.0, seed=5).frames
+    est = MotionEstimator(hfov_deg=hfov)
+    ms = [est.apply(f) for f in frames][1:]
+    heads = np.array([m.heading for m in ms if m.heading is not None])
+    assert len(heads) >= 0.8 * len(ms)
+    assert np.median(np.hypot(heads[:, 0] - 159.5, heads[:, 1] - 119.5)) < 8.0
+
+
+def test_an_approaching_object_before_a_still_camera_gives_no_heading_until_it_fills_much_of_the_view():
+    """A textured square (0.8 m) approaching a still camera from 4 m at 8 m/s, off the centre: on frames 8-9 it
+    holds 16-22 % of the followed points, expanding fast about its own centre, but at one rate (one depth): not
+    the static world of a fast drive, which lies at many depths (``camera.FAST_DEPTHS``), no heading."""
+    obj = stimuli.ApproachObject(kind="collision", shape="square", appearance="textured", width_m=0.8,
+                                 start=(0.3, 0.1, 4.0), velocity=(0.0, 0.0, -8.0), seed=3)
+    ms = _estimates(_frames("static", 0.0, objects=[obj], frames=16))
+    assert all(m.heading is None for m in ms[:9])        # frames 1-9
+
+
 def test_the_heading_of_a_slow_forward_drive_is_measured_over_several_frames():
     """At 2 m/s (the benchmark's ground_forward) the ground moves ~0.6 px a frame at the reduced size: too
     little for a heading between two frames; over 3 frames (``heading_frames``) it is the principal point."""
