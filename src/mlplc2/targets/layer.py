@@ -432,7 +432,10 @@ class TargetLayer:
         """The shift (px), log-scale and log-anisotropy gained by the box of ``t`` since the oldest
         frame kept (``change_frames`` before, :meth:`_reference`; the image alignment of :meth:`_grows`),
         so that :func:`keeps_bearing` can answer on a target's first frame; None when there is no such
-        frame or the alignment fails."""
+        frame or the alignment fails, or (``TargetParams.seed_return``) when the alignment run backwards
+        from where it ended does not come back to the box (the forward-backward check of trackers): a
+        patch that moved too far for the alignment to follow, as the road just ahead of a car seen
+        through a wide lens, gives a shift and growth that say nothing."""
         p = self.params
         ref = self._reference()
         if ref is None or self._now is None:
@@ -445,6 +448,14 @@ class TargetLayer:
                    iterations=p.iterations, kernel=self.align_kernel)
         if al is None or al.residual > p.max_residual or al.scale <= 0:
             return None
+        if p.seed_return > 0:      # the alignment run backwards from where it ended must come back
+            back = align(self._now[1], ref[0], t.cx + al.dx, t.cy + al.dy, half * al.scale,
+                         (al.kx * t.w / 2.0, al.ky * t.h / 2.0), n=p.patch, iterations=p.iterations,
+                         kernel=self.align_kernel)
+            if back is None or math.hypot(al.dx + back.dx, al.dy + back.dy) > p.seed_return * max(min(t.w, t.h), 1.0):
+                t.seed_refused = True
+                return None
+            t.seed_refused = False
         return float(al.dx), float(al.dy), math.log(al.scale), float(al.anisotropy)
 
     def _heading_grows(self, t: Track, o: Target) -> bool:

@@ -762,6 +762,19 @@ class TargetParams(ParameterSet):
                               1000 frames holdout 1 1.24 -> 1.03, holdout 2 0.72 -> 0.51, the standard suite and
                               holdout 3 as before, no collision, lead or real clip changed; docs/history.md, "The
                               field alarm's seed that does not loom").""", valid=Valid.boolean())
+    seed_return: float = param(0.5, """The seed's own alignment over ``change_frames`` (``Track.seed_move``: the
+                              drift and growth that :func:`~mlplc2.targets.warning.keeps_bearing`,
+                              ``alarm_isotropic``, ``alarm_course`` and ``split_bearing`` judge on a target's
+                              first frame) counts only when the same alignment run backwards, from where it
+                              ended to the frame ``change_frames`` before, comes back to within this fraction
+                              of the box's smaller side (the forward-backward check of trackers); else the seed
+                              has none, and ``alarm_isotropic`` counts it as a seed that did not loom. The road
+                              just ahead of a car seen through a wide lens moves 20 px or more a frame, too far
+                              for the alignment, which then settles on a shift and a growth that mean nothing
+                              and made the field alarm warn there. The LPLC2 family's image alignment only (the
+                              flow baseline's seed is its object flow, not checked). 0 = off (on since session
+                              41; docs/history.md, "The seed's alignment checked backwards").""",
+                              unit="box sides", valid=Valid.real(minimum=0))
     hold_frames: int = param(15, """A target whose fit gives no time to contact this frame (the growth not
                              significant, not isotropic, a gap in its measurement) reports its last one
                              counted down for up to this many frames after it (``Target.ttc_age_s``: its

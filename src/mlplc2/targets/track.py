@@ -158,6 +158,7 @@ class Track:
     rate: float | None = None
     seed_move: tuple | None = None     # (dx, dy, log-scale) of an alarm's seed since ``change_frames`` before (TargetLayer._seed_move)
     seed_skew: float | None = None     # and its log-anisotropy (``alarm_isotropic``)
+    seed_refused: bool = False         # its seed's alignment did not come back (``seed_return``): no measure of looming
     ox: float = 0.0
     oy: float = 0.0
     warned: bool = False               # it has warned (a warning then holds below ``cut_onset_s``)

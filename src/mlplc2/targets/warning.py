@@ -290,11 +290,14 @@ def anisotropic(t: Track, p: TargetParams, heading: tuple[float, float] | None) 
     px; None: no test), the box does not hold the heading (:func:`holds`), and the seed grew by less than
     ``min_growth`` or unlike in both directions. The ground, a wall along the path or the edge where the
     static world's surfaces meet alarm as the camera moves forward, and grow unlike in both directions; an
-    approaching object grows alike. A track without its seed's alignment (born before its alarm): no test
+    approaching object grows alike. A seed whose alignment did not come back (``seed_return``, ``Track.seed_refused``)
+    measured no looming and fails the test. A track without its seed's alignment (born before its alarm): no test
     (its own box's history was measured too, session 14, and delayed a real clip's warning past its alarm
     on a scaled copy: docs/model.md)."""
     if not p.alarm_isotropic or heading is None or holds(t, heading):
         return False
+    if t.seed_refused:           # its seed's alignment did not come back (``seed_return``): no looming measured
+        return True
     if t.seed_move is None or t.seed_skew is None:
         return False
     growth, skew = t.seed_move[2], t.seed_skew
