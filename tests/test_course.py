@@ -1073,6 +1073,28 @@ def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
     assert second(3.5, 0.5) and second(3.5, 0.5, bearing_drift=0.4)
 
 
+def test_a_bearing_kept_by_a_box_that_stretches_begins_no_warning_with_bearing_isotropic():
+    # bearing_isotropic (docs/history.md, "A bearing kept by a box that stretches"): a young track (two observations
+    # two frames apart) 3 widths beside the heading on a collision course keeps its bearing exactly (drift 0); its
+    # field alarm without a course begins a warning where its box grew alike in both directions, not where the box
+    # stretched 0.2 in log(ky / kx) (the ground, a wall along the path: beyond 0.35 of its growth of 0.105 plus
+    # SKEW_NOISE); a target that already warned goes on, and the rule off lets it begin
+    heading = ((SHAPE[1] - 1) / 2.0, 60.0)
+
+    def second(skew, warned=False, **kw):
+        t = _crossing(heading, 3.0, 0.0, frames=(0, 2), width=14.0, contact=20)
+        t.history[-1] = t.history[-1]._replace(anisotropy=skew)
+        t.alarm_run, t.warned = 2, warned
+        assert drift(t, heading) == pytest.approx(0.0, abs=1e-9)
+        return estimate(t, TargetParams(alarm_warns=True, alarm_frames=2, **kw), FPS, 2, SHAPE, heading=heading).warning
+
+    assert TargetParams().bearing_isotropic
+    assert second(0.0) and second(0.04)                 # alike, or within one alignment's noise
+    assert not second(0.2) and not second(-0.2)         # stretched along either axis
+    assert second(0.2, warned=True)                     # a warning that began goes on
+    assert second(0.2, bearing_isotropic=False)
+
+
 def test_the_alarm_past_its_first_frame_begins_only_within_onset_miss_with_alarm_onset_miss():
     # alarm_onset_miss (on; docs/history.md, "False warnings, session 15"): the static world 0.9 of its widths
     # beside the heading (a course of 0.9: within max_miss, beyond onset_miss, so the fit alone begins no warning)

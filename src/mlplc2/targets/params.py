@@ -425,6 +425,18 @@ class TargetParams(ParameterSet):
                                  (0.45) 3 false frames -> 1, no collision, lead or real clip changed; docs/history.md,
                                  "False warnings, session 15"; session 10: "A warning that begins off the path",
                                  (H)).""", valid=Valid.real(minimum=0))
+    bearing_isotropic: bool = param(True, """A warning that the field alarm without a course begins on a box off the
+                                    path because it keeps its bearing over its own history (two observations or
+                                    more, ``bearing_drift``) begins only where that box grew alike in both
+                                    directions: its log-anisotropy gained at most ``max_anisotropy`` times its
+                                    log-growth plus the noise of one frame's alignment
+                                    (:func:`~mlplc2.targets.warning.grew_alike`, ``SKEW_NOISE`` 0.05). A box over
+                                    the ground, along a wall or across the gap beside a passing object stretches
+                                    along one axis while the edges it lies between hold its centre. False = off (on
+                                    since session 42: false episodes, the standard suite 5 -> 3, holdouts 83-85
+                                    8 -> 7, through 90 degrees holdouts 30-32 18 -> 16, no collider, lead or real
+                                    clip changed; docs/history.md, "A bearing kept by a box that
+                                    stretches").""", valid=Valid.boolean())
     alarm_onset_miss: bool = param(True, """The field alarm with a course begins a warning beyond ``onset_miss`` (up to
                                    ``max_miss``) only on its first frame in a row (``Track.alarm_run``): an alarm that
                                    lasted while the course said the object passes, and warns once its course falls

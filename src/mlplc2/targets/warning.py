@@ -19,7 +19,7 @@ from .contact import fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
-__all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
+__all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "grew_alike", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
            "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows",
            "MIN_POINTS"]
 
@@ -71,7 +71,8 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
     (passing). No ``max_ttc_sigma`` needed. Without a course (its fit too short, or its box cut
     by the border) the alarm warns only for a box wholly inside a frame of ``shape`` (h, w) that
     lies on the path now (:func:`on_path`) or keeps its bearing while it grows
-    (:func:`keeps_bearing`), against ``heading`` (px): the field alarm alone cannot tell an object
+    (:func:`keeps_bearing`; a warning that begins so, on a box whose history grew alike in both directions,
+    ``bearing_isotropic``, :func:`grew_alike`), against ``heading`` (px): the field alarm alone cannot tell an object
     that will pass beside the camera (a roadside wall, a passing car, the ground) from one that hits. With
     ``alarm_onset_miss``, an alarm past its first frame in a row begins a warning only on a course within
     ``onset_miss`` (:func:`wide`)."""
@@ -90,7 +91,8 @@ def alarm_warns(t: Track, p: TargetParams, index: int, ttc: float | None, miss: 
         return miss <= p.max_miss
     if heading is None or shape is None or t.cut(shape, p.border) or t.grounded:
         return False
-    return on_path(t, p, heading) or keeps_bearing(t, heading, p.bearing_drift)
+    return on_path(t, p, heading) or (keeps_bearing(t, heading, p.bearing_drift)
+                                      and (t.warned or not p.bearing_isotropic or grew_alike(t, p)))
 
 
 def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
@@ -102,6 +104,24 @@ def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
 
 #: :func:`keeps_bearing`: the least drift of the static world (px) that a box's jitter cannot fake
 MIN_DRIFT_PX = 2.0
+#: :func:`grew_alike`: the log-anisotropy (``log(ky / kx)``) one frame's image alignment gives a box that grows
+#: alike in both directions (its noise: the real colliders' young tracks gained up to 0.04 in a frame)
+SKEW_NOISE = 0.05
+
+
+def grew_alike(t: Track, p: TargetParams) -> bool:
+    """``bearing_isotropic`` (docs/history.md, "A bearing kept by a box that stretches"): whether track ``t``'s box
+    grew alike in both directions over its history, as an approaching object's does: the log-anisotropy it gained at
+    most ``max_anisotropy`` times its log-growth plus :data:`SKEW_NOISE` (the growth test of every seed,
+    :meth:`~mlplc2.targets.layer.TargetLayer._grows`, with the noise of one frame's alignment). A box over the
+    ground, over a wall along the path or over the gap beside a passing object stretches along one axis, and its
+    centre, held by the edges it lies between, drifts as little as an object on a collision course: its
+    :func:`keeps_bearing` says nothing. True with fewer than two observations (the seed's own alignment is judged by
+    :func:`anisotropic`)."""
+    if len(t.history) < 2:
+        return True
+    q0, q1 = t.history[0], t.history[-1]
+    return abs(q1.anisotropy - q0.anisotropy) <= p.max_anisotropy * (q1.log_scale - q0.log_scale) + SKEW_NOISE
 
 
 def keeps_bearing(t: Track, heading: tuple[float, float], fraction: float) -> bool:
