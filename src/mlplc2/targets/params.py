@@ -434,7 +434,8 @@ class TargetParams(ParameterSet):
                                     the ground, along a wall or across the gap beside a passing object stretches
                                     along one axis while the edges it lies between hold its centre. False = off (on
                                     since session 42: false episodes, the standard suite 5 -> 3, holdouts 83-85
-                                    8 -> 7, through 90 degrees holdouts 30-32 18 -> 16, no collider, lead or real
+                                    8 -> 7, through 90 degrees holdouts 30-32 18 -> 16 and 27-29 13 -> 12, the
+                                    held-back holdouts 86-88 and 33-35 byte for byte, no collider, lead or real
                                     clip changed; docs/history.md, "A bearing kept by a box that
                                     stretches").""", valid=Valid.boolean())
     alarm_onset_miss: bool = param(True, """The field alarm with a course begins a warning beyond ``onset_miss`` (up to

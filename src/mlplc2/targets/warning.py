@@ -105,7 +105,8 @@ def on_path(t: Track, p: TargetParams, heading: tuple[float, float]) -> bool:
 #: :func:`keeps_bearing`: the least drift of the static world (px) that a box's jitter cannot fake
 MIN_DRIFT_PX = 2.0
 #: :func:`grew_alike`: the log-anisotropy (``log(ky / kx)``) one frame's image alignment gives a box that grows
-#: alike in both directions (its noise: the real colliders' young tracks gained up to 0.04 in a frame)
+#: alike in both directions (its noise: the young tracks of the benchmark's colliders that began a warning so
+#: gained 0.00-0.04; docs/history.md, "A bearing kept by a box that stretches")
 SKEW_NOISE = 0.05
 
 
