@@ -8,6 +8,7 @@ import math
 from collections import deque
 from dataclasses import replace
 
+import numpy as np
 import pytest
 
 from mlplc2.evaluation.truth import parse
@@ -1004,6 +1005,49 @@ def test_the_field_alarm_exempts_a_box_from_path_drift():
         assert not off_path(wall(cx1, 24), p, 24, heading)           # a field in alarm this frame: exempt
         assert off_path(wall(cx1, 23), p, 24, heading)               # none this frame: off the path
     assert not off_path(wall(0.0, 23), TargetParams(path_drift=0.0), 24, heading)   # the rule off
+
+
+def test_a_steady_heading_judges_the_alarms_course_off_the_path_with_alarm_path():
+    # alarm_path (docs/history.md, "The alarm's course against a steady heading"): the wall beside the path above
+    # (drift 0.8 of the static world's) whose field alarms this frame is exempt from path_drift without a course or
+    # while the heading is not steady; with a course (the alarm's warning would begin on it) against a steady heading,
+    # it is off the path, as without the alarm; the rule off exempts it as before
+    from mlplc2.targets.warning import off_path
+
+    heading = (160.0, 120.0)
+    x0, g = heading[0] + 40.0, 0.5
+    x1 = heading[0] + 40.0 * (1.0 + 0.8 * math.expm1(g))
+    t = Track(3, 13, x1, heading[1], 60.0, 60.0, log_s=g)
+    t.history = deque([Observation(13, 0.0, x0, heading[1], 40.0, 0.0), Observation(24, g, x1, heading[1], 66.0, 0.0)])
+    t.last_alarm = 24
+    p = TargetParams(path_drift=0.4)
+    assert p.alarm_path and drift(t, heading) == pytest.approx(0.8)
+    assert off_path(t, p, 24, heading, steady=True, miss=0.6)
+    assert not off_path(t, p, 24, heading, steady=False, miss=0.6)           # a heading measured seldom
+    assert not off_path(t, p, 24, heading, steady=True, miss=None)           # no course: the alarm exempts it
+    assert not off_path(t, p.replace(alarm_path=False), 24, heading, steady=True, miss=0.6)
+
+
+def test_the_heading_is_steady_once_measured_on_most_of_the_last_frames():
+    # TargetLayer.steady (alarm_path): a heading measured on at least 80 % of the last 15 processed frames, 10 seen
+    from mlplc2.targets.layer import STEADY_FRAMES, STEADY_MIN
+
+    def steady(seen) -> bool:
+        layer = TargetLayer(fps=FPS)
+        gray = np.zeros(SHAPE, np.float32)
+        for i, s in enumerate(seen):
+            layer.see_heading((80.0, 60.0) if s else None, 1.0 if s else 0.0)
+            layer.step(gray, None, [], i)
+        return layer.steady
+
+    assert (STEADY_FRAMES, STEADY_MIN) == (15, 10)
+    assert not steady([True] * 9) and steady([True] * 10)                   # 10 frames seen at least
+    assert steady([False] * 3 + [True] * 12) and not steady([False] * 4 + [True] * 11)   # 12 of the last 15
+    assert steady([False] * 20 + [True] * 15) and not steady([True] * 20 + [False] * 4)
+    layer = TargetLayer(fps=FPS)                                              # a frame without see_heading: none
+    for i in range(12):
+        layer.step(np.zeros(SHAPE, np.float32), None, [], i)
+    assert not layer.steady
 
 
 def _to_border(p: TargetParams, cx: float, static: bool) -> list:

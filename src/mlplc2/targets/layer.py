@@ -32,6 +32,12 @@ __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
 #: :meth:`TargetLayer.see_heading`: the weight of a frame's sure heading estimate in the smoothed heading
 HEADING_GAIN = 0.2
+#: :attr:`TargetLayer.steady` (``alarm_path``): a heading is steady when it was measured on at least ``STEADY_SHARE``
+#: of the last ``STEADY_FRAMES`` processed frames, ``STEADY_MIN`` of them seen at least (a camera driving or flying
+#: forward: every frame; the real dashcam clips: a third of their frames or fewer)
+STEADY_FRAMES = 15
+STEADY_MIN = 10
+STEADY_SHARE = 0.8
 #: ``support_reseat``: the box put on the part that moves with it is at least this many px on a side
 _MIN_SIDE = 6.0
 
@@ -87,6 +93,9 @@ class TargetLayer:
         self._now: tuple[np.ndarray, list[np.ndarray]] | None = None          # this frame's (gray, pyramid)
         self._size: tuple[int, int] | None = None   # this frame's (w, h)
         self.heading: tuple[float, float] | None = None   # the measured heading, smoothed (:meth:`see_heading`)
+        self._seen = False                 # a heading measured for this frame (:meth:`see_heading`)
+        self._seen_frames: deque = deque(maxlen=STEADY_FRAMES)   # ... for the last processed frames (:attr:`steady`)
+        self.steady = False                # the heading is steady this frame (``alarm_path``)
         self._blind_until = -math.inf   # contact_blind: no warning begins up to this clock
 
     def see_heading(self, point: tuple[float, float] | None, confidence: float) -> None:
@@ -95,7 +104,8 @@ class TargetLayer:
         confidence (an exponential average over ~1 / ``HEADING_GAIN`` frames of a sure estimate; a
         frame without one leaves it). The course's tests without a fit (:func:`on_path`,
         :func:`keeps_bearing`) use it; until one is measured, ``TargetParams.heading`` or the
-        principal point."""
+        principal point. A frame with one counts towards :attr:`steady`."""
+        self._seen = point is not None and confidence > 0
         if point is None or not confidence > 0:
             return
         if self.heading is None:
@@ -163,6 +173,10 @@ class TargetLayer:
         ``clock``: the frame's time in frame intervals since frame 0 (None: ``index``), which the
         fits of the time to contact and the course use (``docs/model.md``, "Time")."""
         p = self.params
+        # alarm_path: whether the heading was measured on most of the last frames (STEADY_FRAMES)
+        self._seen_frames.append(self._seen)
+        self._seen = False
+        self.steady = len(self._seen_frames) >= STEADY_MIN and sum(self._seen_frames) >= STEADY_SHARE * len(self._seen_frames)
         clock = index if clock is None else clock
         levels = self._pyramid(gray)
         h, w = gray.shape
@@ -280,7 +294,8 @@ class TargetLayer:
             t.grounded = p.ground_alarm > 0 and t.last_alarm == index and self._grounded(t, gray)
             t.fields &= alive
             warned = t.warned
-            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval)
+            o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval,
+                         steady=self.steady)
             if t.shadow and t.last_estimate >= t.birth:    # seed_shadow: its first time to contact shows it
                 t.shadow = False
                 shown.append(t)

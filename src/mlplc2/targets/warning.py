@@ -196,7 +196,8 @@ def holds(t: Track, heading: tuple[float, float]) -> bool:
     return abs(t.cx - heading[0]) <= t.w / 2.0 and abs(t.cy - heading[1]) <= t.h / 2.0
 
 
-def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None) -> bool:
+def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float] | None, *,
+             steady: bool = False, miss: float | None = None) -> bool:
     """``path_drift`` (docs/history.md, "A warning that begins off the path"): whether a warning that
     would begin this frame on track ``t`` is the static world's, so does not begin: the camera
     translates (``heading``: the measured heading, px; None: none measured, no test), no field of
@@ -205,8 +206,13 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     more than ``path_drift`` of the static world's drift (:func:`drift`), or, where the static world
     would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
     world beside the path expands about the heading, while an object on a collision course keeps its
-    bearing."""
-    if p.path_drift <= 0 or heading is None or holds(t, heading) or t.last_alarm == index:
+    bearing. With ``alarm_path``, a field in alarm exempts the box only where it has no course (``miss`` None) or
+    the heading is not ``steady`` (:attr:`TargetLayer.steady`: measured on most of the last frames): a translation
+    measured frame after frame is the one the static world expands about, and a box whose course the alarm
+    would begin on drifts away from it as the static world does or as an object passing beside the path."""
+    if p.path_drift <= 0 or heading is None or holds(t, heading):
+        return False
+    if t.last_alarm == index and not (p.alarm_path and steady and miss is not None):
         return False
     ratio = drift(t, heading, away=True)
     return ratio is not None and ratio > p.path_drift
@@ -532,14 +538,15 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None, heading: tuple[float, float] | None = None,
-             interval: float | None = None) -> Target:
+             interval: float | None = None, steady: bool = False) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
     frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
     the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
     :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point. ``interval``:
-    clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``)."""
+    clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``). ``steady``:
+    the heading was measured on most of the last frames (:attr:`TargetLayer.steady`; ``alarm_path``)."""
     h, w = shape
     measured = heading
     t.fit_span = p.span(p.min_frames - 1, fps)
@@ -608,7 +615,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss, p.exit_ahead):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured):
+    if warning and not t.warned and off_path(t, p, index, measured, steady=steady, miss=miss):
         warning = False
     # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
     if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
