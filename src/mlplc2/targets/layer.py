@@ -34,7 +34,8 @@ __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 HEADING_GAIN = 0.2
 #: :attr:`TargetLayer.steady` (``alarm_path``): a heading is steady when it was measured on at least ``STEADY_SHARE``
 #: of the last ``STEADY_FRAMES`` processed frames, ``STEADY_MIN`` of them seen at least (a camera driving or flying
-#: forward: every frame; the real dashcam clips: a third of their frames or fewer)
+#: forward: every frame; the real dashcam clips: 3-45 % of their frames; docs/history.md, "The alarm's course against a
+#: steady heading")
 STEADY_FRAMES = 15
 STEADY_MIN = 10
 STEADY_SHARE = 0.8
@@ -295,7 +296,7 @@ class TargetLayer:
             t.fields &= alive
             warned = t.warned
             o = estimate(t, p, self.fps, now, (h, w), self.focal, heading=self.heading, interval=interval,
-                         steady=self.steady)
+                         heading_steady=self.steady)
             if t.shadow and t.last_estimate >= t.birth:    # seed_shadow: its first time to contact shows it
                 t.shadow = False
                 shown.append(t)

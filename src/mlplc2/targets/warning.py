@@ -538,15 +538,15 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
 
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None, heading: tuple[float, float] | None = None,
-             interval: float | None = None, steady: bool = False) -> Target:
+             interval: float | None = None, heading_steady: bool = False) -> Target:
     """The :class:`Target` of track ``t`` this frame: time to contact (:func:`fit_contact`),
     course (:func:`course`) and the warning rule (``docs/targets.md``, step 7). Shared
     by every model with targets (the LPLC2 family and the optical-flow baseline). ``index``: the
     frame's clock (frame intervals at ``fps`` since frame 0: the frame index at a constant rate),
     the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
     :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point. ``interval``:
-    clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``). ``steady``:
-    the heading was measured on most of the last frames (:attr:`TargetLayer.steady`; ``alarm_path``)."""
+    clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``).
+    ``heading_steady``: the heading was measured on most of the last frames (:attr:`TargetLayer.steady`; ``alarm_path``)."""
     h, w = shape
     measured = heading
     t.fit_span = p.span(p.min_frames - 1, fps)
@@ -615,7 +615,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss, p.exit_ahead):
         warning = False
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
-    if warning and not t.warned and off_path(t, p, index, measured, steady=steady, miss=miss):
+    if warning and not t.warned and off_path(t, p, index, measured, steady=heading_steady, miss=miss):
         warning = False
     # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
     if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
