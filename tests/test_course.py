@@ -1011,7 +1011,7 @@ def test_a_steady_heading_judges_the_alarms_course_off_the_path_with_alarm_path(
     # alarm_path (docs/history.md, "The alarm's course against a steady heading"): the wall beside the path above
     # (drift 0.8 of the static world's) whose field alarms this frame is exempt from path_drift without a course or
     # while the heading is not steady; with a course (the alarm's warning would begin on it) against a steady heading,
-    # it is off the path, as without the alarm; the rule off exempts it as before
+    # it is off the path beyond alarm_path (0.5); the rule off exempts it as before
     from mlplc2.targets.warning import off_path
 
     heading = (160.0, 120.0)
@@ -1021,11 +1021,31 @@ def test_a_steady_heading_judges_the_alarms_course_off_the_path_with_alarm_path(
     t.history = deque([Observation(13, 0.0, x0, heading[1], 40.0, 0.0), Observation(24, g, x1, heading[1], 66.0, 0.0)])
     t.last_alarm = 24
     p = TargetParams(path_drift=0.4)
-    assert p.alarm_path and drift(t, heading) == pytest.approx(0.8)
+    assert p.alarm_path == 0.5 and drift(t, heading) == pytest.approx(0.8)
     assert off_path(t, p, 24, heading, steady=True, miss=0.6)
     assert not off_path(t, p, 24, heading, steady=False, miss=0.6)           # a heading measured seldom
     assert not off_path(t, p, 24, heading, steady=True, miss=None)           # no course: the alarm exempts it
-    assert not off_path(t, p.replace(alarm_path=False), 24, heading, steady=True, miss=0.6)
+    assert not off_path(t, p.replace(alarm_path=0.0), 24, heading, steady=True, miss=0.6)    # the rule off
+    assert not off_path(t, p.replace(alarm_path=0.85), 24, heading, steady=True, miss=0.6)   # within its drift
+
+
+def test_the_alarms_course_on_the_static_world_begins_no_warning_against_a_steady_heading():
+    # alarm_path through estimate: the static world 18 px beside the heading (0.9 of its widths: a course of 0.9,
+    # within max_miss) whose field alarms on its first frame in a row warns while the heading measured is not
+    # steady (the field alarm exempts it from path_drift), and not against a steady heading (it drifts as the static
+    # world does, ratio 1 > path_drift 0.4); the rule off lets it warn
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+
+    def first(steady: bool, **kw) -> bool:
+        t = _looming(heading[0] - 18.0, 12, static=True)
+        t.last_alarm, t.alarm_run = 12, 1
+        return estimate(t, TargetParams(alarm_warns=True, **kw), FPS, 12, SHAPE, heading=heading,
+                        heading_steady=steady).warning
+
+    t = _looming(heading[0] - 18.0, 12, static=True)
+    assert drift(t, heading) == pytest.approx(1.0, abs=1e-6)
+    assert first(False) and not first(True)
+    assert first(True, alarm_path=0.0)
 
 
 def test_the_heading_is_steady_once_measured_on_most_of_the_last_frames():

@@ -425,16 +425,20 @@ class TargetParams(ParameterSet):
                                  (0.45) 3 false frames -> 1, no collision, lead or real clip changed; docs/history.md,
                                  "False warnings, session 15"; session 10: "A warning that begins off the path",
                                  (H)).""", valid=Valid.real(minimum=0))
-    alarm_path: bool = param(True, """From a camera whose heading is steady (measured on at least 80 % of the last 15
-                             processed frames, 10 seen at least: ``TargetLayer.steady``), a field in collision alarm
-                             no longer exempts a warning that its course would begin from ``path_drift``: on a box that
-                             does not hold the heading and drifts away from it by more than ``path_drift`` of the
-                             static world's drift, the alarm with a course begins no warning (the static world, or an
-                             object passing beside the path, its box too wide for its course). Without a course, or
-                             where the heading is measured on fewer frames (the real dashcam clips: 3-45 % of their
-                             frames; two of their colliders' first warnings drifted 0.80 and 1.34 against a heading
-                             measured so seldom), the alarm exempts it as before. False = off (on since session 42;
-                             docs/history.md, "The alarm's course against a steady heading").""", valid=Valid.boolean())
+    alarm_path: float = param(0.5, """From a camera whose heading is steady (measured on at least 80 % of the last 15
+                              processed frames, 10 seen at least: ``TargetLayer.steady``), a field in collision alarm
+                              no longer exempts a warning that its course would begin from the drift test of
+                              ``path_drift``: on a box that does not hold the heading and drifts away from it by more
+                              than this fraction of the static world's drift, the alarm with a course begins no
+                              warning (the static world, or an object passing beside the path, its box too wide for
+                              its course). Halfway between an object on a collision course (0) and the static world
+                              (1), more lenient than ``path_drift`` (0.4), the alarm being evidence of its own: at 0.4
+                              a collider's young box settling onto it (drift 0.43) lost 0.87 s of lead. Without a
+                              course, or where the heading is measured on fewer frames (the real dashcam clips: 3-45 %
+                              of their frames; two of their colliders' first warnings drifted 0.80 and 1.34 against a
+                              heading measured so seldom), the alarm exempts it as before. 0 = off (0.5 since session
+                              42; docs/history.md, "The alarm's course against a steady heading").""",
+                              valid=Valid.real(minimum=0))
     bearing_isotropic: bool = param(True, """A warning that the field alarm without a course begins on a box off the
                                     path because it keeps its bearing over its own history (two observations or
                                     more, ``bearing_drift``) begins only where that box grew alike in both

@@ -207,15 +207,19 @@ def off_path(t: Track, p: TargetParams, index: int, heading: tuple[float, float]
     would barely drift (a box that began at the heading), by more than ``MIN_DRIFT_PX``: the static
     world beside the path expands about the heading, while an object on a collision course keeps its
     bearing. With ``alarm_path``, a field in alarm exempts the box only where it has no course (``miss`` None) or
-    the heading is not ``steady`` (:attr:`TargetLayer.steady`: measured on most of the last frames): a translation
-    measured frame after frame is the one the static world expands about, and a box whose course the alarm
-    would begin on drifts away from it as the static world does or as an object passing beside the path."""
+    the heading is not ``steady`` (:attr:`TargetLayer.steady`: measured on most of the last frames); else its drift
+    may be at most ``alarm_path`` (0.5): a translation measured frame after frame is the one the static world expands
+    about, and a box whose course the alarm would begin on drifts away from it as the static world does or as an
+    object passing beside the path."""
     if p.path_drift <= 0 or heading is None or holds(t, heading):
         return False
-    if t.last_alarm == index and not (p.alarm_path and steady and miss is not None):
-        return False
+    limit = p.path_drift
+    if t.last_alarm == index:
+        if not (p.alarm_path > 0 and steady and miss is not None):
+            return False
+        limit = p.alarm_path
     ratio = drift(t, heading, away=True)
-    return ratio is not None and ratio > p.path_drift
+    return ratio is not None and ratio > limit
 
 
 def fresh(t: Track, p: TargetParams, fps: float, index: float, measured: tuple[float, float] | None,
