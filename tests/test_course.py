@@ -1495,3 +1495,64 @@ def test_a_streak_that_lapsed_briefly_keeps_its_looming_evidence_with_evidence_b
     assert first(on, 12, 58) == (38, None) and first(off, 12, 58) == (38, None)
     looming = [o.looming for o in _streak_lapse_resume(TargetParams(evidence_bridge=30), 12, 58)]
     assert looming[37] and not any(looming[16:37])          # with a bridge of 30 frames the evidence comes back at 38
+
+
+
+def _turning(yaw: float, pitch: float, frames: int = 12, *, turns_with_path: bool = True) -> Track:
+    """A track of an object approaching at constant speed (its image grows about its own centre, contact at frame
+    ``CONTACT``) at (80, 60) while the camera turns ``yaw`` px a frame to the right and ``pitch`` px down, as the
+    layer sees it: each frame's turn carries the box into the new frame's pixels (:meth:`TargetLayer.compensate`:
+    ``cx``, ``cy`` and the track's ``ox``, ``oy``). ``turns_with_path``: the object stays where it was in the
+    image (a lead vehicle on the curve the camera's vehicle follows), else where the turn carried it (it keeps its
+    direction in the world)."""
+    p = TargetParams()
+    t = Track(1, 0, 80.0, 60.0, 20.0, 20.0, history=deque(maxlen=p.window))
+    t.last_answer = frames
+    for k in range(1, frames + 1):
+        t.cx, t.cy, t.ox, t.oy = t.cx + yaw, t.cy + pitch, t.ox + yaw, t.oy + pitch
+        s = (CONTACT - (k - 1)) / (CONTACT - k)
+        back = (-yaw, -pitch) if turns_with_path else (0.0, 0.0)
+        assert t.follow((*back, s, s, math.log(s), 0.0), k, FPS, SHAPE, p.max_fails, border=p.border)
+    return t
+
+
+def test_a_lead_vehicle_on_a_curve_warns_with_its_course_in_the_vehicles_axes():
+    # course_yaw: a car that turns at 1.5 px a frame follows a lead vehicle on the same curve, which stays at the
+    # heading in every frame (both turn with the road). Stabilised, its centre drifts 1.5 px a frame against the
+    # heading: a course of about 2 widths, no warning. In the vehicle's axes (its yaw kept, a steady heading) it
+    # comes straight on: miss 0, a warning. Without a steady heading (a camera that pans, no path to turn) and with
+    # the option off the course stays stabilised
+    heading = (80.0, 60.0)
+    t = _turning(1.5, 0.0)
+    assert [q.x + q.ox for q in t.history] == pytest.approx([80.0] * len(t.history))
+    on = estimate(t, TargetParams(), FPS, 12, SHAPE, heading=heading, heading_steady=True)
+    assert on.warning and on.miss == pytest.approx(0.0, abs=1e-6)
+    for p, steady in ((TargetParams(), False), (TargetParams(course_yaw=False), True)):
+        off = estimate(_turning(1.5, 0.0), p, FPS, 12, SHAPE, heading=heading, heading_steady=steady)
+        assert off.miss > TargetParams().max_miss and not off.warning
+
+
+def test_a_pitch_of_the_camera_stays_out_of_the_course_with_course_yaw():
+    # course_yaw keeps only the yaw: a camera whose pitch bounces 1.5 px a frame (which does not turn the vehicle's
+    # path) over an object coming straight on, which the pitch carries down the image: stabilised it stays put, a
+    # course of 0 and a warning, against a steady heading too. Kept in the frames' own pixels (as the yaw is) its
+    # centre would drift 1.5 px a frame: the same object with the turn as a yaw misses by about 2 widths
+    heading = (80.0, 60.0)
+    t = _turning(0.0, 1.5, turns_with_path=False)
+    assert t.cy == pytest.approx(60.0 + 12 * 1.5)
+    out = estimate(t, TargetParams(), FPS, 12, SHAPE, heading=heading, heading_steady=True)
+    assert out.warning and out.miss == pytest.approx(0.0, abs=1e-6)
+    yawed = estimate(_turning(1.5, 0.0, turns_with_path=False), TargetParams(), FPS, 12, SHAPE, heading=heading,
+                     heading_steady=True)
+    assert yawed.miss > TargetParams().max_miss and not yawed.warning
+
+
+def test_a_warning_does_not_begin_on_a_box_a_few_pixels_across():
+    # onset_px: the same approach straight at the camera seen through a box 2.5 px wide (3.6 px at frame 12, under
+    # onset_px = 4) begins no warning, though its fit says it will hit within the horizon; 0 lets it warn, and a box
+    # twice as wide (7.1 px) warns by default
+    small = estimate(_looming(80.0, width=2.5), TargetParams(), FPS, 12, SHAPE)
+    assert small.ttc_s == pytest.approx((CONTACT - 12) / FPS, rel=1e-6) and small.miss == pytest.approx(0.0, abs=1e-6)
+    assert small.width < TargetParams().onset_px and not small.warning
+    assert estimate(_looming(80.0, width=2.5), TargetParams(onset_px=0.0), FPS, 12, SHAPE).warning
+    assert estimate(_looming(80.0, width=5.0), TargetParams(), FPS, 12, SHAPE).warning

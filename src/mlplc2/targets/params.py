@@ -186,6 +186,19 @@ class TargetParams(ParameterSet):
                                                 principal point ((W - 1) / 2, (H - 1) / 2): the camera moves
                                                 along its optical axis, or stands still.""",
                                                 unit="px", valid=Valid.point())
+    course_yaw: bool = param(True, """From a camera whose heading is steady (``TargetLayer.steady``, as
+                             ``alarm_path``), the horizontal course is fitted in the vehicle's axes: the box's
+                             centres in each frame's own pixels (its yaw kept), against the heading, rather than
+                             stabilised (less the camera's turn). A vehicle that turns turns its path with its
+                             yaw, and its heading stays put in the image: a lead vehicle on the same curve stays
+                             ahead in its axes while it drifts sideways once the yaw is taken out, and a far
+                             object beside the curve sweeps across it (a lateral ``Z`` times the yaw rate),
+                             which the stabilised course does not see. What will hit is judged in the vehicle's
+                             axes at contact (the benchmark's truth for a camera on a path). The vertical course
+                             stays stabilised (a pitch bounce, a roll or a shake of the camera does not turn the
+                             vehicle's path); without a steady heading (a camera that pans, tilts or only
+                             shakes, which has no path to turn) both stay stabilised. False = off
+                             (docs/history.md, "The course in the vehicle's axes, and a box a few pixels across").""", valid=Valid.boolean())
     border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
                           neither the object's size nor its centre, so the course is fitted only from the
                           last ``window`` frames of the track where the box lay wholly inside (however
@@ -327,6 +340,13 @@ class TargetParams(ParameterSet):
                             false episode added (``ground_static_4_h30``); 5 added seven (docs/history.md, "The box on
                             what moves with it, on a cut box and from a moving camera").""", unit="fits",
                             valid=Valid.integer(0))
+    onset_px: float = param(4.0, """A warning begins only on a box at least this large on its smaller side (every
+                            route: the fit's, the field alarm's, ``held_onset``; a warning that began goes on). The
+                            image alignment measures a box's growth from the grey levels inside it: across a few
+                            pixels a tenth of a pixel of its edges' noise is a few percent of its size a frame, the
+                            growth of an approach a second away (a pan's or a tilt's speck of texture, a 2 x 7 box
+                            at the border). 0 = off (docs/history.md, "The course in the vehicle's axes, and a box
+                            a few pixels across").""", unit="px", valid=Valid.real(minimum=0))
     held_cut: bool = param(True, """``held_onset`` also on a box cut by the border that keeps its bearing against the
                            measured heading (:func:`~mlplc2.targets.warning.cut_keeps_bearing`: drifted from the
                            heading by at most ``cut_drift`` of the static world's drift, the test a fit's warning on a

@@ -98,8 +98,10 @@ class Observation(NamedTuple):
     (1 / fps) since frame 0 (the model's clock: the frame index at a constant rate), the accumulated
     log-scale, the box's centre less the camera's turn (``Track.ox``, ``Track.oy``), its width,
     the accumulated log-anisotropy, whether the box was cut by the image's border
-    (``TargetParams.border``: then its centre and size are not the object's), and its height
-    (None: as its width), the unit of the vertical course (:func:`fit_course`)."""
+    (``TargetParams.border``: then its centre and size are not the object's), its height
+    (None: as its width), the unit of the vertical course (:func:`fit_course`), and the camera's
+    horizontal turn then (``Track.ox``: ``x + ox`` is the centre's x in that frame's own pixels, the
+    horizontal course in the vehicle's axes, ``TargetParams.course_yaw``)."""
 
     frame: int
     log_scale: float
@@ -109,6 +111,7 @@ class Observation(NamedTuple):
     anisotropy: float
     cut: bool = False
     height: float | None = None
+    ox: float = 0.0
 
 
 def _reaches(cx: float, cy: float, w: float, h: float, shape: tuple[int, int], border: float) -> bool:
@@ -275,7 +278,7 @@ class Track:
             self.oy += float(dv)
         h, w = shape
         obs = Observation(clock, self.log_s, self.cx - self.ox, self.cy - self.oy, self.w, self.aniso,
-                          border is not None and self.cut(shape, border), self.h)
+                          border is not None and self.cut(shape, border), self.h, self.ox)
         self.history.append(obs)
         self._trim(self.history)
         if not obs.cut:                  # the course's points outlive the window while the box is cut

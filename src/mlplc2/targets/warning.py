@@ -20,20 +20,25 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "grew_alike", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows",
+           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny",
            "MIN_POINTS"]
 
-def course(t: Track, heading: tuple[float, float], ttc: float, span: float) -> tuple[float, float] | None:
+def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
+           yaw: bool = False) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
     heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
     pixels), from its last observations whose box was wholly inside the frame (``Track.inside``:
     a cut box gives neither the object's centre nor its size); None when they are too
-    few for a fit over ``span`` clock units (:func:`fits`)."""
+    few for a fit over ``span`` clock units (:func:`fits`). The centres are the camera's
+    stabilised ones (less its turn); with ``yaw`` (``TargetParams.course_yaw``) the horizontal ones
+    keep the camera's horizontal turn (each frame's own pixels, :class:`Observation`): the course
+    in the vehicle's axes, which turn with its path."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     if not fits(inside, span):
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
-    return fit_course([q.frame for q in inside], [q.x for q in inside], [q.y for q in inside],
+    xs = [q.x + q.ox for q in inside] if yaw else [q.x for q in inside]
+    return fit_course([q.frame for q in inside], xs, [q.y for q in inside],
                       [q.width for q in inside], heading, ahead,
                       heights=[q.width if q.height is None else q.height for q in inside])
 
@@ -476,7 +481,13 @@ def held_onset(t: Track, p: TargetParams, index: float, ttc: float | None, miss:
             and ttc <= p.horizon_s and miss is not None and not wide(p, miss) and not t.spent
             and (not t.cut(shape, p.border)
                  or (p.held_cut and measured is not None and cut_keeps_bearing(t, p, ttc, measured)))
-            and not off_path(t, p, index, measured) and not flat(t, p, measured))
+            and not off_path(t, p, index, measured) and not flat(t, p, measured) and not tiny(t, p))
+
+
+def tiny(t: Track, p: TargetParams) -> bool:
+    """``onset_px``: whether track ``t``'s box is under ``onset_px`` on its smaller side (too small to begin a
+    warning)."""
+    return min(t.w, t.h) < p.onset_px
 
 
 def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None,
@@ -550,7 +561,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     the stamp of the track's evidence. ``heading``: the measured heading (px, this frame's;
     :meth:`TargetLayer.see_heading`), None: ``TargetParams.heading`` or the principal point. ``interval``:
     clock units since the frame processed before this one (None: none; ``slow_evidence``, ``slow_onset``).
-    ``heading_steady``: the heading was measured on most of the last frames (:attr:`TargetLayer.steady`; ``alarm_path``)."""
+    ``heading_steady``: the heading was measured on most of the last frames (:attr:`TargetLayer.steady`; ``alarm_path``,
+    ``course_yaw``)."""
     h, w = shape
     measured = heading
     t.fit_span = p.span(p.min_frames - 1, fps)
@@ -576,7 +588,7 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
             and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
         ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
-        miss_xy = course(t, heading, fit.ttc, t.fit_span)
+        miss_xy = course(t, heading, fit.ttc, t.fit_span, yaw=p.course_yaw and heading_steady)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
             t.streak_since = index
@@ -645,6 +657,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
                                      or stalls(t, p, fps, index, ttc, sigma if p.stall_sigma else None)):
         warning = False
         t.stalls += 1
+    # ... and not on a box a few pixels across, whose growth its alignment cannot measure (onset_px)
+    if warning and not t.warned and tiny(t, p):
+        warning = False
     began = t.warned
     if warning and not began:
         t.onset_cut = t.cut(shape, p.border)
