@@ -197,8 +197,12 @@ class TargetParams(ParameterSet):
                              axes at contact (the benchmark's truth for a camera on a path). The vertical course
                              stays stabilised (a pitch bounce, a roll or a shake of the camera does not turn the
                              vehicle's path); without a steady heading (a camera that pans, tilts or only
-                             shakes, which has no path to turn) both stay stabilised. False = off
-                             (docs/history.md, "The course in the vehicle's axes, and a box a few pixels across").""", valid=Valid.boolean())
+                             shakes, which has no path to turn) both stay stabilised. False = off (on since
+                             session 43: through 90 degrees holdouts 27-29 a collider more, 86 -> 87 of 89, no
+                             collider or lead lost over eleven sets, the real clips' warnings as before; both axes
+                             kept gave a hand-held camera's shake and a drone's pitch for turns, and a real clip a
+                             false warning: docs/history.md, "The course in the vehicle's axes, and a box a few
+                             pixels across").""", valid=Valid.boolean())
     border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
                           neither the object's size nor its centre, so the course is fitted only from the
                           last ``window`` frames of the track where the box lay wholly inside (however
@@ -344,9 +348,12 @@ class TargetParams(ParameterSet):
                             route: the fit's, the field alarm's, ``held_onset``; a warning that began goes on). The
                             image alignment measures a box's growth from the grey levels inside it: across a few
                             pixels a tenth of a pixel of its edges' noise is a few percent of its size a frame, the
-                            growth of an approach a second away (a pan's or a tilt's speck of texture, a 2 x 7 box
-                            at the border). 0 = off (docs/history.md, "The course in the vehicle's axes, and a box
-                            a few pixels across").""", unit="px", valid=Valid.real(minimum=0))
+                            growth of an approach a second away (a pan's or a tilt's speck of texture, a 2.5 x 7 px box
+                            on a tilt). 0 = off (4 since session 43: the five onsets under 4 px over nine sets
+                            were all off every object, none between 4 and 6 px; false episodes on holdouts 30-32,
+                            86-88, 89-91 and the held-back 92-94 one fewer each, no collider or lead changed;
+                            docs/history.md, "The course in the vehicle's axes, and a box a few pixels
+                            across").""", unit="px", valid=Valid.real(minimum=0))
     held_cut: bool = param(True, """``held_onset`` also on a box cut by the border that keeps its bearing against the
                            measured heading (:func:`~mlplc2.targets.warning.cut_keeps_bearing`: drifted from the
                            heading by at most ``cut_drift`` of the static world's drift, the test a fit's warning on a
