@@ -1497,7 +1497,6 @@ def test_a_streak_that_lapsed_briefly_keeps_its_looming_evidence_with_evidence_b
     assert looming[37] and not any(looming[16:37])          # with a bridge of 30 frames the evidence comes back at 38
 
 
-
 def _turning(yaw: float, pitch: float, frames: int = 12, *, turns_with_path: bool = True) -> Track:
     """A track of an object approaching at constant speed (its image grows about its own centre, contact at frame
     ``CONTACT``) at (80, 60) while the camera turns ``yaw`` px a frame to the right and ``pitch`` px down, as the
