@@ -163,16 +163,21 @@ def test_twenty_five_in_thirty_holds_the_copies(tmp_path):
     assert _held(_write(frames, tmp_path / "pulldown.mp4")) == copies
 
 
-def _encoding_check():
-    """``benchmarks/encoding_invariance.py`` as a module."""
+def _module(name):
+    """``benchmarks/NAME.py`` as a module."""
     import importlib.util
     from pathlib import Path
 
-    path = Path(__file__).resolve().parents[1] / "benchmarks" / "encoding_invariance.py"
-    spec = importlib.util.spec_from_file_location("encoding_invariance", path)
+    path = Path(__file__).resolve().parents[1] / "benchmarks" / f"{name}.py"
+    spec = importlib.util.spec_from_file_location(name, path)
     module = importlib.util.module_from_spec(spec)
     spec.loader.exec_module(module)
     return module
+
+
+def _encoding_check():
+    """``benchmarks/encoding_invariance.py`` as a module."""
+    return _module("encoding_invariance")
 
 
 def test_the_encoding_check_writes_each_copy_once_and_the_same_every_time(tmp_path, monkeypatch):
@@ -209,3 +214,61 @@ def test_the_encoding_check_says_where_two_runs_part():
     assert enc.parting(a, moved, 2.0) == "fields part at -, targets at 6"     # 5 native px = 2.5 working px
     fewer = {"_births": [(1, 10.0, 10.0)], "_boxes": {}}
     assert enc.parting(a, fewer, 1.0) == "fields part at 5, targets at 4"
+
+
+def test_a_replicate_is_the_same_scene_seen_with_noise_nobody_can_see(tmp_path):
+    """``benchmarks/replicate.py make``: every scene file of a benchmark folder again, losslessly, with its labels;
+    each frame differs from the original by Gaussian noise of 0.5 grey levels rounded to 8 bits (a third of the
+    pixels by one level, none by more than a few); the same seed writes the same bytes, another seed and another
+    file other draws."""
+    from mlplc2.io import write_lossless_video
+
+    rep = _module("replicate")
+    src = tmp_path / "bench" / "scenes"
+    src.mkdir(parents=True)
+    frames = [np.round(_texture(120, 64)[:, k:k + 80]).astype(np.uint8) for k in range(6)]
+    write_lossless_video(src / "drive_0.mkv", frames, 30.0)
+    write_lossless_video(src / "drone_0.mkv", frames, 30.0)
+    (src / "ground_truth.json").write_text('{"videos": {}}')
+    rep.make(tmp_path / "bench", tmp_path / "a", seed=1, sigma=0.5, progress=False)
+    rep.make(tmp_path / "bench", tmp_path / "b", seed=1, sigma=0.5, progress=False)
+    rep.make(tmp_path / "bench", tmp_path / "c", seed=2, sigma=0.5, progress=False)
+    a = tmp_path / "a" / "scenes"
+    assert (a / "ground_truth.json").read_text() == '{"videos": {}}'
+    copy = list(rep._frames(a / "drive_0.mkv"))
+    assert len(copy) == len(frames)
+    diff = np.array([c.astype(int) - f.astype(int) for c, f in zip(copy, frames)])
+    assert 0.25 < np.mean(diff != 0) < 0.40           # P(|N(0, 0.5)| > 0.5) = 0.32
+    assert np.abs(diff).max() <= 3 and abs(diff.mean()) < 0.05
+    assert (a / "drive_0.mkv").read_bytes() == (tmp_path / "b" / "scenes" / "drive_0.mkv").read_bytes()
+    assert (a / "drive_0.mkv").read_bytes() != (tmp_path / "c" / "scenes" / "drive_0.mkv").read_bytes()
+    other = np.array(list(rep._frames(a / "drone_0.mkv")), dtype=int) - np.array(frames, dtype=int)
+    assert np.any(other != diff)                          # each file its own draw
+    with pytest.raises(SystemExit, match="no ground_truth.json"):
+        rep.make(tmp_path / "a" / "scenes", tmp_path / "d", seed=1, sigma=0.5, progress=False)
+    with pytest.raises(SystemExit, match="sigma"):
+        rep.make(tmp_path / "bench", tmp_path / "d", seed=1, sigma=0.0, progress=False)
+    with pytest.raises(SystemExit, match="overwrite its original"):
+        rep.make(tmp_path / "bench", tmp_path / "bench", seed=1, sigma=0.5, progress=False)
+
+
+def test_the_replicate_comparison_holds_a_first_warning_the_same_within_two_frames():
+    """``stability``: per setting, a collision object first warned within 2 frames by both runs, or by neither,
+    is the same; warned by one run only, or further apart, it is not (issue 22's item 7 on the benchmark)."""
+    rep = _module("replicate")
+    assert [rep._setting(v) for v in ("drive_3_h28_f90.mkv", "ground_forward_0_h36_f90.mkv", "texture_pan_4.mkv",
+                                      "plain_static_2.mkv", "drone_1_h92.mkv")] == \
+        ["drive", "ground_forward", "texture_pan", "plain_static", "drone"]
+
+    def obj(frame):
+        return {"warned": frame is not None, "warning_frame": frame}
+    a = {("drive_0_h1.mkv", 7): obj(10), ("drive_1_h1.mkv", 7): obj(10), ("drone_0_h1.mkv", 1): obj(40),
+         ("texture_pan_4.mkv", 1): obj(None), ("drive_2_h1.mkv", 7): obj(30)}
+    b = {("drive_0_h1.mkv", 7): obj(12), ("drive_1_h1.mkv", 7): obj(15), ("drone_0_h1.mkv", 1): obj(None),
+         ("texture_pan_4.mkv", 1): obj(None)}                     # drive_2 is not in the replicate: not counted
+    st = rep.stability([(a, b)])
+    assert st["drive"] == {"n": 2, "same": 1, "one": 0, "moved": [5]}
+    assert st["drone"] == {"n": 1, "same": 0, "one": 1, "moved": []}
+    assert st["texture_pan"] == {"n": 1, "same": 1, "one": 0, "moved": []}
+    assert st["all"]["n"] == 4 and st["all"]["same"] == 2
+    assert rep.stability([(a, b)], frames=5)["drive"]["same"] == 2

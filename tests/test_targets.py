@@ -1762,6 +1762,24 @@ def test_the_ground_plane_is_found_as_the_camera_drives_over_it(speed, height):
     assert ground_kappa(prev, prev, heading) == (0.0, heading)
 
 
+def test_the_ground_carried_near_its_vanishing_line_does_not_crash_the_process():
+    """ground_reference with the ground's scaling and horizon that a replicate of ``drive_4_h27_f90`` measured (its row
+    0 all but on the plane's vanishing line: ``1 - kappa y_h`` = 0.007): OpenCV 5.1's ``warpPerspective`` of the whole
+    frame killed the process there (a segmentation fault: the benchmark's worker died, ``mlplc2 run`` ended). Run in a
+    process of its own: the rows above the horizon as they were, those below carried and finite."""
+    import subprocess
+    import sys
+
+    code = ("import numpy as np\n"
+            "from mlplc2.targets.change import ground_reference\n"
+            "prev = np.random.default_rng(0).uniform(0, 255, (240, 320)).astype(np.float32)\n"
+            "out = ground_reference(prev, 0.008337982210319691, (158.95230070825846, 119.06690650379088))\n"
+            "assert np.array_equal(out[:120], prev[:120]) and np.isfinite(out).all()\n"
+            "assert not np.array_equal(out[120:], prev[120:])\n")
+    done = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, timeout=120)
+    assert done.returncode == 0, (done.returncode, done.stderr[-2000:])
+
+
 def test_a_young_box_grown_over_the_road_is_put_on_what_stands_on_it():
     """ground_change, through the target layer's re-seat (``affine_reseat``): a young track's box three times the
     width of a passing square that stands on the road (the road's motion is no one affine map of the window: the

@@ -421,14 +421,18 @@ def ground_kappa(prev: np.ndarray, cur: np.ndarray, heading: tuple[float, float]
 
 def ground_reference(prev: np.ndarray, kappa: float, heading: tuple[float, float]) -> np.ndarray:
     """``prev`` with its ground (below the horizon, ``heading``'s row) carried into the later frame's pixels
-    (:func:`ground_matrix`), the rest as it was."""
+    (:func:`ground_matrix`), the rest as it was. Only the rows below the horizon are warped (as
+    :func:`ground_kappa` does): above it the plane's homography sends the rows near the horizon to the
+    vanishing line at infinity, where ``cv2.warpPerspective`` (OpenCV 5.1) can crash the process
+    (``tests/test_targets.py``)."""
     h, w = prev.shape
     src = np.asarray(prev, np.float32)
     if kappa <= 0:
         return src
-    back = cv2.warpPerspective(src, ground_matrix(kappa, heading), (w, h),
-                               flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
     top = min(max(int(math.ceil(heading[1])), 0), h)
     out = src.copy()
-    out[top:] = back[top:]
+    if top < h:
+        shift = np.array([[1.0, 0.0, 0.0], [0.0, 1.0, float(top)], [0.0, 0.0, 1.0]])   # only the rows below
+        out[top:] = cv2.warpPerspective(src, ground_matrix(kappa, heading) @ shift, (w, h - top),
+                                        flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP, borderMode=cv2.BORDER_REPLICATE)
     return out
