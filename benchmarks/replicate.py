@@ -32,7 +32,7 @@ from pathlib import Path
 import numpy as np
 
 from mlplc2._progress import bar
-from mlplc2.io import write_lossless_video
+from mlplc2.io import read_video, write_lossless_video
 
 GT = "ground_truth.json"
 
@@ -50,21 +50,6 @@ def dither(frames, sigma: float, seed: int):
     for f in frames:
         noisy = f.astype(np.float32) + rng.normal(0.0, sigma, f.shape).astype(np.float32)
         yield np.clip(np.rint(noisy), 0, 255).astype(np.uint8)
-
-
-def _frames(path: Path):
-    import av
-
-    with av.open(str(path)) as c:
-        for fr in c.decode(video=0):
-            yield fr.to_ndarray(format="gray")
-
-
-def _fps(path: Path) -> float:
-    import av
-
-    with av.open(str(path)) as c:
-        return float(c.streams.video[0].average_rate)
 
 
 def make(src: Path, dst: Path, seed: int, sigma: float, progress: bool = True) -> list[Path]:
@@ -85,7 +70,8 @@ def make(src: Path, dst: Path, seed: int, sigma: float, progress: bool = True) -
     shutil.copyfile(scenes / GT, out / GT)
     written = []
     for v in bar(videos, desc="replicate", unit="scene", disable=not progress):
-        written.append(write_lossless_video(out / v.name, dither(_frames(v), sigma, seed_for(v.name, seed)), _fps(v)))
+        frames, fps = read_video(v, decoder="pyav")      # grey scenes, decoded as RGB: one channel is the grey
+        written.append(write_lossless_video(out / v.name, dither(frames[..., 0], sigma, seed_for(v.name, seed)), fps))
     return written
 
 
