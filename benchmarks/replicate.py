@@ -15,7 +15,9 @@ benchmark reuses scene files it finds in its ``--out`` folder, so the replicate 
 ``compare`` reads the pairs' ``evaluation.json`` and prints, pooled over the pairs: the figures of each side (colliders
 warned, lead median and 10th percentile, false episodes and frames, TTC coverage) and, per setting, the collision
 objects whose first warning is the same (within ``--frames`` frames, default 2: issue 22's item 7) or which neither
-run warns, those warned by one run only, and the spread of the first warnings that moved. A design whose figures
+run warns, those warned by one run only, the spread of the first warnings that moved, and the same count for the
+paper's field alarm on each object (the layer the targets are built on: how steady a first decision of the model's own
+front end is under the same noise). A design whose figures
 differ from the original's by no more than a replicate's do is not shown better or worse by them
 (docs/benchmark.md, "Replicates").
 """
@@ -87,27 +89,31 @@ def _colliders(folder: Path) -> dict:
     return {(o["video"], o["object"]): o for o in e["warning_objects"] if o["model"] == "mlplc2"}
 
 
-def stability(pairs: list[tuple[dict, dict]], frames: int = 2) -> dict:
+def stability(pairs: list[tuple[dict, dict]], frames: int = 2, key: str = "warning_frame") -> dict:
     """Per setting (and ``"all"``): ``n`` collision objects in both runs of a pair, ``same`` first warned within
     ``frames`` frames of each other or by neither run, ``one`` warned by one run only, ``moved`` the first warnings'
-    differences (frames) beyond ``frames``. ``pairs``: (original, replicate) colliders as :func:`_colliders`."""
+    differences (frames) beyond ``frames``, ``none`` neither run's. ``pairs``: (original, replicate) colliders as :func:`_colliders`.
+    ``key``: the frame compared, the target warning's (``warning_frame``) or the paper's field alarm's on the object
+    (``alarm_frame``, the layer the targets are built on); None: none in that run."""
     out: dict = {}
     for a, b in pairs:
-        for key, o in a.items():
-            p = b.get(key)
+        for name, o in a.items():
+            p = b.get(name)
             if p is None:
                 continue
-            for s in (_setting(key[0]), "all"):
-                r = out.setdefault(s, {"n": 0, "same": 0, "one": 0, "moved": []})
+            x, y = o.get(key), p.get(key)
+            for s in (_setting(name[0]), "all"):
+                r = out.setdefault(s, {"n": 0, "same": 0, "none": 0, "one": 0, "moved": []})
                 r["n"] += 1
-                if not o["warned"] and not p["warned"]:
+                if x is None and y is None:
                     r["same"] += 1
-                elif o["warned"] != p["warned"]:
+                    r["none"] += 1
+                elif x is None or y is None:
                     r["one"] += 1
-                elif abs(p["warning_frame"] - o["warning_frame"]) <= frames:
+                elif abs(y - x) <= frames:
                     r["same"] += 1
                 else:
-                    r["moved"].append(p["warning_frame"] - o["warning_frame"])
+                    r["moved"].append(y - x)
     return out
 
 
@@ -159,14 +165,18 @@ def compare(folders: list[Path], frames: int = 2) -> str:
              "|---|---|---|---|---|---|",
              _row("original", figures(orig)), _row("replicate", figures(rep)), "",
              f"| setting | collision objects | first warning the same (within {frames} frames, or none) | "
-             f"warned by one run only | moved further: median, largest (frames) |", "|---|---|---|---|---|"]
-    st = stability([(_colliders(a), _colliders(b)) for a, b in zip(orig, rep)], frames)
+             f"warned by one run only | moved further: median, largest (frames) | the field alarm on it the same "
+             f"(of those alarmed by either run) |",
+             "|---|---|---|---|---|---|"]
+    pairs = [(_colliders(a), _colliders(b)) for a, b in zip(orig, rep)]
+    st, alarm = stability(pairs, frames), stability(pairs, frames, key="alarm_frame")
     for s in sorted(st, key=lambda k: (k == "all", k)):
-        r = st[s]
+        r, q = st[s], alarm[s]
         moved = np.abs(np.array(r["moved"])) if r["moved"] else None
         spread = "-" if moved is None else f"{len(moved)}: {np.median(moved):.0f}, {moved.max():.0f}"
         lines.append(f"| {'**all**' if s == 'all' else s} | {r['n']} | {r['same']} ({100 * r['same'] / r['n']:.0f} %) | "
-                     f"{r['one']} | {spread} |")
+                     f"{r['one']} | {spread} | {q['same']} ({100 * q['same'] / q['n']:.0f} %; "
+                     f"{q['same'] - q['none']} of {q['n'] - q['none']}) |")
     return "\n".join(lines)
 
 

@@ -267,8 +267,12 @@ def test_the_replicate_comparison_holds_a_first_warning_the_same_within_two_fram
     b = {("drive_0_h1.mkv", 7): obj(12), ("drive_1_h1.mkv", 7): obj(15), ("drone_0_h1.mkv", 1): obj(None),
          ("texture_pan_4.mkv", 1): obj(None)}                     # drive_2 is not in the replicate: not counted
     st = rep.stability([(a, b)])
-    assert st["drive"] == {"n": 2, "same": 1, "one": 0, "moved": [5]}
-    assert st["drone"] == {"n": 1, "same": 0, "one": 1, "moved": []}
-    assert st["texture_pan"] == {"n": 1, "same": 1, "one": 0, "moved": []}
+    assert st["drive"] == {"n": 2, "same": 1, "none": 0, "one": 0, "moved": [5]}
+    assert st["drone"] == {"n": 1, "same": 0, "none": 0, "one": 1, "moved": []}
+    assert st["texture_pan"] == {"n": 1, "same": 1, "none": 1, "one": 0, "moved": []}
     assert st["all"]["n"] == 4 and st["all"]["same"] == 2
     assert rep.stability([(a, b)], frames=5)["drive"]["same"] == 2
+    # the field alarm's first frame on each object, counted alike (a missing frame: none in that run)
+    alarm_a = {("drive_0_h1.mkv", 7): {"alarm_frame": 20}, ("drive_1_h1.mkv", 7): {"alarm_frame": None}}
+    alarm_b = {("drive_0_h1.mkv", 7): {"alarm_frame": 19}, ("drive_1_h1.mkv", 7): {"alarm_frame": 31}}
+    assert rep.stability([(alarm_a, alarm_b)], key="alarm_frame")["drive"] == {"n": 2, "same": 1, "none": 0, "one": 1, "moved": []}
