@@ -829,6 +829,43 @@ def test_alarming_field_seeds_a_target_that_warns_at_once():
     assert not any(t.warning for t in off[8])
 
 
+def test_a_warning_is_shown_from_its_second_frame_unless_a_field_alarms():
+    """``onset_confirm``: a disc that grows from frame 6 on, no field: the fit's warning (the first frame it is
+    decided, shown at once with the rule off) is shown one frame later, on the same target, and goes on as with the
+    rule off; a field in collision alarm over the disc (from frame 8) shows its warning at once (issue 22 item 4)."""
+    frames = _growing_disc(40, start=6)
+
+    def first(outs):
+        return next((k, t.id) for k, out in enumerate(outs) for t in out if t.warning)
+
+    at_once = _layer_run(frames, 99, (200, 90), onset_confirm=False)
+    confirmed = _layer_run(frames, 99, (200, 90))
+    k, tid = first(at_once)
+    assert first(confirmed) == (k + 1, tid)
+    shown = [[t.id for t in out if t.warning] for out in confirmed[k + 1:]]
+    assert shown == [[t.id for t in out if t.warning] for out in at_once[k + 1:]]
+    on = _layer_run(frames, 8, (200, 90))
+    assert any(t.warning and abs(t.x - 200) < 5 and abs(t.y - 90) < 5 for t in on[8])
+
+
+def test_a_warning_decided_on_one_frame_alone_is_never_shown():
+    """``onset_confirm`` (``warning.confirmed``): the rule's decision on a track is shown only where it was decided
+    on the frame before too, a field of it alarms this frame, or the frame lies far from the one before."""
+    from mlplc2.targets.warning import confirmed
+
+    p = TargetParams()
+    t = Track(1, 0, 100.0, 100.0, 20.0, 20.0)
+    assert not confirmed(t, p, 10, far=False)                   # its first frame decided: waits
+    t.decided = True
+    assert confirmed(t, p, 11, far=False)                       # its second in a row: shown
+    t.decided = False
+    t.last_alarm = 12
+    assert confirmed(t, p, 12, far=False)                       # a field of it alarms this frame: at once
+    assert not confirmed(t, p, 13, far=False)                   # ... not a frame after the alarm
+    assert confirmed(t, p, 13, far=True)                        # a slow camera's frame: at once
+    assert confirmed(t, TargetParams(onset_confirm=False), 13, far=False)
+
+
 def test_alarming_field_on_a_shrinking_disc_makes_no_warning():
     frames = _growing_disc(24, r0=20.0, rate=-0.03)
     outs = _layer_run(frames, 6, (200, 90))
@@ -1645,7 +1682,7 @@ def test_a_warning_over_the_whole_view_runs_to_its_contact_and_the_target_then_g
     layer.step(np.full((240, 320), 40.0, np.float32), lm, [], 0)
     t = Track(layer._next, 0, 159.5, 119.5, 320.0, 240.0, birth=0, span=p.span(p.window - 1, FPS), keep=p.window)
     t.history = deque([Obs(0, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
-    t.warned = t.last_warned = True
+    t.warned = t.last_warned = t.decided = True       # a warning running (shown: onset_confirm)
     t.held = (0, 0.2, 0.01, 0.1, (0.0, 0.0))
     layer._tracks.append(t)
     layer._next += 1

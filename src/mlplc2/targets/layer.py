@@ -26,7 +26,7 @@ from .change import (SUPPORT_PAD, Support, affine_change_box, change_box, ground
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, drift, estimate, heading_grows, holds, keeps_bearing, spans_view
+from .warning import blind_until, confirmed, drift, estimate, heading_grows, holds, keeps_bearing, spans_view
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -313,6 +313,11 @@ class TargetLayer:
                 o, t.warned, t.last_warned = replace(o, warning=False), warned, False
             if o.warning:
                 t.last_warning = now
+            # a warning decided on one frame alone is not shown, unless a field of it alarms (onset_confirm)
+            decided = o.warning
+            if decided and not confirmed(t, p, now, far):
+                o = replace(o, warning=False)
+            t.decided = decided
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
             ids = {id(t) for t in shown}

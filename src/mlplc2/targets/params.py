@@ -354,6 +354,24 @@ class TargetParams(ParameterSet):
                             86-88, 89-91 and the held-back 92-94 one fewer each, no collider or lead changed;
                             docs/history.md, "The course in the vehicle's axes, and a box a few pixels
                             across").""", unit="px", valid=Valid.real(minimum=0))
+    onset_confirm: bool = param(True, """A warning is shown from the second frame in a row on which the warning rule
+                                decides it (every rule above and the layer's own, ``contact_blind``, ``heading_growth``,
+                                ``onset_support``): a warning decided on one frame alone, a rule's threshold crossed by
+                                one frame's noise, is never shown, and an onset waits one frame; not where a field of
+                                the target is in collision alarm that frame (the paper's alarm is evidence at once,
+                                issue 22 item 4: the warning comes no later than the field alarm), nor on a frame that
+                                follows the one before by more than one nominal frame interval (a camera slower than
+                                ``nominal_fps``, whose frames lie further apart than the wait; the 7.5 fps helmet clip's
+                                only warning is its last frame before contact). The rule's own state
+                                (``Track.decided``, ``warned``, ``last_warned``) follows the decision, so nothing but
+                                what is shown changes. False = shown at once (main's before session 45). On since
+                                session 45: five sets of six moving settings (445 colliders) and their replicate,
+                                false episodes 53 -> 47 and 52 -> 45 (0.55 -> 0.48 and 0.53 -> 0.46 per 1000 frames),
+                                false frames 308 -> 277 and 229 -> 200, colliders 428 -> 426 and 428 -> 424 (the ones
+                                lost warned on one frame only, 3-8 % of their approach, or on the last frame before
+                                contact), lead median and 10th percentile 0.03 s shorter; the real clips' warnings
+                                as before; docs/history.md, "Where a first warning moves, traced to its rule").""",
+                                valid=Valid.boolean())
     held_cut: bool = param(True, """``held_onset`` also on a box cut by the border that keeps its bearing against the
                            measured heading (:func:`~mlplc2.targets.warning.cut_keeps_bearing`: drifted from the
                            heading by at most ``cut_drift`` of the static world's drift, the test a fit's warning on a

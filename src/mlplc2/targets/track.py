@@ -167,6 +167,7 @@ class Track:
     warned: bool = False               # it has warned (a warning then holds below ``cut_onset_s``)
     last_warned: bool = False          # its last frame was a warning (``reonset_miss``)
     last_warning: float = -(10 ** 9)   # clock of its last frame with a warning (``split_warned``)
+    decided: bool = False              # the warning rule decided a warning on its last frame, shown or not (``onset_confirm``)
     held: tuple | None = None          # (clock, ttc_s, sigma_s, miss, miss_xy) of its last time to contact (``hold_frames``)
     first_ttc: float | None = None     # its first time to contact (s), of its own fit or the lost track's it was refound from (``fresh_ttc``)
     ttcs: deque = field(default_factory=lambda: deque(maxlen=32))   # (clock, ttc_s or None, sigma_s or None) of its last estimates

@@ -20,7 +20,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "grew_alike", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny",
+           "slow", "rising", "count_down", "confirmed", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny",
            "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
@@ -482,6 +482,14 @@ def held_onset(t: Track, p: TargetParams, index: float, ttc: float | None, miss:
             and (not t.cut(shape, p.border)
                  or (p.held_cut and measured is not None and cut_keeps_bearing(t, p, ttc, measured)))
             and not off_path(t, p, index, measured) and not flat(t, p, measured) and not tiny(t, p))
+
+
+def confirmed(t: Track, p: TargetParams, now: float, far: bool) -> bool:
+    """``onset_confirm``: whether a warning the rule decided on track ``t`` this frame (clock ``now``) is shown: it was
+    decided on the track's frame before too (``Track.decided``), a field of it is in collision alarm this frame (the
+    paper's alarm is evidence at once: issue 22 item 4), the frame lies ``far`` from the one before (more than a
+    nominal frame interval: :meth:`~mlplc2.targets.layer.TargetLayer._far`), or the rule is off."""
+    return not p.onset_confirm or t.decided or t.last_alarm == now or far
 
 
 def tiny(t: Track, p: TargetParams) -> bool:
