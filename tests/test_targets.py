@@ -848,6 +848,29 @@ def test_a_warning_is_shown_from_its_second_frame_unless_a_field_alarms():
     assert any(t.warning and abs(t.x - 200) < 5 and abs(t.y - 90) < 5 for t in on[8])
 
 
+def test_a_young_target_shows_its_time_to_contact_from_its_second_observation():
+    """``young_ttc``: a disc that grows steadily (its radius by 4 % a frame: the size's time to contact 1 / 0.04
+    frames), no field: its target shows a time to contact from its second observation (the fit over it, its first
+    and the growth its growth test measured before its birth) instead of its ``min_frames``-th, near the true one,
+    while every warning, and every time to contact from the ``min_frames``-th observation on, stays as with the rule
+    off."""
+    frames = _growing_disc(40, start=-20)
+
+    def first_ttc(outs):
+        return next((k, t.id, t.ttc_s) for k, out in enumerate(outs) for t in out if t.ttc_s is not None)
+
+    off = _layer_run(frames, 99, (200, 90), young_ttc=False)
+    on = _layer_run(frames, 99, (200, 90))
+    k_off, tid, _ = first_ttc(off)
+    k_on, tid_on, ttc = first_ttc(on)
+    born = next(k for k, out in enumerate(on) if any(t.id == tid_on for t in out))
+    assert tid_on == tid
+    assert k_on == born + 1 and k_off == born + TargetParams().min_frames - 1
+    assert ttc == pytest.approx(1 / (0.04 * FPS), rel=0.1)
+    assert [[(t.id, t.warning) for t in out] for out in on] == [[(t.id, t.warning) for t in out] for out in off]
+    assert all(t.ttc_s == u.ttc_s for a, b in zip(on[k_off:], off[k_off:]) for t, u in zip(a, b))
+
+
 def test_a_warning_decided_on_one_frame_alone_is_never_shown():
     """``onset_confirm`` (``warning.confirmed``): the rule's decision on a track is shown only where it was decided
     on the frame before too, a field of it alarms this frame, or the frame lies far from the one before."""
@@ -885,6 +908,47 @@ def test_real_clip_warning_no_later_than_the_field_alarm(real_dir, clip):
     assert obj["alarm_frame"] is not None
     assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]
 
+
+
+def test_the_field_alarm_holds_a_running_warning_whatever_its_course():
+    """``alarm_hold`` (``warning.alarm_holds``): a running warning goes on on every frame a field of its target alarms
+    while the target has a time to contact, whatever its course; not before it warns, not once it lapsed, without a
+    time to contact, without the alarm that frame, once it is spent, or with the rule off."""
+    from mlplc2.targets.warning import alarm_holds
+
+    p = TargetParams()
+    t = Track(1, 0, 100.0, 100.0, 20.0, 20.0)
+    t.last_alarm = 20
+    assert not alarm_holds(t, p, 20, 0.5)                       # it has not warned: the onset's rules decide
+    t.warned = True
+    assert not alarm_holds(t, p, 20, 0.5)                       # it warned, but not on its last frame: lapsed
+    t.last_warned = True
+    assert alarm_holds(t, p, 20, 0.5)
+    assert not alarm_holds(t, p, 20, None)                      # no time to contact, not even one held
+    assert not alarm_holds(t, p, 21, 0.5)                       # no field of it alarms this frame
+    assert not alarm_holds(t, TargetParams(alarm_hold=False), 20, 0.5)
+    t.spent = True
+    assert not alarm_holds(t, p, 20, 0.5)                       # its time to contact rose: ended for good
+
+
+def test_real_clip_warning_held_by_the_field_alarm_to_contact(real_dir):
+    """``night_rear_end``: a car that fills the rear view; the box of a part of it warns at the field alarm's first
+    frame, then its course, counted in the part's own width, reaches 1.0 as the car grows: the warning held on every
+    frame to the contact while the alarm goes on (with the rule off it lapsed 0.27 s before the contact, as a brake
+    fed by it would have let go)."""
+    path = real_dir / "night_rear_end.mp4"
+    if not path.exists():
+        pytest.skip(f"{path} is absent")
+
+    def kept(hold):
+        ev = mlplc2.evaluate([str(path)], real_dir / "ground_truth.json", models=["mlplc2"],
+                             run_options={"target_params": {"alarm_hold": hold}})
+        (obj,) = ev.warning_objects
+        assert obj["warned"] and obj["warning_frame"] <= obj["alarm_frame"]
+        return obj["warning_kept"]
+
+    assert kept(True) == 1.0
+    assert kept(False) < 0.5
 
 def _expanding_patch(n, r0, contact=40.0, side=30.0):
     """Grey frames of a textured square on a plain background, ``side`` px at first, whose size

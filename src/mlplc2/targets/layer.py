@@ -26,7 +26,7 @@ from .change import (SUPPORT_PAD, Support, affine_change_box, change_box, ground
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, confirmed, drift, estimate, heading_grows, holds, keeps_bearing, spans_view
+from .warning import blind_until, confirmed, drift, estimate, heading_grows, holds, keeps_bearing, spans_view, young
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -290,7 +290,7 @@ class TargetLayer:
         self._past.append(self._prev)
         self._past_t.append(clock)
         alive = {f.id for f in fields}
-        out, shown = [], []
+        out, shown, early = [], [], {}
         for t in self._tracks:
             t.grounded = p.ground_alarm > 0 and t.last_alarm == index and self._grounded(t, gray)
             t.fields &= alive
@@ -318,6 +318,8 @@ class TargetLayer:
             if decided and not confirmed(t, p, now, far):
                 o = replace(o, warning=False)
             t.decided = decided
+            if o.ttc_s is None and (guess := young(t, p, self.fps, now, (h, w))) is not None:
+                early[o.id] = guess              # young_ttc: shown once every decision is taken
             out.append(o)
         if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
             ids = {id(t) for t in shown}
@@ -338,7 +340,9 @@ class TargetLayer:
             c.read.clear()
         self._settle()
         keep = {t.id for t in self._tracks if not t.shadow}
-        return tuple(sorted((o for o in out if o.id in keep), key=Target.urgency))
+        out = [o if o.id not in early else replace(o, ttc_s=early[o.id][0], ttc_sigma_s=early[o.id][1], ttc_age_s=0.0)
+               for o in out if o.id in keep]
+        return tuple(sorted(out, key=Target.urgency))
 
     def _keep_past(self, clock: float) -> None:
         """Forget the kept frames older than needed: the newest frame at least ``change_frames``
@@ -670,6 +674,7 @@ class TargetLayer:
         half = p.margin * t.size / 2.0 + 3.0
         if self.measure is not None:             # another front end's growth evidence
             move = self.measure(ref[0], levels, t, half, float(ref[1]))
+            t.growth = None if move is None else (float(ref[1]), float(move[4]))
             return move is not None and move[4] >= p.min_growth and abs(move[5]) <= p.max_anisotropy * move[4]
         al = align(ref[0], levels, t.cx, t.cy, half, (t.w / 2.0, t.h / 2.0), n=p.patch,
                    iterations=p.iterations, kernel=self.align_kernel)
@@ -677,6 +682,7 @@ class TargetLayer:
             return alarm
         t.motion = (al.dx / ref[1], al.dy / ref[1], math.log(al.scale) / ref[1])
         g = math.log(al.scale)
+        t.growth = (float(ref[1]), g)
         if alarm:
             return g > 0
         return g >= p.min_growth and abs(al.anisotropy) <= p.max_anisotropy * g \

@@ -176,6 +176,14 @@ class TargetParams(ParameterSet):
                              valid=Valid.real(minimum=0))
     max_ttc_s: float = param(10.0, "Longer times to contact are reported as None (no measurable approach).",
                              unit="s", valid=Valid.real(minimum=0))
+    young_ttc: bool = param(True, """A target whose history is still too short for a fit (under ``min_frames``) shows
+                            the time to contact of the fit over the observations it has and the growth its growth test
+                            measured over the ``change_frames`` before its birth (at least 3 points), when that fit
+                            passes the tests a time to contact must pass (``min_tstat``, ``max_ttc_s``, growth alike in
+                            both directions): ``ttc_s`` and ``ttc_sigma_s`` only, set once every decision of the frame
+                            is taken, so no warning, course, countdown or held time to contact rests on it
+                            (``warning.young``). False = no time to contact before ``min_frames`` (main's before
+                            session 46). On since session 46 (docs/history.md, "A young target's time to contact").""", valid=Valid.boolean())
     heading: tuple[float, float] | None = param(None, """Heading point (x, y): where the camera moves to (the
                                                 focus of expansion), in the pixels of the input, as every
                                                 output (``mlplc2.run`` and ``mlplc2 run --heading X,Y``: the
@@ -401,6 +409,16 @@ class TargetParams(ParameterSet):
                                 of a large object that fills the view (its course counted in the part's extent) misses by
                                 more than ``reonset_miss`` while the object hits. False = ``reonset_miss`` always (as until
                                 session 24).""", valid=Valid.boolean())
+    alarm_hold: bool = param(True, """A running warning goes on on every frame a field of its target is in collision
+                             alarm (the paper's fatal field) while the target has a time to contact (its fit's this
+                             frame or the one held, ``hold_frames``), whatever its course, through the border too
+                             (not ``cut_exit``), until it is spent (``countdown_frames``)
+                             (``warning.alarm_holds``): the box of a part of an object that fills the view misses, in
+                             the part's own extent, by more than the object, and its fit lapses as the box stretches,
+                             while the paper's alarm goes on to the contact. False = the alarm carries a running
+                             warning only through a frame without a fit, on a course within ``max_miss``
+                             (``through_alarm``; main's before session 46). On since session 46 (docs/history.md,
+                             "A warning held by the field alarm").""", valid=Valid.boolean())
     countdown_onset: bool = param(True, """With ``countdown_frames``: a warning begins only while the target's time to contact
                                   counts down: a frame whose ``ttc_s`` exceeds the one the target had ``countdown_frames``
                                   frames before (:func:`~mlplc2.targets.warning.rises`; by more than their standard

@@ -174,6 +174,7 @@ class Track:
     spent: bool = False                # its warning ended for good: its time to contact rose (``countdown_frames``)
     onset_cut: bool = False            # its warning began on a box cut by the border (``cut_exit``)
     motion: tuple | None = None        # its last measured move per clock unit: (dx, dy, log scale)
+    growth: tuple | None = None        # its growth test's (clock units back, log-scale grown since) at its birth (``young_ttc``)
     grown: bool = False                # made a target by the growth test, not a field alarm (``confirm_birth``)
     early: bool = False                # its streak began on its first fit after a growth test (``confirm_birth``)
     tries: int = 0                     # frames on which its history was long enough for a fit (``confirm_birth``)

@@ -20,7 +20,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "grew_alike", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "confirmed", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny",
+           "slow", "rising", "count_down", "confirmed", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny", "young", "alarm_holds",
            "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
@@ -498,6 +498,18 @@ def tiny(t: Track, p: TargetParams) -> bool:
     return min(t.w, t.h) < p.onset_px
 
 
+def alarm_holds(t: Track, p: TargetParams, now: float, ttc: float | None) -> bool:
+    """``alarm_hold``: whether the running warning of track ``t`` (it warned on its last frame, ``Track.last_warned``,
+    and its warning is not spent: its time to contact did not rise, ``countdown_frames``) goes on at clock ``now``: a
+    field of it is in collision alarm this frame (the paper's fatal field) and it has a time to contact ``ttc`` (this
+    frame's fit or the one held, :func:`held`), whatever its course. The target was judged on a collision course when
+    it began to warn; the box of a part of an object that fills the view (its course counted in the part's own extent)
+    then misses by more than the object, and its fit lapses as the box stretches, while the alarm goes on. A warning
+    that lapsed does not begin again so (that cost false warnings: docs/history.md, "A warning held by the field
+    alarm")."""
+    return p.alarm_hold and t.last_warned and not t.spent and t.last_alarm == now and ttc is not None
+
+
 def through(t: Track, p: TargetParams, fps: float, now: float, ttc: float | None, miss: float | None,
             view: bool = False) -> bool:
     """``warn_through`` (docs/history.md, "A warning held to contact"): whether track ``t``'s running warning goes on at
@@ -559,6 +571,41 @@ def _evident(t: Track, p: TargetParams, fps: float, now: float, heading: tuple[f
     return p.slow_evidence and slow(t, p, fps, now, interval) and rising(t, now - span)
 
 
+def _contact(t: Track, p: TargetParams, fit, fps: float, index: float) -> tuple[float, float] | None:
+    """The time to contact (s) of ``fit`` (a :class:`ContactFit` over track ``t``'s history, or None) and its standard
+    error, counted from clock ``index``, when it passes the tests a time to contact must pass: significant growth
+    (``min_tstat``), a contact within ``max_ttc_s`` and still ahead, and growth alike in both directions
+    (``max_anisotropy``: the ground ahead, or a wall beside the path, grows twice as fast in one direction, and a box
+    that slides over a moving edge stretches along the motion; none of them is an object approaching). None otherwise."""
+    if fit is None or fit.ttc is None or fit.tstat < p.min_tstat or fit.ttc / fps > p.max_ttc_s:
+        return None
+    growth = t.history[-1].log_scale - t.history[0].log_scale
+    skew = t.history[-1].anisotropy - t.history[0].anisotropy
+    # the fit's contact is counted from its newest observation: a frame whose measurement failed
+    # (``max_fails``) added none, and the contact is that much nearer
+    ago = index - t.history[-1].frame
+    if not (growth > 0 and abs(skew) <= p.max_anisotropy * growth) or fit.ttc <= ago:
+        return None
+    return (fit.ttc - ago) / fps, fit.sigma / fps
+
+
+def young(t: Track, p: TargetParams, fps: float, index: float, shape: tuple[int, int]) -> tuple[float, float] | None:
+    """``young_ttc``: the time to contact (s) and its standard error shown on track ``t`` at clock ``index`` while
+    its history is too short for a fit (:func:`fits`: under ``min_frames``): the line fit (:func:`fit_contact`) over
+    the observations it has and, while they begin at its birth, the growth its growth test measured before it
+    (``Track.growth``: the log-scale over ``change_frames``, a point that far back), at least ``MIN_POINTS`` points,
+    when it passes the tests of a fit's (:func:`_contact`). Shown only: no warning, course, countdown or held time
+    to contact rests on it. None otherwise, and on a box that fills a frame of ``shape`` (h, w) (:func:`spans_view`)."""
+    if not p.young_ttc or not t.history or fits(t.history, t.fit_span) or spans_view(t, p, shape):
+        return None
+    frames, scales = [q.frame for q in t.history], [q.log_scale for q in t.history]
+    if t.growth is not None and abs(frames[0] - t.birth) <= _EPS:
+        frames, scales = [frames[0] - t.growth[0], *frames], [scales[0] - t.growth[1], *scales]
+    if len(frames) < MIN_POINTS:
+        return None
+    return _contact(t, p, fit_contact(frames, scales), fps, index)
+
+
 def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int, int],
              focal: float | None = None, heading: tuple[float, float] | None = None,
              interval: float | None = None, heading_steady: bool = False) -> Target:
@@ -582,20 +629,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     view = t.last_warned and spans_view(t, p, shape)  # view_hold: a warning over the view (its growth not the object's)
     fit = None if view or not fits(t.history, t.fit_span) else fit_contact(frames, [q.log_scale for q in t.history])
     t.tries += fit is not None
-    # an approaching object grows alike in both directions; the ground ahead (or a wall beside
-    # the path) grows twice as fast in one, and a box that slides over a moving edge stretches
-    # along the motion: none of them is an object approaching, none gets a time to contact
-    isotropic = True
-    if fit is not None and fit.ttc is not None:
-        growth = t.history[-1].log_scale - t.history[0].log_scale
-        skew = t.history[-1].anisotropy - t.history[0].anisotropy
-        isotropic = growth > 0 and abs(skew) <= p.max_anisotropy * growth
-    # the fit's contact is counted from its newest observation: a frame whose measurement failed
-    # (``max_fails``) added none, and the contact is that much nearer
-    ago = index - t.history[-1].frame if t.history else 0.0
-    if isotropic and fit is not None and fit.ttc is not None and fit.tstat >= p.min_tstat \
-            and fit.ttc / fps <= p.max_ttc_s and fit.ttc > ago:
-        ttc, sigma = (fit.ttc - ago) / fps, fit.sigma / fps
+    found = _contact(t, p, fit, fps, index)
+    if found is not None:
+        ttc, sigma = found
         miss_xy = course(t, heading, fit.ttc, t.fit_span, yaw=p.course_yaw and heading_steady)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
@@ -677,11 +713,15 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... or begins on the time to contact held, after a long streak of fits (held_onset)
     if not warning and not began and held_onset(t, p, index, ttc, miss, shape, measured):
         warning = t.warned = True
+    # ... goes on while a field of it is in collision alarm and it has a time to contact, whatever its course (alarm_hold)
+    if not warning and began and alarm_holds(t, p, index, ttc):
+        warning = True
     # ... goes on through frames without a fit, on the time to contact held (warn_through; over the view, view_hold)
     if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss, view):
         warning = True
-    # ... goes on while cut by the border off the heading only on a course through its box (cut_exit)
-    if warning and began and exits(t, p, shape, heading, miss):
+    # ... goes on while cut by the border off the heading only on a course through its box (cut_exit), or while a
+    # field of it is in collision alarm (alarm_hold)
+    if warning and began and exits(t, p, shape, heading, miss) and not (p.alarm_hold and t.last_alarm == index):
         warning = False
     # ... and goes on only while its time to contact counts down (countdown_frames)
     if warning and began and rises(t, p, fps, index, ttc, sigma):
