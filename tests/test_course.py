@@ -1328,7 +1328,7 @@ def test_a_running_warning_goes_on_through_a_fit_that_lapses_on_its_course_while
     alarmed = _lapsing_beside(p, alarm=True)
     assert all(o.warning for o in alarmed)                             # held on the alarm's evidence
     assert all(o.ttc_s is not None and o.miss == pytest.approx(quiet[0].miss, abs=0.05) for o in alarmed)
-    off = _lapsing_beside(TargetParams(through_alarm=False), alarm=True)
+    off = _lapsing_beside(TargetParams(through_alarm=False, alarm_hold=False), alarm=True)
     assert [o.warning for o in off] == [o.warning for o in quiet]      # as until session 24
 
 

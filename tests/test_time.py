@@ -300,15 +300,15 @@ def _square_approach(fps_step, contact, offset=0.0, n=None):
 def test_a_slow_camera_warns_from_its_first_time_to_contact():
     """A square 0.67 s (20 intervals at 30 fps) from contact, straight at the camera: at 30 fps its target warns
     at clock 13 (first time to contact at 8, a streak of estimates over 5 intervals: ``confirm_frames``); a
-    7.5 fps camera's first time to contact comes at 12 (3 frames, 0.27 s before contact) and a streak would
-    need 2 more of its frames, past contact. Its log-scale rising at every frame over that span is the
-    evidence (``slow_evidence``): it warns at 12, by the first of its frames after the 30 fps warning, before
-    contact (without: no warning before contact)."""
+    7.5 fps camera's first fit (a time to contact with a course; ``young_ttc`` shows one sooner, without a
+    course) comes at 12 (3 frames, 0.27 s before contact) and a streak would need 2 more of its frames, past
+    contact. Its log-scale rising at every frame over that span is the evidence (``slow_evidence``): it warns at
+    12, by the first of its frames after the 30 fps warning, before contact (without: no warning before contact)."""
     fast, _ = _square_approach(1, 20)
     slow, seen = _square_approach(4, 20)
     assert fast is not None and fast < 20
     assert slow is not None and slow < 20 and slow <= fast + 4, (fast, slow)
-    estimates = [t for t, o in seen if o.ttc_s is not None]
+    estimates = [t for t, o in seen if o.miss is not None]     # the fit's (``young_ttc`` shows one sooner, no course)
     assert estimates and slow == estimates[0]           # on its first time to contact
 
 
@@ -319,6 +319,6 @@ def test_a_slow_camera_first_course_within_max_miss_begins_a_warning():
     have fallen from (``onset_miss`` holds a passing object's course as it falls through ``max_miss``):
     ``slow_onset`` lets it begin the warning there, before contact (without: none before contact)."""
     slow, seen = _square_approach(4, 20, offset=0.9)
-    first = next((t, o) for t, o in seen if o.ttc_s is not None)
+    first = next((t, o) for t, o in seen if o.miss is not None)   # the first fit's (``young_ttc``'s has no course)
     assert first[0] == 12 and 0.8 < first[1].miss <= 1.0, first
     assert slow == 12
