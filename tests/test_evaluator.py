@@ -1290,14 +1290,15 @@ def test_results_folder_scores_like_the_run_result(tmp_path):
 
 
 def test_results_folder_with_a_targets_csv_from_before_ttc_age_s_scores_alike(tmp_path):
-    """A ``targets.csv`` written before its ``ttc_age_s`` column (the last one) loads and scores as a new one."""
-    assert TARGET_COLUMNS[-1] == "ttc_age_s"
+    """A ``targets.csv`` written before its ``ttc_age_s`` and ``ttc_sigma_s`` columns (the last ones) loads and
+    scores as a new one."""
+    assert TARGET_COLUMNS[-2:] == ("ttc_age_s", "ttc_sigma_s")
     gt, targets = _case()
     res = result("a.mp4", 30, targets=targets)
     _write_folder(tmp_path / "new", res)
     _write_folder(tmp_path / "old", res)
     with open(tmp_path / "old" / "targets.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=TARGET_COLUMNS[:-1], extrasaction="ignore", lineterminator="\n")
+        w = csv.DictWriter(f, fieldnames=TARGET_COLUMNS[:-2], extrasaction="ignore", lineterminator="\n")
         w.writeheader()
         w.writerows(res.targets)
     old, new = evaluate(tmp_path / "old", gt), evaluate(tmp_path / "new", gt)

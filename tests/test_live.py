@@ -624,11 +624,12 @@ def _disc_hidden_for_three_frames(n=42):
     return [np.repeat(img[:, :, None], 3, axis=2) for img in disc_with_gap(n=n)]
 
 
-def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):
-    """``ttc_age_s`` in the JSON lines (``mlplc2.stream``) and in ``targets.csv`` (its last column): 0 on a
-    frame whose fit measured ``ttc_s``; on the frames after the occlusion, where the time to contact shown is
-    the one measured before it counted down, the time since that frame (whole frames at 30 frames/s), and
-    ``ttc_s`` is the one shown then less it; null (empty) without ``ttc_s``. The lines and the file agree."""
+def test_each_target_says_how_old_its_time_to_contact_is_and_how_sure(tmp_path):
+    """``ttc_age_s`` in the JSON lines (``mlplc2.stream``) and in ``targets.csv`` (its last columns, with
+    ``ttc_sigma_s``): 0 on a frame whose fit measured ``ttc_s``; on the frames after the occlusion, where the time
+    to contact shown is the one measured before it counted down, the time since that frame (whole frames at 30
+    frames/s), and ``ttc_s`` is the one shown then less it, with that fit's standard error; null (empty) without
+    ``ttc_s``, and the standard error a positive fraction of ``ttc_s`` with it. The lines and the file agree."""
     import csv
 
     from mlplc2.evaluation.record import TargetRow
@@ -639,7 +640,7 @@ def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):
     mlplc2.run(clip, ["mlplc2"], out=tmp_path / "o", repeat_threshold=None, quiet=True)
     with open(tmp_path / "o" / "targets.csv", newline="") as f:
         reader = csv.DictReader(f)
-        assert reader.fieldnames[-1] == "ttc_age_s"
+        assert reader.fieldnames[-2:] == ["ttc_age_s", "ttc_sigma_s"]
         rows = {(int(r["frame"]), int(r["target_id"])): r for r in reader}
     shown = {}                                    # (frame, id): the JSON target
     for line in lines:
@@ -648,6 +649,10 @@ def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):
             row = rows[line["frame"], t["id"]]
             assert row["ttc_age_s"] == ("" if t["ttc_age_s"] is None else str(t["ttc_age_s"]))
             assert TargetRow.from_row(row).ttc_age_s == t["ttc_age_s"]
+            assert (t["ttc_s"] is None) == (t["ttc_sigma_s"] is None)
+            assert row["ttc_sigma_s"] == ("" if t["ttc_sigma_s"] is None else str(t["ttc_sigma_s"]))
+            if t["ttc_s"] is not None:
+                assert 0 < t["ttc_sigma_s"] < t["ttc_s"]
             shown[line["frame"], t["id"]] = t
     held = []
     for (k, tid), t in shown.items():
@@ -656,19 +661,21 @@ def test_each_target_says_how_old_its_time_to_contact_is(tmp_path):
             assert t["ttc_age_s"] == pytest.approx(ago / 30, abs=1e-4) and ago >= 1
             then = shown[k - ago, tid]                # the frame of the fit it was held from
             assert then["ttc_age_s"] == 0.0 and t["ttc_s"] == pytest.approx(then["ttc_s"] - t["ttc_age_s"], abs=2e-4)
+            assert t["ttc_sigma_s"] == then["ttc_sigma_s"]
             held.append(k)
     assert held and set(held) <= set(range(33, 42))   # only after the occlusion
     assert sum(t["ttc_age_s"] == 0.0 for t in shown.values()) > 20
 
 
 def test_a_targets_csv_written_before_ttc_age_s_still_loads():
-    """An older ``targets.csv`` has no ``ttc_age_s`` column: its rows read with no age."""
+    """An older ``targets.csv`` has no ``ttc_age_s`` or ``ttc_sigma_s`` column: its rows read with neither."""
     from mlplc2.evaluation.record import TargetRow
 
     old = {"frame": "5", "model": "mlplc2", "target_id": "2", "x": "10.5", "y": "20", "width": "8", "height": "8",
            "ttc_s": "0.75", "miss": "0.1", "warning": "1", "fields": "3 4", "azimuth_deg": "", "elevation_deg": ""}
     row = TargetRow.from_row(old)
-    assert (row.id, row.ttc_s, row.warning, row.fields, row.ttc_age_s) == (2, 0.75, True, (3, 4), None)
+    assert (row.id, row.ttc_s, row.warning, row.fields, row.ttc_age_s, row.ttc_sigma_s) == (2, 0.75, True, (3, 4), None,
+                                                                                            None)
     assert TargetRow.from_row(dict(old, ttc_age_s="0.0333")).ttc_age_s == pytest.approx(1 / 30, abs=1e-4)
     assert TargetRow.from_row(dict(old, ttc_s="", ttc_age_s="")).ttc_age_s is None
 
@@ -678,6 +685,7 @@ def test_a_targets_csv_row_reads_back_every_cell_it_was_written_with():
     from mlplc2.evaluation.record import TargetRow
 
     row = {"x": "10.5", "y": "20.0", "width": "8.0", "height": "6.0", "ttc_s": "0.75", "miss": "0.1", "warning": "1",
-           "fields": "3 4", "azimuth_deg": "12.5", "elevation_deg": "-3.25", "ttc_age_s": "0.0333"}
+           "fields": "3 4", "azimuth_deg": "12.5", "elevation_deg": "-3.25", "ttc_age_s": "0.0333",
+           "ttc_sigma_s": "0.0412"}
     again = TargetRow.from_row(dict(row, frame="5", model="mlplc2", target_id="2")).values()
     assert {k: ("" if v is None else str(v)) for k, v in again.items()} == row

@@ -98,6 +98,33 @@ def test_header_is_on_a_box_and_scales_with_the_frame(level):
     assert 2.5 <= heights[(1280, 720)] / heights[(320, 240)] <= 3.5, heights
 
 
+def test_a_header_wider_than_the_frame_is_written_smaller_to_fit_it():
+    """A 160x120 frame is narrower than the header of a warning model in alarm at the frame's own font size: the
+    header is written smaller, so its box ends inside the frame with its padding clear (the text not cut by the
+    edge), still with text in it; a header that fits keeps its size."""
+    from mlplc2.targets import Target
+
+    def header_box(size, targets):
+        w, h = size
+        frame = np.full((h, w, 3), 255, np.uint8)
+        out = Output(0, 9.0, (_field(collision=True),), collision=True, targets=targets)
+        img = annotate_frame(frame, [out], ["mlplc2"], draw_fields="none")
+        red = np.all(img[: h // 4] == ALARM_RGB, axis=2)
+        rows = np.nonzero(red.sum(axis=1) > 5)[0]
+        cols = np.nonzero(red[rows].any(axis=0))[0]
+        return img[rows[0]:rows[-1] + 1, cols[0]:cols[-1] + 1], cols[-1], w
+
+    long = (Target(12, 20.0, 100.0, 8.0, 8.0, ttc_s=0.53, miss=0.4, warning=True),
+            Target(13, 140.0, 100.0, 8.0, 8.0, ttc_s=0.61, miss=0.2, warning=True))
+    box, right, w = header_box((160, 120), long)
+    assert right < w - 1                                   # the box ends inside the frame ...
+    assert np.all(box[:, -2:] == ALARM_RGB)                # ... and no letter runs into its right edge
+    assert (~np.all(box == ALARM_RGB, axis=2)).sum() > 50  # the text is there
+    small_h = box.shape[0]
+    box, _, _ = header_box((320, 120), long)               # the same height, room for the whole header
+    assert box.shape[0] > small_h
+
+
 def test_header_rows_do_not_overlap_and_field_labels_avoid_them():
     frame = np.full((240, 320, 3), 255, np.uint8)
     f = _field(x=40, y=40, radius=20, response=9.0)  # its label would sit on the header

@@ -337,7 +337,8 @@ class _Labels:
     A label is ``text`` in black or white on a filled ``bg`` box. ``add`` takes candidate
     positions, each ``(x, y, anchor)`` with ``anchor`` "top" (``(x, y)`` is the box's
     top-left corner) or "bottom" (its bottom-left corner), and uses the first one whose box,
-    moved inside the frame, overlaps no earlier label (else the first one).
+    moved inside the frame, overlaps no earlier label (else the first one). A label wider than
+    the frame is written smaller, to fit it.
     """
 
     def __init__(self, img: np.ndarray, style: _Style):
@@ -346,14 +347,24 @@ class _Labels:
         self._cv2 = cv2
         self.img = img
         self.style = style
-        self.items: list[tuple[str, tuple, tuple[int, int, int, int], int]] = []
+        self.items: list[tuple[str, tuple, tuple[int, int, int, int], int, float]] = []
 
-    def size(self, text: str) -> tuple[int, int, int]:
-        """``(width, height, text height)`` of the box of ``text``."""
+    def size(self, text: str, font_scale: float | None = None) -> tuple[int, int, int]:
+        """``(width, height, text height)`` of the box of ``text`` (at the style's font scale, or ``font_scale``)."""
         st = self.style
-        (tw, th), base = self._cv2.getTextSize(text, self._cv2.FONT_HERSHEY_SIMPLEX, st.font_scale,
-                                               st.text_thickness)
+        (tw, th), base = self._cv2.getTextSize(text, self._cv2.FONT_HERSHEY_SIMPLEX,
+                                               st.font_scale if font_scale is None else font_scale, st.text_thickness)
         return tw + 2 * st.pad, th + base + 2 * st.pad, th
+
+    def _fit(self, text: str) -> tuple[int, int, int, float]:
+        """The box of ``text`` and its font scale: the style's, or smaller where the box would be wider than the frame."""
+        scale = self.style.font_scale
+        bw, bh, th = self.size(text)
+        w = self.img.shape[1]
+        while bw > w and scale > 0.1:
+            scale *= max(min((w - 2 * self.style.pad) / max(bw - 2 * self.style.pad, 1), 0.95), 0.1)
+            bw, bh, th = self.size(text, scale)
+        return bw, bh, th, scale
 
     def _box(self, x: float, y: float, anchor: str, bw: int, bh: int) -> tuple[int, int, int, int]:
         h, w = self.img.shape[:2]
@@ -363,7 +374,7 @@ class _Labels:
 
     def add(self, text: str, bg, *candidates: tuple[float, float, str]) -> tuple[int, int, int, int]:
         """Place one label (see the class docstring); returns its box ``(x0, y0, x1, y1)``."""
-        bw, bh, th = self.size(text)
+        bw, bh, th, scale = self._fit(text)
         boxes = [self._box(x, y, anchor, bw, bh) for x, y, anchor in candidates]
         box = next((b for b in boxes if not self._hits(b)), None)
         if box is None:  # every candidate hides a label: the first one, moved down below them
@@ -375,19 +386,19 @@ class _Labels:
                 box = self._box(box[0], max(o[3] for o in hits) + self.style.gap, "top", bw, bh)
             if self._hits(box):
                 box = boxes[0]
-        self.items.append((text, tuple(int(c) for c in bg), box, th))
+        self.items.append((text, tuple(int(c) for c in bg), box, th, scale))
         return box
 
     def _hits(self, box) -> list[tuple[int, int, int, int]]:
         """The boxes of the labels placed so far that ``box`` overlaps."""
-        return [other for _, _, other, _ in self.items if _overlap(box, other)]
+        return [other for _, _, other, _, _ in self.items if _overlap(box, other)]
 
     def draw(self) -> None:
         cv2, st = self._cv2, self.style
-        for text, bg, (x0, y0, x1, y1), th in self.items:
+        for text, bg, (x0, y0, x1, y1), th, scale in self.items:
             cv2.rectangle(self.img, (x0, y0), (x1 - 1, y1 - 1), bg, cv2.FILLED)
             cv2.putText(self.img, text, (x0 + st.pad, y0 + st.pad + th), cv2.FONT_HERSHEY_SIMPLEX,
-                        st.font_scale, _text_on(bg), st.text_thickness, cv2.LINE_AA)
+                        scale, _text_on(bg), st.text_thickness, cv2.LINE_AA)
 
 
 def _overlap(a, b) -> bool:

@@ -121,11 +121,12 @@ class TargetRow:
     azimuth_deg: float | None = None
     elevation_deg: float | None = None
     ttc_age_s: float | None = None
+    ttc_sigma_s: float | None = None
 
     @classmethod
     def from_row(cls, r) -> "TargetRow":
         """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``): every cell
-        :meth:`values` writes; a file written before ``ttc_age_s`` (no such column) reads as None."""
+        :meth:`values` writes; a file written before ``ttc_age_s`` or ``ttc_sigma_s`` (no such column) reads as None."""
         def num(v):
             return None if v in (None, "") else float(v)
 
@@ -133,14 +134,16 @@ class TargetRow:
         return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
                    num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
                    tuple(int(v) for v in str(fields).split()), azimuth_deg=num(r.get("azimuth_deg")),
-                   elevation_deg=num(r.get("elevation_deg")), ttc_age_s=num(r.get("ttc_age_s")))
+                   elevation_deg=num(r.get("elevation_deg")), ttc_age_s=num(r.get("ttc_age_s")),
+                   ttc_sigma_s=num(r.get("ttc_sigma_s")))
 
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
         return {"x": _px(self.x), "y": _px(self.y), "width": _px(self.width), "height": _px(self.height),
                 "ttc_s": _opt4(self.ttc_s), "miss": _opt4(self.miss), "warning": int(bool(self.warning)),
                 "fields": " ".join(map(str, self.fields)), "azimuth_deg": _opt4(self.azimuth_deg),
-                "elevation_deg": _opt4(self.elevation_deg), "ttc_age_s": _opt4(self.ttc_age_s)}
+                "elevation_deg": _opt4(self.elevation_deg), "ttc_age_s": _opt4(self.ttc_age_s),
+                "ttc_sigma_s": _opt4(self.ttc_sigma_s)}
 
 
 @dataclass
@@ -306,7 +309,7 @@ class Recorder:
         x1, y1 = self.to_input(t.x + t.width, t.y + t.height)
         return TargetRow(t.id, float(x), float(y), float(x1 - x), float(y1 - y), t.ttc_s, t.miss, bool(t.warning),
                          tuple(t.fields), getattr(t, "azimuth_deg", None), getattr(t, "elevation_deg", None),
-                         getattr(t, "ttc_age_s", None))
+                         getattr(t, "ttc_age_s", None), getattr(t, "ttc_sigma_s", None))
 
     def _update_targets(self, index: int, rec: Record, name: str, rows: list[TargetRow]) -> None:
         """Per target: life, frames, first estimate and first warning (with the estimate then)."""

@@ -24,7 +24,8 @@ __all__ = ["SCHEMA", "frame_record", "CsvFile", "JsonLines", "Latency"]
 SCHEMA = 1
 
 #: The cells of a ``targets.csv`` row a JSON line's target carries (besides ``model`` and ``id``).
-_TARGET_KEYS = ("x", "y", "width", "height", "ttc_s", "miss", "azimuth_deg", "elevation_deg", "ttc_age_s")
+_TARGET_KEYS = ("x", "y", "width", "height", "ttc_s", "miss", "azimuth_deg", "elevation_deg", "ttc_age_s",
+               "ttc_sigma_s")
 
 
 def frame_record(index: int, time_s: float, skipped: int, models, outputs, target_rows, *,

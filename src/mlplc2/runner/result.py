@@ -17,9 +17,10 @@ __all__ = ["RunResult", "RunInterrupted", "COLUMNS", "TARGET_COLUMNS"]
 #: Columns of ``responses.csv``, in order.
 COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collision")
 #: Columns of ``targets.csv``, in order (``docs/targets.md``): positions and sizes in input pixels,
-#: the bearing in degrees (empty without a field of view), the age of ``ttc_s`` in s (0: measured this frame).
+#: the bearing in degrees (empty without a field of view), the age of ``ttc_s`` in s (0: measured this frame),
+#: its standard error in s.
 TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
-                  "azimuth_deg", "elevation_deg", "ttc_age_s")
+                  "azimuth_deg", "elevation_deg", "ttc_age_s", "ttc_sigma_s")
 
 
 class RunInterrupted(KeyboardInterrupt):
