@@ -203,6 +203,36 @@ def test_a_warning_is_held_back_where_a_passing_box_leaves_through_the_border_be
     assert not exits(hit, on, SHAPE, heading, 0.75)
 
 
+def test_the_field_alarm_waives_the_border_only_where_it_holds_the_warning():
+    # alarm_hold waives cut_exit where it holds a running warning (a field of the target alarms and it has a time to
+    # contact), not on any frame a field of it alarms: the static world of the test above, its field alarming from the
+    # frame its box is cut on, warns on to the end (held); alarming only from the frame after, its warning has lapsed
+    # on the cut frame, and the alarm does not begin it again on a box that leaves through the border beside the
+    # path (until session 47 it did: the alarm waived cut_exit whatever the warning)
+    heading = ((SHAPE[1] - 1) / 2.0, (SHAPE[0] - 1) / 2.0)
+    p = TargetParams(alarm_warns=False)
+
+    def run(alarm_from):
+        seen = []
+
+        def each(t, k):
+            if k >= alarm_from:
+                t.last_alarm = k
+            seen.append((k, t.cut(SHAPE, p.border), estimate(t, p, FPS, k, SHAPE)))
+        _looming(heading[0] - 15.0, 19, contact=24, static=True, each=each)
+        return seen
+
+    quiet = run(10 ** 6)
+    first = min(k for k, _, o in quiet if o.warning)
+    cut = min(k for k, c, _ in quiet if c)
+    assert first < cut < quiet[-1][0] and not any(o.warning for k, _, o in quiet if k >= cut)
+    held = run(cut)
+    assert all(o.warning and o.ttc_s is not None for k, _, o in held if k >= first)
+    late = run(cut + 1)
+    assert all(o.warning for k, _, o in late if first <= k < cut)
+    assert not any(o.warning for k, _, o in late if k >= cut)
+
+
 def test_border_zero_still_cuts_a_box_past_the_edge():
     p = TargetParams(border=0.0)
     t = Track(1, 0, 5.0, 60.0, 20.0, 20.0)

@@ -719,9 +719,9 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... goes on through frames without a fit, on the time to contact held (warn_through; over the view, view_hold)
     if not warning and began and t.last_warned and through(t, p, fps, index, ttc, miss, view):
         warning = True
-    # ... goes on while cut by the border off the heading only on a course through its box (cut_exit), or while a
-    # field of it is in collision alarm (alarm_hold)
-    if warning and began and exits(t, p, shape, heading, miss) and not (p.alarm_hold and t.last_alarm == index):
+    # ... goes on while cut by the border off the heading only on a course through its box (cut_exit), or while the
+    # field alarm holds it (alarm_hold: a field of it in collision alarm, a time to contact)
+    if warning and began and exits(t, p, shape, heading, miss) and not alarm_holds(t, p, index, ttc):
         warning = False
     # ... and goes on only while its time to contact counts down (countdown_frames)
     if warning and began and rises(t, p, fps, index, ttc, sigma):
