@@ -276,3 +276,27 @@ def test_the_replicate_comparison_holds_a_first_warning_the_same_within_two_fram
     alarm_a = {("drive_0_h1.mkv", 7): {"alarm_frame": 20}, ("drive_1_h1.mkv", 7): {"alarm_frame": None}}
     alarm_b = {("drive_0_h1.mkv", 7): {"alarm_frame": 19}, ("drive_1_h1.mkv", 7): {"alarm_frame": 31}}
     assert rep.stability([(alarm_a, alarm_b)], key="alarm_frame")["drive"] == {"n": 2, "same": 1, "none": 0, "one": 1, "moved": []}
+
+
+def test_the_sigma_check_counts_estimates_within_two_sigma_of_the_truth(tmp_path):
+    """``benchmarks/ttc_sigma.py``: the truth of a scene folder's colliders (0-3 s only, the first collider alive),
+    and the summary line: errors, the median sigma and the share of estimates within 2 sigma of the truth."""
+    import json
+
+    sig = _module("ttc_sigma")
+    cols = ["frame", "x", "y", "width", "height", "ttc_s", "miss"]
+    gt = {"videos": {"drive_0.mkv": {"objects": [
+        {"kind": "pass", "track_columns": cols, "track": [[5, 1.0, 1.0, 4.0, 4.0, 0.5, 3.0]]},
+        {"kind": "collision", "track_columns": cols, "track": [[5, 40.0, 30.0, 8.0, 8.0, 3.5, 0.1],
+                                                                [6, 41.0, 31.0, 9.0, 9.0, 1.0, 0.1]]}]},
+        "plain_static_0.mkv": {"objects": []}}}
+    (tmp_path / "ground_truth.json").write_text(json.dumps(gt))
+    (setting, path, truth), = list(sig._scenes(tmp_path))           # the scene without a collider is left out
+    assert setting == "drive" and path == tmp_path / "drive_0.mkv"
+    assert truth(5) is None                                          # 3.5 s: beyond 3 s
+    assert truth(6) == (41.0, 31.0, 1.0) and truth(7) is None
+    rows = [(1.1, 0.1, 1.0), (1.0, 0.1, 1.0), (0.5, 0.1, 1.0), (2.0, 0.2, 1.0)]   # |z| 1, 0, 5, 5
+    line = sig._line("drive", rows)
+    assert "rows     4" in line and "within 2 sigma 50%" in line and "median |z| 3.0" in line
+    assert "median sigma 0.100 s" in line and "median error 0.300 s (30.0%)" in line
+
