@@ -817,6 +817,19 @@ def test_a_one_frame_video_says_that_no_model_could_respond(tmp_path, capsys, n)
     assert captured.out.startswith(f"{n} frame{'s' if n > 1 else ''} of "), captured.out
 
 
+def test_cli_says_when_the_frames_are_smaller_than_the_defaults_were_set_for(tmp_path, capsys):
+    """A 160x120 clip: a note on stderr that the models saw frames narrower than the 320 px the defaults were set
+    at (a new user's trial, session 47: such copies of two real clips never warned); none at 320x240 (the
+    size measured), at 160x120 scaled by 2 (what the models see), or with --quiet."""
+    small = write_video(tmp_path / "small.avi", noise_frames(4, 160, 120), 30.0)
+    big = write_video(tmp_path / "big.avi", noise_frames(4, 320, 240), 30.0)
+    for source, extra, noted in [(small, [], True), (small, ["--quiet"], False), (big, [], False),
+                                 (small, ["--scale", "2"], False)]:
+        assert main(["run", str(source), "--out", str(tmp_path / "o"), "--model", "mlplc2", *extra]) == 0
+        err = capsys.readouterr().err
+        assert ("the models saw 160x120 frames, narrower than the 320 px" in err) == noted, (source.name, extra)
+
+
 @pytest.mark.parametrize("n", [1, 2])
 def test_cli_one_and_two_frame_videos_are_valid(tmp_path, capsys, n):
     """One frame has no motion (every model at rest) but is a valid input: exit 0, all outputs."""
@@ -1065,12 +1078,12 @@ def test_one_decision_on_repeated_frames(tmp_path, capsys):
     assert cli.main(["run", str(plain), "-m", "mlplc2,lgmd2", "--out", str(tmp_path / "p")]) == 0
     summary = json.loads((tmp_path / "p" / "fields.json").read_text())
     assert summary["frames_held"] == {"mlplc2": 0, "lgmd2": 0} and summary["duplicated"] is False
-    assert "note:" not in capsys.readouterr().err
+    assert "note: the video repeats" not in capsys.readouterr().err
     # --every-frame: no model is left to find out, so there is no decision (null) and no note
     assert cli.main(["run", str(late), "-m", "mlplc2", "--every-frame", "--out", str(tmp_path / "e")]) == 0
     summary = json.loads((tmp_path / "e" / "fields.json").read_text())
     assert summary["duplicated"] is None and summary["frames_held"] == {"mlplc2": 0}
-    assert "note:" not in capsys.readouterr().err
+    assert "note: the video repeats" not in capsys.readouterr().err
 
 
 def test_a_file_read_live_is_prescanned_frame_by_frame(tmp_path, capsys, monkeypatch):
