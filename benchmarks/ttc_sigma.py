@@ -6,11 +6,15 @@ Were ``ttc_sigma_s`` the error's standard deviation, about 95 % of the rows woul
 
 ``--real DIR``: the labelled real clips (``DIR/ground_truth.json``, ``"clips"``; the paper's UAV clips under
 ``DIR/../paper`` too): the true time to contact is ``(contact_frame - frame) / fps``, the centre the labelled track's,
-interpolated. ``--scenes DIR``: a benchmark's scene folder (``OUT/scenes`` of ``mlplc2 benchmark``, its
+interpolated; with ``--growth``, the time to contact of the labelled boxes' own expansion instead (their width over
+its growth a second, across the 8 frames about the frame, interpolated between the labelled frames): a label's
+contact is where the object touches the vehicle or fills the view, which comes before the contact with the camera's
+plane that an expansion measures (``car_attack``: the car passes over the camera; ``night_rear_end``: it hits the
+car's rear, behind the camera). ``--scenes DIR``: a benchmark's scene folder (``OUT/scenes`` of ``mlplc2 benchmark``, its
 ``ground_truth.json``, ``"videos"``): the renderer's exact ``ttc_s`` and centre of each collider, 0-3 s. Each video
 is run as ``mlplc2.stream`` runs it (the defaults; ``--hfov`` given to every video of ``--scenes``).
 
-    python benchmarks/ttc_sigma.py --real ../shared/data/real
+    python benchmarks/ttc_sigma.py --real ../shared/data/real [--growth]
     python benchmarks/ttc_sigma.py --scenes bench/scenes [--hfov 90]
 
 Prints per clip (``--real``) or per setting (``--scenes``): rows, median absolute error (s) and median relative
@@ -44,7 +48,7 @@ def _rows(path: Path, truth, hfov: float | None) -> list[tuple[float, float, flo
     return out
 
 
-def _real(root: Path):
+def _real(root: Path, growth: bool = False):
     clips = json.loads((root / "ground_truth.json").read_text())["clips"]
     for key, v in clips.items():
         if v["label"] != "collision":
@@ -58,9 +62,18 @@ def _real(root: Path):
         def truth(f, track=track, fps=fps, contact=contact):
             if f >= contact or not track[0, 0] <= f <= track[-1, 0]:
                 return None
-            return (float(np.interp(f, track[:, 0], track[:, 1])), float(np.interp(f, track[:, 0], track[:, 2])),
-                    (contact - f) / fps)
+            x, y = float(np.interp(f, track[:, 0], track[:, 1])), float(np.interp(f, track[:, 0], track[:, 2]))
+            if not growth:
+                return x, y, (contact - f) / fps
+            if not (track[0, 0] <= f - GROWTH_SPAN / 2 and f + GROWTH_SPAN / 2 <= track[-1, 0]):
+                return None
+            w0, w, w1 = (float(np.interp(g, track[:, 0], track[:, 3])) for g in (f - GROWTH_SPAN / 2, f, f + GROWTH_SPAN / 2))
+            return (x, y, w * GROWTH_SPAN / fps / (w1 - w0)) if w1 > w0 else None
         yield key, path, truth
+
+
+#: ``--growth``: the frames across which a labelled box's expansion is measured
+GROWTH_SPAN = 8
 
 
 def _scenes(root: Path):
@@ -97,10 +110,14 @@ def main(argv=None) -> None:
     ap.add_argument("--real", type=Path, help="the labelled real clips' folder (../shared/data/real)")
     ap.add_argument("--scenes", type=Path, help="a benchmark's scene folder (OUT/scenes)")
     ap.add_argument("--hfov", type=float, default=None, help="field of view given with --scenes (degrees)")
+    ap.add_argument("--growth", action="store_true",
+                    help="with --real: the labelled boxes' expansion as the truth, not the labelled contact")
     args = ap.parse_args(argv)
     if (args.real is None) == (args.scenes is None):
         ap.error("give one of --real DIR and --scenes DIR")
-    source = _real(args.real) if args.real else _scenes(args.scenes)
+    if args.growth and args.real is None:
+        ap.error("--growth goes with --real")
+    source = _real(args.real, args.growth) if args.real else _scenes(args.scenes)
     groups: dict[str, list] = {}
     for label, path, truth in source:
         groups.setdefault(label, []).extend(_rows(path, truth, None if args.real else args.hfov))

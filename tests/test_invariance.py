@@ -299,4 +299,16 @@ def test_the_sigma_check_counts_estimates_within_two_sigma_of_the_truth(tmp_path
     line = sig._line("drive", rows)
     assert "rows     4" in line and "within 2 sigma 50%" in line and "median |z| 3.0" in line
     assert "median sigma 0.100 s" in line and "median error 0.300 s (30.0%)" in line
+    # --real: the labelled contact, or (--growth) the labelled boxes' own expansion: a box 13 -> 17 px wide over the
+    # 8 frames about frame 10 (15 px there) at 10 frames/s grows 5 px/s: 3.0 s, where the contact label says 2.0 s
+    real = tmp_path / "real"
+    real.mkdir()
+    (real / "a.mp4").write_bytes(b"")
+    clip = {"label": "collision", "fps": 10.0, "contact_frame": 30, "track": [[0, 10.0, 12.0, 10.0], [20, 30.0, 12.0, 20.0]]}
+    (real / "ground_truth.json").write_text(json.dumps({"clips": {"a.mp4": clip, "b.mp4": clip}}))   # b.mp4 absent
+    (key, path, contact), = list(sig._real(real))
+    (_, _, growth), = list(sig._real(real, growth=True))
+    assert key == "a.mp4" and path == real / "a.mp4"
+    assert contact(10) == pytest.approx((20.0, 12.0, 2.0)) and contact(30) is None and contact(21) is None
+    assert growth(10) == pytest.approx((20.0, 12.0, 3.0)) and growth(2) is None     # its 8 frames not all labelled
 
