@@ -188,6 +188,11 @@ def _report_interrupt(exc) -> int:
     return EXIT_INTERRUPTED
 
 
+#: :func:`_print_run_summary`'s note: frames narrower than this (px) are smaller than the defaults were set for (a new
+#: user's trial, session 47: 160x120 copies of night_rear_end and sudden_turning_vehicle never warned)
+SMALL_WIDTH = 240
+
+
 def _print_run_summary(args, result) -> None:
     w, h = result.size
     mw, mh = result.model_size
@@ -248,11 +253,6 @@ def _print_run_summary(args, result) -> None:
         print(f"{PROG}: note: the models saw {w}x{h} frames, narrower than the {WORK_WIDTH} px their defaults were set "
               f"and measured at: an object covers fewer pixels and its growth is measured less well, so a warning may "
               f"come late or not at all (docs/cli.md, --scale)", file=sys.stderr)
-
-
-#: :func:`_print_run_summary`'s note: frames narrower than this (px) are smaller than the defaults were set for (a new
-#: user's trial, session 47: 160x120 copies of night_rear_end and sudden_turning_vehicle never warned)
-SMALL_WIDTH = 240
 
 
 # ---------------------------------------------------------------------------
