@@ -195,6 +195,26 @@ def test_warning_label_keeps_clear_of_the_header():
     assert np.all(img == WARN_RGB, axis=2)[100:].sum() > 300  # the label went below the header
 
 
+
+def test_labels_take_less_of_a_small_frame():
+    """At 160x120 three target labels covered about a quarter of the picture (the targets' overlay, boxes
+    and labels, changed 25.0 % of its pixels, the whole overlay 37.5 %): below 320 px wide the text is
+    smaller and a target's label short (``T1 WARN 0.62 s``, no miss), so the targets' overlay changes
+    12.0 %, the whole 20.9 %. Frames 320 px wide and wider keep their labels (the tests above)."""
+    frame = np.full((120, 160, 3), GREY, np.uint8)
+    targets = (_target(1, 40.0, 70.0, 20.0, 20.0, ttc_s=0.62, miss=0.3, warning=True),
+               _target(2, 110.0, 50.0, 16.0, 16.0, ttc_s=1.84, miss=0.7, warning=False),
+               _target(3, 90.0, 95.0, 12.0, 12.0, ttc_s=3.05, miss=2.4, warning=False))
+    outs = [Output(0, 0.0, targets=targets)]
+    img = annotate_frame(frame, outs, ["mlplc2"], index=7)
+    header = annotate_frame(frame, outs, ["mlplc2"], index=7, primary=None)
+    by_targets = np.any(img != header, axis=2).mean()
+    overall = np.any(img != frame, axis=2).mean()
+    assert by_targets < 0.16, by_targets
+    assert overall < 0.25, overall
+    assert np.all(img == WARN_RGB, axis=2).sum() > 150   # the warning target's box and label are still drawn
+
+
 def _timeline_rows():
     rows = [{"frame": k, "model": "mlplc2", "target_id": 1, "ttc_s": 1.0 - 0.1 * k, "miss": 0.2,
              "warning": int(k >= 6)} for k in range(10)]

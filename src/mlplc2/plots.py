@@ -267,7 +267,8 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     The targets of ``outputs[primary]`` (``Output.targets``) are drawn as boxes of their
     apparent size, clipped to the frame, labelled ``T<id>`` with the time to contact and the
     predicted miss once known: red, thicker and ``T<id> WARNING`` while warning (orange with a
-    time to contact, blue without one).
+    time to contact, blue without one). On a frame narrower than ``SMALL_FRAME_WIDTH`` (320 px)
+    the label is short, ``T<id> <ttc> s`` (``T<id> WARN <ttc> s``), without the miss.
 
     The fields of ``outputs[primary]`` are drawn in their real shape, scaled to input
     pixels: a square of half-side ``radius`` (``field_shape="square"``, the default of
@@ -281,7 +282,8 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     or the response; on red while a target warns or the model is in alarm), and ``index`` is
     shown at the bottom left.
 
-    Text size, line widths and margins scale with the frame size (``_Style``), and every
+    Text size, line widths and margins scale with the frame size (``_Style``; smaller text below
+    320 px wide), and every
     label sits on a filled box, placed where it hides no other label, so it reads on any
     background.
     """
@@ -305,17 +307,27 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     return img
 
 
+#: Frames narrower than this (px) get smaller text and short target labels (``_Style``).
+SMALL_FRAME_WIDTH = 320
+#: The smallest font scale of the overlay (a 160-px frame's): OpenCV's simplex font still reads there.
+MIN_FONT_SCALE = 0.25
+
+
 class _Style:
     """Sizes of the overlay for one frame size: everything scales with ``u = min(H, W) / 240``.
 
     Font scale ``0.45 u``: "mlplc2 1.5" is 11 px high (ascender to descender) at 320x240,
-    34 px at 1280x720, on a box 19 and 60 px high (measured with OpenCV 5.0). Field outlines
-    are ``round(u)`` px wide (one more in alarm).
+    34 px at 1280x720, on a box 19 and 60 px high (measured with OpenCV 5.0); at least 0.35,
+    and below ``SMALL_FRAME_WIDTH`` at least ``0.35 W / 320`` (not under ``MIN_FONT_SCALE``), so
+    that labels on a 160x120 frame take less of it. There the target labels are short
+    (``short``: no miss, ``WARN``). Field outlines are ``round(u)`` px wide (one more in alarm).
     """
 
     def __init__(self, h: int, w: int):
         u = max(min(h, w), 1) / 240.0
-        self.font_scale = max(0.35, 0.45 * u)
+        self.short = w < SMALL_FRAME_WIDTH
+        floor = max(0.35 * min(w, SMALL_FRAME_WIDTH) / SMALL_FRAME_WIDTH, MIN_FONT_SCALE)
+        self.font_scale = max(floor, 0.45 * u)
         self.text_thickness = max(1, int(round(self.font_scale * 1.4)))
         self.line = max(1, int(round(u)))
         self.pad = max(2, int(round(2.5 * u)))
@@ -438,7 +450,8 @@ def _header_labels(labels: _Labels, outputs, names: Sequence[str], index: int | 
 def _draw_target(img: np.ndarray, labels: _Labels, t, style: _Style, scale_x: float, scale_y: float) -> None:
     """One target: a box of its apparent size, clipped to the frame (all four sides show), and a
     label ``T<id> <ttc> s miss <m>``; a warning target's box is thicker, edged in white, and
-    its label reads ``T<id> WARNING <ttc> s miss <m>``."""
+    its label reads ``T<id> WARNING <ttc> s miss <m>``. On a small frame (``style.short``) the
+    label is ``T<id> <ttc> s``, ``T<id> WARN <ttc> s`` while warning."""
     import cv2
 
     colour = WARN_RGB if t.warning else TIMED_RGB if t.ttc_s is not None else TARGET_RGB
@@ -452,10 +465,10 @@ def _draw_target(img: np.ndarray, labels: _Labels, t, style: _Style, scale_x: fl
     if t.warning:  # a white edge: the box stands out on dark and on red backgrounds
         cv2.rectangle(img, (x0, y0), (x1, y1), (255, 255, 255), line + 2)
     cv2.rectangle(img, (x0, y0), (x1, y1), colour, line)
-    text = f"T{t.id}" + (" WARNING" if t.warning else "")
+    text = f"T{t.id}" + ((" WARN" if style.short else " WARNING") if t.warning else "")
     if t.ttc_s is not None:
         text += f" {t.ttc_s:.2f} s"
-        if t.miss is not None:
+        if t.miss is not None and not style.short:
             text += f" miss {t.miss:.1f}"
     labels.add(text, colour, (x0, y0 - half, "bottom"), (x0, y1 + half, "top"), (x0 + half, y0 + half, "top"),
                (x0 + half, y1 - half, "bottom"))
