@@ -12,7 +12,7 @@ import pytest
 from mlplc2._validation import InputValueError
 from mlplc2.neuropils.attention import Field
 from mlplc2.models.base import Output
-from mlplc2.plots import ALARM_RGB, CALM_RGB, PANEL_RGB, WARN_RGB, annotate_frame
+from mlplc2.plots import ALARM_RGB, CALM_RGB, FIELD_ALARM_RGB, PANEL_RGB, WARN_RGB, annotate_frame
 
 GREY = 128
 
@@ -163,11 +163,33 @@ def test_header_says_which_target_warns_and_what_is_a_field_alarm():
     assert header_text("mlplc2", Output(0, 0.0, targets=(calm, later, soon))) == "mlplc2 WARNING T3 0.80 s +1"
     f = _field(collision=True, response=1926.0)
     assert header_text("mlplc2", Output(0, 1926.0, (f,), collision=True, targets=(soon,))) == \
-        "mlplc2 WARNING T3 0.80 s, field ALARM"
+        "mlplc2 WARNING T3 0.80 s, field alarm"
     assert header_text("mlplc2", Output(0, 1926.0, (f,), collision=True, targets=(calm,))) == \
-        "mlplc2 field ALARM, response 1926"
+        "mlplc2 field alarm (paper), response 1926"
     assert header_text("lgmd2", Output(0, 0.9, collision=True)) == "lgmd2 ALARM, response 0.9"
     assert header_text("mlplc2", Output(0, 0.0, targets=(calm,))) == "mlplc2 response 0"
+
+
+
+def test_a_field_alarm_without_a_warning_is_not_shown_as_one():
+    """The paper's field alarm while no target warns is a row of its own colour, saying which signal it is:
+    only a warning (a target's, or an LGMD model's alarm, its only signal) is on red. The header of a field
+    alarm was red too, with ``field ALARM``, and read as the collision warning."""
+    frame = np.full((240, 320, 3), 255, np.uint8)
+    f = _field(collision=True, response=1926.0)
+    calm, warning = _target(1, ttc_s=2.0, warning=False), _target(3, ttc_s=0.8)
+
+    def header_colours(out):
+        img = annotate_frame(frame, [out], [("mlplc2" if out.fields else "lgmd2")], draw_fields="none")
+        left = img[:30, :6].reshape(-1, 3)   # the header row's left end, left of any target
+        return {name for name, rgb in (("red", ALARM_RGB), ("violet", FIELD_ALARM_RGB), ("grey", PANEL_RGB))
+                if np.all(left == rgb, axis=1).any()}
+
+    assert header_colours(Output(0, 1926.0, (f,), collision=True, targets=(calm,))) == {"violet"}
+    assert header_colours(Output(0, 1926.0, (f,), collision=True, targets=(warning,))) == {"red"}
+    assert header_colours(Output(0, 0.0, targets=(warning,))) == {"red"}
+    assert header_colours(Output(0, 0.9, collision=True)) == {"red"}   # an LGMD model's alarm is its warning
+    assert header_colours(Output(0, 5.0, (_field(),), targets=(calm,))) == {"grey"}
 
 
 def test_target_box_wider_than_the_frame_is_clipped_inside_it():

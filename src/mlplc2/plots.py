@@ -257,6 +257,9 @@ TIMED_RGB = (255, 170, 0)
 TARGET_RGB = (90, 170, 255)
 #: Label backgrounds of the annotated video: the header and the frame number.
 PANEL_RGB = (20, 20, 20)
+#: A header row whose model's attention fields alarm (the paper's field alarm) while none of its targets warns:
+#: violet, not the red of a warning (a target's, or an LGMD model's alarm, which is that model's warning).
+FIELD_ALARM_RGB = (130, 70, 170)
 
 
 def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: float = 1.0,
@@ -278,8 +281,9 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     red, the others green. ``draw_fields``: "auto" (default) draws no field when the model
     has targets and else only the fields that respond (response > 0) or are in alarm,
     "responding" those, "all" every field, "none" none. A header at the top left has one row per
-    model (:func:`header_text`: the warning target and its time to contact, ``field ALARM``,
-    or the response; on red while a target warns or the model is in alarm), and ``index`` is
+    model (:func:`header_text`: the warning target and its time to contact, ``field alarm (paper)``,
+    or the response; on red while a target warns or a model without fields alarms, on violet while
+    only the attention fields alarm), and ``index`` is
     shown at the bottom left.
 
     Text size, line widths and margins scale with the frame size (``_Style``; smaller text below
@@ -419,8 +423,9 @@ def _overlap(a, b) -> bool:
 
 def header_text(name: str, out) -> str:
     """One model's header row: ``mlplc2 WARNING T3 0.80 s`` while a target warns (the most
-    urgent: the shortest time to contact; ``+k`` more warning), ``field ALARM`` while an
-    attention field is in collision alarm (``ALARM`` for a model without fields), and
+    urgent: the shortest time to contact; ``+k`` more warning), ``field alarm (paper)`` while an
+    attention field is in collision alarm (the paper's signal, not the targets' warning; ``field
+    alarm`` after a warning; ``ALARM`` for a model without fields, whose alarm is its warning), and
     ``response <r>`` (Eq. 15, a.u.) unless a target warns."""
     warning = sorted((t for t in getattr(out, "targets", ()) if t.warning), key=lambda t: t.urgency())
     parts = []
@@ -429,20 +434,22 @@ def header_text(name: str, out) -> str:
         ttc = "" if t.ttc_s is None else f" {t.ttc_s:.2f} s"
         parts.append(f"WARNING T{t.id}{ttc}" + (f" +{len(warning) - 1}" if len(warning) > 1 else ""))
     if out.collision:
-        parts.append("field ALARM" if out.fields else "ALARM")
+        parts.append(("field alarm" if warning else "field alarm (paper)") if out.fields else "ALARM")
     if not warning:
         parts.append(f"response {_fmt(out.response)}")
     return f"{name} " + ", ".join(parts)
 
 
 def _header_labels(labels: _Labels, outputs, names: Sequence[str], index: int | None) -> None:
-    """Top left, one row per model (:func:`header_text`), on red while a target warns or the
-    model is in alarm; bottom left: the frame number."""
+    """Top left, one row per model (:func:`header_text`): on red while it warns (a target warns, or a
+    model without fields is in alarm), on violet while only its attention fields alarm (the paper's
+    field alarm), else dark grey; bottom left: the frame number."""
     st = labels.style
     y = st.margin
     for name, out in zip(names, outputs):
-        red = bool(out.collision) or any(t.warning for t in getattr(out, "targets", ()))
-        y = labels.add(header_text(name, out), ALARM_RGB if red else PANEL_RGB, (st.margin, y, "top"))[3] + st.gap
+        warns = any(t.warning for t in getattr(out, "targets", ())) or (bool(out.collision) and not out.fields)
+        bg = ALARM_RGB if warns else FIELD_ALARM_RGB if out.collision else PANEL_RGB
+        y = labels.add(header_text(name, out), bg, (st.margin, y, "top"))[3] + st.gap
     if index is not None:
         labels.add(f"frame {index}", PANEL_RGB, (st.margin, labels.img.shape[0] - st.margin, "bottom"))
 
