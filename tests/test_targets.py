@@ -1035,7 +1035,7 @@ def test_the_time_to_contact_held_through_an_occlusion_says_how_old_it_is(hold_f
     that fit (a whole number of frames, at most ``hold_frames``) and ``ttc_s`` the one shown then less the
     age; on a frame of its own fit the age is 0. Without ``hold_frames`` nothing is held: every age is 0."""
     outs = _run_with_field(_disc_with_gap(), hold_frames=hold_frames, refind_frames=15)
-    on = {k: t for k in range(20, 46) for t in outs[k] if abs(t.x - 200) < 6 and abs(t.y - 110) < 6}
+    on = {k: t for k in range(46) for t in outs[k] if abs(t.x - 200) < 6 and abs(t.y - 110) < 6}
     held = []
     for k, t in on.items():
         assert (t.ttc_s is None) == (t.ttc_age_s is None)
@@ -1045,7 +1045,8 @@ def test_the_time_to_contact_held_through_an_occlusion_says_how_old_it_is(hold_f
             fit = on[k - round(ago)]                       # the frame of the fit it was held from
             assert fit.ttc_age_s == 0.0 and t.ttc_s == pytest.approx(fit.ttc_s - t.ttc_age_s, abs=1e-9)
             held.append(k)
-    assert (len(held) >= 2 and set(held) <= set(range(33, 40))) if hold_frames else not held
+    # held over the occlusion (and, the disc's uniform region growing by whole pixels, where a fit lapses before it)
+    assert {33, 34, 35, 36} <= set(held) if hold_frames else not held
     assert any(t.ttc_age_s == 0.0 for k, t in on.items() if k > max(held or [0]))   # its own fit again
 
 
@@ -1117,11 +1118,16 @@ def test_a_target_whose_contact_has_passed_opens_its_box_to_seeds():
 
 def test_time_to_contact_counts_down_through_a_failed_alignment():
     """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
-    is the fit's contact less the frames since its newest point (else it stands still)."""
+    is the fit's contact less the frames since its newest point (else it stands still); that fit within 10 % of
+    the truth."""
     outs = _run_with_field(_disc_with_gap(n=32))
+    last = next(t for t in outs[29] if abs(t.x - 200) < 6)
+    fit_k = 29 - round(last.ttc_age_s * FPS)             # the frame of its newest fit (29, or one it was held from)
+    fit = next(t for t in outs[fit_k] if abs(t.x - 200) < 6)
+    assert fit.ttc_age_s == 0.0 and fit.ttc_s == pytest.approx((70 - fit_k) / FPS, rel=0.1)
     for k in (30, 31):
         t = next(t for t in outs[k] if abs(t.x - 200) < 6)
-        assert t.ttc_s == pytest.approx((70 - k) / FPS, abs=0.02)
+        assert t.ttc_s == pytest.approx(fit.ttc_s - (k - fit_k) / FPS, abs=1e-6)
 
 
 @pytest.mark.parametrize("noise", [0.0, 3.0])
@@ -1213,6 +1219,38 @@ def test_uniform_box_holds_a_uniform_square_from_a_seed_beside_its_corner():
     assert uniform_box(cut, 77, 70, 12.0, 4.0) is None
 
 
+def _disc_on_texture(diameter, at=(150, 120), shape=(240, 320), seed=3, grey=255.0):
+    """:func:`_square_on_texture`'s texture with a uniform disc (white by default) of ``diameter`` px centred on the
+    pixel corner up and left of ``at``: the pixels whose centres lie inside it (a camera's or a renderer's disc: its
+    uniform inside fills 0.76-0.81 of its box, the benchmark's rendered discs 12-64 px across)."""
+    tex, _ = _square_on_texture(0, shape=shape, seed=seed)
+    yy, xx = np.mgrid[:shape[0], :shape[1]]
+    tex[(xx - at[0] + 0.5) ** 2 + (yy - at[1] + 0.5) ** 2 < (diameter / 2.0) ** 2] = grey
+    return tex
+
+
+@pytest.mark.parametrize("diameter", [12, 20, 40, 90])
+def test_uniform_box_holds_a_uniform_disc(diameter):
+    """``uniform_fill``: a disc fills pi/4 (0.785) of its bounding box, an ellipse too; the default admits it, so a
+    round object (a ball, a wheel, a round sign) gets its whole box from a seed on its outline, as a square does.
+    At 0.85 (the default until session 48) no disc did: its box was the change of its outline and the background
+    beside it (the bright discs over the walked ground of the benchmark, boxed with the ground below them)."""
+    from mlplc2.targets.change import uniform_box
+
+    img = _disc_on_texture(diameter)
+    p = TargetParams()
+    seed = (150, int(120 - diameter / 2) - 2)                      # just above its top edge
+    box = uniform_box(img, *seed, p.claim, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect)
+    assert box is not None and box[:2] == pytest.approx((149.5, 119.5), abs=1.0)
+    assert box[2:] == pytest.approx((diameter, diameter), abs=1.0)
+    assert uniform_box(img, *seed, p.claim, p.uniform_tol, fill=0.85, aspect=p.uniform_aspect) is None
+    if diameter >= 20:                      # drawn to whole pixels, a single pixel at each of its four tips
+        drawn, _ = _square_on_texture(0)
+        cv2.circle(drawn, (150, 120), diameter // 2, 255.0, -1)
+        box = uniform_box(drawn, *seed, p.claim, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect)
+        assert box is not None and box == pytest.approx((150, 120, diameter + 1, diameter + 1), abs=1.0)
+
+
 def test_uniform_region_takes_the_visible_part_of_a_cut_square():
     """``uniform_reseat``: the uniform region at a point inside a black square is its box; cut by the
     frame's border its visible part (``cut``), else none."""
@@ -1254,6 +1292,40 @@ def test_a_uniform_square_seeded_at_its_corner_is_boxed_whole(uniform):
         assert all(t is not None and abs(t / true - 1) < 0.1 for _, t, true in got[-5:]), got
     else:
         assert all(w < 0.95 or w > 1.05 for w, _, _ in got), got
+
+
+@pytest.mark.parametrize("fill", [None, 0.85])
+def test_a_bright_disc_over_a_moving_ground_is_boxed_whole(fill):
+    """A white disc approaching (40 -> ~60 px) over a texture that flows past it (3 px a frame, down: the walked
+    ground below the heading), its attention field on its outline: with the default ``uniform_fill`` the target's
+    box is the disc (within 5 %) and its time to contact within 10 % of the truth; at 0.85 (until session 48) the
+    disc is no uniform region, and no target's box is centred on it (the boxes hold the flowing texture beside it)."""
+    from types import SimpleNamespace
+
+    from mlplc2.targets import TargetLayer
+
+    contact, d0, flow = 90, 40.0, 3
+    ground, _ = _square_on_texture(0, shape=(240 + 40 * flow, 320), seed=5)
+    yy, xx = np.mgrid[:240, :320]
+    layer = TargetLayer(TargetParams() if fill is None else TargetParams(uniform_fill=fill), FPS)
+    got = []
+    for k in range(40):
+        d = d0 * contact / (contact - k)
+        img = ground[40 * flow - k * flow:40 * flow - k * flow + 240].copy()
+        img[(xx - 149.5) ** 2 + (yy - 119.5) ** 2 < (d / 2.0) ** 2] = 255.0
+        field = SimpleNamespace(id=1, x=150 + int(0.35 * d), y=120 + int(0.35 * d), radius=10, response=1.0,
+                                collision=False)
+        out = layer.step(img, None, [field], k)
+        if k >= 30:
+            on = [o for o in out if abs(o.x - 149.5) < 10 and abs(o.y - 119.5) < 10]
+            got.append((max((o.width / d for o in on), default=0.0), max((o.height / d for o in on), default=0.0),
+                        on[0].ttc_s if on else None, (contact - k) / FPS))
+    whole = [0.95 <= w <= 1.05 and 0.95 <= h <= 1.05 for w, h, _, _ in got]
+    if fill is None:
+        assert all(whole), got
+        assert all(t is not None and abs(t / true - 1) < 0.1 for _, _, t, true in got[-5:]), got
+    else:
+        assert not any(whole), got
 
 
 @pytest.mark.parametrize("lm", [True, False])
@@ -1336,7 +1408,7 @@ def test_no_warning_begins_within_the_contact_window(until, first):
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
 
-    frames = _growing_disc(12, start=6)
+    frames = _growing_disc(12, r0=20.0, start=6)      # 40 px: a smaller disc's uniform region grows by whole pixels
     layer = TargetLayer(TargetParams(alarm_warns=True), FPS)
     layer._blind_until = until
     zero = np.zeros((240, 320), np.float32)

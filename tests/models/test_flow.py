@@ -260,6 +260,9 @@ def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_wor
         misses.append([t.miss for out in (model.step(f) for f in st.frames) for t in out.targets])
     assert any(m is not None for m in misses[0])
     assert [m is None for m in misses[0]] == [m is None for m in misses[1]]
-    # the same course to rounding (the fit's miss is the centre's offset from its own expansion
-    # centre at contact: the heading drops out but for the rounding of the subtraction)
-    assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None], abs=1e-6)
+    # the same course to 1e-3 of the object's extent (the fit's miss is the centre's offset from its own expansion
+    # centre at contact: the heading drops out but for the rounding of the subtraction; a given heading also counts
+    # as a known one in the layer's rules, and with the disc's uniform region's growth (``uniform_growth``) the fits
+    # then differ by up to 7e-4; 1e-10 without it). A heading 160 px off (the frame's pixels taken for the
+    # working frame's) moves it by up to 1.5 extents.
+    assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None], abs=1e-3)

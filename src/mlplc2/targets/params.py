@@ -926,8 +926,14 @@ class TargetParams(ParameterSet):
                                grow). 0 = off; 4 since session 15 (docs/history.md, "A uniform object's box", and "Objects missed",
                                session 15).""",
                                unit="grey levels", valid=Valid.real(minimum=0))
-    uniform_fill: float = param(0.85, """``uniform_tol``: the smallest fraction of its bounding box a uniform region fills
-                                (a compact object, not a patch of smooth texture).""",
+    uniform_fill: float = param(0.7, """``uniform_tol``: the smallest fraction of its bounding box a uniform region fills
+                                (a compact object, not a patch of smooth texture). A rectangle fills all of it, a disc or
+                                an ellipse pi/4 (0.785); counted in pixels a disc fills 0.76-0.81 (the benchmark's
+                                rendered discs, 10-64 px across) or, drawn to whole pixels with single pixels at its
+                                four tips, 0.72-0.77 from 20 px across: 0.7 takes round objects too. 0.85 until
+                                session 48, which took no disc: a bright disc over the walked ground was boxed with
+                                the ground below it and warned late or never (docs/history.md, "A round object's
+                                box").""",
                                 valid=Valid.real(minimum=0, maximum=1))
     uniform_aspect: float = param(2.0, """``uniform_tol``: the largest elongation (longer side / shorter side) of a
                                   uniform region's box (not a band of the horizon or a wall).""",
