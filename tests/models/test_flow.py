@@ -248,21 +248,32 @@ def test_the_readme_points_to_the_flow_docs():
 @pytest.mark.parametrize("name", ["flow", "mlplc2"])
 def test_a_heading_given_in_the_frames_pixels_holds_on_frames_wider_than_the_working_width(name):
     """``TargetParams.heading`` is in the pixels of the frames given: the principal point of a
-    640 x 480 video given explicitly predicts the same course (miss) as no heading at all (the
-    principal point by default), although the models work on 320 x 240 frames."""
+    640 x 480 video given explicitly is the working frame's principal point, and predicts the same course
+    (miss) as no heading at all (the principal point by default) while the model measures none itself,
+    although the models work on 320 x 240 frames."""
     from mlplc2 import stimuli
     from mlplc2.targets import TargetParams
 
     st = stimuli.approach_scene(kind="collision", size=(640, 480), ttc_s=1.5, seed=4)
-    misses = []
+    misses, measured = [], []
     for heading in (None, (319.5, 239.5)):
         model = mlplc2.get_model(name)(fps=st.fps, target_params=TargetParams(heading=heading))
-        misses.append([t.miss for out in (model.step(f) for f in st.frames) for t in out.targets])
+        rows = []
+        for f in st.frames:
+            out = model.step(f)
+            rows += [(t.miss, model._layer.heading) for t in out.targets]
+        misses.append([m for m, _ in rows])
+        measured.append([h for _, h in rows])
+        if heading is not None:
+            assert model._work_heading() == (159.5, 119.5)
     assert any(m is not None for m in misses[0])
     assert [m is None for m in misses[0]] == [m is None for m in misses[1]]
-    # the same course to 1e-3 of the object's extent (the fit's miss is the centre's offset from its own expansion
-    # centre at contact: the heading drops out but for the rounding of the subtraction; a given heading also counts
-    # as a known one in the layer's rules, and with the disc's uniform region's growth (``uniform_growth``) the fits
-    # then differ by up to 7e-4; 1e-10 without it). A heading 160 px off (the frame's pixels taken for the
-    # working frame's) moves it by up to 1.5 extents.
+    # the same course to rounding while no heading is measured (the fit's miss is the centre's offset from its own
+    # expansion centre at contact: the heading drops out but for the rounding of the subtraction) ...
+    alike = [(a, b) for a, b, h in zip(*misses, measured[0]) if a is not None and h is None]
+    assert alike and [a for a, _ in alike] == pytest.approx([b for _, b in alike], abs=1e-6)
+    # ... and to 1e-3 of the object's extent where the run without one measures its own (the flow baseline's focus of
+    # expansion, 2 px from the principal point from frame 35 on: with the disc's uniform region re-seated it no longer
+    # drops out exactly). A heading 160 px off (the frame's pixels taken for the working frame's) moves it by up to
+    # 1.5 extents.
     assert [m for m in misses[0] if m is not None] == pytest.approx([m for m in misses[1] if m is not None], abs=1e-3)

@@ -236,7 +236,7 @@ def _compact(n: int, rect, w: int, h: int, fill: float, aspect: float, min_px: f
             and n >= fill * bw * bh)
 
 
-def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: float = 0.85, aspect: float = 2.0,
+def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: float = 0.7, aspect: float = 2.0,
                    min_px: float = 8.0, cut: bool = True) -> tuple[float, float, float, float] | None:
     """Box ``(cx, cy, w, h)`` of the uniform region at the point (x, y) (:func:`uniform_box`'s region
     from that one start, ``TargetParams.uniform_reseat``), None when it is not a compact object; with
@@ -253,7 +253,7 @@ def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: fl
     return bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)
 
 
-def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, fill: float = 0.85,
+def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, fill: float = 0.7,
                 aspect: float = 2.0, min_px: float = 8.0) -> tuple[float, float, float, float] | None:
     """Box ``(cx, cy, w, h)`` of the uniform region beside the point (x, y), or None
     (``TargetParams.uniform_tol``): from start points ``reach`` / 3, 2 ``reach`` / 3 and ``reach``
