@@ -65,7 +65,7 @@ def test_only_responding_or_alarmed_fields_by_default():
     _, img = _draw([quiet, loud, alarm])
     assert _is(img, 40 + 15, 60, (GREY,) * 3) and _is(img, 40 - 15, 65, (GREY,) * 3)  # not drawn
     assert _is(img, 120 + 15, 60, CALM_RGB)
-    assert _is(img, 80 + 10, 100, ALARM_RGB)
+    assert _is(img, 80 + 10, 100, FIELD_ALARM_RGB)  # in alarm: the field alarm's violet
     _, everything = _draw([quiet, loud, alarm], draw_fields="all")
     assert _is(everything, 40 + 15, 60, CALM_RGB) and _is(everything, 40 - 15, 65, CALM_RGB)
     with pytest.raises(InputValueError, match="draw_fields"):
@@ -190,6 +190,24 @@ def test_a_field_alarm_without_a_warning_is_not_shown_as_one():
     assert header_colours(Output(0, 0.0, targets=(warning,))) == {"red"}
     assert header_colours(Output(0, 0.9, collision=True)) == {"red"}   # an LGMD model's alarm is its warning
     assert header_colours(Output(0, 5.0, (_field(),), targets=(calm,))) == {"grey"}
+
+
+def test_a_field_in_alarm_is_drawn_in_the_field_alarm_colour_not_the_warning_red():
+    """A field in collision alarm is outlined, crossed and labelled in violet (``FIELD_ALARM_RGB``), as the
+    header of its model: red is a warning's alone. With no target warning no pixel is warning red; a warning
+    target beside the field is red, its field still violet."""
+    frame = np.full((240, 320, 3), 255, np.uint8)
+    f = _field(x=200, y=150, radius=30, response=1926.0, collision=True)
+    calm = _target(1, x=60, y=150, width=40, height=40, ttc_s=2.0, warning=False)
+    img = annotate_frame(frame, [Output(0, 1926.0, (f,), collision=True, targets=(calm,))], ["mlplc2"],
+                         draw_fields="all")
+    assert not np.all(img == ALARM_RGB, axis=2).any()       # nothing says "warning"
+    for x, y in [(170, 150), (230, 150), (200, 180), (200, 150)]:  # the outline's sides and the centre cross
+        assert _is(img, x, y, FIELD_ALARM_RGB), (x, y)
+    warning = _target(3, x=60, y=150, width=40, height=40, ttc_s=0.8)
+    img = annotate_frame(frame, [Output(0, 1926.0, (f,), collision=True, targets=(warning,))], ["mlplc2"],
+                         draw_fields="all")
+    assert _is(img, 230, 150, FIELD_ALARM_RGB) and _is(img, 40, 150, WARN_RGB)
 
 
 def test_target_box_wider_than_the_frame_is_clipped_inside_it():

@@ -257,8 +257,9 @@ TIMED_RGB = (255, 170, 0)
 TARGET_RGB = (90, 170, 255)
 #: Label backgrounds of the annotated video: the header and the frame number.
 PANEL_RGB = (20, 20, 20)
-#: A header row whose model's attention fields alarm (the paper's field alarm) while none of its targets warns:
-#: violet, not the red of a warning (a target's, or an LGMD model's alarm, which is that model's warning).
+#: The paper's field alarm: an attention field in collision alarm (its outline, cross and label) and a header row
+#: whose model's fields alarm while none of its targets warns. Violet, not the red of a warning (a target's, or an
+#: LGMD model's alarm, which is that model's warning).
 FIELD_ALARM_RGB = (130, 70, 170)
 
 
@@ -278,7 +279,7 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     :class:`mlplc2.Params`) or a disc of that radius (``"disc"``), a rectangle or an
     ellipse when the model frames were resized anisotropically. Each gets a cross at its
     centre and a label ``#id response`` (and ``ttc`` once estimated). Fields in alarm are
-    red, the others green. ``draw_fields``: "auto" (default) draws no field when the model
+    violet (``FIELD_ALARM_RGB``, the paper's field alarm, not a warning), the others green. ``draw_fields``: "auto" (default) draws no field when the model
     has targets and else only the fields that respond (response > 0) or are in alarm,
     "responding" those, "all" every field, "none" none. A header at the top left has one row per
     model (:func:`header_text`: the warning target and its time to contact, ``field alarm (paper)``,
@@ -483,10 +484,11 @@ def _draw_target(img: np.ndarray, labels: _Labels, t, style: _Style, scale_x: fl
 
 def _draw_field(img: np.ndarray, labels: _Labels, f, style: _Style, scale_x: float, scale_y: float,
                 shape: str) -> None:
-    """One attention field: its outline (square or disc), a centre cross and its label."""
+    """One attention field: its outline (square or disc), a centre cross and its label; violet
+    (``FIELD_ALARM_RGB``) in collision alarm, else green."""
     import cv2
 
-    colour = ALARM_RGB if f.collision else CALM_RGB
+    colour = FIELD_ALARM_RGB if f.collision else CALM_RGB
     cx, cy = int(round(f.x * scale_x)), int(round(f.y * scale_y))
     ax = max(1, int(round(f.radius * scale_x)))
     ay = max(1, int(round(f.radius * scale_y)))
