@@ -279,7 +279,8 @@ def annotate_frame(frame: np.ndarray, outputs, names: Sequence[str], scale_x: fl
     :class:`mlplc2.Params`) or a disc of that radius (``"disc"``), a rectangle or an
     ellipse when the model frames were resized anisotropically. Each gets a cross at its
     centre and a label ``#id response`` (and ``ttc`` once estimated). Fields in alarm are
-    violet (``FIELD_ALARM_RGB``, the paper's field alarm, not a warning), the others green. ``draw_fields``: "auto" (default) draws no field when the model
+    violet (``FIELD_ALARM_RGB``, the paper's field alarm, not a warning), the others green.
+    ``draw_fields``: "auto" (default) draws no field when the model
     has targets and else only the fields that respond (response > 0) or are in alarm,
     "responding" those, "all" every field, "none" none. A header at the top left has one row per
     model (:func:`header_text`: the warning target and its time to contact, ``field alarm (paper)``,
