@@ -1045,8 +1045,8 @@ def test_the_time_to_contact_held_through_an_occlusion_says_how_old_it_is(hold_f
             fit = on[k - round(ago)]                       # the frame of the fit it was held from
             assert fit.ttc_age_s == 0.0 and t.ttc_s == pytest.approx(fit.ttc_s - t.ttc_age_s, abs=1e-9)
             held.append(k)
-    # held over the occlusion (and, the disc's uniform region growing by whole pixels, where a fit lapses before it)
-    assert {33, 34, 35, 36} <= set(held) if hold_frames else not held
+    # held over the occlusion alone (the disc's growth measured from its spread, uniform_spread, lapses no fit before it)
+    assert {33, 34, 35, 36} <= set(held) <= set(range(33, 40)) if hold_frames else not held
     assert any(t.ttc_age_s == 0.0 for k, t in on.items() if k > max(held or [0]))   # its own fit again
 
 
@@ -1118,13 +1118,13 @@ def test_a_target_whose_contact_has_passed_opens_its_box_to_seeds():
 
 def test_time_to_contact_counts_down_through_a_failed_alignment():
     """While the disc is hidden (frames 30-31) the track's fit has no new point: its time to contact
-    is the fit's contact less the frames since its newest point (else it stands still); that fit within 10 % of
-    the truth."""
+    is the fit's contact less the frames since its newest point (else it stands still); that fit within 5 % of
+    the truth (a 20-px disc's growth measured from its spread, ``uniform_spread``)."""
     outs = _run_with_field(_disc_with_gap(n=32))
     last = next(t for t in outs[29] if abs(t.x - 200) < 6)
     fit_k = 29 - round(last.ttc_age_s * FPS)             # the frame of its newest fit (29, or one it was held from)
     fit = next(t for t in outs[fit_k] if abs(t.x - 200) < 6)
-    assert fit.ttc_age_s == 0.0 and fit.ttc_s == pytest.approx((70 - fit_k) / FPS, rel=0.1)
+    assert fit.ttc_age_s == 0.0 and fit.ttc_s == pytest.approx((70 - fit_k) / FPS, rel=0.05)
     for k in (30, 31):
         t = next(t for t in outs[k] if abs(t.x - 200) < 6)
         assert t.ttc_s == pytest.approx(fit.ttc_s - (k - fit_k) / FPS, abs=1e-6)
@@ -1261,6 +1261,36 @@ def test_uniform_region_takes_the_visible_part_of_a_cut_square():
     cut, _ = _square_on_texture(90, at=(30, 120))
     assert uniform_region(cut, 30, 120, 4.0) == pytest.approx((37.0, 119.5, 75.0, 90.0), abs=1.0)
     assert uniform_region(cut, 30, 120, 4.0, cut=False) is None
+
+
+@pytest.mark.parametrize("radius", [6.0, 10.0, 20.0, 40.0])
+@pytest.mark.parametrize("ground", ["plain", "texture"])
+def test_a_discs_spread_grows_as_its_radius(radius, ground):
+    """``uniform_spread``: a dark disc of radius r (each pixel's grey level mixed by the share of it the disc covers,
+    at a sub-pixel centre) has a spread of r / 2 along both axes (within 3 % on a plain ground, 6 % over a texture),
+    and from r to 1.02 r its spread grows by that ratio (within 1 %, 2 % over a texture), where its box grows by 0
+    or 2 whole pixels. Without the spread the same region's box, as :func:`uniform_region` gives it."""
+    from mlplc2.targets.change import uniform_region, uniform_spread
+
+    sub = (np.arange(8) + 0.5) / 8 - 0.5                 # 8 x 8 samples a pixel: the share each pixel covers
+    ys, xs = np.mgrid[0:240, 0:320].astype(np.float32)
+
+    def disc(r):
+        img = np.full((240, 320), 150.0, np.float32) if ground == "plain" else _texture(7).astype(np.float32)
+        a = np.zeros((240, 320), np.float32)
+        for dy in sub:
+            for dx in sub:
+                a += ((xs + dx - 160.3) ** 2 + (ys + dy - 120.6) ** 2 <= r * r) / 64.0
+        return img * (1 - a) + 20.0 * a
+
+    box, (sx, sy) = uniform_spread(disc(radius), 160, 120, 4.0)
+    bound = 0.03 if ground == "plain" else 0.06
+    assert sx == pytest.approx(radius / 2, rel=bound) and sy == pytest.approx(radius / 2, rel=bound)
+    _, (gx, gy) = uniform_spread(disc(1.02 * radius), 160, 120, 4.0)
+    step = 0.01 if ground == "plain" else 0.02
+    assert math.sqrt(gx * gy / (sx * sy)) == pytest.approx(1.02, abs=step)
+    assert uniform_spread(disc(radius), 160, 120, 4.0, spread=False) == (uniform_region(disc(radius), 160, 120, 4.0), None)
+    assert box == uniform_region(disc(radius), 160, 120, 4.0)
 
 
 @pytest.mark.parametrize("uniform", [False, True])

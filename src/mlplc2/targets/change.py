@@ -1,7 +1,7 @@
 """The box of the region that changed between two frames around a point (:func:`change_box`):
 the window's own image motion undone by phase correlation, then the connected region of large
 grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2); a uniform
-region's box (:func:`uniform_box`, :func:`uniform_region`); the extent of the part of a box that moved as the
+region's box (:func:`uniform_box`, :func:`uniform_region`) and spread (:func:`uniform_spread`); the extent of the part of a box that moved as the
 box did (:func:`moving_extent`, ``TargetParams.onset_support``); and the region that changed once the window's
 affine motion is undone (:func:`affine_change_box`, ``TargetParams.affine_reseat``).
 """
@@ -15,7 +15,8 @@ from typing import NamedTuple
 import cv2
 import numpy as np
 
-__all__ = ["Support", "affine_change_box", "change_box", "moving_extent", "uniform_box", "uniform_region"]
+__all__ = ["Support", "affine_change_box", "change_box", "moving_extent", "uniform_box", "uniform_region",
+           "uniform_spread"]
 
 
 @lru_cache(maxsize=None)
@@ -241,6 +242,26 @@ def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: fl
     """Box ``(cx, cy, w, h)`` of the uniform region at the point (x, y) (:func:`uniform_box`'s region
     from that one start, ``TargetParams.uniform_reseat``), None when it is not a compact object; with
     ``cut`` a region at the frame's border counts (the visible part of an object leaving the view)."""
+    found = uniform_spread(gray, x, y, tol, fill=fill, aspect=aspect, min_px=min_px, cut=cut, spread=False)
+    return None if found is None else found[0]
+
+
+#: :func:`uniform_spread`: the width (px) of the ring outside a region's rim whose median grey level is the
+#: background's, and the least contrast (grey levels) between the region and that background for its rim's pixels
+#: to be weighted by their coverage (below it each counts half)
+SPREAD_RING = 2
+SPREAD_CONTRAST = 8.0
+
+
+def uniform_spread(gray: np.ndarray, x: float, y: float, tol: float, *, fill: float = 0.7, aspect: float = 2.0,
+                   min_px: float = 8.0, cut: bool = True, spread: bool = True):
+    """:func:`uniform_region`'s box and the region's spread ``(sx, sy)``: the standard deviations of its pixels'
+    columns and rows, its 1-px rim (the pixels beside it, outside the flood fill's tolerance) weighted by their
+    coverage, ``(I - b) / (v - b)`` clipped to [0, 1], from the region's median grey level ``v`` and the background's
+    ``b`` (the median of the :data:`SPREAD_RING` px beyond the rim). ``TargetParams.uniform_spread``: a region counted
+    in whole pixels grows by a ring of them at a time (a 20-px disc's box 19 -> 21 px in one frame), its rim's
+    coverage grows smoothly; a disc of radius r has a spread of r / 2. ``(box, None)`` with ``spread`` False; None
+    when the region is not a compact object."""
     h, w = gray.shape
     xi, yi = int(round(x)), int(round(y))
     if not (0 <= xi < w and 0 <= yi < h):
@@ -250,7 +271,25 @@ def uniform_region(gray: np.ndarray, x: float, y: float, tol: float, *, fill: fl
     if not _compact(n, rect, w, h, fill, aspect, min_px, cut):
         return None
     bx, by, bw, bh = rect
-    return bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)
+    box = bx + bw / 2.0 - 0.5, by + bh / 2.0 - 0.5, float(bw), float(bh)
+    if not spread:
+        return box, None
+    pad = 1 + SPREAD_RING
+    x0, y0, x1, y1 = max(bx - pad, 0), max(by - pad, 0), min(bx + bw + pad, w), min(by + bh + pad, h)
+    inside = mask[y0 + 1:y1 + 1, x0 + 1:x1 + 1]
+    img = np.asarray(gray[y0:y1, x0:x1], np.float32)
+    near = cv2.dilate(inside, _DILATION) > 0
+    rim = near & (inside == 0)
+    ring = (cv2.dilate(inside, _DILATION, iterations=pad) > 0) & ~near
+    weights = inside.astype(np.float32)
+    v = float(np.median(img[inside > 0]))
+    b = float(np.median(img[ring])) if ring.any() else v
+    if abs(v - b) >= SPREAD_CONTRAST:
+        weights[rim] = np.clip((img[rim] - b) / (v - b), 0.0, 1.0)
+    else:
+        weights[rim] = 0.5
+    m = cv2.moments(weights)
+    return box, (math.sqrt(max(m["mu20"], 1e-9) / m["m00"]), math.sqrt(max(m["mu02"], 1e-9) / m["m00"]))
 
 
 def uniform_box(gray: np.ndarray, x: int, y: int, reach: float, tol: float, *, fill: float = 0.7,

@@ -22,7 +22,7 @@ import numpy as np
 from ..neuropils.lobula_plate import LocalMotion
 from .alignment import align, pyramid
 from .change import (SUPPORT_PAD, Support, affine_change_box, change_box, ground_kappa, ground_reference, moving_extent,
-                     uniform_box, uniform_region)
+                     uniform_box, uniform_region, uniform_spread)
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
@@ -853,13 +853,16 @@ class TargetLayer:
     def _reseat_uniform(self, t: Track, gray: np.ndarray) -> None:
         """``TargetParams.uniform_reseat``: a track seeded on a uniform region is put on the uniform
         region at its centre (:func:`uniform_region`) when that is a compact object whose centre lies
-        inside the box and whose area is within a factor 2 of the box's (:meth:`Track.reseat`)."""
+        inside the box and whose area is within a factor 2 of the box's (:meth:`Track.reseat`); with
+        ``uniform_growth`` its growth is the region's (with ``uniform_spread``, its spread's: :func:`uniform_spread`)."""
         p = self.params
         if not (p.uniform_reseat and p.uniform_tol > 0 and t.uniform):
             return
-        box = uniform_region(gray, t.cx, t.cy, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect)
-        if box is None or not t.contains(box[0], box[1]):
+        found = uniform_spread(gray, t.cx, t.cy, p.uniform_tol, fill=p.uniform_fill, aspect=p.uniform_aspect,
+                               spread=p.uniform_growth and p.uniform_spread)
+        if found is None or not t.contains(found[0][0], found[0][1]):
             return
+        box, spread = found
         if not 0.5 <= box[2] * box[3] / (t.w * t.h) <= 2.0:
             return
         t.reseat(box)
@@ -870,15 +873,16 @@ class TargetLayer:
                 or box[1] + box[3] / 2.0 > h - 1:
             t.region = None                      # a cut region is not the object's size
             return
+        sw, sh = (box[2], box[3]) if spread is None else spread      # uniform_spread: its spread, not its box
         if t.region is not None:                 # the region's growth since it was last measured
             pw, ph, ls, an = t.region
-            t.log_s = ls + 0.5 * math.log(box[2] * box[3] / (pw * ph))
-            t.aniso = an + math.log((box[3] / ph) / (box[2] / pw))
+            t.log_s = ls + 0.5 * math.log(sw * sh / (pw * ph))
+            t.aniso = an + math.log((sh / ph) / (sw / pw))
             last = t.history[-1]._replace(log_scale=t.log_s, anisotropy=t.aniso)
             if t.inside and abs(t.inside[-1].frame - last.frame) <= _EPS:
                 t.inside[-1] = last
             t.history[-1] = last
-        t.region = (box[2], box[3], t.log_s, t.aniso)
+        t.region = (sw, sh, t.log_s, t.aniso)
 
     def _absorb(self, out, now: float) -> None:
         """``absorb_frames``: drop (not to be refound, but by ``refind_late``) the targets without a time to contact

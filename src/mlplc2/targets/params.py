@@ -956,6 +956,14 @@ class TargetParams(ParameterSet):
                                  in place of the image alignment's, whose patch holds road that flows faster than
                                  the object (a box anisotropic a second before contact). False = off; on since session 15.""",
                                  valid=Valid.boolean())
+    uniform_spread: bool = param(True, """In short: a plain-coloured object's growth is measured from its whole area, edge
+                                 pixels counted by how much of them it covers, not from its box. In full: with
+                                 ``uniform_growth``, the region's size is its spread (the standard deviations of its
+                                 pixels' columns and rows, its 1-px rim weighted by its coverage between the region's
+                                 and the background's grey levels: :func:`~mlplc2.targets.change.uniform_spread`), not
+                                 its bounding box, which grows by whole pixels (a 20-px disc 19 -> 21 px in a frame)
+                                 and lapses the fit on single frames. False = the box (docs/history.md, "A round
+                                 object's growth, from its area").""", valid=Valid.boolean())
     idle_frames: int = param(30, "Frames without an estimate or an answering field after which a target is dropped.",
                              unit="frames", valid=Valid.integer(0))
 
