@@ -1,9 +1,9 @@
 """The box of the region that changed between two frames around a point (:func:`change_box`):
 the window's own image motion undone by phase correlation, then the connected region of large
 grey-level change nearest the point (a faint candidate's box; ``docs/targets.md``, step 2); a uniform
-region's box (:func:`uniform_box`, :func:`uniform_region`) and spread (:func:`uniform_spread`); the extent of the part of a box that moved as the
-box did (:func:`moving_extent`, ``TargetParams.onset_support``); and the region that changed once the window's
-affine motion is undone (:func:`affine_change_box`, ``TargetParams.affine_reseat``).
+region's box (:func:`uniform_box`, :func:`uniform_region`) and spread (:func:`uniform_spread`); the extent of
+the part of a box that moved as the box did (:func:`moving_extent`, ``TargetParams.onset_support``); and the region
+that changed once the window's affine motion is undone (:func:`affine_change_box`, ``TargetParams.affine_reseat``).
 """
 
 from __future__ import annotations
