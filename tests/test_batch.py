@@ -220,6 +220,13 @@ def test_param_sets_and_ids(tmp_path):
     assert param_sets(f) == [{"t_a": 12}]
     with pytest.raises(InputValueError, match="unknown parameter"):
         param_sets({"nope": 1})
+    # a target-layer field, flat, in a "targets" section (as fields.json records it) or in a model's section: one
+    # error that names it and the options that set it (a new user's --params of horizon_s: "unknown parameter")
+    for pset, name in (({"horizon_s": 2.0}, "'horizon_s'"), ({"targets": {"horizon_s": 2.0}}, "'targets'"),
+                       ({"mlplc2": {"targets": {"horizon_s": 2.0}}}, "'mlplc2.targets'"),
+                       ({"mlplc2": {"max_miss": 2.0}}, "'mlplc2.max_miss'")):
+        with pytest.raises(InputValueError, match=f"{name} belongs to the target layer .*--horizon, --max-miss"):
+            param_sets(pset)
     with pytest.raises(InputValueError, match="t_a"):
         param_sets({"t_a": -1})
     with pytest.raises(InputValueError, match="PARAM=V1"):

@@ -89,6 +89,20 @@ def model_params(pset: Mapping, model: str):
         raise InputValueError(f"parameters for {model}: {exc}") from None
 
 
+def _target_fields() -> set:
+    """The target layer's parameter names (:class:`~mlplc2.targets.TargetParams`)."""
+    from ..targets import TargetParams
+
+    return set(TargetParams().to_dict())
+
+
+def _target_layer(name: str) -> str:
+    """The one-line error for a target-layer parameter (or section) in a parameter file: those are not set there."""
+    return (f"parameters: {name!r} belongs to the target layer (TargetParams), which a parameter file does not set: "
+            "use --horizon, --max-miss, --alarm-warns / --no-alarm-warns and --heading, or target_params= in Python "
+            "(docs/cli.md, 'mlplc2 params')")
+
+
 def _is_number(value) -> bool:
     return isinstance(value, (int, float)) and not isinstance(value, bool)
 
@@ -241,7 +255,14 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
         for k, v in pset.items():
             if isinstance(v, Mapping):
                 if k not in available_models():
-                    raise InputValueError(f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
+                    raise InputValueError(_target_layer(k) if k in ("targets", "target_params") else
+                                          f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
+                named = next((n for n in v if (n in _target_fields() or n == "targets")
+                              and n not in _param_class(k)().to_dict()), None)
+                if named is not None:
+                    raise InputValueError(_target_layer(f"{k}.{named}"))
+            elif k not in pnames and k in _target_fields():
+                raise InputValueError(_target_layer(k))
             elif k not in pnames:
                 close = difflib.get_close_matches(str(k).lower(), sorted(pnames), n=1)
                 raise InputValueError(f"parameters: unknown parameter {k!r}"
