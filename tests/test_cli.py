@@ -158,6 +158,10 @@ def test_run_summary_names_each_warning_target(data, tmp_path, capsys):
         assert f"at ({float(r['x']):.0f}, {float(r['y']):.0f})" in line
         if r["ttc_s"]:
             assert f"time to contact {float(r['ttc_s']):.2f} s" in line
+        else:
+            assert "no time to contact yet (the field alarm's warning)" in line
+        if r["miss"]:
+            assert f"miss {float(r['miss']):.2f} extents" in line     # the name of targets.csv's column
     # ... and on which frames: each run of frames it warned on, as targets.csv's warning column has them
     summary = json.loads((out / "fields.json").read_text())["targets"]["mlplc2"]
     for tid in first:

@@ -12,6 +12,8 @@ frame) and its courses missed.
 from __future__ import annotations
 
 import csv
+import re
+import warnings
 
 import cv2
 import numpy as np
@@ -104,3 +106,20 @@ def test_run_takes_a_heading_and_refuses_a_bad_one(clips, tmp_path, capsys):
         written = [(int(r["frame"]), r["warning"] == "1") for r in csv.DictReader(fh)]
     direct = _rows(_run(d / "large", (_twice(CENTRE[0]), _twice(CENTRE[1]))))
     assert written == [(f, w) for f, _, w, *_ in direct] and any(w for _, w in written)
+
+
+def test_a_heading_left_of_the_frame_is_given_as_any_other(clips, tmp_path, capsys):
+    """``--heading -5,10`` (a new user's try: argparse took ``-5,10`` for an option, "expected one argument") is the
+    heading (-5, 10), as ``--heading=-5,10`` is: the same targets, and the warning that it lies outside the frame."""
+    d, _ = clips
+    rows = []
+    for args in (["--heading", "-5,10"], ["--heading=-5,10"], ["--heading", "-.5,10"]):
+        out = tmp_path / f"h{len(rows)}"
+        with warnings.catch_warnings():
+            warnings.simplefilter("always")            # the command's own line on stderr, not the suite's error
+            assert main(["run", str(d / "small"), *args, "--out", str(out), "-q"]) == 0
+        assert re.search(r"the heading \(-0?\.?5, 10\) lies outside", capsys.readouterr().err)
+        rows.append((out / "targets.csv").read_text())
+    assert rows[0] == rows[1]
+    assert main(["run", str(d / "small"), "--heading", "--out", str(tmp_path / "none")]) == 2   # no value: one line
+    assert "--heading: expected one argument" in capsys.readouterr().err

@@ -102,11 +102,34 @@ def run_command(argv: list[str] | None = None) -> int:
             sys.stderr = stderr
 
 
+#: Options whose value may begin with a minus sign (a point left of or above the frame): ``--heading -5,10`` is
+#: read as ``--heading=-5,10``, where argparse would take ``-5,10`` for an option of its own.
+_SIGNED_OPTIONS = ("--heading",)
+
+
+def _signed_values(argv: list[str]) -> list[str]:
+    """``argv`` with each of :data:`_SIGNED_OPTIONS` joined to a following value that begins with a minus sign."""
+    out: list[str] = []
+    it = iter(argv)
+    for a in it:
+        if a in _SIGNED_OPTIONS:
+            nxt = next(it, None)
+            if nxt is not None and nxt[:1] == "-" and (nxt[1:2].isdigit() or nxt[1:2] == "."):
+                out.append(f"{a}={nxt}")
+                continue
+            out.append(a)
+            if nxt is not None:
+                out.append(nxt)
+            continue
+        out.append(a)
+    return out
+
+
 def _main(argv: list[str] | None) -> int:
     _quiet_decoders()
     parser = build_parser()
     try:
-        args, extra = parser.parse_known_args(argv)
+        args, extra = parser.parse_known_args(_signed_values(sys.argv[1:] if argv is None else list(argv)))
         if extra:  # pointing at the subcommand's help, not the top level's
             options = [o for a in args._parser._actions for o in a.option_strings]
             hint = did_you_mean(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""

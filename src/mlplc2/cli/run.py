@@ -62,7 +62,7 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                         "e.g. the frame's centre ((W-1)/2,(H-1)/2) for a camera that drives along its optical "
                         "axis); the targets' course (miss) and the camera-motion estimate use it; default: "
                         "measured from the images while the camera translates (with --stabilise), else the "
-                        "frame's centre (TargetParams.heading; docs/targets.md); a negative X: --heading=X,Y")
+                        "frame's centre (TargetParams.heading; docs/targets.md); a negative X too: --heading -5,10")
     p.add_argument("--stabilise", action=argparse.BooleanOptionalAction, default=None,
                    help="gaze stabilisation (mlplc2, slplc2, lplc2): the camera's rotation is estimated every frame "
                         "and compensated before the front end, for a camera that pans, tilts or rolls "
@@ -223,8 +223,9 @@ def _print_run_summary(args, result) -> None:
                          + (f" (first warning at frame {warned[0]['first_warning_frame']})" if warned else ""))
             for t in warned[:6]:                 # which targets warned, where, how soon, on what course
                 at = t["at_first_warning"] or {}
-                ttc = "" if at.get("ttc_s") is None else f", time to contact {at['ttc_s']:.2f} s"
-                miss = "" if at.get("miss") is None else f", course {at['miss']:.2f} extents off"
+                ttc = ", no time to contact yet (the field alarm's warning)" if at.get("ttc_s") is None \
+                    else f", time to contact {at['ttc_s']:.2f} s"
+                miss = "" if at.get("miss") is None else f", miss {at['miss']:.2f} extents"
                 runs = t.get("warning_runs") or [[t["first_warning_frame"], t["first_warning_frame"]]]
                 spans = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs[:4]) + (", ..." if len(runs) > 4 else "")
                 lines.append(f"    T{t['id']} warned from frame {t['first_warning_frame']} on {t['warning_frames']} "
