@@ -689,3 +689,47 @@ def test_a_targets_csv_row_reads_back_every_cell_it_was_written_with():
            "ttc_sigma_s": "0.0412"}
     again = TargetRow.from_row(dict(row, frame="5", model="mlplc2", target_id="2")).values()
     assert {k: ("" if v is None else str(v)) for k, v in again.items()} == row
+
+
+def test_a_decoder_of_ones_own_gives_the_cameras_clock_across_dropped_frames():
+    """The ``SDKCamera`` decoder of docs/robot.md ("Your own camera and its clock") around a camera that drops every
+    third frame: each line carries the camera's capture time, and the time to contact is the one of that clock
+    (counted in frames delivered, the disc would seem to arrive half as late again)."""
+    from pathlib import Path
+
+    from tests.helpers import disc_with_gap
+
+    doc = (Path(__file__).resolve().parents[1] / "docs" / "robot.md").read_text()
+    code = "import mlplc2\n" + doc.split("### Your own camera and its clock")[1].split("```python\n")[1].split(
+        "for r in mlplc2.stream")[0]
+    space: dict = {}
+    exec(code, space)                   # noqa: S102 - the documented class, as a user copies it
+
+    contact = 70                        # frame (at 30 fps) of the disc's contact
+    frames = disc_with_gap(n=64, contact=contact, gap=(0, 0))
+    kept = [k for k in range(len(frames)) if k % 3 != 2]
+
+    class Camera:                       # an SDK's camera: an RGB frame and its capture time, None at the end
+        def __init__(self):
+            self.i, self.closed = 0, False
+
+        def grab(self):
+            if self.i == len(kept):
+                return None, None
+            k = kept[self.i]
+            self.i += 1
+            return np.repeat(frames[k][:, :, None], 3, axis=2), k / 30.0
+
+        def close(self):
+            self.closed = True
+
+    camera = Camera()
+    lines = list(mlplc2.stream(FrameSource(space["SDKCamera"](camera), "camera"), repeat_threshold=None))
+    assert camera.closed
+    assert [line["time_s"] for line in lines] == pytest.approx([k / 30.0 for k in kept], abs=1e-6)   # 6 decimals
+    estimates = [(line["time_s"], t["ttc_s"]) for line in lines for t in line["targets"] if t["ttc_s"] is not None
+                 and t["ttc_age_s"] == 0 and line["time_s"] >= 40 / 30.0]
+    assert len(estimates) >= 8
+    errors = [abs(ttc - (contact / 30.0 - t)) / (contact / 30.0 - t) for t, ttc in estimates]
+    assert sorted(errors)[len(errors) // 2] < 0.1, estimates
+    assert any(line["warning"] for line in lines)
