@@ -34,6 +34,12 @@ in brackets). Default model there: ``mlplc2`` alone. (Session 18: 9 clips x 6 va
 
     python benchmarks/encoding_invariance.py --hfov none,45,60,78,90,120 [--clip ...] [--model ...] [--json out.json]
 
+With ``--heading centre`` it measures a given heading the same way: each clip as it is, with the heading estimated
+(``none``) and with the frame's centre given as the heading (``centre``: ``target_params={"heading": ...}``, as
+``mlplc2 run --heading`` gives it, what docs/cli.md advises for a camera that drives along its optical axis).
+
+    python benchmarks/encoding_invariance.py --heading centre [--clip ...] [--model ...] [--json out.json]
+
 The first run writes the copies (411 s for all of them and mLPLC2 on two cores at a load of about 20); later runs
 reuse them (305 s at a load of 25; the model runs took ~65 s on a quiet machine in session 10).
 """
@@ -140,14 +146,15 @@ class _HeldFrames(mlplc2.LGMD2):
 
 
 def measure(video: Path, truth, native: tuple[int, int], models: list[str],
-            hfov_deg: float | None = None) -> dict[str, dict]:
+            hfov_deg: float | None = None, target_params: dict | None = None) -> dict[str, dict]:
     """Per model: first warning frame, position in the labels' pixels, on the collider or not; and the
-    indices of the frames held as repeats. ``hfov_deg``: the run's field of view (None: not given)."""
+    indices of the frames held as repeats. ``hfov_deg``: the run's field of view (None: not given);
+    ``target_params``: the run's (None: the defaults)."""
     with av.open(str(video)) as c:
         fps = float(c.streams.video[0].average_rate or 30)
     probe = _HeldFrames(fps=fps)
     res = mlplc2.run(str(video), [*models, probe], out=False, quiet=True, progress=False, plot=False,
-                     hfov_deg=hfov_deg)
+                     hfov_deg=hfov_deg, target_params=target_params)
     sx, sy = native[0] / res.size[0], native[1] / res.size[1]
     nat = lambda x, y: ((x + 0.5) * sx - 0.5, (y + 0.5) * sy - 0.5)  # noqa: E731
     out = {}
@@ -222,19 +229,19 @@ def hfov_values(text: str) -> list[float | None]:
     return [None if v.strip().lower() == "none" else float(v) for v in text.split(",") if v.strip()]
 
 
-def by_hfov(data: Path, names: list[str], models: list[str], values: list[float | None]) -> dict:
-    """The first warning of each clip as it is (no ``*_fullres`` copy) at each field of view in ``values``."""
+def by_setting(data: Path, names: list[str], models: list[str], settings: dict, what: str) -> dict:
+    """The first warning of each clip as it is (no ``*_fullres`` copy) under each of ``settings`` (a label -> a
+    function of the clip's size (w, h) giving :func:`measure`'s keywords); ``what``: the settings' name."""
     table = {}
     for video, key, truth, native, size in measured(data, names):
         if "_fullres" in video.name:
             continue
         rows = {}
-        for hfov in values:
-            name = "none" if hfov is None else f"{hfov:g}"
-            rows[name] = r = measure(video, truth, native, models, hfov)
+        for name, kwargs in settings.items():
+            rows[name] = r = measure(video, truth, native, models, **kwargs(size))
             for m in models:
                 r[m].pop("_births"), r[m].pop("_boxes"), r[m].pop("held_frames")
-            print(f"{video.name:34s} hfov {name:5s} " + "  ".join(f"{m}: {fmt(r[m]):24s}" for m in models)
+            print(f"{video.name:34s} {what} {name:6s} " + "  ".join(f"{m}: {fmt(r[m]):24s}" for m in models)
                   + f" first alarm {r[models[0]]['alarm']}", flush=True)
         col = truth.collider if truth is not None and truth.label == "collision" else None
         if col is not None and getattr(col, "contact_frame", None) is not None:
@@ -247,9 +254,20 @@ def by_hfov(data: Path, names: list[str], models: list[str], values: list[float 
                             + ("" if r[m]["frame"] is None or (r[m]["on"] in (None, True) and not false)
                                else " (false)" if false else " OFF")
                             for k, r in rows.items())
-            print(f"{'':34s} {m}: first warning by field of view{contact}: {seq}", flush=True)
+            print(f"{'':34s} {m}: first warning by {what}{contact}: {seq}", flush=True)
         table[video.name] = rows
     return table
+
+
+def hfov_settings(values: list[float | None]) -> dict:
+    """``--hfov``'s values as :func:`by_setting`'s settings."""
+    return {"none" if v is None else f"{v:g}": (lambda size, v=v: {"hfov_deg": v}) for v in values}
+
+
+#: ``--heading centre``: each clip without a heading (estimated) and with the frame's centre given as the heading
+#: (a camera that drives along its optical axis: docs/cli.md, ``--heading``)
+HEADING_SETTINGS = {"none": lambda size: {},
+                    "centre": lambda size: {"target_params": {"heading": ((size[0] - 1) / 2.0, (size[1] - 1) / 2.0)}}}
 
 
 def main(argv=None) -> int:
@@ -261,11 +279,17 @@ def main(argv=None) -> int:
     ap.add_argument("--json", type=Path, help="also write the table as JSON")
     ap.add_argument("--cache", type=Path, default=CACHE,
                     help=f"where the copies are kept, named by source checksum and settings (default {CACHE})")
-    ap.add_argument("--hfov", type=hfov_values, metavar="DEG,DEG,...",
-                    help="measure the field of view instead: each clip as it is at these values (none: not given)")
+    what = ap.add_mutually_exclusive_group()
+    what.add_argument("--hfov", type=hfov_values, metavar="DEG,DEG,...",
+                      help="measure the field of view instead: each clip as it is at these values (none: not given)")
+    what.add_argument("--heading", choices=["centre"],
+                      help="measure a given heading instead: each clip as it is without one and with the frame's "
+                           "centre given")
     args = ap.parse_args(argv)
-    if args.hfov:
-        table = by_hfov(args.data, args.clip, args.model or ["mlplc2"], args.hfov)
+    if args.hfov or args.heading:
+        settings = hfov_settings(args.hfov) if args.hfov else HEADING_SETTINGS
+        table = by_setting(args.data, args.clip, args.model or ["mlplc2"], settings,
+                           "field of view" if args.hfov else "heading")
         if args.json:
             args.json.write_text(json.dumps(table, indent=1))
         return 0
