@@ -110,18 +110,11 @@ _SIGNED_OPTIONS = ("--heading",)
 def _signed_values(argv: list[str]) -> list[str]:
     """``argv`` with each of :data:`_SIGNED_OPTIONS` joined to a following value that begins with a minus sign."""
     out: list[str] = []
-    it = iter(argv)
-    for a in it:
-        if a in _SIGNED_OPTIONS:
-            nxt = next(it, None)
-            if nxt is not None and nxt[:1] == "-" and (nxt[1:2].isdigit() or nxt[1:2] == "."):
-                out.append(f"{a}={nxt}")
-                continue
+    for a in argv:
+        if out and out[-1] in _SIGNED_OPTIONS and a[:1] == "-" and (a[1:2].isdigit() or a[1:2] == "."):
+            out[-1] = f"{out[-1]}={a}"
+        else:
             out.append(a)
-            if nxt is not None:
-                out.append(nxt)
-            continue
-        out.append(a)
     return out
 
 
