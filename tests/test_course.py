@@ -1151,10 +1151,11 @@ def test_no_warning_begins_on_a_box_the_border_cuts_next_frame_with_exit_ahead()
 
 
 def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
-    # bearing_drift (0.4 since session 15; 0.5 before, DRIFT_FRACTION; docs/history.md, "False warnings, session
-    # 15"): an object 3.5 widths beside the heading that will pass 1.5 widths beside keeps 0.57 of its bearing
-    # (drift 0.43): on its alarm's second frame it warns at 0.5, not at 0.4; a collision course (to hit at 0.5
-    # widths, drift 0.14) warns at both
+    # bearing_drift (0.3 since session 50, 0.4 since session 15, 0.5 before, DRIFT_FRACTION; docs/history.md, "False
+    # warnings, session 15", "The bearing kept, 0.3, session 50"): an object 3.5 widths beside the heading that will
+    # pass 1.5 widths beside keeps 0.57 of its bearing (drift 0.43): on its alarm's second frame it warns at 0.5, not
+    # at 0.4; one that will pass 1.2 widths beside (drift 0.34) warns at 0.4, not at 0.3; a collision course (to hit
+    # at 0.5 widths, drift 0.14) warns at each
     heading = ((SHAPE[1] - 1) / 2.0, 60.0)
 
     def second(u0, uc, **kw):
@@ -1162,8 +1163,9 @@ def test_bearing_drift_is_the_largest_drift_the_alarm_without_a_course_allows():
         s.alarm_run = 2
         return estimate(s, TargetParams(alarm_warns=True, alarm_frames=2, **kw), FPS, 4, SHAPE, heading=heading).warning
 
-    assert TargetParams().bearing_drift == 0.4
-    assert second(3.5, 1.5, bearing_drift=0.5) and not second(3.5, 1.5)
+    assert TargetParams().bearing_drift == 0.3
+    assert second(3.5, 1.5, bearing_drift=0.5) and not second(3.5, 1.5, bearing_drift=0.4)
+    assert second(3.5, 1.2, bearing_drift=0.4) and not second(3.5, 1.2)
     assert second(3.5, 0.5) and second(3.5, 0.5, bearing_drift=0.4)
 
 

@@ -1759,7 +1759,7 @@ def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_it
     # warning stops. Off the camera's path (a heading measured 80 px left of the square) the seed's box splits only
     # where the square keeps its bearing, as an object on a collision course does (split_bearing, docs/history.md, "The
     # ground and the roadside, session 32"); not without split_bearing, and not where its centre moves away from the
-    # heading at 0.6 of the static world's rate (bearing_drift 0.4): a passing object's alarm, which the owner keeps
+    # heading at 0.6 of the static world's rate (bearing_drift 0.3): a passing object's alarm, which the owner keeps
     from types import SimpleNamespace
 
     from mlplc2.neuropils.lobula_plate import LocalMotion
