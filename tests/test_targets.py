@@ -1794,20 +1794,28 @@ def test_an_alarm_inside_a_larger_box_without_a_time_to_contact_gets_a_box_of_it
 
 
 @pytest.mark.parametrize("owner, on", [("misses", True), ("misses", False), ("warned long before", True),
-                                       ("warned long before", False), ("warned lately", True), ("warns", True)])
-def test_an_alarm_inside_a_larger_box_that_will_not_warn_gets_a_box_of_its_own(owner, on):
+                                       ("warned long before", False), ("warned lately", True), ("warns", True),
+                                       ("passed", True), ("passed", False), ("passed, no box found", True)])
+def test_an_alarm_inside_a_larger_box_that_will_not_warn_gets_a_box_of_its_own(owner, on, monkeypatch):
     # split_course and split_warned (docs/history.md, "An alarm seed under a target that will not warn"): as above (no
     # heading), but the larger target either holds a time to contact within the horizon (0.5 s) on a course that misses
     # by 3 extents, or warned before (on an object that has since hit) and not for more than warn_through (15) frames:
     # a target that will not warn. With the option the field's seed takes the square's box and warns; without it the
     # larger box keeps the alarm and vetoes it. A larger target that warned 2 frames before (the end of its own
     # object's warning: the alarm may still be that object's), or warns on its last frame, keeps the alarm.
+    # split_passed (docs/history.md, "A collider behind a collider that hit"): a larger target that warned 2 frames
+    # before but whose contact has passed (its last time to contact, 0.05 s at frame 8, ran out at 9.5: the box of an
+    # object that hit, left over the view) no longer keeps it, unless no box of its own is found for the seed (its box
+    # is the field's extent: the remains of the object that hit, handheld_4_h40_f90), here a box finder that finds none.
     from types import SimpleNamespace
 
     from mlplc2.neuropils.lobula_plate import LocalMotion
     from mlplc2.targets import TargetLayer
 
-    option = "split_course" if owner == "misses" else "split_warned"
+    option = {"misses": "split_course", "passed": "split_passed"}.get(owner.split(",")[0], "split_warned")
+    if owner == "passed, no box found":
+        monkeypatch.setattr(TargetLayer, "_boxes", lambda self, lm, gray, x, y, field=None, alarm=False, every=False:
+                            iter([(self._field_box(field, gray.shape[1], gray.shape[0]), False)] if field else []))
     p = TargetParams(alarm_warns=True, seed_lm=0, **{option: on})
     layer = TargetLayer(p, FPS)
     zero = np.zeros((240, 320), np.float32)
@@ -1819,13 +1827,16 @@ def test_an_alarm_inside_a_larger_box_that_will_not_warn_gets_a_box_of_its_own(o
             big = _put_track(layer, k - 1, (230.0, 110.0, 150.0, 150.0))
         if big is not None and owner == "misses":
             big.held = (k - 1, 0.5, 0.01, 3.0, (3.0, 0.0))
+        elif big is not None and owner.startswith("passed"):
+            big.held = (8.0, 0.05, 0.01, 0.2, (0.2, 0.0))
+            big.warned, big.last_warned, big.last_warning = True, False, k - 2
         elif big is not None:
             big.warned, big.last_warned = True, owner == "warns"
             big.last_warning = k - 2 if owner == "warned lately" else -1000
         fields = [SimpleNamespace(id=1, x=200, y=112, radius=40, response=1.0, collision=True)] if k >= 10 else []
         outs.append(layer.step(g, lm, fields, k))
     centred = [[t for t in out if abs(t.x - 200) < 5 and abs(t.y - 110) < 5] for out in outs[10:27]]
-    if on and owner in ("misses", "warned long before"):
+    if on and owner in ("misses", "warned long before", "passed"):
         assert all(len(c) == 1 and c[0].warning for c in centred[2:])
     else:
         assert not any(centred[2:])

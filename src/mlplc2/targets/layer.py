@@ -201,11 +201,15 @@ class TargetLayer:
         self._merge(now)
         seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
         split: dict = {}             # alarm_split: field id -> the owner its seed may replace
+        passed = set()               # split_passed: the fields of split whose owner's contact has passed
         for f in fields:
             owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not t.shadow]
             if owners:
                 owner = min(owners, key=lambda t: t.size)
-                if self._splits(owner, f):
+                plain = self._splits(owner, f)
+                if plain or self._splits_passed(owner, f):
+                    if not plain:
+                        passed.add(f.id)
                     split[f.id] = owner
                     seeds.append((int(f.x), int(f.y), f))
                 else:
@@ -262,6 +266,9 @@ class TargetLayer:
                 if host is not None or self._grows(levels, t, alarm=alarm, focus=focus):
                     break
                 t = None
+            if owner is not None and f.id in passed and t is not None and self._is_field_box(t, f, w, h):
+                self._own(owner, f, now)         # split_passed: only with a box of its own
+                continue
             if host is not None:          # a part of an object already tracked
                 if f is not None:
                     self._seat_on_alarm(host, t, alarm)
@@ -439,6 +446,21 @@ class TargetLayer:
         return p.alarm_split > 0 and self._alarming(f) and quiet and not t.shadow \
             and (t.held is None or t.held[1] is None or t.held[1] > p.horizon_s
                  or (p.split_course and t.held[3] is not None and t.held[3] > p.max_miss))
+
+    def _splits_passed(self, t: Track, f) -> bool:
+        """``TargetParams.split_passed``: whether field ``f`` in collision alarm, which track ``t`` would own and which
+        :meth:`_splits` keeps with it, is a seed of its own all the same because ``t``'s contact has passed
+        (:meth:`_opened`: the box of an object that hit). Its seed replaces ``t`` only with a box of its own found
+        (not the field's extent, :meth:`_field_box`: the remains of the object that hit are no object), under the
+        conditions of ``alarm_split``."""
+        p = self.params
+        return p.split_passed and p.alarm_split > 0 and self._alarming(f) and not t.shadow \
+            and self._opened(t, self._clock)
+
+    @classmethod
+    def _is_field_box(cls, t: Track, f, w: int, h: int) -> bool:
+        """Whether track ``t``'s box is field ``f``'s own extent (:meth:`_field_box`): no box was found for its seed."""
+        return all(abs(a - b) < 1e-6 for a, b in zip((t.cx, t.cy, t.w, t.h), cls._field_box(f, w, h)))
 
     def _seed_keeps_bearing(self, t: Track) -> bool:
         """``split_bearing``: whether the box of a new seed ``t`` kept its bearing over ``change_frames`` (its own

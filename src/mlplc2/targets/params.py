@@ -648,6 +648,18 @@ class TargetParams(ParameterSet):
                                alarm, which may still be its own object's. On since session 34 with ``split_course``:
                                thirty-three sets, two colliders more, as many false episodes; docs/history.md, "An
                                alarm seed under a target that will not warn".""", valid=Valid.boolean())
+    split_passed: bool = param(True, """``alarm_split`` also under an owner whose contact has passed (its last time
+                               to contact has run out with none since, ``passed_seeds``: the box of an object that
+                               hit, left over the view), whatever its warning and time to contact (``split_warned``
+                               and the horizon do not hold it), where a box of its own is found for the seed (not
+                               the field's extent: the remains of the object that hit are no object). A second
+                               object behind the first, on nearly the same line of sight, raises its field alarm
+                               inside that box as it grows after the first one's contact, and was hidden by it
+                               (``drone_4_h109``: two discs 13 frames apart, the second's alarm one frame after the
+                               first one's contact). The seed still needs a growing box on the path and an owner at
+                               least ``alarm_split`` times its size. On since session 51; docs/history.md, "A collider
+                               behind a collider that hit".""",
+                               valid=Valid.boolean())
     heading_patch: float = param(0.25, """The side of the patch about the heading (``heading_growth``) as a fraction of
                                  the box's smaller side: small enough to hold what lies at the heading, not the box's
                                  near ground.""", valid=Valid.real(minimum=0, maximum=1))
