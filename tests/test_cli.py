@@ -658,6 +658,28 @@ def test_params_says_whose_equation_numbers_it_cites(capsys):
     assert "Eq. 5-16" not in capsys.readouterr().out
 
 
+def test_the_outputs_record_whether_each_model_stabilised_its_gaze(data, tmp_path, capsys):
+    """A researcher's trial (session 51): the stabilised mLPLC2 of ``mlplc2 run`` and the paper's model
+    (``--no-stabilise``) give other fields on the same clip, and neither ``fields.json`` nor ``results.csv`` said
+    which ran. Now ``fields.json`` ``"stabilise"`` and the batch's ``stabilise`` column do, and the run's summary
+    names the models that compensated the camera's rotation."""
+    import csv
+
+    for flag, on in ((None, True), ("--no-stabilise", False)):
+        out = tmp_path / f"o{on}"
+        capsys.readouterr()
+        assert main(["run", str(data["avi"]), "--out", str(out), "-m", "mlplc2,lgmd2", "--end", "12",
+                     *([flag] if flag else [])]) == 0
+        printed = capsys.readouterr()
+        assert json.loads((out / "fields.json").read_text())["stabilise"] == {"mlplc2": on, "lgmd2": False}
+        assert ("gaze stabilised (the camera's rotation compensated): mlplc2;" in printed.out + printed.err) == on
+    assert main(["batch", str(data["avi"]), "--out", str(tmp_path / "b"), "-m", "mlplc2,lgmd2", "--no-stabilise",
+                 "-q"]) == 0
+    with (tmp_path / "b" / "results.csv").open() as f:
+        rows = list(csv.DictReader(f))
+    assert {r["model"]: r["stabilise"] for r in rows} == {"mlplc2": "False", "lgmd2": "False"}
+
+
 def test_run_params_file_reaches_the_models_and_is_recorded(data, tmp_path, capsys):
     """`mlplc2 run --params FILE.json` (the format of `batch --params`): a collision threshold no response reaches
     silences the looming square's alarms, the LGMD2 section reaches LGMD2, and fields.json records what each

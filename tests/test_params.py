@@ -105,6 +105,20 @@ def test_replace_validates_like_the_constructor():
     assert (q.r_af, q.t_a) == (30, 12.0) and type(q.r_af) is int and type(q.t_a) is float
 
 
+@pytest.mark.parametrize("make, message", [
+    (lambda: mlplc2.Params(R_AF=60), r"^Params\(\) has no parameter 'R_AF'; did you mean 'r_af'\?$"),
+    (lambda: mlplc2.Params().replace(T_a=12), r"^unknown parameter\(s\) T_a; did you mean 't_a'\?$"),
+    (lambda: mlplc2.targets.TargetParams(horizon=2.0), r"did you mean 'horizon_s'\?$"),
+    (lambda: mlplc2.Params(no_such_thing=1), r"has no parameter 'no_such_thing'; known: after_image, "),
+])
+def test_a_mistyped_parameter_names_the_one_meant(make, message):
+    # a researcher's trial (session 51): Params(R_AF=60) gave Python's "unexpected keyword argument", while the
+    # command line's --params file named the field meant; still a TypeError (and an InputError)
+    with pytest.raises(InputError, match=message) as info:
+        make()
+    assert isinstance(info.value, (TypeError, ValueError))
+
+
 def test_every_error_is_an_input_error():
     """InputValueError / InputTypeError are ValueError / TypeError, so older callers still catch them."""
     for kwargs in (dict(t_a="x"), dict(t_a=-1), dict(grace=True), dict(field_shape="hexagon"),

@@ -93,7 +93,12 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     assert (tmp_path / "b" / "responses.png").stat().st_size > 10_000
     for name in ("mlplc2", "lgmd2"):
         frames = sorted({r["frame"] for r in kept.rows if r["model"] == name and r["collision"]})
-        assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None}
+        responses = {r["frame"]: r["response"] for r in kept.rows if r["model"] == name and r["field_id"] is None}
+        peak = max(r["response"] for r in kept.rows if r["model"] == name)
+        assert lean.alarms[name] == {"count": len(frames), "first": frames[0] if frames else None,
+                                     "peak": pytest.approx(peak, rel=1e-6), "peak_frame": lean.alarms[name]["peak_frame"]}
+        if name == "lgmd2":               # the summary's "(peak P at frame F)" of a model without fields
+            assert responses[lean.alarms[name]["peak_frame"]] == pytest.approx(peak, rel=1e-6)
     # the summaries of dead fields wait on disk, and come back complete and in order
     assert lean.fields == kept.fields and any(f["died"] is not None for f in lean.fields["mlplc2"])
     a, b = (json.loads((tmp_path / d / "fields.json").read_text()) for d in "ab")
@@ -109,7 +114,9 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
 def test_run_api_rejects_ambiguous_models_and_params(data):
     from mlplc2._validation import InputError
 
-    with pytest.raises(InputError, match="t_a is not a model of this run"):
+    # a dict of Params fields, as reproduce(params=...) takes (a researcher's trial, session 51): the fix named
+    with pytest.raises(InputError, match=r"t_a is a field of mlplc2\.Params, not a model name: give "
+                                         r"params=mlplc2\.Params\(t_a=\.\.\.\) or params=\{'mlplc2'"):
         run(data["avi"], ["mlplc2"], out=False, end=5, params={"t_a": 1000})
     with pytest.raises(InputError, match="mlpcl2 is not a model"):
         run(data["avi"], ["mlplc2"], out=False, end=5, params={"mlpcl2": mlplc2.Params()})
@@ -247,10 +254,10 @@ def built(monkeypatch):
 
 def test_stabilise_reaches_the_models_that_have_it(data, built):
     """run(..., stabilise=True) (CLI --stabilise) builds the LPLC2 family with gaze stabilisation
-    and the other models as they are."""
+    and the other models as they are (``Model.stabilise`` False: LGMD2 compensates nothing)."""
     run(str(data["avi"]), ["mlplc2", "lgmd2"], out=False, quiet=True, end=5, stabilise=True)
     kinds = {type(m).__name__: getattr(m, "stabilise", None) for m in built}
-    assert kinds == {"MLPLC2": True, "LGMD2": None}
+    assert kinds == {"MLPLC2": True, "LGMD2": False}
 
 
 def test_stabilisation_is_on_by_default_for_run_and_stream_and_off_for_reproduce(data, built):

@@ -12,13 +12,14 @@ set serves every input: nothing here is tuned per video.
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import inspect
 import textwrap
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-from ._validation import InputValueError, Valid, check_fields
+from ._validation import InputTypeError, InputValueError, Valid, check_fields
 
 __all__ = ["Params", "ParameterSet", "GAMMA_MIN", "LM_SCALE_MAX", "param", "param_of", "parameter_table",
            "document_parameters"]
@@ -35,7 +36,16 @@ LM_SCALE_MAX = 1e15
 
 class ParameterSet:
     """What every frozen parameter dataclass offers (:class:`Params`, ``TargetParams``, the LGMD
-    and flow parameters): a validated :meth:`replace`, :meth:`to_dict` and :meth:`coerce`."""
+    and flow parameters): a validated :meth:`replace`, :meth:`to_dict` and :meth:`coerce`; a keyword that is no
+    field is refused with the field it most likely meant (``Params(R_AF=60)``: did you mean 'r_af'?)."""
+
+    def __new__(cls, *args, **kwargs):
+        if kwargs and dataclasses.is_dataclass(cls):
+            names = sorted(f.name for f in dataclasses.fields(cls) if f.init)
+            unknown = [k for k in kwargs if k not in names]
+            if unknown:
+                raise InputTypeError(f"{cls.__name__}() has no parameter {unknown[0]!r}{_did_you_mean(unknown[0], names)}")
+        return super().__new__(cls)
 
     @classmethod
     def coerce(cls, value, name: str):
@@ -54,11 +64,18 @@ class ParameterSet:
         names = {f.name for f in dataclasses.fields(self)}
         unknown = sorted(set(changes) - names)
         if unknown:
-            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}; known: {', '.join(sorted(names))}")
+            hint = _did_you_mean(unknown[0], sorted(names)) if len(unknown) == 1 else ""
+            raise InputValueError(f"unknown parameter(s) {', '.join(unknown)}{hint or '; known: ' + ', '.join(sorted(names))}")
         return dataclasses.replace(self, **changes)
 
     def to_dict(self) -> dict:
         return dataclasses.asdict(self)
+
+
+def _did_you_mean(word: str, names: list[str]) -> str:
+    """``"; did you mean 'X'?"`` for the field name closest to a mistyped ``word`` (case aside), else the names."""
+    close = difflib.get_close_matches(str(word).lower(), names, n=1, cutoff=0.6)
+    return f"; did you mean {close[0]!r}?" if close else f"; known: {', '.join(names)}"
 
 
 def param(default, doc: str, *, valid: Valid, symbol: str = "", unit: str = "", table: str | None = None):
@@ -153,6 +170,8 @@ class Params(ParameterSet):
     value; the remaining fields are the extras ``docs/model.md`` documents.
     Time constants are in milliseconds and turned into filter coefficients
     from the frame rate the model is built with (``tau_i = 1000 / fps``).
+    Equation numbers (here, in ``mlplc2 params`` and in the code) follow NOTES.md and docs/model.md, which count
+    the vDoG subtraction as Eq. 4: from Eq. 5 on they are one above the compiled paper's own.
 
     Valid values (the table below; checked at construction and by
     :meth:`replace`; one-line :class:`mlplc2.InputError` otherwise, a

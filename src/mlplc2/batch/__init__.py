@@ -51,7 +51,7 @@ __all__ = ["batch", "BatchResult", "BatchInterrupted", "param_sets", "model_para
            "start_local_cluster", "param_label", "RESULT_COLUMNS", "DONE_MARKER"]
 
 #: Columns of ``results.csv``, in order.
-RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "n_frames", "fields", "alarms",
+RESULT_COLUMNS = ("video", "model", "label", "param_set", "params", "stabilise", "n_frames", "fields", "alarms",
                   "first_alarm_frame", "warnings", "first_warning_frame", "seconds", "status", "error", "out")
 #: Written last into a task's folder: the task is finished when it exists.
 DONE_MARKER = "done.json"
@@ -93,7 +93,8 @@ def run_task(task: dict) -> dict:
         alarms = res.alarms[task["model"]]
         targets = res.target_summaries.get(task["model"])  # None: a model without targets
         warned = [t["first_warning_frame"] for t in targets or () if t["first_warning_frame"] is not None]
-        row.update(n_frames=res.n_frames, fields=len(res.fields.get(task["model"], [])),
+        row.update(n_frames=res.n_frames, stabilise=res.stabilise.get(task["model"]),
+                   fields=len(res.fields.get(task["model"], [])),
                    alarms=alarms["count"], first_alarm_frame=alarms["first"],
                    warnings=None if targets is None else len(warned), first_warning_frame=min(warned, default=None),
                    status="truncated" if res.truncated else "ok", error=_one_line(res.message) if res.truncated else "")
@@ -111,7 +112,7 @@ def run_task(task: dict) -> dict:
 def _error_row(task: dict, error: str = "") -> dict:
     """The row of a task that failed with the one-line message ``error``."""
     return {"video": task["video"], "model": task["model"], "param_set": task["param_set"],
-            "params": json.dumps(task["overrides"], sort_keys=True), "n_frames": None, "fields": None,
+            "params": json.dumps(task["overrides"], sort_keys=True), "stabilise": None, "n_frames": None, "fields": None,
             "alarms": None, "first_alarm_frame": None, "warnings": None, "first_warning_frame": None,
             "seconds": None, "status": "error", "error": error,
             "out": task["rel_out"]}
@@ -161,7 +162,7 @@ def _done_row(task: dict) -> dict | None:
         return None
     if saved.get("pset") != task["pset"] or saved.get("video") != task["video"] \
             or saved.get("run_options", {}) != task.get("run_options", {}) \
-            or "warnings" not in saved:  # done before results.csv had the warning columns: rerun
+            or "warnings" not in saved or "stabilise" not in saved:  # done before results.csv had these columns
         return None
     return {k: saved.get(k) for k in RESULT_COLUMNS}
 

@@ -200,6 +200,10 @@ def _print_run_summary(args, result) -> None:
     source = "stdin" if result.source == STDIN else result.source   # as the progress bar says
     frames = f"{result.n_frames} frame{'' if result.n_frames == 1 else 's'}"
     lines = [f"{frames} of {source} ({size}, {result.fps:g} fps) {_timing(result)}"]
+    family = [n for n in result.models if result.stabilise.get(n) and n != "flow"]
+    if family:                 # what fields.json's "stabilise" records: the paper's model is --no-stabilise
+        lines.append(f"  gaze stabilised (the camera's rotation compensated): {', '.join(family)}; "
+                     f"--no-stabilise runs the paper's model")
     for name in result.models:
         fields = result.fields.get(name, [])
         if fields:
@@ -212,9 +216,10 @@ def _print_run_summary(args, result) -> None:
                              f"{'' if f['died'] is None else f['died']}, peak {f['peak_response']:.3g} "
                              f"at frame {f['peak_frame']}{alarm}")
         else:
-            first_alarm = result.alarms[name]["first"]
-            first = f", first alarm at frame {first_alarm}" if first_alarm is not None else ", no alarm"
-            lines.append(f"  {name}: no fields{first}")
+            alarms = result.alarms[name]
+            first = f", first alarm at frame {alarms['first']}" if alarms["first"] is not None else ", no alarm"
+            peak = "" if alarms.get("peak") is None else f" (peak {alarms['peak']:.3g} at frame {alarms['peak_frame']})"
+            lines.append(f"  {name}: no fields{first}{peak}")
         targets = result.target_summaries.get(name)
         if targets:
             warned = sorted((t for t in targets if t["first_warning_frame"] is not None),

@@ -178,7 +178,7 @@ class Record:
 
     Always: ``fields`` (id -> :class:`FieldHistory`, their summaries; with ``spill`` only the
     live ones), ``targets`` (id -> :class:`TargetHistory`), ``alarm_count`` and
-    ``first_alarm_frame`` (frames with ``Output.collision``). With ``series`` (the default)
+    ``first_alarm_frame`` (frames with ``Output.collision``), ``peak_response`` and ``peak_frame``. With ``series`` (the default)
     also per frame: ``alarm[frame]`` (``Output.collision``), ``response_at[frame]``
     (``Output.response``), ``fields_at[frame]``: ``(field_id, x, y, response, collision)`` of
     every field, ``targets_at[frame]``: its :class:`TargetRow` s; and each field's series.
@@ -200,6 +200,9 @@ class Record:
     targets: dict[int, TargetHistory] = field(default_factory=dict)
     alarm_count: int = 0
     first_alarm_frame: int | None = None
+    peak_response: float | None = None
+    """The largest ``Output.response`` of any frame (None before the first), and its frame: ``peak_frame``."""
+    peak_frame: int | None = None
     has_targets: bool = False
     localises: bool = False
     label: str = ""
@@ -262,6 +265,8 @@ class Recorder:
             rec.alarm_count += 1
             if rec.first_alarm_frame is None:
                 rec.first_alarm_frame = index
+        if rec.peak_response is None or out.response > rec.peak_response:
+            rec.peak_response, rec.peak_frame = float(out.response), index
         if self.series:
             rec.alarm[index] = bool(out.collision)
             rec.response_at[index] = float(out.response)

@@ -284,6 +284,9 @@ class Model(abc.ABC):
     #: True for models built with ``stabilise=`` (gaze stabilisation: the camera's rotation
     #: compensated before the front end; docs/model.md, "Camera motion").
     stabilises: ClassVar[bool] = False
+    #: Whether this model compensates the camera's rotation before its front end (gaze stabilisation; an instance's
+    #: ``stabilise=``, always for the optical-flow baseline): ``fields.json`` and ``results.csv`` record it.
+    stabilise: bool = False
 
     def __init__(self, fps: float = 30.0, params: Any = None, repeat_threshold: float | str | None = "auto",
                  work_width: int | None = WORK_WIDTH):

@@ -311,6 +311,8 @@ class FlowTTC(Model):
     """
 
     has_targets = True
+    #: the flow baseline always compensates the camera's rotation (docs/model.md, "Camera motion")
+    stabilise = True
 
     def __init__(self, fps: float = 30.0, params: FlowParams | None = None, *, hfov_deg: float | None = None,
                  target_params: TargetParams | None = None, repeat_threshold: float | str | None = "auto",

@@ -185,7 +185,25 @@ class MLPLC2(_LPLC2Family):
     backend : {"auto", "numba", "reference"}, keyword-only
         Implementation (:mod:`mlplc2.backend`): the fast OpenCV + Numba one by default, the
         plain reference one on request or when Numba is unavailable (it never imports
-        Numba). Both give the same fields; the LM maps agree to ~1e-6.
+        Numba). Both give the same fields; the LM maps agree to ~1e-6. The neuropil modules
+        (:mod:`mlplc2.neuropils`) are the reference: an edit there changes ``"reference"`` only.
+    repeat_threshold : float, "auto" or None, keyword-only
+        Which frames are repeats the model holds instead of stepping (duplicated frames of a
+        frame-rate conversion; docs/model.md, "Repeated frames"): ``"auto"`` (the default) decides
+        from the frames themselves, a number is the largest change (grey levels) of a repeat, None
+        steps every frame.
+    work_width : int or None, keyword-only
+        Frames wider than this (px; default 320, the paper's videos) are reduced to it, keeping
+        their aspect, before the front end; outputs stay in the frame's own pixels. None: every
+        frame at its own size (docs/model.md, "Working width").
+
+    Attributes
+    ----------
+    maps : LocalMotion or None
+        The lobula-plate maps of the last frame (``LM_r``, ``LM_l``, ``LM_d``, ``LM_u`` and
+        ``LM``, Eq. 11-12, at the working size), for inspection; None before the first frame.
+    backend : str
+        The implementation in use, ``"numba"`` or ``"reference"``.
 
     Examples
     --------

@@ -57,6 +57,7 @@ from ..io.gyro import Gyro
 from ..io.formats import STDIN, without_password
 from ..models.base import (Model, available_models, check_repeat_threshold, frame_change, get_model,
                           looks_duplicated, resolve_names)
+from ..params import Params
 from ..plots import DRAW_FIELDS
 from ..targets import TargetParams, check_hfov
 from ..evaluation.match import match_fields
@@ -230,6 +231,13 @@ def _model_options(options: RunOptions, names: list[str]) -> RunOptions:
     if isinstance(params, Mapping):
         params = {str(k).strip().lower(): v for k, v in params.items()}
         unknown = sorted(k for k in params if k not in names)
+        family = {f.name for f in dataclasses.fields(Params)}
+        if unknown and all(k in family for k in unknown):     # reproduce(params=...) takes such a dict
+            name = next((n for n in names if n in ("mlplc2", "slplc2", "lplc2")), "mlplc2")
+            first = unknown[0]
+            raise InputValueError(f"params: {', '.join(unknown)} {'is a field' if len(unknown) == 1 else 'are fields'} "
+                                  f"of mlplc2.Params, not a model name: give params=mlplc2.Params({first}=...) or "
+                                  f"params={{{name!r}: {{{first!r}: ...}}}}")
         if unknown:
             raise InputValueError(f"params: {', '.join(unknown)} is not a model of this run "
                                   f"({', '.join(dict.fromkeys(names))}); give one Params for every "
@@ -505,7 +513,8 @@ def _open(source, models, options: RunOptions, out) -> tuple[FrameSource, list[M
                        model_size=src.out_size, start=src.start, duplicated=duplicated, out=out_dir,
                        repeated={m.name: 0 for m in built},
                        hfov_deg=next((m.hfov_deg for m in built if getattr(m, "hfov_deg", None) is not None),
-                                     None), params={m.name: _changed(m) for m in built})
+                                     None), params={m.name: _changed(m) for m in built},
+                       stabilise={m.name: bool(getattr(m, "stabilise", False)) for m in built})
     return src, built, result
 
 
@@ -720,7 +729,8 @@ class _Frames:
             result.fields = {name: recorder.summaries(name) for name in names}
             result.target_summaries = {name: recorder.target_summaries(name) for name in names
                                        if recorder.records[name].has_targets}
-            result.alarms = {name: {"count": r.alarm_count, "first": r.first_alarm_frame}
+            result.alarms = {name: {"count": r.alarm_count, "first": r.first_alarm_frame, "peak": r.peak_response,
+                                    "peak_frame": r.peak_frame}
                              for name, r in recorder.records.items()}
 
 

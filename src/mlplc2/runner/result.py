@@ -46,7 +46,8 @@ class RunResult:
         with ``keep_rows=False`` (the rows are then only in the CSV).
     alarms : dict
         Per model name, the frames with the collision flag set: ``{"count": n,
-        "first": frame or None}`` (kept whatever ``keep_rows`` says).
+        "first": frame or None}``, and the largest ``Output.response`` with its frame (``"peak"``,
+        ``"peak_frame"``; None without frames); kept whatever ``keep_rows`` says.
     fields : dict
         Per model name, the list of field summaries written to ``fields.json``.
     fps : float
@@ -88,6 +89,9 @@ class RunResult:
     """The rows of ``targets.csv`` (keys :data:`TARGET_COLUMNS`; empty with ``keep_rows=False``)."""
     alarms: dict[str, dict] = field(default_factory=dict)
     hfov_deg: float | None = None
+    stabilise: dict[str, bool] = field(default_factory=dict)
+    """Per model, whether it compensated the camera's rotation before its front end (gaze stabilisation,
+    ``Model.stabilise``): the paper's model does not (``--no-stabilise``); ``fields.json`` ``"stabilise"``."""
     seconds: float = 0.0
     target_summaries: dict[str, list[dict]] = field(default_factory=dict)
     """Per model with targets, one summary per target (``fields.json`` ``"targets"``)."""
@@ -144,6 +148,7 @@ class RunResult:
             "interrupted": self.interrupted,
             "error": self.error,
             "hfov_deg": self.hfov_deg,
+            "stabilise": self.stabilise,
             "models": self.fields,
             "targets": self.target_summaries,
             "duplicated": self.duplicated,
