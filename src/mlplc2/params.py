@@ -41,10 +41,11 @@ class ParameterSet:
 
     def __new__(cls, *args, **kwargs):
         if kwargs and dataclasses.is_dataclass(cls):
-            names = sorted(f.name for f in dataclasses.fields(cls) if f.init)
+            names = {f.name for f in dataclasses.fields(cls) if f.init}
             unknown = [k for k in kwargs if k not in names]
             if unknown:
-                raise InputTypeError(f"{cls.__name__}() has no parameter {unknown[0]!r}{_did_you_mean(unknown[0], names)}")
+                raise InputTypeError(f"{cls.__name__}() has no parameter {unknown[0]!r}"
+                                     f"{_did_you_mean(unknown[0], sorted(names))}")
         return super().__new__(cls)
 
     @classmethod

@@ -200,9 +200,9 @@ def _print_run_summary(args, result) -> None:
     source = "stdin" if result.source == STDIN else result.source   # as the progress bar says
     frames = f"{result.n_frames} frame{'' if result.n_frames == 1 else 's'}"
     lines = [f"{frames} of {source} ({size}, {result.fps:g} fps) {_timing(result)}"]
-    family = [n for n in result.models if result.stabilise.get(n) and n != "flow"]
-    if family:                 # what fields.json's "stabilise" records: the paper's model is --no-stabilise
-        lines.append(f"  gaze stabilised (the camera's rotation compensated): {', '.join(family)}; "
+    turned = [n for n in result.models if result.stabilise.get(n)]
+    if turned:                 # what fields.json's "stabilise" records: the paper's model is --no-stabilise
+        lines.append(f"  gaze stabilised (the camera's rotation compensated): {', '.join(turned)}; "
                      f"--no-stabilise runs the paper's model")
     for name in result.models:
         fields = result.fields.get(name, [])
