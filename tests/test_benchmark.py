@@ -9,6 +9,7 @@ import io
 import json
 import warnings
 import shutil
+from pathlib import Path
 
 import pytest
 
@@ -65,6 +66,16 @@ def test_quick_benchmark_prints_the_table_and_writes_the_report(quick):
         assert by["texture_pan"][m]["collision_objects"] == 1
     assert "| moving camera | 2 |" in (out / "benchmark.md").read_text()
     assert "# mlplc2 benchmark" in (out / "benchmark.md").read_text()
+    # the report says what its columns mean (a new user met "lapsed" and "TTC error ... 6 %" undefined), and
+    # docs/benchmark.md defines each of them
+    md = (out / "benchmark.md").read_text()
+    docs = (Path(__file__).resolve().parents[1] / "docs" / "benchmark.md").read_text()
+    keys = [ln.split(" | ")[0][2:] for ln in docs.split("| column of `benchmark.md` | meaning |", 1)[1].splitlines()[2:]
+            if ln.startswith("| ")]
+    for name in ("warned", "lead", "lapsed", "false episodes", "false frames", "TTC error", "TTC coverage",
+                 "targets/object", "real clips", "ms/frame"):
+        assert f"*{name}*" in md, name
+        assert any(k.startswith(name) for k in keys), name
 
 
 def test_quick_benchmark_rerun_reuses_the_tasks_and_quiet_prints_nothing(quick, capsys):

@@ -175,6 +175,9 @@ def test_run_summary_names_each_warning_target(data, tmp_path, capsys):
                 runs.append([f, f])
         t = next(t for t in summary if str(t["id"]) == tid)
         assert t["warning_runs"] == runs and sum(b - a + 1 for a, b in runs) == t["warning_frames"]
+        # the row of its first warning lists its fields as the target's own "fields" does: ids, not a CSV cell
+        assert t["at_first_warning"]["fields"] == [int(v) for v in first[tid]["fields"].split()]
+        assert set(t["at_first_warning"]["fields"]) <= set(t["fields"])
         line = next(ln for ln in text.splitlines() if ln.strip().startswith(f"T{tid} warned from frame "))
         spans = ", ".join(str(a) if a == b else f"{a}-{b}" for a, b in runs[:4])
         assert f"({spans}" in line

@@ -15,8 +15,8 @@ from mlplc2.evaluation.truth import parse
 from mlplc2.models import MLPLC2
 from mlplc2.stimuli import ApproachObject, CameraPath, approach
 from mlplc2.targets import Observation, TargetLayer, TargetParams, Track, estimate
-from mlplc2.targets.contact import expansion_centre
-from mlplc2.targets.warning import cut_course, cut_keeps_bearing, drift, exits, holds, off_path, seed_course
+from mlplc2.targets.contact import expansion_centre, fit_centre_course
+from mlplc2.targets.warning import course, cut_course, cut_keeps_bearing, drift, exits, holds, off_path, seed_course
 
 FPS = 30.0
 SHAPE = (120, 160)                     # (h, w)
@@ -332,6 +332,65 @@ def test_the_expansion_centre_is_the_fixed_point_of_the_scaling():
     assert expansion_centre(xs, ys, ls) == pytest.approx((40.0, 70.0), abs=1e-6)
     assert expansion_centre(xs, ys, [0.0, 0.01, 0.02, 0.03]) is None  # too little growth to say
     assert expansion_centre(xs[:2], ys[:2], ls[:2]) is None
+    # the course from it: the centre's slope against the size, in box sizes (25 px per unit of scale over a box 50 px
+    # wide at scale 1: 0.5 widths right; -10 px over 20 px tall: 0.5 heights up)
+    ws = [50.0 * math.exp(v) for v in ls]
+    assert fit_centre_course(xs, ys, ls, ws, [20.0 * math.exp(v) for v in ls]) == pytest.approx((0.5, -0.5), abs=1e-6)
+    assert fit_centre_course(xs, ys, [0.0, 0.01, 0.02, 0.03], ws) is None
+
+
+def _off_axis_collider(growth: float = 1.0, contact: int = 35) -> Track:
+    """A collider 100 px right of the principal point (frames 10-19 of an approach at constant speed, contact at frame
+    ``contact``, 12 px wide at frame 0: 8 widths off) that keeps its bearing, as a panning camera's collider does in
+    stabilised pixels; its box exact, its alignment's log-scale ``growth`` times the true one (below 1: a time to
+    contact fitted long)."""
+    frames = list(range(10, 20))
+    ls = [math.log(contact / (contact - k)) for k in frames]
+    x0 = (SHAPE[1] - 1) / 2.0 + 100.0
+    t = Track(1, frames[0], x0, 60.0, 12.0 * math.exp(ls[-1]), 12.0 * math.exp(ls[-1]), log_s=growth * ls[-1])
+    t.history = deque(Observation(k, growth * v, x0, 60.0, 12.0 * math.exp(v), 0.0) for k, v in zip(frames, ls))
+    t.inside = deque(t.history)
+    t.last_answer = frames[-1]                                       # looming evidence: a field answered
+    return t
+
+
+def test_the_course_from_the_boxs_own_expansion_centre_needs_no_time_to_contact():
+    # course_centre: a collider 8 widths right of the principal point that keeps its bearing passes through the
+    # camera: the line of its offset in widths, evaluated at a time to contact 30 % long, misses by 30 % of its
+    # offset; its centre's slope against its size is 0, whatever the time to contact. The static world beside the
+    # path (a patch 0.83 widths off the heading, expanding about it) keeps its course either way
+    p = TargetParams()
+    heading, span = ((SHAPE[1] - 1) / 2.0, 60.0), p.span(p.min_frames - 1, FPS)
+    exact = 35 - 19                                                   # frames from the newest to contact
+    t = _off_axis_collider()
+    assert math.hypot(*course(t, heading, exact, span)) == pytest.approx(0.0, abs=0.05)
+    assert math.hypot(*course(t, heading, 1.3 * exact, span)) > 1.0
+    assert math.hypot(*course(t, heading, 1.3 * exact, span, centre=p.centre_growth)) == pytest.approx(0.0, abs=1e-6)
+    patch = _approach((SHAPE[1] - 1) / 2.0 + 20.0, (SHAPE[1] - 1) / 2.0, True)
+    for ttc in (CONTACT - 19, 1.3 * (CONTACT - 19)):
+        assert course(patch, heading, ttc, span, centre=p.centre_growth) == pytest.approx((20 / 24, 0.0), abs=1e-3)
+    # in the warning rule: its alignment grew 0.7 of what its box did (a time to contact fitted long, as a pan's
+    # perspective gives at the frame's edge): with course_centre (the default) the collider warns on a course near 0,
+    # without it the course misses by more than max_miss and it does not
+    on = estimate(_off_axis_collider(0.7), p, FPS, 19, SHAPE, heading=heading)
+    off = estimate(_off_axis_collider(0.7), replace(p, course_centre=False), FPS, 19, SHAPE, heading=heading)
+    assert p.course_centre and on.ttc_s > 1.2 * exact / FPS and on.miss < 0.1 and on.warning
+    assert off.miss > p.max_miss and not off.warning
+    # too little growth over the course's points to tell a slope: the line alone
+    assert course(t, heading, 1.3 * exact, span, centre=10.0) == course(t, heading, 1.3 * exact, span)
+    # on a frame where a field of it is in collision alarm, the shorter of the two: an object crossing towards the
+    # path (2 widths right of the heading at frame 0, 0.9 at contact) whose line, at a time to contact 30 % long, says
+    # 0.75 widths, its expansion centre 0.9
+    frames = list(range(10, 20))
+    ls = [math.log(35 / (35 - k)) for k in frames]
+    crossing = _off_axis_collider()
+    crossing.history = deque(Observation(k, v, heading[0] + (2.0 - 1.1 * k / 35) * 12.0 * math.exp(v), 60.0,
+                                         12.0 * math.exp(v), 0.0) for k, v in zip(frames, ls))
+    crossing.inside = deque(crossing.history)
+    line = course(crossing, heading, 1.3 * exact, span)
+    own = course(crossing, heading, 1.3 * exact, span, centre=p.centre_growth)
+    assert own == pytest.approx((0.9, 0.0), abs=1e-6) and 0.7 < line[0] < 0.8
+    assert course(crossing, heading, 1.3 * exact, span, centre=p.centre_growth, alarm=True) == line
 
 
 def _young_static(heading_x: float, x0: float, frames=(0, 1, 2), width: float = 20.0) -> Track:
@@ -557,9 +616,11 @@ def test_a_warning_begins_only_on_a_time_to_contact_that_falls_as_an_approach_do
         return t
 
     t = fitted_since(5, ttc + 0.03)                       # 6 frames before: 0.03 s longer (a fall of 0.15 s per s)
-    assert not estimate(t, on, FPS, 12, SHAPE).warning
+    out = estimate(t, on, FPS, 12, SHAPE)
+    assert not out.warning and out.held_by == "onset_fall"            # the output names the rule that held it back
     assert not t.spent and not t.warned
-    assert estimate(fitted_since(5, ttc + 6 / FPS), on, FPS, 12, SHAPE).warning   # an approach's: 0.2 s longer
+    out = estimate(fitted_since(5, ttc + 6 / FPS), on, FPS, 12, SHAPE)             # an approach's: 0.2 s longer
+    assert out.warning and out.held_by is None
     # an estimate of an earlier run of fits (another box, before a gap) is not compared with
     assert estimate(fitted_since(8, ttc + 0.03), on, FPS, 12, SHAPE).warning
     # stall_sigma: an older estimate 0.03 s longer but uncertain by 0.2 s (a fit across a box re-seated) cannot say that
@@ -590,7 +651,8 @@ def test_a_rise_of_the_time_to_contact_within_its_noise_does_not_hold_a_warning_
 
     assert estimate(settling(0.02), on, FPS, 12, SHAPE).warning
     t = settling(0.02)
-    assert not estimate(t, off, FPS, 12, SHAPE).warning
+    out = estimate(t, off, FPS, 12, SHAPE)
+    assert not out.warning and out.held_by == "countdown_onset"
     assert t.stalls == 1 and not t.spent
     assert not estimate(settling(0.2), on, FPS, 12, SHAPE).warning
     assert not estimate(settling(0.2), off, FPS, 12, SHAPE).warning
@@ -615,7 +677,8 @@ def test_a_lapsed_warning_begins_again_only_on_a_short_course():
 
     out = estimate(lapsed(), off, FPS, last, SHAPE)
     assert out.warning and 0.4 < out.miss <= 1.0                  # the return over the patch
-    assert not estimate(lapsed(), on, FPS, last, SHAPE).warning
+    out = estimate(lapsed(), on, FPS, last, SHAPE)
+    assert not out.warning and out.held_by == "reonset_miss"
     assert estimate(lapsed(going=True), on, FPS, last, SHAPE).warning
     assert estimate(lapsed(static=False), on, FPS, last, SHAPE).warning
     alarmed = lapsed()
@@ -640,6 +703,7 @@ def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     assert o.warning and o.miss == pytest.approx(0.9, abs=1e-6)     # the warning onset_miss removes
     o = estimate(passing(0.9), on, FPS, last, SHAPE)
     assert not o.warning and o.miss == pytest.approx(0.9, abs=1e-6) and o.ttc_s is not None
+    assert o.held_by == "onset_miss"                 # within max_miss, held back: the output says by which rule
     assert estimate(passing(0.5), on, FPS, last, SHAPE).warning
     alarmed = passing(0.9)
     alarmed.last_alarm = last
@@ -647,7 +711,8 @@ def test_the_fit_begins_a_warning_only_on_a_course_within_onset_miss():
     warned = passing(0.9)
     warned.warned = warned.last_warned = True                        # a warning that goes on
     assert estimate(warned, on, FPS, last, SHAPE).warning
-    assert not estimate(passing(1.1), off, FPS, last, SHAPE).warning          # beyond max_miss either way
+    o = estimate(passing(1.1), off, FPS, last, SHAPE)
+    assert not o.warning and o.held_by is None       # beyond max_miss either way: the main rule, nothing held back
 
 
 def test_a_warning_ends_for_good_when_its_time_to_contact_stops_counting_down():

@@ -112,6 +112,20 @@ def test_the_brake_consumer_of_robot_md_takes_a_warning_without_a_time_to_contac
     assert "0.50 s" in out[1]
 
 
+def test_the_readmes_first_python_example_warns_where_it_says(real_dir, capsys):
+    """README, "Use it from Python": its first block, ``mlplc2.stream`` over a clip, prints the warning frames, the
+    first at the frame its comment names on ``helmet_attack.avi``."""
+    import re
+
+    text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
+    block = text.split("```python\n", 1)[1].split("```", 1)[0]
+    frame = int(re.search(r"on helmet_attack.avi: frame (\d+)", block).group(1))
+    clip = str(real_dir / "helmet_attack.avi")
+    exec(compile(block.replace('"clip.mp4"', repr(clip)), "README.md", "exec"), {})  # noqa: S102 - the README's code
+    lines = capsys.readouterr().out.splitlines()
+    assert lines and int(lines[0].split()[0]) == frame
+
+
 def test_the_readme_python_example_runs_and_names_real_attributes():
     """README, "Use it from Python": the block runs on a short approach (``frames`` is the reader's),
     and the attributes its comments list (``.id .x ...`` of a field, ``.r ... .magnitude`` of
@@ -121,7 +135,7 @@ def test_the_readme_python_example_runs_and_names_real_attributes():
     from mlplc2 import stimuli
 
     text = (Path(__file__).resolve().parents[1] / "README.md").read_text(encoding="utf-8")
-    block = text.split("```python\n", 1)[1].split("```", 1)[0]
+    block = next(b.split("```", 1)[0] for b in text.split("```python\n")[1:] if "model.step(frame)" in b)
     scope = {"frames": stimuli.looming(size=(160, 120), contact_time=0.5).frames}
     exec(compile(block.replace("model.reset()", ""), "README.md", "exec"), scope)
     model, out = scope["model"], scope["out"]

@@ -198,6 +198,11 @@ def test_label_only_clips_have_no_object_level_false_alarms():
     only_b = evaluate(_result("clipB.avi", 60, field_rows=fr_b), gt)
     assert only_b.models["mlplc2"]["false_alarms"] is None and only_b.models["mlplc2"]["false_alarms_per_min"] is None
     assert "| - | - |" in only_b.object_table()
+    # its row of the per-video table counts no objects: "-" (a new user read "detected 0/0" as a miss), while the
+    # object-level clip keeps its counts
+    rows = {line.split(" | ")[1]: line for line in ev.video_table().splitlines()[2:]}
+    assert "| 60 | - | - | - |" in rows["clipB.avi"] and "| TP |" in rows["clipB.avi"]
+    assert "| 120 | 1 | 1/1 | 1/1 |" in rows["clipA.avi"]
 
 
 def test_clip_level_metrics():
@@ -1290,15 +1295,15 @@ def test_results_folder_scores_like_the_run_result(tmp_path):
 
 
 def test_results_folder_with_a_targets_csv_from_before_ttc_age_s_scores_alike(tmp_path):
-    """A ``targets.csv`` written before its ``ttc_age_s`` and ``ttc_sigma_s`` columns (the last ones) loads and
-    scores as a new one."""
-    assert TARGET_COLUMNS[-2:] == ("ttc_age_s", "ttc_sigma_s")
+    """A ``targets.csv`` written before its ``ttc_age_s``, ``ttc_sigma_s`` and ``held_by`` columns (the last ones)
+    loads and scores as a new one."""
+    assert TARGET_COLUMNS[-3:] == ("ttc_age_s", "ttc_sigma_s", "held_by")
     gt, targets = _case()
     res = result("a.mp4", 30, targets=targets)
     _write_folder(tmp_path / "new", res)
     _write_folder(tmp_path / "old", res)
     with open(tmp_path / "old" / "targets.csv", "w", newline="") as f:
-        w = csv.DictWriter(f, fieldnames=TARGET_COLUMNS[:-2], extrasaction="ignore", lineterminator="\n")
+        w = csv.DictWriter(f, fieldnames=TARGET_COLUMNS[:-3], extrasaction="ignore", lineterminator="\n")
         w.writeheader()
         w.writerows(res.targets)
     old, new = evaluate(tmp_path / "old", gt), evaluate(tmp_path / "new", gt)

@@ -269,6 +269,7 @@ def test_run_stops_after_max_frames_and_reports_latency(data, tmp_path, capsys):
     out = capsys.readouterr().out
     assert out.startswith("7 frames of")
     assert "latency from decoding to results: median" in out
+    assert "(a file: the wait in the decoding queue included" in out   # not a live source's latency
     summary = json.loads((tmp_path / "o" / "fields.json").read_text())
     assert summary["n_frames"] == 7 and set(summary["latency_ms"]) == {"median_ms", "p99_ms", "max_ms"}
 
@@ -640,7 +641,7 @@ def test_each_target_says_how_old_its_time_to_contact_is_and_how_sure(tmp_path):
     mlplc2.run(clip, ["mlplc2"], out=tmp_path / "o", repeat_threshold=None, quiet=True)
     with open(tmp_path / "o" / "targets.csv", newline="") as f:
         reader = csv.DictReader(f)
-        assert reader.fieldnames[-2:] == ["ttc_age_s", "ttc_sigma_s"]
+        assert reader.fieldnames[-3:] == ["ttc_age_s", "ttc_sigma_s", "held_by"]
         rows = {(int(r["frame"]), int(r["target_id"])): r for r in reader}
     shown = {}                                    # (frame, id): the JSON target
     for line in lines:
@@ -686,7 +687,10 @@ def test_a_targets_csv_row_reads_back_every_cell_it_was_written_with():
 
     row = {"x": "10.5", "y": "20.0", "width": "8.0", "height": "6.0", "ttc_s": "0.75", "miss": "0.1", "warning": "1",
            "fields": "3 4", "azimuth_deg": "12.5", "elevation_deg": "-3.25", "ttc_age_s": "0.0333",
-           "ttc_sigma_s": "0.0412"}
+           "ttc_sigma_s": "0.0412", "held_by": ""}
+    again = TargetRow.from_row(dict(row, frame="5", model="mlplc2", target_id="2")).values()
+    assert {k: ("" if v is None else str(v)) for k, v in again.items()} == row
+    row["held_by"], row["warning"] = "onset_fall", "0"                 # the rule that held a warning back
     again = TargetRow.from_row(dict(row, frame="5", model="mlplc2", target_id="2")).values()
     assert {k: ("" if v is None else str(v)) for k, v in again.items()} == row
 

@@ -77,6 +77,14 @@ def test_a_resize_that_stretches_the_frames_warns(data):
 def test_run_api_without_outputs_and_dataframe(data, tmp_path):
     res = run(str(data["images"]), ["mlplc2", "lplc2"], out=False, progress=False)
     assert res.out is None and res.files == {} and res.n_frames == 40
+    # a notebook shows the repr: a few lines, not the rows (a new user's 47-frame clip printed 55,849 characters)
+    text = repr(res)
+    assert len(text.splitlines()) == 4 and len(text) < 600 and str(res.rows[0]) not in text
+    first = {m: res.alarms[m]["first"] for m in res.models}
+    assert f"mlplc2: collision alarm on {res.alarms['mlplc2']['count']} frames (first {first['mlplc2']})" in text
+    warned = [t["first_warning_frame"] for t in res.target_summaries["mlplc2"] if t["first_warning_frame"] is not None]
+    assert (f"first warning at frame {min(warned)}" if warned else "first warning none") in text
+    assert "complete" in text.splitlines()[0] and "no files written" in text
     assert not (data["images"].parent / "nothing").exists()
     pd = pytest.importorskip("pandas")
     df = res.to_dataframe()

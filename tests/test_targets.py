@@ -842,6 +842,8 @@ def test_a_warning_is_shown_from_its_second_frame_unless_a_field_alarms():
     confirmed = _layer_run(frames, 99, (200, 90))
     k, tid = first(at_once)
     assert first(confirmed) == (k + 1, tid)
+    held = next(t for t in confirmed[k] if t.id == tid)                # the frame it was decided: held back, named
+    assert not held.warning and held.held_by == "onset_confirm"
     shown = [[t.id for t in out if t.warning] for out in confirmed[k + 1:]]
     assert shown == [[t.id for t in out if t.warning] for out in at_once[k + 1:]]
     on = _layer_run(frames, 8, (200, 90))

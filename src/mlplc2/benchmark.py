@@ -325,6 +325,20 @@ def _holdout_text(holdout: int | list[int]) -> str:
     return ", ".join(f"{a}" if a == b else f"{a}-{b}" for a, b in runs)
 
 
+#: Below the table of ``benchmark.md``: what its columns mean, in short (docs/benchmark.md, "What it measures").
+_LEGEND = (
+    "Columns: *warned*: collision objects warned before contact (a warning on the object); *lead*: how long "
+    "before contact the first warning came (median, 10th percentile); *lapsed*: warned objects whose warning then "
+    "went silent for 0.2 s or more before contact; *false episodes*: runs of frames warning of something that will "
+    "not hit, per 1000 frames, and by cause; *false frames*: frames with a false warning; *TTC error*: median "
+    "relative error of the time to contact per bin of the true one; *TTC coverage*: frames of a collision object "
+    "(16 px or wider) with an estimate on it; *targets/object*: targets that stood for one collision object (1 is "
+    "ideal); *real clips*: the labelled clips warned, missed, with a false warning, and their median lead; "
+    "*ms/frame*: a task's wall time per frame (decoding and writing included, on a shared machine: `mlplc2 bench` "
+    "measures the model). `evaluation.md` beside this file scores the paper's field alarms and object "
+    "detections on the same runs. Every definition: docs/benchmark.md, \"What it measures\".")
+
+
 def _markdown(res: BenchmarkResult) -> str:
     st = res.settings
     hold = st.get("holdout") or 0
@@ -348,6 +362,7 @@ def _markdown(res: BenchmarkResult) -> str:
             f"| {_fmt(r['targets_per_object'])} | {_fmt(r['clips_warned'])}/{_fmt(r['clips'])} "
             f"| {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} | {_fmt(r['clip_lead_median_s'])} "
             f"| {_fmt(r['ms_per_frame'])} |")
+    lines += ["", _LEGEND]
     lines += _setting_markdown(res.settings_table, [r["model"] for r in res.rows])
     clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
     if clip:

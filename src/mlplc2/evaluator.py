@@ -441,9 +441,13 @@ class Evaluation:
         lines = ["| model | video | frames | objects | detected | alarmed | fields | false alarms | first alarm "
                  "| alarm outcome |", "|" + "|".join(["---"] * 10) + "|"]
         for v in self.videos:
-            det = "-" if not v["localises"] else f"{v['detected']}/{v['objects']}"
-            lines.append(f"| {shown[v['model']]} | {v['video']} | {v['frames']} | {v['objects']} | {det} "
-                         f"| {v['alarmed']}/{v['objects']} | {_fmt(v['fields'])} | {_fmt(v['false_alarms'])} "
+            # a clip labelled as a whole (docs/evaluation.md, the clip format) has no objects to count: its
+            # alarm is scored by "alarm outcome"
+            level = v.get("object_level", True)
+            det = "-" if not (v["localises"] and level) else f"{v['detected']}/{v['objects']}"
+            objects, alarmed = (v["objects"], f"{v['alarmed']}/{v['objects']}") if level else ("-", "-")
+            lines.append(f"| {shown[v['model']]} | {v['video']} | {v['frames']} | {objects} | {det} "
+                         f"| {alarmed} | {_fmt(v['fields'])} | {_fmt(v['false_alarms'])} "
                          f"| {_fmt(v['first_alarm_frame'])} | {v['outcome'] or '-'} |")
         return "\n".join(lines)
 
@@ -530,7 +534,7 @@ class Evaluation:
         out.mkdir(parents=True, exist_ok=True)
         st = self.settings
         md = (f"# Evaluation\n\nGround truth: `{st['ground_truth']}`; match radius {st['match_radius']:g} px, "
-              f"tail {st['tail']} frames.\n\n{self.to_markdown(details=True)}\n")
+              f"tail {st['tail']} frames.\n\n{_READING}\n\n{self.to_markdown(details=True)}\n")
         if self.warnings:
             md += "\nWarnings:\n\n" + "".join(f"- {w}\n" for w in self.warnings)
         files = {}
@@ -539,6 +543,14 @@ class Evaluation:
             write_text(path, text)
             files[name] = path
         return files
+
+
+#: The first lines of ``evaluation.md``: which table scores what (docs/evaluation.md).
+_READING = ("The first table scores the attention fields as the paper does: every approaching object (colliding or "
+            "not), *detected* by a field near it, *alarmed* by the model's collision flag. \"Warnings\" scores the "
+            "targets' warnings (or the LGMD models' alarms) on the objects that will hit, as `benchmark.md` does; "
+            "the last table gives each video (\"-\": a clip labelled as a whole, whose alarm the clip outcome "
+            "scores). Every definition: docs/evaluation.md.")
 
 
 def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_radius: float = DEFAULT_MATCH_RADIUS,

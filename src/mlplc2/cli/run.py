@@ -9,6 +9,7 @@ import contextlib
 import math
 import sys
 import warnings
+from pathlib import Path
 
 from .._validation import InputError, InputValueError
 from ..io.formats import STDIN
@@ -243,8 +244,10 @@ def _print_run_summary(args, result) -> None:
                      f"(--every-frame processes every frame)")
     if result.latency:
         lat = result.latency
+        queued = Path(result.source).is_file()  # a file is decoded ahead: its frames wait in the queue
         lines.append(f"latency from decoding to results: median {lat['median_ms']:.1f} ms, "
-                     f"99th percentile {lat['p99_ms']:.1f} ms, max {lat['max_ms']:.1f} ms")
+                     f"99th percentile {lat['p99_ms']:.1f} ms, max {lat['max_ms']:.1f} ms"
+                     + (" (a file: the wait in the decoding queue included; a live source has none)" if queued else ""))
     if result.out is not None:
         lines.append(f"outputs in {result.out}: {', '.join(sorted(result.files))}")
     say(args, *lines)

@@ -34,6 +34,10 @@ def _cmd_params(args) -> int:
 
     cls = TargetParams if args.targets else LGMD2Params if args.lgmd2 else LGMD1Params if args.lgmd1 else \
         FlowParams if args.flow else Params
+    if cls is TargetParams and not args.markdown:  # 128 rows: the few a user sets first (a new user's trial)
+        out("The ones a user sets (mlplc2 run --horizon, --max-miss, --alarm-warns, --heading): horizon_s, max_miss, "
+            "alarm_warns, heading. The others are the target layer's own, set once for every input with the "
+            "benchmark (docs/targets.md says why each has its value).\n")
     out(parameter_table(cls, markdown=args.markdown), end="")
     if cls is Params and not args.markdown:   # the descriptions cite docs/model.md's numbers (a researcher's trial)
         out("Equation numbers are docs/model.md's (NOTES.md's): they count the vDoG subtraction as Eq. 4, so their "

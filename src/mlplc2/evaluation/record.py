@@ -122,11 +122,13 @@ class TargetRow:
     elevation_deg: float | None = None
     ttc_age_s: float | None = None
     ttc_sigma_s: float | None = None
+    held_by: str | None = None
 
     @classmethod
     def from_row(cls, r) -> "TargetRow":
         """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``): every cell
-        :meth:`values` writes; a file written before ``ttc_age_s`` or ``ttc_sigma_s`` (no such column) reads as None."""
+        :meth:`values` writes; a file written before ``ttc_age_s``, ``ttc_sigma_s`` or ``held_by`` (no such column)
+        reads as None."""
         def num(v):
             return None if v in (None, "") else float(v)
 
@@ -135,7 +137,7 @@ class TargetRow:
                    num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
                    tuple(int(v) for v in str(fields).split()), azimuth_deg=num(r.get("azimuth_deg")),
                    elevation_deg=num(r.get("elevation_deg")), ttc_age_s=num(r.get("ttc_age_s")),
-                   ttc_sigma_s=num(r.get("ttc_sigma_s")))
+                   ttc_sigma_s=num(r.get("ttc_sigma_s")), held_by=r.get("held_by") or None)
 
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
@@ -143,7 +145,7 @@ class TargetRow:
                 "ttc_s": _opt4(self.ttc_s), "miss": _opt4(self.miss), "warning": int(bool(self.warning)),
                 "fields": " ".join(map(str, self.fields)), "azimuth_deg": _opt4(self.azimuth_deg),
                 "elevation_deg": _opt4(self.elevation_deg), "ttc_age_s": _opt4(self.ttc_age_s),
-                "ttc_sigma_s": _opt4(self.ttc_sigma_s)}
+                "ttc_sigma_s": _opt4(self.ttc_sigma_s), "held_by": self.held_by}
 
 
 @dataclass
@@ -168,8 +170,14 @@ class TargetHistory:
         return {"id": self.id, "born": self.born, "died": self.died, "frames": self.frames,
                 "first_ttc_frame": self.first_ttc_frame, "first_warning_frame": self.first_warning_frame,
                 "warning_frames": self.warning_frames, "warning_runs": [list(r) for r in self.warning_runs],
-                "at_first_warning": None if self.at_first_warning is None else self.at_first_warning.values(),
-                "fields": sorted(self.fields), "last": {"frame": self.last_frame, **self.last.values()}}
+                "at_first_warning": None if self.at_first_warning is None else _listed(self.at_first_warning),
+                "fields": sorted(self.fields), "last": {"frame": self.last_frame, **_listed(self.last)}}
+
+
+def _listed(row: TargetRow) -> dict:
+    """A ``targets.csv`` row for ``fields.json``: its ``fields`` a list of ids, as the target's own ``fields``
+    (the CSV's cell is the ids separated by spaces)."""
+    return {**row.values(), "fields": list(row.fields)}
 
 
 @dataclass
@@ -314,7 +322,7 @@ class Recorder:
         x1, y1 = self.to_input(t.x + t.width, t.y + t.height)
         return TargetRow(t.id, float(x), float(y), float(x1 - x), float(y1 - y), t.ttc_s, t.miss, bool(t.warning),
                          tuple(t.fields), getattr(t, "azimuth_deg", None), getattr(t, "elevation_deg", None),
-                         getattr(t, "ttc_age_s", None), getattr(t, "ttc_sigma_s", None))
+                         getattr(t, "ttc_age_s", None), getattr(t, "ttc_sigma_s", None), getattr(t, "held_by", None))
 
     def _update_targets(self, index: int, rec: Record, name: str, rows: list[TargetRow]) -> None:
         """Per target: life, frames, first estimate and first warning (with the estimate then)."""

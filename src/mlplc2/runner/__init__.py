@@ -14,12 +14,13 @@ steps every model on each frame, writing as it goes:
     then, see ``docs/targets.md``).
 ``targets.csv``
     (models with targets) one row per target per frame:
-    ``frame,model,target_id,x,y,width,height,ttc_s,miss,warning,fields,azimuth_deg,elevation_deg,ttc_age_s,ttc_sigma_s``
+    ``frame,model,target_id,x,y,width,height,ttc_s,miss,warning,fields,azimuth_deg,elevation_deg,ttc_age_s,ttc_sigma_s,held_by``
     (input pixels; time to contact in s, miss in object extents (widths across, heights up and down), empty while not estimable;
     the bearing in degrees only with ``hfov_deg``; ``fields`` the ids of its attention fields,
     space-separated; ``ttc_age_s`` the seconds since ``ttc_s`` was measured: 0 when this frame's fit
     gave it, more when it is the last one held and counted down, empty without ``ttc_s``; ``ttc_sigma_s``
-    the standard error of ``ttc_s`` in s, that of the fit it came from).
+    the standard error of ``ttc_s`` in s, that of the fit it came from; ``held_by`` the rule that held back a
+    warning on that frame, :attr:`Target.held_by <mlplc2.targets.Target.held_by>`, else empty).
 ``responses.png``
     response against frame, one panel per model, and under a model with targets their time to
     contact with the warning frames marked (see :mod:`mlplc2.plots`).

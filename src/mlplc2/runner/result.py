@@ -20,7 +20,7 @@ COLUMNS = ("frame", "time_s", "model", "field_id", "x", "y", "response", "collis
 #: the bearing in degrees (empty without a field of view), the age of ``ttc_s`` in s (0: measured this frame),
 #: its standard error in s.
 TARGET_COLUMNS = ("frame", "model", "target_id", "x", "y", "width", "height", "ttc_s", "miss", "warning", "fields",
-                  "azimuth_deg", "elevation_deg", "ttc_age_s", "ttc_sigma_s")
+                  "azimuth_deg", "elevation_deg", "ttc_age_s", "ttc_sigma_s", "held_by")
 
 
 class RunInterrupted(KeyboardInterrupt):
@@ -120,6 +120,30 @@ class RunResult:
     (every model's ``repeat_threshold`` set: ``--skip-repeats``, ``--every-frame``). The
     ``note:`` line of ``mlplc2 run`` is printed exactly when it is True."""
 
+    def __repr__(self) -> str:
+        """A few lines, not the rows (a notebook shows this): the source, the frames, each model's alarms and first
+        warning, the files; ``rows``, ``targets`` and :meth:`summary` hold the rest."""
+        status = "complete" if self.complete else "incomplete: " + (self.message or self.error or "stopped early")
+        lines = [f"RunResult({self.source!r}: {self.n_frames} frames from {self.start} at {self.fps:g} fps, "
+                 f"{self.size[0]}x{self.size[1]}, {status})"]
+        for m in self.models:
+            a = self.alarms.get(m, {})
+            line = f"  {m}: collision alarm on {a.get('count', 0)} frames (first {a.get('first')})"
+            if m in self.target_summaries:
+                warned = [s["first_warning_frame"] for s in self.target_summaries[m]
+                          if s.get("first_warning_frame") is not None]
+                line += (f"; {len(self.target_summaries[m])} targets, first warning "
+                         f"{'at frame %d' % min(warned) if warned else 'none'}")
+            lines.append(line)
+        lines.append(f"  rows: {len(self.rows)}, target rows: {len(self.targets)}"
+                     + (f"; files in {self.out}" if self.files else "; no files written"))
+        return "\n".join(lines)
+
+    @property
+    def complete(self) -> bool:
+        """The whole input was processed and every output written (``fields.json`` ``"complete"``)."""
+        return not (self.truncated or self.interrupted or self.error or self.dropped or self.reader_gone)
+
     def to_dataframe(self):
         """``rows`` as a pandas DataFrame; after a
         run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
@@ -143,7 +167,7 @@ class RunResult:
             "start": self.start,
             "n_frames": self.n_frames,
             "seconds": round(self.seconds, 3),
-            "complete": not (self.truncated or self.interrupted or self.error or self.dropped or self.reader_gone),
+            "complete": self.complete,
             "truncated": self.truncated,
             "interrupted": self.interrupted,
             "error": self.error,

@@ -313,17 +313,20 @@ class TargetLayer:
                     o = replace(o, id=t.id, born=t.born)
             # the view filled by an object about to hit: no other warning begins (contact_blind)
             if o.warning and not warned and now <= self._blind_until + _EPS:
-                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+                o, t.warned, t.last_warned = replace(o, warning=False, held_by="contact_blind"), warned, False
             # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth), nor on
             # one whose course, counted in the extent of what moved with it, misses (onset_support)
-            if o.warning and not warned and not (self._heading_grows(t, o) and self._supported(t, o)):
-                o, t.warned, t.last_warned = replace(o, warning=False), warned, False
+            if o.warning and not warned:
+                rule = "heading_growth" if not self._heading_grows(t, o) else \
+                    "onset_support" if not self._supported(t, o) else None
+                if rule is not None:
+                    o, t.warned, t.last_warned = replace(o, warning=False, held_by=rule), warned, False
             if o.warning:
                 t.last_warning = now
             # a warning decided on one frame alone is not shown, unless a field of it alarms (onset_confirm)
             decided = o.warning
             if decided and not confirmed(t, p, now, far):
-                o = replace(o, warning=False)
+                o = replace(o, warning=False, held_by="onset_confirm")
             t.decided = decided
             if o.ttc_s is None and (guess := young(t, p, self.fps, now, (h, w))) is not None:
                 early[o.id] = guess              # young_ttc: shown once every decision is taken

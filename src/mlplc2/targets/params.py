@@ -211,6 +211,26 @@ class TargetParams(ParameterSet):
                              kept gave a hand-held camera's shake and a drone's pitch for turns, and a real clip a
                              false warning: docs/history.md, "The course in the vehicle's axes, and a box a few
                              pixels across").""", valid=Valid.boolean())
+    course_centre: bool = param(True, """The course (step 6) from the box's own expansion centre
+                                (:func:`~mlplc2.targets.contact.fit_centre_course`: the slope of its centre against
+                                its size, neither the heading point nor the time to contact needed) rather than the
+                                line of the centre's offset from the heading in box widths evaluated at the fit's
+                                time to contact, which misses by that offset times the time to contact's relative
+                                error: a collider far off the principal point in stabilised pixels (the one a
+                                panning camera turns towards, 4-8 widths off at 1-2 s) got courses of 2-28 widths
+                                from a time to contact 20-40 % long, and warned late or never
+                                (``texture_pan_1_h41_f90``: 28 -> 1.0 widths over its last 2 s, the truth 0.2; its
+                                own expansion centre gives 0.2-0.3). On a frame where a field of the target is in
+                                collision alarm, the shorter of the two (the alarm is evidence of its own, step 7:
+                                only both courses veto it): the expansion centre's course has the box's error, a box
+                                on a part of its object that does not scale with it (``crossing_car_strong_light``'s
+                                van: 1.0-1.17 against the line's 0.88-0.94, beyond ``max_miss`` at its alarm).
+                                False = the line alone (as until session 52); docs/history.md, "The course from the
+                                box's own expansion centre".""", valid=Valid.boolean())
+    centre_growth: float = param(0.05, """With ``course_centre``: the least growth (log-scale, largest less
+                                 smallest) over the course's points for the expansion centre's course; under it
+                                 the line alone (a box that hardly grew tells no slope of its centre against its
+                                 size).""", valid=Valid.real(minimum=0))
     border: float = param(2.0, """A box whose edge lies within this of the image's border is cut: it gives
                           neither the object's size nor its centre, so the course is fitted only from the
                           last ``window`` frames of the track where the box lay wholly inside (however

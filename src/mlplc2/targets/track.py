@@ -70,6 +70,14 @@ class Target:
         Seconds since ``ttc_s`` was measured: 0.0 when this frame's fit gave it; a time to contact
         held through frames without a fit (``hold_frames``, counted down) or through a repeated
         frame is as old as the time since the frame of its fit. None without ``ttc_s``.
+    held_by : str or None
+        Why ``warning`` is False on a frame where something spoke for one: the name of the
+        :class:`TargetParams` rule that held it back (``"onset_fall"``: the time to contact did not
+        fall as an approach's does; ``"onset_miss"``: a course within ``max_miss`` but beyond
+        ``onset_miss`` for a warning to begin; ``"alarm_frames"``: a field alarm too young to begin
+        one without a course; ...: the rules of docs/targets.md, the row ``warning``). Given where the
+        time to contact is within ``horizon_s`` with the course within ``max_miss`` and looming
+        evidence, or a field alarm or a warning was vetoed; None otherwise, and on every frame that warns.
     """
 
     id: int
@@ -89,6 +97,7 @@ class Target:
     elevation_deg: float | None = None
     miss_xy: tuple[float, float] | None = None
     ttc_age_s: float | None = None
+    held_by: str | None = None
 
     def urgency(self) -> tuple:
         """Sort key, most urgent first: warnings, then the shortest ``ttc_s``, then the larger."""

@@ -15,7 +15,7 @@ import numpy as np
 
 from ..camera import bearing
 from .alignment import align
-from .contact import fit_contact, fit_course
+from .contact import fit_centre_course, fit_contact, fit_course
 from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
@@ -24,7 +24,7 @@ __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_beari
            "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
-           yaw: bool = False) -> tuple[float, float] | None:
+           yaw: bool = False, centre: float | None = None, alarm: bool = False) -> tuple[float, float] | None:
     """The predicted miss of track ``t`` (:func:`fit_course`: right in its widths, down in its
     heights), ``ttc`` frames after its newest observation, against ``heading`` (px, this frame's
     pixels), from its last observations whose box was wholly inside the frame (``Track.inside``:
@@ -32,15 +32,23 @@ def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
     few for a fit over ``span`` clock units (:func:`fits`). The centres are the camera's
     stabilised ones (less its turn); with ``yaw`` (``TargetParams.course_yaw``) the horizontal ones
     keep the camera's horizontal turn (each frame's own pixels, :class:`Observation`): the course
-    in the vehicle's axes, which turn with its path."""
+    in the vehicle's axes, which turn with its path. ``centre`` (``TargetParams.course_centre``: the least growth
+    over the points, ``centre_growth``; None: off): the course from the box's own expansion centre
+    (:func:`fit_centre_course`) instead, where it is measured; with ``alarm`` (a field of the track in collision alarm
+    this frame) the shorter of the two."""
     inside = list(t.inside) if t.inside else [q for q in t.history if not q.cut]
     if not fits(inside, span):
         return None
     ahead = ttc + (t.history[-1].frame - inside[-1].frame)
     xs = [q.x + q.ox for q in inside] if yaw else [q.x for q in inside]
-    return fit_course([q.frame for q in inside], xs, [q.y for q in inside],
-                      [q.width for q in inside], heading, ahead,
-                      heights=[q.width if q.height is None else q.height for q in inside])
+    ys, widths = [q.y for q in inside], [q.width for q in inside]
+    heights = [q.width if q.height is None else q.height for q in inside]
+    timed = fit_course([q.frame for q in inside], xs, ys, widths, heading, ahead, heights=heights)
+    own = None if centre is None else fit_centre_course(xs, ys, [q.log_scale for q in inside], widths, heights,
+                                                          min_growth=centre)
+    if own is None or timed is None:
+        return timed if own is None else own
+    return own if not alarm or math.hypot(*own) < math.hypot(*timed) else timed
 
 
 def fits(obs, span: float) -> bool:
@@ -632,7 +640,8 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     found = _contact(t, p, fit, fps, index)
     if found is not None:
         ttc, sigma = found
-        miss_xy = course(t, heading, fit.ttc, t.fit_span, yaw=p.course_yaw and heading_steady)
+        miss_xy = course(t, heading, fit.ttc, t.fit_span, yaw=p.course_yaw and heading_steady,
+                         centre=p.centre_growth if p.course_centre else None, alarm=t.last_alarm == index)
         miss = None if miss_xy is None else math.hypot(*miss_xy)
         if t.streak == 0:       # confirm_birth: the growth test before its birth and every fit since
             t.streak_since = index
@@ -658,31 +667,40 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
                    and sigma <= p.max_ttc_sigma * ttc
                    and (t.warned or steady or not wide(p, miss)
                         or (p.slow_onset and first and slow(t, p, fps, index, interval))))
+    # the rule that held back a warning (Target.held_by): first the parts of the main rule beyond the time to
+    # contact, the course and the looming evidence, then each veto below that turns a warning off
+    held_by = None
+    if not warning and looming and ttc <= p.horizon_s and (steady or (miss is not None and miss <= p.max_miss)):
+        held_by = "max_ttc_sigma" if sigma > p.max_ttc_sigma * ttc else "onset_miss"
     # the field alarm it is built on (issue 22, item 4), unless the target's own measurement vetoes it,
     # and, without a course from a translating camera, once it has lasted (alarm_frames) and on a seed
     # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape):
-        warning = t.warned or miss is not None or not (fleeting(t, p, measured) or t.behind
-                                                       or anisotropic(t, p, measured) or passed_by(t, p))
+        warning = t.warned or miss is not None
+        if not warning:
+            vetoes = (("alarm_frames", lambda: fleeting(t, p, measured)), ("passed_seeds", lambda: t.behind),
+                      ("alarm_isotropic", lambda: anisotropic(t, p, measured)), ("refind_drift", lambda: passed_by(t, p)))
+            held_by = next((name for name, veto in vetoes if veto()), None)
+            warning = held_by is None
     if t.last_alarm == index and miss is not None:   # an alarm frame judged with a course (alarm_onset_course)
         t.alarm_courses += 1
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
     # static world beside the path sweeps out of view through the border with a short time to contact
     if warning and not t.warned and t.cut(shape, p.border) and (ttc is None or ttc < p.cut_onset_s) \
             and not cut_keeps_bearing(t, p, ttc, heading):
-        warning = False
+        warning, held_by = False, "cut_onset_s"
     # ... nor on a cut box off the heading whose course misses it (cut_exit_onset)
     if warning and not t.warned and p.cut_exit_onset and _leaves(t, p, shape, heading, miss, p.exit_ahead):
-        warning = False
+        warning, held_by = False, "cut_exit_onset"
     # ... and, from a translating camera, only on a box on the path or keeping its bearing (path_drift)
     if warning and not t.warned and off_path(t, p, index, measured, steady=heading_steady, miss=miss):
-        warning = False
+        warning, held_by = False, "path_drift"
     # ... and, on a track found already near its contact, only on a box that keeps its bearing closely (fresh_ttc)
     if warning and not t.warned and fresh(t, p, fps, index, measured, interval, miss):
-        warning = False
+        warning, held_by = False, "fresh_ttc"
     # ... and not on a flat box across the path: a roadside object along it, seen in perspective (flat_onset)
     if warning and not t.warned and flat(t, p, measured):
-        warning = False
+        warning, held_by = False, "flat_onset"
     # ... and only on a box that grew alike in both directions since its birth (onset_isotropy; since it was put on
     # its object, alarm_reseat: Track.grown_from); a uniform region's box takes its aspect from its region, measured
     # afresh, and is not held (isotropy_uniform)
@@ -690,20 +708,20 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     if warning and not t.warned and p.onset_isotropy > 0 and stretch > p.onset_stretch \
             and (p.isotropy_uniform or not t.uniform) \
             and stretch > p.onset_isotropy * max(t.log_s - t.grown_from[0], 0.0):
-        warning = False
+        warning, held_by = False, "onset_isotropy"
     # ... and only while its time to contact counts down (countdown_onset; beyond its standard error: countdown_sigma)
     if warning and not t.warned and p.countdown_onset and rises(t, p, fps, index, ttc, sigma if p.countdown_sigma else None):
-        warning = False
+        warning, held_by = False, "countdown_onset"
         t.stalls += 1
     # ... and only while its time to contact falls as an approach's does (onset_fall), and never once held back on
     # stall_hold frames for a time to contact that did not fall (with countdown_onset's)
     if warning and not t.warned and (0 < p.stall_hold <= t.stalls
                                      or stalls(t, p, fps, index, ttc, sigma if p.stall_sigma else None)):
-        warning = False
+        warning, held_by = False, "onset_fall"
         t.stalls += 1
     # ... and not on a box a few pixels across, whose growth its alignment cannot measure (onset_px)
     if warning and not t.warned and tiny(t, p):
-        warning = False
+        warning, held_by = False, "onset_px"
     began = t.warned
     if warning and not began:
         t.onset_cut = t.cut(shape, p.border)
@@ -722,14 +740,16 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # ... goes on while cut by the border off the heading only on a course through its box (cut_exit), or while the
     # field alarm holds it (alarm_hold: a field of it in collision alarm, a time to contact)
     if warning and began and exits(t, p, shape, heading, miss) and not alarm_holds(t, p, index, ttc):
-        warning = False
+        warning, held_by = False, "cut_exit"
     # ... and goes on only while its time to contact counts down (countdown_frames)
     if warning and began and rises(t, p, fps, index, ttc, sigma):
         t.spent = True
     # ... and, once lapsed, begins again without the field alarm only on a short course (reonset_miss)
     if warning and began and not t.last_warned and relapse(t, p, index, miss):
-        warning = False
-    warning = warning and not t.spent
+        warning, held_by = False, "reonset_miss"
+    if warning and t.spent:
+        warning, held_by = False, "countdown_frames"
+    held_by = None if warning else held_by
     t.last_warned = warning
     # (the time to contact a refound track took over from the lost one, Track.held, is not its own:
     # its countdown starts from its own fit)
@@ -747,4 +767,5 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     return Target(t.id, float(t.cx), float(t.cy), float(t.w), float(t.h), ttc_s=num(ttc), miss=num(miss),
                   warning=warning, fields=tuple(sorted(t.fields)), born=t.born, looming=looming,
                   expansion=num(t.rate), ttc_sigma_s=num(sigma), azimuth_deg=num(az), elevation_deg=num(el),
-                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])), ttc_age_s=num(age))
+                  miss_xy=None if miss_xy is None else (float(miss_xy[0]), float(miss_xy[1])), ttc_age_s=num(age),
+                  held_by=held_by)
