@@ -654,6 +654,7 @@ def test_each_target_says_how_old_its_time_to_contact_is_and_how_sure(tmp_path):
             assert row["ttc_sigma_s"] == ("" if t["ttc_sigma_s"] is None else str(t["ttc_sigma_s"]))
             if t["ttc_s"] is not None:
                 assert 0 < t["ttc_sigma_s"] < t["ttc_s"]
+            assert t["held_by"] == (row["held_by"] or None) and not (t["warning"] and t["held_by"])
             shown[line["frame"], t["id"]] = t
     held = []
     for (k, tid), t in shown.items():

@@ -25,7 +25,7 @@ SCHEMA = 1
 
 #: The cells of a ``targets.csv`` row a JSON line's target carries (besides ``model`` and ``id``).
 _TARGET_KEYS = ("x", "y", "width", "height", "ttc_s", "miss", "azimuth_deg", "elevation_deg", "ttc_age_s",
-               "ttc_sigma_s")
+               "ttc_sigma_s", "held_by")
 
 
 def frame_record(index: int, time_s: float, skipped: int, models, outputs, target_rows, *,
