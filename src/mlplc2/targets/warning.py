@@ -43,12 +43,14 @@ def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
     xs = [q.x + q.ox for q in inside] if yaw else [q.x for q in inside]
     ys, widths = [q.y for q in inside], [q.width for q in inside]
     heights = [q.width if q.height is None else q.height for q in inside]
-    timed = fit_course([q.frame for q in inside], xs, ys, widths, heading, ahead, heights=heights)
     own = None if centre is None else fit_centre_course(xs, ys, [q.log_scale for q in inside], widths, heights,
                                                           min_growth=centre)
+    if own is not None and not alarm:        # the line is needed only without the expansion centre, or beside it
+        return own
+    timed = fit_course([q.frame for q in inside], xs, ys, widths, heading, ahead, heights=heights)
     if own is None or timed is None:
         return timed if own is None else own
-    return own if not alarm or math.hypot(*own) < math.hypot(*timed) else timed
+    return own if math.hypot(*own) < math.hypot(*timed) else timed
 
 
 def fits(obs, span: float) -> bool:
@@ -676,12 +678,10 @@ def estimate(t: Track, p: TargetParams, fps: float, index: int, shape: tuple[int
     # and, without a course from a translating camera, once it has lasted (alarm_frames) and on a seed
     # that grows alike in both directions (alarm_isotropic)
     if not warning and alarm_warns(t, p, index, ttc, miss, heading, shape):
-        warning = t.warned or miss is not None
-        if not warning:
-            vetoes = (("alarm_frames", lambda: fleeting(t, p, measured)), ("passed_seeds", lambda: t.behind),
-                      ("alarm_isotropic", lambda: anisotropic(t, p, measured)), ("refind_drift", lambda: passed_by(t, p)))
-            held_by = next((name for name, veto in vetoes if veto()), None)
-            warning = held_by is None
+        held_by = None if t.warned or miss is not None else \
+            "alarm_frames" if fleeting(t, p, measured) else "passed_seeds" if t.behind else \
+            "alarm_isotropic" if anisotropic(t, p, measured) else "refind_drift" if passed_by(t, p) else None
+        warning = held_by is None
     if t.last_alarm == index and miss is not None:   # an alarm frame judged with a course (alarm_onset_course)
         t.alarm_courses += 1
     # a warning begins on a box cut by the border only while the contact is cut_onset_s away: the
