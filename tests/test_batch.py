@@ -312,26 +312,26 @@ def _summary_counts(text):
 
 
 def test_cli_batch_summary_adds_up(videos, tmp_path, capsys):
-    """Tasks that share a run (LGMD2 does not use t_a) are counted once: ran + already done +
-    failed = runs, and the line says how many runs the tasks took."""
+    """Tasks that share a run (LGMD2 does not use t_a, which LPLC2 is swept over) are counted once: ran + already
+    done + failed = runs, and the line says how many runs the tasks took."""
     bad = tmp_path / "bad.avi"
     bad.write_bytes(b"not a video")
-    argv = ["batch", videos["paths"][0], str(bad), "--out", str(tmp_path / "o"), "-m", "lgmd2",
+    argv = ["batch", videos["paths"][0], str(bad), "--out", str(tmp_path / "o"), "-m", "lplc2,lgmd2",
             "--sweep", "t_a=8,12", "--workers", "0"]
     for rerun in (False, True):
         assert main(argv) == 2
         cap = capsys.readouterr()
         tasks, runs, ran, done, failed = _summary_counts(cap.out)
-        assert (tasks, runs) == (4, 2) and ran + done + failed == runs
-        assert (ran, done, failed) == ((0, 1, 1) if rerun else (1, 0, 1))
+        assert (tasks, runs) == (8, 6) and ran + done + failed == runs
+        assert (ran, done, failed) == ((0, 3, 3) if rerun else (3, 0, 3))
         assert len(_read_table(tmp_path / "o" / "results.csv")) == tasks
-        assert cap.err.count("mlplc2: warning:") == 1  # the failed run, once
+        assert cap.err.count("mlplc2: warning:") == 3  # each failed run, once
     # without shared runs the line counts tasks only, and they add up too
     assert main(["batch", *videos["paths"][:2], "--out", str(tmp_path / "p"), "-m", "lgmd2", "--workers", "0"]) == 0
     assert _summary_counts(capsys.readouterr().out) == (2, 2, 2, 0, 0)
-    res = batch([videos["paths"][0], str(bad)], tmp_path / "q", models=["lgmd2"], sweep=["t_a=8,12"], workers=0,
-                progress=False)
-    assert (len(res.rows), res.tasks, res.ran, res.skipped, res.failed_runs, res.failed) == (4, 2, 2, 0, 1, 2)
+    res = batch([videos["paths"][0], str(bad)], tmp_path / "q", models=["lplc2", "lgmd2"], sweep=["t_a=8,12"],
+                workers=0, progress=False)
+    assert (len(res.rows), res.tasks, res.ran, res.skipped, res.failed_runs, res.failed) == (8, 6, 6, 0, 3, 4)
 
 
 def test_parquet_table(videos, tmp_path):
@@ -481,6 +481,57 @@ def test_parameters_of_every_section_are_checked(videos, tmp_path, capsys):
         assert main(["batch", videos["paths"][0], "--out", str(out), "--workers", "0", "-q", *option]) == 2
         _one_error_line(capsys.readouterr().err)
         assert not out.exists()
+
+
+def test_a_sweep_sets_the_parameters_of_a_model_of_ones_own(videos, tmp_path, monkeypatch):
+    """A model written as docs/testing.md shows, its parameters a plain frozen dataclass (no ``replace``, no
+    ``to_dict``), takes a ``--sweep`` and a parameter file's section, and a name it lacks is one line: batch crashed
+    with ``'LumParams' object has no attribute 'replace'`` (a researcher's trial, session 53). A swept value that no
+    model run reads, and an empty value, are one-line errors (they ran the same task twice, or dropped it)."""
+    from dataclasses import dataclass
+
+    from mlplc2.batch import sweep as sweep_module
+    from mlplc2.models import Model, Output, base
+
+    @dataclass(frozen=True)
+    class LumParams:
+        threshold: float = 1.5
+
+    class LumLoom(Model):
+        name = "lumloom"
+
+        def __init__(self, fps=30.0, params=None, **kwargs):
+            super().__init__(fps=fps, params=LumParams() if params is None else params, **kwargs)
+
+        def _reset(self):
+            pass
+
+        def _step(self, gray, index):
+            return Output(frame=index, response=float(gray.mean()), collision=bool(gray.mean() > self.params.threshold))
+
+    monkeypatch.setitem(base.REGISTRY, "lumloom", LumLoom)
+    sweep_module._param_class.cache_clear()      # the parameter class of each name is cached
+    try:
+        sets = param_sets(None, ["lumloom.threshold=1.5,5"], ["mlplc2", "lumloom"])
+        assert sets == [{}, {"lumloom": {"threshold": 5}}]
+        assert sweep_module.model_params({"lumloom": {"threshold": 5}}, "lumloom") == LumParams(threshold=5)
+        with pytest.raises(InputValueError, match="^parameters for lumloom: LumParams has no parameter 'thresold' "
+                                                  r"\(did you mean 'threshold'\?\)$"):
+            param_sets({"lumloom": {"thresold": 5}}, models=["lumloom"])
+        out = tmp_path / "sweep"
+        batch([videos["paths"][0]], out, models=["lumloom"], sweep=["lumloom.threshold=1.5,500"], workers=0,
+              progress=False)
+        with open(out / "results.csv", newline="") as f:
+            rows = {json.loads(r["params"] or "{}").get("threshold", 1.5): r for r in csv.DictReader(f)}
+        assert sorted(rows) == [1.5, 500] and int(rows[1.5]["alarms"]) > 0 == int(rows[500]["alarms"])
+    finally:
+        sweep_module._param_class.cache_clear()
+    with pytest.raises(InputValueError, match="^--sweep lgmd2.a_on: lgmd2 is not among the models run \\(mlplc2\\)$"):
+        param_sets(None, ["lgmd2.a_on=1,2"], ["mlplc2"])
+    with pytest.raises(InputValueError, match="^--sweep t_a: a Params field, read only by the LPLC2 family"):
+        param_sets(None, ["t_a=8,12"], ["lgmd2"])
+    with pytest.raises(InputValueError, match="an empty value"):
+        parse_sweep(["t_a=8,,"])
 
 
 def test_default_values_are_no_override():

@@ -120,6 +120,32 @@ def test_frame_interval_comes_from_fps():
     assert np.allclose(p.delays_ms(), (80, 70, 60, 50, 40))
 
 
+def test_the_output_delay_and_the_last_correlator_delay_are_set_apart():
+    """Eq. 10's output filter takes its delay from ``tau_out`` (read as Table I's tau_Nc, 40 ms), the correlators'
+    last distance from ``tau_nc``: each changes alone, on both front ends alike."""
+    from mlplc2.backend import make_frontend
+
+    tau_i = 1000.0 / 30.0
+    p = mlplc2.Params()
+    assert p.tau_out == p.tau_nc == 40.0
+    for tau_out, tau_nc in ((30.0, 40.0), (40.0, 60.0)):
+        q = p.replace(tau_out=tau_out, tau_nc=tau_nc)
+        fe = FrontEnd(q, fps=30.0)
+        assert np.isclose(fe.alpha_out, tau_i / (tau_i + tau_out))
+        assert np.isclose(fe.alphas[-1], tau_i / (tau_i + tau_nc))
+    frames = moving_edge("r", "off", n=8)
+    maps = {}
+    for backend in ("reference", "numba"):
+        for tau_out in (40.0, 30.0):
+            fe = make_frontend(p.replace(tau_out=tau_out), 30.0, backend)
+            for f in frames:
+                lm = fe.step(f)
+            maps[backend, tau_out] = lm.magnitude.copy()
+    assert not np.allclose(maps["reference", 40.0], maps["reference", 30.0])   # the output delay matters
+    for tau_out in (40.0, 30.0):
+        assert np.allclose(maps["reference", tau_out], maps["numba", tau_out], atol=1e-4)
+
+
 def test_maps_are_reachable_after_step():
     model = mlplc2.MLPLC2(fps=30.0)
     frames = moving_edge("r", "off", n=6)

@@ -191,8 +191,10 @@ def test_docs_testing_variant_of_mlplc2_runs(capsys, monkeypatch):
     instances of one class told apart by ``name`` run side by side (a researcher's trial, session 51: none of this was
     documented). The block's ``mlplc2.run`` of a clip the test has not is left out."""
     text = (Path(__file__).resolve().parents[1] / "docs" / "testing.md").read_text(encoding="utf-8")
-    code = re.findall(r"```python\n(.*?)```", text, re.S)[1]
+    code = next(c for c in re.findall(r"```python\n(.*?)```", text, re.S) if "class BlurredMLPLC2(" in c)
     assert "class BlurredMLPLC2(mlplc2.MLPLC2)" in code
+    script = next(c for c in re.findall(r"```python\n(.*?)```", text, re.S) if "mlplc2.cli.main" in c)
+    assert 'if __name__ == "__main__":' in script      # Dask's workers import the script again (session 53)
     code = "\n".join(line for line in code.splitlines() if not line.startswith("result = mlplc2.run("))
     module = types.ModuleType("docs_testing_variant")
     monkeypatch.setitem(sys.modules, module.__name__, module)
@@ -231,7 +233,8 @@ def test_resolve_names_one_parser_of_model_names(value, names):
 
 
 @pytest.mark.parametrize("value, message", [
-    ("mlplc2,nope", "unknown model 'nope'; choose from " + ", ".join(NAMES)), (",,", "models needs at least one"),
+    ("mlplc2,nope", "unknown model 'nope'; choose from " + ", ".join(NAMES) + r" \(a model of your own: register it"),
+    (",,", "models needs at least one"),
     ([], "models needs at least one"), (5, "models must be a model name or a list"), ([None], r"model names \(str\)"),
 ])
 def test_resolve_names_bad_values_are_one_line_errors(value, message):

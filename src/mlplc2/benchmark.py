@@ -363,6 +363,8 @@ def _markdown(res: BenchmarkResult) -> str:
             f"| {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} | {_fmt(r['clip_lead_median_s'])} "
             f"| {_fmt(r['ms_per_frame'])} |")
     lines += ["", _LEGEND]
+    if res.evaluation is not None and res.evaluation.position_notes():
+        lines += ["", *res.evaluation.position_notes()]
     lines += _setting_markdown(res.settings_table, [r["model"] for r in res.rows])
     clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
     if clip:
@@ -397,7 +399,8 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
         fig.savefig(files[name])
 
     # lead time per model
-    fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.6), dpi=110)
+    width = max(4.2, 1.2 + 1.1 * len(models))     # the title's two lines fit over one or two models
+    fig = Figure(figsize=(width, 3.6), dpi=110)
     ax = fig.subplots()
     for i, m in enumerate(models):
         objs = [o for o in ev.warning_objects if o["model"] == m and o["object"] != "collider"
@@ -409,9 +412,10 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
             ax.text(i, -0.15, f"{missed} missed", ha="center", va="top", fontsize=7, color="crimson")
     ax.axhline(0.25, color="grey", lw=0.8, ls="--")
     ax.set_xticks(range(len(models)), models)
+    ax.set_xlim(-0.6, len(models) - 0.4)
     ax.set_ylabel("lead time before contact (s)")
     ax.set_ylim(bottom=-0.5)
-    ax.set_title("Collision objects of the generated suite: warning lead time")
+    ax.set_title("Collision objects of the generated suite:\nwarning lead time", fontsize=10)
     save(fig, "lead_time.png")
     # TTC estimate against truth
     with_ttc = [m for m in models if any(o["ttc_errors"] for o in ev.warning_objects if o["model"] == m)]
@@ -429,7 +433,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
         axes[0].set_ylabel("estimated TTC (s)")
         save(fig, "ttc.png")
     # false warnings by cause
-    fig = Figure(figsize=(1.2 + 1.1 * len(models), 3.4), dpi=110)
+    fig = Figure(figsize=(width, 3.4), dpi=110)
     ax = fig.subplots()
     bottom = [0.0] * len(models)
     for cause, key in (("pass-by", "false_episodes_pass"), ("distractor", "false_episodes_distractor"),
@@ -441,7 +445,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     ax.set_xticks(range(len(models)), models)
     ax.set_ylabel("false-warning episodes per 1000 frames")
     ax.legend(fontsize=7)
-    ax.set_title("False warnings on the generated suite, by cause")
+    ax.set_title("False warnings on the generated suite,\nby cause", fontsize=10)
     save(fig, "false_warnings.png")
     return files
 

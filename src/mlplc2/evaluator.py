@@ -385,6 +385,10 @@ class Evaluation:
         from .batch import param_label
 
         shown = {lb: lb for lb in self.models}
+        swept = {s["model_name"] for s in self.models.values() if s.get("params")}
+        for lb, s in self.models.items():      # beside the same model's other parameter sets: say it
+            if not s.get("params") and s["model_name"] in swept and lb == s["model_name"]:
+                shown[lb] = f"{lb} (defaults)"
         notes = []
         by_model: dict[str, list[str]] = {}
         for lb, s in self.models.items():
@@ -507,12 +511,23 @@ class Evaluation:
         processed frames (incomplete or partial runs), per model, and what shortened
         labels leave out; empty if none."""
         shown, lines = self._shown()
+        lines += self.position_notes()
         for s in self.models.values():
             if s["objects_outside"]:
                 inc = s["incomplete_videos"]
                 lines.append(f"- {shown[s['model']]}: {s['objects_outside']} approaching object(s) outside the "
                              f"processed frames, not scored" + (f" ({inc} incomplete result(s))" if inc else ""))
         return "\n".join(lines)
+
+    def position_notes(self) -> list[str]:
+        """One Markdown line per model scored whose warnings have no position (neither fields that localise nor
+        targets: LGMD1, LGMD2, a model of your own that gives only an alarm): its warning counts on every object in
+        view, so its warned and lead figures are not those of a model that must place its warning on the collider."""
+        shown = self._shown()[0]
+        return [f"- {shown.get(lb, lb)} gives no positions: each of its warnings counts on every object in view "
+                "(docs/evaluation.md, \"Warning metrics\"), so its warned and lead figures are not comparable with "
+                "a model that places its warnings" for lb, s in self.models.items()
+                if not s.get("places_warnings", s.get("localises"))]
 
     def to_markdown(self, details: bool = False) -> str:
         """The per-model comparison table(s); ``details`` adds the per-video table."""
@@ -612,7 +627,10 @@ def evaluate(results, gt, *, models: Sequence[str] | str | None = None, match_ra
     notes.extend(f"{p}; not scored" for p in problems)
     _issue(notes)
     order = list(MODEL_ORDER) + [m for m in available_models() if m not in MODEL_ORDER]
-    labels = sorted(sc.by_label, key=lambda lb: _rank(sc.by_label[lb], lb, order))
+    keys: dict[str, set] = {}              # per model, the parameters its sets change (a sweep's)
+    for r in sc.by_label.values():
+        keys.setdefault(r.model, set()).update(r.params)
+    labels = sorted(sc.by_label, key=lambda lb: _rank(sc.by_label[lb], lb, order, keys.get(sc.by_label[lb].model)))
     summary = {lb: {"model": lb, "model_name": sc.by_label[lb].model,
                     "param_set": sc.by_label[lb].param_set or "default", "params": sc.by_label[lb].params,
                     **summarise(lb, sc.videos, sc.objects),
@@ -755,11 +773,21 @@ def unnamed_source_hint(source: str) -> str:
             f"truth, without \"video\", and it applies to any run; docs/evaluation.md)")
 
 
-def _rank(r: ModelRun, label: str, order: list[str]) -> tuple:
+def _rank(r: ModelRun, label: str, order: list[str], keys=None) -> tuple:
     """Sort key of a model label: model order, then parameter values (numbers as numbers: t_a=8
-    before t_a=12)."""
+    before t_a=12), a parameter ``keys`` names (those the model's other sets change) that this set
+    leaves at its default counted at the default value (a sweep's default among its values)."""
+    params = dict(r.params)
+    missing = [k for k in keys or () if k not in params]
+    if missing:
+        from .batch.sweep import _fields_of, _param_class
+        try:
+            defaults = _fields_of(_param_class(r.model))
+        except Exception:                  # a model not registered here: its sets as recorded
+            defaults = {}
+        params.update({k: defaults[k] for k in missing if k in defaults})
     values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)
-               else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(r.params.items())]
+               else (1, 0, json.dumps(v, sort_keys=True))) for k, v in sorted(params.items())]
     return order.index(r.model) if r.model in order else 99, r.model, values, label
 
 

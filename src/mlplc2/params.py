@@ -168,7 +168,8 @@ class Params(ParameterSet):
     """Parameters of the LPLC2 model family (LPLC2, sLPLC2, mLPLC2).
 
     Defaults are Table I of Liu & Fu (the mLPLC2 paper) where Table I gives a
-    value; the remaining fields are the extras ``docs/model.md`` documents.
+    value, except ``epsilon`` (25 grey levels for Table I's 0.2: docs/model.md, "Deviations from
+    the paper, in one list"); the remaining fields are the extras ``docs/model.md`` documents.
     Time constants are in milliseconds and turned into filter coefficients
     from the frame rate the model is built with (``tau_i = 1000 / fps``).
     Equation numbers (here, in ``mlplc2 params`` and in the code) follow NOTES.md and docs/model.md, which count
@@ -240,8 +241,13 @@ class Params(ParameterSet):
     tau_1: float = param(80.0, "Delay of the correlator at sampling distance 1, Eq. 8.",
                          symbol="tau_1", unit="ms", table="80", valid=Valid.real(positive=True))
     tau_nc: float = param(40.0, """Delay at sampling distance N_c; the dynamic delays run linearly from
-                          tau_1 to tau_Nc ("80~40" in Table I). Also the delay of the T4/T5 output filter,
-                          Eq. 10.""", symbol="tau_Nc", unit="ms", table="80~40", valid=Valid.real(positive=True))
+                          tau_1 to tau_Nc ("80~40" in Table I).""", symbol="tau_Nc", unit="ms", table="80~40",
+                          valid=Valid.real(positive=True))
+    tau_out: float = param(40.0, """Delay of the T4/T5 output filter, M-hat(t-1) in Eq. 10 (the paper's Eq. 9).
+                           Table I gives no value of its own: the paper's tau_Nc is read as this delay too
+                           (40 ms); the authors' code uses a recursive 30 ms low-pass (NOTES 8). A parameter of
+                           its own so that either delay changes alone.""", unit="ms",
+                           valid=Valid.real(positive=True))
     beta: float = param(1.5, "Bias coefficient of the null-direction term of the correlator, Eq. 9.",
                         symbol="beta", table="1.5", valid=Valid.real(minimum=0))
     average_distances: bool = param(True, """Divide the sum over the N_c sampling distances of Eq. 10 by
@@ -282,11 +288,13 @@ class Params(ParameterSet):
                        is removed, Eq. 16.""", symbol="T_d", table="5000", valid=Valid.real(minimum=0))
     d: int = param(10, "Window of the removal rule, Eq. 16.",
                    symbol="d", unit="frames", table="10 tau_i", valid=Valid.integer(1))
-    grace: int = param(15, """Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5).
+    grace: int = param(15, """Frames a new field lives before Eq. 16 may remove it (NOTES 16; authors: 5; frames
+                       given, held repeats included: a time).
                        A field is created when the expansion starts (2-3 frames after onset with the
                        default gain) but answers only once the expansion is wider than the lamina filters
                        (several frames later); 15 frames give it a full window of d responses before it is
-                       judged.""", unit="frames", valid=Valid.integer(0))
+                       judged where every frame is processed (on a clip whose images are each held four
+                       times, 4-5 responses: docs/model.md, "Time").""", unit="frames", valid=Valid.integer(0))
     q_min: float = param(0.05, """Arbour threshold: the all-four-arbours gate of Eq. 15 opens when every
                          quadrant sum Q_i exceeds q_min times the quadrant's area in pixels (the paper's
                          bool(prod Q_i), which with a leaky f would open on any faint net outward motion).

@@ -47,7 +47,9 @@ def parse_sweep(specs) -> dict[str, list]:
         name = name.strip()
         if not sep or not name or not values.strip():
             raise InputValueError(f"--sweep {spec!r}: expected PARAM=V1,V2,...")
-        vals = [_parse_value(v) for v in values.split(",") if v.strip()]
+        if any(not v.strip() for v in values.split(",")):
+            raise InputValueError(f"--sweep {spec!r}: an empty value (expected PARAM=V1,V2,...)")
+        vals = [_parse_value(v) for v in values.split(",")]
         if name in sweep:
             raise InputValueError(f"--sweep: parameter {name!r} given twice")
         sweep[name] = vals
@@ -58,7 +60,32 @@ def parse_sweep(specs) -> dict[str, list]:
 def _param_class(model: str):
     from ..models.base import get_model
 
-    return type(get_model(model)(fps=30.0).params)
+    cls = type(get_model(model)(fps=30.0).params)
+    if not dataclasses.is_dataclass(cls):
+        raise InputValueError(f"parameters for {model}: its params ({cls.__name__}) are no dataclass, so none can be "
+                              "set (docs/testing.md: a model's parameters are a frozen dataclass)")
+    return cls
+
+
+def _fields_of(cls) -> dict:
+    """The defaults of parameter class ``cls``, by name: a :class:`~mlplc2.params.ParameterSet`'s ``to_dict()``, or
+    any dataclass's fields (a model of your own, docs/testing.md)."""
+    obj = cls()
+    return obj.to_dict() if hasattr(obj, "to_dict") else {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
+
+
+def _replaced(cls, over: Mapping):
+    """``cls()`` with ``over`` applied: a :class:`~mlplc2.params.ParameterSet`'s ``replace`` (validated), or
+    ``dataclasses.replace`` after a check of the names (a model of your own)."""
+    if hasattr(cls, "replace"):
+        return cls().replace(**over)
+    names = {f.name for f in dataclasses.fields(cls)}
+    unknown = [k for k in over if k not in names]
+    if unknown:
+        close = difflib.get_close_matches(str(unknown[0]), sorted(names), n=1)
+        raise TypeError(f"{cls.__name__} has no parameter {unknown[0]!r}"
+                        + (f" (did you mean {close[0]!r}?)" if close else ""))
+    return dataclasses.replace(cls(), **over)
 
 
 def _lplc2_family(model: str) -> bool:
@@ -84,7 +111,7 @@ def model_params(pset: Mapping, model: str):
         return None
     cls = _param_class(model)
     try:
-        return cls().replace(**over)
+        return _replaced(cls, over)
     except (TypeError, ValueError) as exc:
         raise InputValueError(f"parameters for {model}: {exc}") from None
 
@@ -145,7 +172,7 @@ def _drop_defaults(pset: Mapping) -> dict:
     for model, section in pset.items():
         if not isinstance(section, Mapping):
             continue
-        own = _param_class(model)().to_dict()
+        own = _fields_of(_param_class(model))
         if _lplc2_family(model):  # its section overrides the flat values for it
             own.update(flat)
         keep = {k: v for k, v in section.items() if not _is_default(v, own[k])}
@@ -240,6 +267,14 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
     sweeping = sweep is not None
     sweep = parse_sweep(sweep)
     names = list(sweep)
+    for name in names:      # a swept value that no model run reads would only repeat the same runs
+        model, dot, _ = name.partition(".")
+        if dot and model in available_models() and model not in models:
+            raise InputValueError(f"--sweep {name}: {model} is not among the models run ({', '.join(models)})")
+        if not dot and models and not any(_lplc2_family(m) for m in models if m in available_models()):
+            raise InputValueError(f"--sweep {name}: a Params field, read only by the LPLC2 family, which none of "
+                                  f"the models run is ({', '.join(models)}); another model's parameter: "
+                                  "--sweep MODEL.NAME=...")
     sets = []
     for combo in itertools.product(*(sweep[n] for n in names)) if names else [()]:
         pset = json.loads(json.dumps(base))
@@ -258,7 +293,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
                     raise InputValueError(_target_layer(k) if k in ("targets", "target_params") else
                                           f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
                 named = next((n for n in v if (n in _target_fields() or n == "targets")
-                              and n not in _param_class(k)().to_dict()), None)
+                              and n not in _fields_of(_param_class(k))), None)
                 if named is not None:
                     raise InputValueError(_target_layer(f"{k}.{named}"))
             elif k not in pnames and k in _target_fields():

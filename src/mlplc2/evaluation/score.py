@@ -174,6 +174,7 @@ def score_run(run: ModelRun, truth: VideoTruth, *, radius: float, tail: int) -> 
     localises = run.localises
     video = {"model": run.label, "video": truth.key, "source": run.source, "frames": run.n_frames,
              "seconds": round(run.n_frames / run.fps, 6), "localises": localises,
+             "places_warnings": bool(localises or run.has_targets),
              "complete": run.incomplete is None, "object_level": truth.object_level,
              "fields": len(run.fields) if localises or run.fields else None,
              "objects": len(objects), "objects_outside": outside,
@@ -688,11 +689,12 @@ def summarise(label: str, videos: list[dict], objects: list[dict]) -> dict:
     vids = [v for v in videos if v["model"] == label]
     objs = [o for o in objects if o["model"] == label]
     localises = any(v["localises"] for v in vids)
+    places = any(v.get("places_warnings", v["localises"]) for v in vids)
     minutes = sum(v["seconds"] for v in vids) / 60.0
     obj_vids = [v for v in vids if v["object_level"]]  # false alarms: object-level truth only
     obj_minutes = sum(v["seconds"] for v in obj_vids) / 60.0
     s: dict[str, Any] = {"model": label, "videos": len(vids), "minutes": round(minutes, 4),
-                         "localises": localises, "objects": len(objs),
+                         "localises": localises, "places_warnings": places, "objects": len(objs),
                          "objects_outside": sum(v["objects_outside"] for v in vids),
                          "incomplete_videos": sum(1 for v in vids if not v["complete"])}
     if localises:

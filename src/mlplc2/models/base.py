@@ -84,11 +84,11 @@ class Output:
         return self.targets[0] if self.targets else None
 
 
-#: Suggested ``Model.repeat_threshold`` (grey levels, 0-255; the default is None, off):
-#: duplicated frames in the paper's clips differ from their original by at most 15 grey
-#: levels (compression noise), frames with real motion there by 15-255 (docs/model.md,
-#: "Repeated frames"). Off by default because a slow, faint change (a far object looming)
-#: also stays under it for a few frames and would be sampled less often.
+#: Suggested fixed ``Model.repeat_threshold`` (grey levels, 0-255; the default is ``"auto"``, which
+#: decides from the frames themselves): duplicated frames in the paper's clips differ from their
+#: original by at most 15 grey levels (compression noise), frames with real motion there by 15-255
+#: (docs/model.md, "Repeated frames"). Not the default because a slow, faint change (a far object
+#: looming) also stays under it for a few frames and would be sampled less often.
 REPEAT_THRESHOLD = 16.0
 #: Longest run of repeated frames held as duplicates (a 6 fps source stored at 30 fps repeats
 #: each frame 4 times; the paper's raptor clip has runs of up to 5). From the next repeat on
@@ -243,7 +243,7 @@ def resolve_names(value, *, what: str = "models") -> list[str]:
             if not name:
                 continue
             if name not in REGISTRY:
-                raise InputValueError(f"unknown model {name!r}; choose from {', '.join(available_models())}")
+                raise InputValueError(_unknown(name))
             if name not in names:
                 names.append(name)
     if not names:
@@ -256,8 +256,13 @@ def get_model(name: str) -> type["Model"]:
     try:
         return REGISTRY[name.lower()]
     except KeyError:
-        raise InputValueError(
-            f"unknown model {name!r}; choose from {', '.join(available_models())}") from None
+        raise InputValueError(_unknown(name)) from None
+
+
+def _unknown(name: str) -> str:
+    """The one-line error for a model name nobody registered."""
+    return (f"unknown model {name!r}; choose from {', '.join(available_models())} (a model of your own: "
+            "register it first, from the command line in a script that calls mlplc2.cli.main: docs/testing.md)")
 
 
 class Model(abc.ABC):
@@ -489,6 +494,19 @@ class Model(abc.ABC):
         given in the input's pixels as every output is, means the same point whatever size the
         frames reach the model at. :meth:`reset` forgets it."""
         self._input_map = to_frames
+
+    def _turn(self, image: np.ndarray, shape: tuple[int, int]):
+        """Gaze stabilisation's first step, one for every model that stabilises (docs/model.md, "Camera
+        motion"): this frame's camera motion (``self.camera_motion``) from ``image`` by the model's
+        ``_camera`` (:class:`mlplc2.camera.MotionEstimator`; the gyro's rotation where given), whose heading
+        the target layer (``_layer``, where the model has one) takes for the course; returns the homography
+        that carries the last frame's pixels into this one's, None where the camera did not turn."""
+        self.camera_motion, hom = self._camera.turn(image, shape, hfov_deg=self.hfov_deg,
+                                                    heading=self._work_heading(), omega=self.rotation_given)
+        layer = getattr(self, "_layer", None)
+        if layer is not None:                              # the course's heading (docs/targets.md, step 7)
+            layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
+        return hom
 
     def _work_heading(self) -> tuple[float, float] | None:
         """``TargetParams.heading`` (the input's pixels; None stays None) in the working frame's

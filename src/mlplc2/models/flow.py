@@ -378,11 +378,7 @@ class FlowTTC(Model):
     def _stabilise(self, gray: np.ndarray, cur: np.ndarray) -> None:
         """Gaze stabilisation, as the LPLC2 family's (docs/model.md, "Camera motion"): when the
         camera turned, the frames kept and the target layer are carried into this frame's pixels."""
-        self.camera_motion, hom = self._camera.turn(cur, gray.shape, hfov_deg=self.hfov_deg,
-                                                    heading=self._work_heading(),
-                                                    omega=self.rotation_given)
-        if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
-            self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
+        hom = self._turn(cur, gray.shape)
         if hom is None:
             return
         ones = np.ones(cur.shape, np.float32)

@@ -83,11 +83,7 @@ class _LPLC2Family(Model):
 
     def _stabilise(self, gray: np.ndarray) -> None:
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""
-        self.camera_motion, hom = self._camera.turn(gray, gray.shape, hfov_deg=self.hfov_deg,
-                                                    heading=self._work_heading(),
-                                                    omega=self.rotation_given)
-        if self._layer is not None:                        # the course's heading (docs/targets.md, step 7)
-            self._layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
+        hom = self._turn(gray, gray.shape)
         if hom is None:
             return
         self.frontend.compensate(hom, gray)
@@ -138,8 +134,10 @@ class _LPLC2Family(Model):
         f.collision = sum(recent) >= p.alarm_threshold
 
     def _survivors(self, index: int) -> list[AttentionField]:
-        """Eq. 16: the fields kept at frame ``index``; a field past its ``grace`` frames whose responses
-        over the last ``d`` frames sum under ``t_d`` is removed, but never the last field."""
+        """Eq. 16: the fields kept at frame ``index``; a field ``grace`` frames old or more (frames given, held
+        repeats included: a time, as the paper's model, which steps every frame, would judge it) whose responses
+        over the last ``d`` processed frames sum under ``t_d`` is removed, but never the last field (the one whose
+        kept responses sum highest stays, the oldest of equals)."""
         p = self.params
         keep = [f for f in self._fields if not (index - f.born >= p.grace and sum(list(f.history)[-p.d:]) < p.t_d)]
         if not keep and self._fields:
@@ -172,14 +170,17 @@ class MLPLC2(_LPLC2Family):
     fps : float
         Frame rate of the input (sets the frame interval tau_i of Eq. 8 and 10).
     params : Params, optional
-        Model parameters; Table I defaults.
+        Model parameters; by default ``Params()``: Table I's values but ``epsilon``, and the extras
+        (docs/model.md, "Deviations from the paper, in one list").
     hfov_deg : float, optional, keyword-only
         Horizontal field of view of the camera in degrees: targets then carry their bearing
         (``Target.azimuth_deg``, ``elevation_deg``). Time to contact and miss need none.
     stabilise : bool, keyword-only
         Gaze stabilisation (docs/model.md, "Camera motion"): the camera's rotation is estimated
         every frame and the state is carried into the new frame's pixels before the front end.
-        False (the default): the paper's model.
+        False (the default): none, as in the paper, which also steps every frame at its own size
+        (``repeat_threshold=None, work_width=None``; ``mlplc2 reproduce`` holds the duplicated frames of
+        the paper's clips, docs/reproduce.md).
     target_params : mlplc2.targets.TargetParams, optional, keyword-only
         Settings of the target layer: time to contact, course, warning (``docs/targets.md``).
     backend : {"auto", "numba", "reference"}, keyword-only
@@ -234,8 +235,9 @@ class MLPLC2(_LPLC2Family):
 
 @register("slplc2")
 class SLPLC2(_LPLC2Family):
-    """sLPLC2: at most one attention field, centred every frame on the
-    LM-weighted centroid of the whole frame (paper Sec. IV-A)."""
+    """sLPLC2: at most one attention field (paper Sec. IV-A), born at the first frame whose LM exceeds
+    T_a somewhere and centred every frame on the LM-weighted centroid of the salient motion, the pixels
+    whose LM exceeds T_a (docs/model.md); on a frame without any it stays where it was."""
 
     def _step(self, gray: np.ndarray, index: int) -> Output:
         p = self.params

@@ -28,7 +28,7 @@ phases; a barrier separates them because each needs a few rows of its neighbours
 1. L = P(t) - P(t-1) on the band plus r_i rows of context, E and I (``sepFilter2D``), vDoG and
    ON/OFF for the band's rows (Eq. 1-5);
 2. K_c * ON and K_c * OFF on the band plus r_c rows, N = tanh(ON / (epsilon + K_c * ON))
-   (Eq. 6-7); with the relative floor of ``Params.n_floor`` (on by default) N is formed on
+   (Eq. 6-7); with the relative floor of ``Params.n_floor`` (off by default: 0) N is formed on
    ``n_floor_radius`` more rows of context and set to 0 where it is below ``n_floor`` times
    its local maximum (the reference's own ``medulla.local_max``, an OpenCV dilation), so no
    extra barrier is needed;

@@ -48,7 +48,7 @@ def set_coefficients(front_end, params: Params, fps: float) -> None:
     front_end.params = params
     front_end.fps = float(fps)
     front_end.alphas = tuple(lowpass_alpha(tau, front_end.fps) for tau in params.delays_ms())
-    front_end.alpha_out = lowpass_alpha(params.tau_nc, front_end.fps)
+    front_end.alpha_out = lowpass_alpha(params.tau_out, front_end.fps)
     front_end.interval = 1
     front_end.coefficient_cache = {1: (front_end.alphas, front_end.alpha_out)}
     front_end.k_e = gaussian_kernel_1d(params.r_e, params.sigma_e, normalise=params.normalise_kernels)
@@ -70,7 +70,7 @@ def use_interval(front_end, interval: float) -> bool:
             cache = front_end.coefficient_cache = {1: cache[1]}
         rate = front_end.fps / interval
         coeffs = cache[interval] = (tuple(lowpass_alpha(tau, rate) for tau in front_end.params.delays_ms()),
-                                    lowpass_alpha(front_end.params.tau_nc, rate))
+                                    lowpass_alpha(front_end.params.tau_out, rate))
     front_end.alphas, front_end.alpha_out = coeffs
     front_end.interval = interval
     return True
