@@ -39,7 +39,7 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, Iterable
 
-from ._validation import InputTypeError, InputValueError, check_int, check_real
+from ._validation import InputError, InputTypeError, InputValueError, check_int, check_real
 
 from .evaluation.match import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL
 from .evaluation.record import TargetRow
@@ -783,7 +783,7 @@ def _rank(r: ModelRun, label: str, order: list[str], keys=None) -> tuple:
         from .batch.sweep import _fields_of, _param_class
         try:
             defaults = _fields_of(_param_class(r.model))
-        except Exception:                  # a model not registered here: its sets as recorded
+        except (InputError, TypeError, ValueError):   # a model not registered here: its sets as recorded
             defaults = {}
         params.update({k: defaults[k] for k in missing if k in defaults})
     values = [(k, (0, v, "") if isinstance(v, (int, float)) and not isinstance(v, bool)

@@ -271,7 +271,8 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
         model, dot, _ = name.partition(".")
         if dot and model in available_models() and model not in models:
             raise InputValueError(f"--sweep {name}: {model} is not among the models run ({', '.join(models)})")
-        if not dot and models and not any(_lplc2_family(m) for m in models if m in available_models()):
+        if not dot and name in Params().to_dict() and models \
+                and not any(_lplc2_family(m) for m in models if m in available_models()):
             raise InputValueError(f"--sweep {name}: a Params field, read only by the LPLC2 family, which none of "
                                   f"the models run is ({', '.join(models)}); another model's parameter: "
                                   "--sweep MODEL.NAME=...")
