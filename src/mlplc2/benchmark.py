@@ -359,9 +359,10 @@ def _markdown(res: BenchmarkResult) -> str:
             + "".join(f"| {_fmt(r[f'ttc_rte_pct_{b}'], 0)}{'' if r[f'ttc_rte_pct_{b}'] is None else ' %'} "
                       for b in ("0-1s", "1-3s", "3-6s"))
             + f"| {_fmt(r['ttc_coverage_pct'], 0)}{'' if r['ttc_coverage_pct'] is None else ' %'} "
-            f"| {_fmt(r['targets_per_object'])} | {_fmt(r['clips_warned'])}/{_fmt(r['clips'])} "
-            f"| {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} | {_fmt(r['clip_lead_median_s'])} "
-            f"| {_fmt(r['ms_per_frame'])} |")
+            f"| {_fmt(r['targets_per_object'])} | "
+            + (f"{_fmt(r['clips_warned'])}/{_fmt(r['clips'])} | {_fmt(r['clips_missed'])} | {_fmt(r['clips_false'])} "
+               f"| {_fmt(r['clip_lead_median_s'])} " if r['clips'] else "- | - | - | - ")
+            + f"| {_fmt(r['ms_per_frame'])} |")
     lines += ["", _LEGEND]
     if res.evaluation is not None and res.evaluation.position_notes():
         lines += ["", *res.evaluation.position_notes()]

@@ -301,7 +301,8 @@ LABEL_WIDTH = 40
 #: The title of the clip-level table (:meth:`Evaluation.clip_table`): it scores the paper's field alarm, which a
 #: clip's targets may not share (a TP there beside "warned: no" in the warnings on labelled clips).
 CLIP_ALARM_TITLE = ("Field alarm on labelled clips (the paper's clip-level score: any field in collision alarm, "
-                    "anywhere in the frame, before contact; not the targets' warning, below):\n\n")
+                    "anywhere in the frame, before contact; for a model without fields its collision alarm; not the "
+                    "targets' warning, below):\n\n")
 
 
 @dataclass
