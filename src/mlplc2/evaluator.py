@@ -781,9 +781,9 @@ def _rank(r: ModelRun, label: str, order: list[str], keys=None) -> tuple:
     params = dict(r.params)
     missing = [k for k in keys or () if k not in params]
     if missing:
-        from .batch.sweep import _fields_of, _param_class
+        from .models.base import param_defaults
         try:
-            defaults = _fields_of(_param_class(r.model))
+            defaults = param_defaults(r.model)
         except (InputError, TypeError, ValueError):   # a model not registered here: its sets as recorded
             defaults = {}
         params.update({k: defaults[k] for k in missing if k in defaults})

@@ -67,13 +67,6 @@ def _param_class(model: str):
     return cls
 
 
-def _fields_of(cls) -> dict:
-    """The defaults of parameter class ``cls``, by name: a :class:`~mlplc2.params.ParameterSet`'s ``to_dict()``, or
-    any dataclass's fields (a model of your own, docs/testing.md)."""
-    obj = cls()
-    return obj.to_dict() if hasattr(obj, "to_dict") else {f.name: getattr(obj, f.name) for f in dataclasses.fields(obj)}
-
-
 def _replaced(cls, over: Mapping):
     """``cls()`` with ``over`` applied: a :class:`~mlplc2.params.ParameterSet`'s ``replace`` (validated), or
     ``dataclasses.replace`` after a check of the names (a model of your own)."""
@@ -164,6 +157,7 @@ def _is_default(value, default) -> bool:
 def _drop_defaults(pset: Mapping) -> dict:
     """``pset`` without the overrides equal to the default value (``t_a=10`` is no
     override), so that a parameter set of default values has the id ``default``."""
+    from ..models.base import param_defaults
     from ..params import Params
 
     flat = {k: v for k, v in pset.items() if not isinstance(v, Mapping)}
@@ -172,7 +166,7 @@ def _drop_defaults(pset: Mapping) -> dict:
     for model, section in pset.items():
         if not isinstance(section, Mapping):
             continue
-        own = _fields_of(_param_class(model))
+        own = param_defaults(model)
         if _lplc2_family(model):  # its section overrides the flat values for it
             own.update(flat)
         keep = {k: v for k, v in section.items() if not _is_default(v, own[k])}
@@ -243,7 +237,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
     building the parameters of every model in ``models``. Overrides equal to
     the default value are dropped (a set of defaults is ``{}``, id ``default``).
     """
-    from ..models.base import available_models
+    from ..models.base import available_models, param_defaults
     from ..params import Params
 
     base: dict = {}
@@ -294,7 +288,7 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
                     raise InputValueError(_target_layer(k) if k in ("targets", "target_params") else
                                           f"parameters: {k!r} is not a model name ({', '.join(available_models())})")
                 named = next((n for n in v if (n in _target_fields() or n == "targets")
-                              and n not in _fields_of(_param_class(k))), None)
+                              and n not in param_defaults(k)), None)
                 if named is not None:
                     raise InputValueError(_target_layer(f"{k}.{named}"))
             elif k not in pnames and k in _target_fields():

@@ -259,6 +259,18 @@ def get_model(name: str) -> type["Model"]:
         raise InputValueError(_unknown(name)) from None
 
 
+def param_defaults(name: str) -> dict:
+    """The default parameters of the model registered as ``name``, by field name: its ``params``' ``to_dict()`` (a
+    :class:`~mlplc2.params.ParameterSet`) or any dataclass's fields (a model of your own, docs/testing.md); {} for a
+    model whose parameters are no dataclass."""
+    params = get_model(name)(fps=30.0).params
+    if hasattr(params, "to_dict"):
+        return params.to_dict()
+    if dataclasses.is_dataclass(params):
+        return {f.name: getattr(params, f.name) for f in dataclasses.fields(params)}
+    return {}
+
+
 def _unknown(name: str) -> str:
     """The one-line error for a model name nobody registered."""
     return (f"unknown model {name!r}; choose from {', '.join(available_models())} (a model of your own: "
