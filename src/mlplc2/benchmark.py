@@ -36,12 +36,13 @@ from pathlib import Path
 from typing import Any
 
 from ._validation import InputValueError
+from .models.base import PACKAGE_MODELS
 
 __all__ = ["Scene", "suite", "benchmark", "by_setting", "BenchmarkResult", "BenchmarkWarning", "MODELS", "REAL_DIR",
            "SUITE_GT", "COLUMNS", "REAL_USE", "setting_names"]
 
 #: Every model the benchmark compares, in table order (the optical-flow baseline last).
-MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
+MODELS = PACKAGE_MODELS
 #: Where the labelled real clips are looked for, relative to the current folder and to the checkout.
 REAL_DIR = Path("..") / "shared" / "data" / "real"
 #: File name of the generated suite's ground truth (in ``scenes/``).
@@ -384,24 +385,19 @@ def _failure(f: dict) -> str:
 
 
 def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
-    """lead_time.png, ttc.png, false_warnings.png."""
-    import matplotlib
-
-    matplotlib.use("Agg", force=False)
-    from matplotlib.figure import Figure
+    """lead_time.png, ttc.png, false_warnings.png (:func:`mlplc2.plots.figure`, written atomically)."""
+    from .plots import figure, save_png
 
     ev = res.evaluation
     models = [r["model"] for r in res.rows]
     files = {}
 
     def save(fig, name: str) -> None:
-        fig.tight_layout()
-        files[name] = out / name
-        fig.savefig(files[name])
+        files[name] = save_png(fig, out / name, dpi=110)
 
     # lead time per model
     width = max(4.2, 1.2 + 1.1 * len(models))     # the title's two lines fit over one or two models
-    fig = Figure(figsize=(width, 3.6), dpi=110)
+    fig = figure(width, 3.6)
     ax = fig.subplots()
     for i, m in enumerate(models):
         objs = [o for o in ev.warning_objects if o["model"] == m and o["object"] != "collider"
@@ -421,7 +417,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
     # TTC estimate against truth
     with_ttc = [m for m in models if any(o["ttc_errors"] for o in ev.warning_objects if o["model"] == m)]
     if with_ttc:
-        fig = Figure(figsize=(3.0 * len(with_ttc), 3.2), dpi=110)
+        fig = figure(3.0 * len(with_ttc), 3.2)
         axes = fig.subplots(1, len(with_ttc), squeeze=False)[0]
         for ax, m in zip(axes, with_ttc):
             pts = [e for o in ev.warning_objects if o["model"] == m for e in o["ttc_errors"]]
@@ -434,7 +430,7 @@ def _plots(res: BenchmarkResult, out: Path) -> dict[str, Path]:
         axes[0].set_ylabel("estimated TTC (s)")
         save(fig, "ttc.png")
     # false warnings by cause
-    fig = Figure(figsize=(width, 3.4), dpi=110)
+    fig = figure(width, 3.4)
     ax = fig.subplots()
     bottom = [0.0] * len(models)
     for cause, key in (("pass-by", "false_episodes_pass"), ("distractor", "false_episodes_distractor"),

@@ -47,13 +47,14 @@ from .evaluation.score import (EARLY_S, LATE_S, MID_INTERVAL_S, MIN_TTC_WIDTH, T
                                score_run, score_warnings, summarise, summarise_warnings, warning_truth)
 from .evaluation.truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
 from .evaluation.truth import load as load_ground_truth
+from .models.base import PACKAGE_MODELS
 
 __all__ = ["evaluate", "Evaluation", "EvaluationWarning", "load_ground_truth", "GroundTruth", "VideoTruth",
            "ObjectTruth", "PHASES", "KINDS", "DEFAULT_TAIL", "DEFAULT_MATCH_RADIUS", "TTC_BINS", "MIN_TTC_WIDTH",
            "EARLY_S", "LATE_S", "MID_INTERVAL_S", "mid_error"]
 
 #: Row order of the comparison table (other registered models follow, alphabetically).
-MODEL_ORDER = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
+MODEL_ORDER = PACKAGE_MODELS
 
 
 class EvaluationWarning(UserWarning):

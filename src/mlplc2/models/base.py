@@ -223,6 +223,11 @@ def available_models() -> list[str]:
     return sorted(REGISTRY)
 
 
+#: The package's own models, in the order of every comparison table (the LPLC2 family, the LGMD
+#: models, the optical-flow baseline last): ``mlplc2.benchmark.MODELS``, ``mlplc2.evaluator.MODEL_ORDER``.
+PACKAGE_MODELS = ("mlplc2", "slplc2", "lplc2", "lgmd2", "lgmd1", "flow")
+
+
 def resolve_names(value, *, what: str = "models") -> list[str]:
     """The model names in ``value``: a name, a comma-separated string (``"mlplc2,lgmd2"``) or a
     list of them (the CLI's repeated ``--model``), case-insensitive and stripped, each once in
