@@ -365,8 +365,9 @@ def _markdown(res: BenchmarkResult) -> str:
                f"| {_fmt(r['clip_lead_median_s'])} " if r['clips'] else "- | - | - | - ")
             + f"| {_fmt(r['ms_per_frame'])} |")
     lines += ["", _LEGEND]
-    if res.evaluation is not None and res.evaluation.position_notes():
-        lines += ["", *res.evaluation.position_notes()]
+    positionless = res.evaluation.position_notes() if res.evaluation is not None else []
+    if positionless:
+        lines += ["", *positionless]
     lines += _setting_markdown(res.settings_table, [r["model"] for r in res.rows])
     clip = res.evaluation.clip_warning_table() if res.evaluation is not None else ""
     if clip:
