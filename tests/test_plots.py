@@ -292,7 +292,9 @@ def test_responses_png_gets_a_timeline_panel_from_targets_csv(tmp_path):
         for r in _timeline_rows():
             w.writerow({**r, "ttc_s": "" if r["ttc_s"] is None else r["ttc_s"], "miss": r["miss"] or "",
                         "x": 1, "y": 1, "width": 2, "height": 2, "fields": "", "azimuth_deg": "", "elevation_deg": ""})
-    assert read_targets(path)[:2] == _timeline_rows()[:2] and read_targets(path)[-1]["ttc_s"] is None
+    read = read_targets(path)      # the rows as RunResult.targets holds them: the keys plot_timeline uses, and more
+    assert [{k: r[k] for k in _timeline_rows()[0]} for r in read[:2]] == _timeline_rows()[:2]
+    assert read[-1]["ttc_s"] is None and read[0]["fields"] == "" and read[0]["ttc_age_s"] is None
     one = plot_responses(rows, tmp_path / "one.png")
     two = plot_responses(rows, tmp_path / "two.png", targets=path)
     h1, h2 = (matplotlib.image.imread(p).shape[0] for p in (one, two))

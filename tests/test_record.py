@@ -64,3 +64,32 @@ def test_peak_frame_is_the_first_frame_of_a_plateau():
         tracker.update(k, "m", mlplc2.Output(frame=k, response=r, fields=(f,)))
     (s,) = tracker.summaries("m")
     assert s["peak_frame"] == 1 and s["peak_response"] == pytest.approx(12058.34, abs=0.01)
+
+
+def test_the_output_files_read_back_with_one_line_errors(tmp_path):
+    """read_responses / read_targets (``mlplc2 evaluate``, the plots): parsed rows, rows without a frame skipped,
+    a one-line InputValueError for a file that is not a responses.csv or has a cell that does not parse, and
+    None for a targets.csv written before the target layer (no target_id)."""
+    from mlplc2._validation import InputValueError
+    from mlplc2.evaluation.record import read_responses, read_targets
+
+    p = tmp_path / "responses.csv"
+    p.write_text("frame,time_s,model,field_id,x,y,response,collision\n0,0.0,m,,,,1.5,0\n,,,,,,,\n"
+                 "1,0.1,m,3,2.5,4.0,2.0,1\n")
+    assert read_responses(p) == [
+        {"frame": 0, "time_s": 0.0, "model": "m", "field_id": None, "x": None, "y": None, "response": 1.5,
+         "collision": 0},
+        {"frame": 1, "time_s": 0.1, "model": "m", "field_id": 3, "x": 2.5, "y": 4.0, "response": 2.0,
+         "collision": 1}]
+    p.write_text("frame,model,field_id,x,y\n0,m,,,\n")
+    with pytest.raises(InputValueError, match=r"responses.csv: not a responses.csv \(missing columns collision\)$"):
+        read_responses(p)
+    p.write_text("frame,model,field_id,x,y,collision\n0,m,,,,yes\n")
+    with pytest.raises(InputValueError, match=r"responses.csv: malformed row$"):
+        read_responses(p)
+    t = tmp_path / "targets.csv"
+    t.write_text("frame,model,x,y\n0,m,1,2\n")
+    assert read_targets(t) is None
+    t.write_text("frame,model,target_id,x,y,warning\n0,m,1,,2,0\n")
+    with pytest.raises(InputValueError, match=r"targets.csv: malformed row$"):
+        read_targets(t)

@@ -113,6 +113,10 @@ def test_keep_rows_false_streams_to_disk_only(data, tmp_path):
     assert a.pop("seconds") > 0 and b.pop("seconds") > 0  # the measured wall time differs from run to run
     assert a.pop("latency_ms")["max_ms"] > 0 and b.pop("latency_ms")["max_ms"] > 0  # and so do the latencies
     assert json.dumps(a) == json.dumps(b)  # the rest identical, in the same order
+    # the files read back are the rows kept (mlplc2 evaluate and the plots read them so)
+    from mlplc2.evaluation.record import read_responses, read_targets
+    assert read_responses(tmp_path / "a" / "responses.csv") == kept.rows
+    assert read_targets(tmp_path / "a" / "targets.csv") == kept.targets and kept.targets
     # the table is read back from responses.csv
     pytest.importorskip("pandas")
     a, b = kept.to_dataframe(), lean.to_dataframe()

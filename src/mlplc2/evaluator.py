@@ -29,7 +29,6 @@ Markdown (:meth:`Evaluation.to_markdown`) and JSON (:meth:`Evaluation.to_dict`).
 
 from __future__ import annotations
 
-import csv
 import json
 import math
 import os
@@ -42,7 +41,7 @@ from typing import Any, Iterable
 from ._validation import InputError, InputTypeError, InputValueError, check_int, check_real
 
 from .evaluation.match import DEFAULT_MATCH_RADIUS, DEFAULT_TAIL
-from .evaluation.record import TargetRow
+from .evaluation.record import TargetRow, read_responses, read_targets
 from .evaluation.score import (EARLY_S, LATE_S, MID_INTERVAL_S, MIN_TTC_WIDTH, TTC_BINS, ModelRun, mid_error,
                                score_run, score_warnings, summarise, summarise_warnings, warning_truth)
 from .evaluation.truth import KINDS, PHASES, GroundTruth, ObjectTruth, VideoTruth, read_json
@@ -134,17 +133,7 @@ def _runs_from_result(res, models, origin=None) -> list[ModelRun]:
 
 def _read_folder(folder: Path, models) -> list[ModelRun]:
     csv_path = folder / "responses.csv"
-    with open(csv_path, newline="", encoding="utf-8") as f:
-        reader = csv.DictReader(f)
-        missing = {"frame", "model", "field_id", "x", "y", "collision"} - set(reader.fieldnames or ())
-        if missing:
-            raise InputValueError(f"{csv_path}: not a responses.csv (missing columns {', '.join(sorted(missing))})")
-        try:
-            rows = [r for r in reader if r["frame"] not in (None, "")]
-            for r in rows:
-                int(r["frame"]), int(r["collision"])
-        except (TypeError, ValueError):
-            raise InputValueError(f"{csv_path}: malformed row") from None
+    rows = read_responses(csv_path)
     fj = folder / "fields.json"
     info = read_json(fj) if fj.is_file() else {}
     if not isinstance(info, Mapping):
@@ -183,25 +172,13 @@ def _read_folder(folder: Path, models) -> list[ModelRun]:
     else:
         incomplete = _incomplete_reason(n_frames, info.get("interrupted"), info.get("truncated"),
                                         complete=info.get("complete") is not False)
-    target_rows = []
-    targets_known = False  # without the target layer's targets.csv (older results) the alarm is the warning
     tp = folder / "targets.csv"
-    if tp.is_file():
-        with open(tp, newline="", encoding="utf-8") as f:
-            reader = csv.DictReader(f)
-            if "target_id" in (reader.fieldnames or ()):   # targets.csv of the target layer
-                targets_known = True
-                try:
-                    target_rows = [r for r in reader if r.get("frame") not in (None, "")]
-                    for r in target_rows:
-                        int(r["frame"]), TargetRow.from_row(r)
-                except (TypeError, ValueError, KeyError):
-                    raise InputValueError(f"{tp}: malformed row") from None
+    target_rows = read_targets(tp) if tp.is_file() else None  # None: older results, the alarm is the warning
     return _runs_from_rows(source, rows, info.get("models", {}), fps=fps, size=size, start=start,
                            n_frames=n_frames, models=models, param_set=done.get("param_set"), params=params,
                            origin=str(folder), ident=("path", _path_key(folder)), incomplete=incomplete,
-                           video_known=bool(info.get("video") or done.get("video")), target_rows=target_rows,
-                           targets_known=targets_known)
+                           video_known=bool(info.get("video") or done.get("video")), target_rows=target_rows or [],
+                           targets_known=target_rows is not None)
 
 
 def _path_key(path) -> str:

@@ -6,7 +6,6 @@ backend change), so importing :mod:`mlplc2` stays light.
 
 from __future__ import annotations
 
-import csv
 import math
 from collections.abc import Sequence
 from pathlib import Path
@@ -15,6 +14,7 @@ import numpy as np
 
 from ._files import atomic_path
 from ._validation import InputValueError
+from .evaluation.record import read_responses, read_targets
 
 __all__ = ["plot_responses", "annotate_frame", "header_text", "read_responses", "read_targets", "plot_timeline",
            "DRAW_FIELDS"]
@@ -22,32 +22,6 @@ __all__ = ["plot_responses", "annotate_frame", "header_text", "read_responses", 
 #: RGB colours of the annotated video.
 ALARM_RGB = (230, 30, 30)
 CALM_RGB = (40, 220, 60)
-
-
-def read_responses(path) -> list[dict]:
-    """Read a ``responses.csv`` written by :func:`mlplc2.run` into row dicts
-    (numbers parsed, empty cells -> None)."""
-    rows = []
-    with open(path, newline="", encoding="utf-8") as f:
-        for r in csv.DictReader(f):
-            rows.append({
-                "frame": int(r["frame"]), "time_s": float(r["time_s"]), "model": r["model"],
-                "field_id": int(r["field_id"]) if r["field_id"] else None,
-                "x": float(r["x"]) if r["x"] else None, "y": float(r["y"]) if r["y"] else None,
-                "response": float(r["response"]), "collision": int(r["collision"]),
-            })
-    return rows
-
-
-def read_targets(path) -> list[dict]:
-    """Read a ``targets.csv`` written by :func:`mlplc2.run` into row dicts with the keys
-    :func:`plot_responses` uses (``frame``, ``model``, ``target_id``, ``ttc_s``, ``miss``,
-    ``warning``; numbers parsed, empty cells -> None)."""
-    with open(path, newline="", encoding="utf-8") as f:
-        return [{"frame": int(r["frame"]), "model": r["model"], "target_id": int(r["target_id"]),
-                 "ttc_s": float(r["ttc_s"]) if r["ttc_s"] else None,
-                 "miss": float(r["miss"]) if r["miss"] else None, "warning": int(r["warning"])}
-                for r in csv.DictReader(f)]
 
 
 def _series(rows: Sequence[dict]):

@@ -15,6 +15,9 @@ One home for what every scorer and recorder needs (``mlplc2 run``, ``mlplc2 eval
     model over frames with every series (``mlplc2 reproduce``, the tests).
 :func:`response_rows`
     the ``responses.csv`` rows of one output (the rounding of the output files).
+:func:`read_responses`, :func:`read_targets`
+    the rows of a ``responses.csv`` / ``targets.csv`` read back, as ``RunResult.rows`` / ``.targets`` hold
+    them (``mlplc2 evaluate``, the plots).
 
 Holding a Record against the ground truth is :mod:`mlplc2.evaluation.match`.
 Coordinates are those of the video (its own pixels, the ground truth's).
@@ -22,16 +25,20 @@ Coordinates are those of the video (its own pixels, the ground truth's).
 
 from __future__ import annotations
 
+import csv
 import json
 import math
 import tempfile
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
-__all__ = ["FieldHistory", "TargetRow", "TargetHistory", "Record", "Recorder", "record", "response_rows"]
+from .._validation import InputValueError
+
+__all__ = ["FieldHistory", "TargetRow", "TargetHistory", "Record", "Recorder", "record", "response_rows",
+           "read_responses", "read_targets"]
 
 
 def _px(v: float | None) -> float | None:
@@ -57,6 +64,11 @@ def response_rows(index: int, time_s: float, name: str, out, to_input) -> list[d
         rows.append({"frame": index, "time_s": time_s, "model": name, "field_id": f.id, "x": _px(x),
                      "y": _px(y), "response": _sig(f.response), "collision": int(bool(f.collision))})
     return rows
+
+
+def _num(v) -> float | None:
+    """A number cell of the output files read back (empty: None)."""
+    return None if v in (None, "") else float(v)
 
 
 def _opt4(v: float | None) -> float | None:
@@ -129,15 +141,12 @@ class TargetRow:
         """A ``targets.csv`` row (dict of strings or numbers) as a TargetRow (``mlplc2 evaluate``): every cell
         :meth:`values` writes; a file written before ``ttc_age_s``, ``ttc_sigma_s`` or ``held_by`` (no such column)
         reads as None."""
-        def num(v):
-            return None if v in (None, "") else float(v)
-
         fields = r.get("fields") or ""
-        return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), num(r.get("width")), num(r.get("height")),
-                   num(r.get("ttc_s")), num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
-                   tuple(int(v) for v in str(fields).split()), azimuth_deg=num(r.get("azimuth_deg")),
-                   elevation_deg=num(r.get("elevation_deg")), ttc_age_s=num(r.get("ttc_age_s")),
-                   ttc_sigma_s=num(r.get("ttc_sigma_s")), held_by=r.get("held_by") or None)
+        return cls(int(r["target_id"]), float(r["x"]), float(r["y"]), _num(r.get("width")), _num(r.get("height")),
+                   _num(r.get("ttc_s")), _num(r.get("miss")), bool(int(float(r.get("warning") or 0))),
+                   tuple(int(v) for v in str(fields).split()), azimuth_deg=_num(r.get("azimuth_deg")),
+                   elevation_deg=_num(r.get("elevation_deg")), ttc_age_s=_num(r.get("ttc_age_s")),
+                   ttc_sigma_s=_num(r.get("ttc_sigma_s")), held_by=r.get("held_by") or None)
 
     def values(self) -> dict:
         """Its cells of ``targets.csv`` after ``frame, model, target_id`` (rounded; None: empty)."""
@@ -146,6 +155,51 @@ class TargetRow:
                 "fields": " ".join(map(str, self.fields)), "azimuth_deg": _opt4(self.azimuth_deg),
                 "elevation_deg": _opt4(self.elevation_deg), "ttc_age_s": _opt4(self.ttc_age_s),
                 "ttc_sigma_s": _opt4(self.ttc_sigma_s), "held_by": self.held_by}
+
+
+def _read_rows(path, row: Callable[[dict], dict], needs: Sequence[str], what: str | None) -> list[dict] | None:
+    """``row(cells)`` of every row of the CSV file ``path`` with a frame. Without a column of ``needs``: None,
+    or InputValueError ``<path>: not a <what> ...`` when ``what`` is given; a cell that does not parse:
+    InputValueError ``<path>: malformed row``."""
+    with open(path, newline="", encoding="utf-8") as f:
+        reader = csv.DictReader(f)
+        missing = set(needs) - set(reader.fieldnames or ())
+        if missing and what is None:
+            return None
+        if missing:
+            raise InputValueError(f"{path}: not a {what} (missing columns {', '.join(sorted(missing))})")
+        try:
+            return [row(r) for r in reader if r["frame"] not in (None, "")]
+        except (TypeError, ValueError, KeyError):
+            raise InputValueError(f"{path}: malformed row") from None
+
+
+def _response(r: dict) -> dict:
+    return {"frame": int(r["frame"]), "time_s": _num(r.get("time_s")), "model": r["model"],
+            "field_id": None if r["field_id"] in (None, "") else int(r["field_id"]), "x": _num(r["x"]),
+            "y": _num(r["y"]), "response": _num(r.get("response")), "collision": int(r["collision"])}
+
+
+def _target(r: dict) -> dict:
+    t = dict(vars(TargetRow.from_row(r)))          # its fields in the order of the columns
+    return {"frame": int(r["frame"]), "model": r["model"], "target_id": t.pop("id"),
+            **t, "warning": int(t["warning"]), "fields": " ".join(map(str, t["fields"]))}
+
+
+def read_responses(path) -> list[dict]:
+    """The rows of a ``responses.csv`` written by :func:`mlplc2.run`, as ``RunResult.rows`` holds them (numbers
+    parsed, an empty cell None; so is ``time_s`` or ``response`` of a file without that column); rows without a
+    frame are skipped. One-line InputValueError for a file without the columns ``mlplc2 evaluate`` needs
+    (``not a responses.csv``) or with a cell that does not parse (``malformed row``)."""
+    return _read_rows(path, _response, ("frame", "model", "field_id", "x", "y", "collision"), "responses.csv")
+
+
+def read_targets(path) -> list[dict] | None:
+    """The rows of a ``targets.csv`` written by :func:`mlplc2.run`, as ``RunResult.targets`` holds them (cells
+    parsed as :meth:`TargetRow.from_row` parses them, not rounded again); rows without a frame are skipped.
+    None for a file without ``target_id`` (written before the target layer). One-line InputValueError for a
+    cell that does not parse (``malformed row``)."""
+    return _read_rows(path, _target, ("target_id",), None)
 
 
 @dataclass

@@ -11,6 +11,7 @@ from pathlib import Path
 from typing import Any
 
 from .._validation import InputValueError
+from ..evaluation.record import read_responses
 
 __all__ = ["RunResult", "RunInterrupted", "COLUMNS", "TARGET_COLUMNS"]
 
@@ -148,13 +149,13 @@ class RunResult:
         """``rows`` as a pandas DataFrame; after a
         run with ``keep_rows=False`` the rows are read back from ``responses.csv``."""
         import pandas as pd
-        if not self.rows and self.n_frames:
+        rows = self.rows
+        if not rows and self.n_frames:
             path = self.files.get("responses.csv")
             if path is None or not Path(path).is_file():
                 raise InputValueError("this run kept no rows (keep_rows=False) and wrote no responses.csv")
-            df = pd.read_csv(path)
-        else:
-            df = pd.DataFrame(self.rows, columns=list(COLUMNS))
+            rows = read_responses(path)
+        df = pd.DataFrame(rows, columns=list(COLUMNS))
         return df.astype({"field_id": "Int64", "x": "float64", "y": "float64", "collision": bool})
 
     def summary(self) -> dict[str, Any]:
