@@ -377,6 +377,34 @@ def test_errors_are_clear():
     assert "\n" not in str(info.value)
 
 
+@pytest.mark.parametrize("call, expect", [
+    (lambda: S.looming(speed="5"), "speed must be a number, got '5'"),
+    (lambda: S.looming(half_size=None), "half_size must be a number, got None"),
+    (lambda: S.scene([S.SceneObject(center=(10, 10))], frames=20, scroll="1"), "scroll must be a number, got '1'"),
+    (lambda: S.scene([S.SceneObject(center=(10, 10), growth="2")], frames=20),
+     "objects[0].growth must be a number, got '2'"),
+    (lambda: S.four_phase(hold="2"), "hold must be an integer >= 0, got '2'"),
+    (lambda: S.basic("grating", frames=True), "frames must be an integer >= 1, got True"),
+    (lambda: S.looming(size=("64", 48)), "size: width must be an integer >= 1, got '64'"),
+])
+def test_a_number_given_as_text_is_refused_as_everywhere_else(call, expect):
+    """The stimuli's checks are _validation's: a string is no number (InputTypeError, one line),
+    as check_real / check_int say it for every other argument."""
+    from mlplc2._validation import InputTypeError, InputValueError
+
+    with pytest.raises((InputTypeError, InputValueError)) as info:
+        call()
+    assert str(info.value) == expect
+    assert isinstance(info.value, InputValueError if "True" in expect else InputTypeError)
+
+
+def test_the_stimuli_still_take_integral_floats_and_numpy_numbers():
+    a = S.basic("grating", size=32, frames=np.float64(5.0))
+    assert len(a) == 5
+    b = S.looming(size=(64.0, 48), speed=np.float32(20.0), half_size=np.int64(1), contact_time=0.3)
+    assert b.size == (64, 48)
+
+
 def test_unknown_option_error_gives_both_spellings_and_the_help():
     with pytest.raises(InputError) as info:
         S.generate("looming", contact=1.0)

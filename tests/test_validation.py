@@ -65,3 +65,26 @@ def test_as_gray_returns_a_new_array():
     ro = np.full((5, 5, 3), 300.0)
     ro.flags.writeable = False
     assert as_gray(ro).max() == 255.0 and ro.max() == 300.0
+
+
+# -- the one "did you mean" helper ------------------------------------------------------
+def test_did_you_mean_names_the_closest_name_or_none():
+    from mlplc2._validation import did_you_mean, did_you_mean_hint
+
+    assert did_you_mean("treshold", ["threshold", "fps", "horizon_s"]) == "threshold"
+    assert did_you_mean("zzzzzz", ["threshold", "fps"]) is None
+    assert did_you_mean("R_AF", ["r_af", "t_a"]) is None          # case counts: callers lower-case
+    assert did_you_mean("fsp", ["fps"]) == "fps"                   # ratio 0.67
+    assert did_you_mean("fsp", ["fps"], cutoff=0.7) is None        # the CLI's cutoff for options
+    assert did_you_mean_hint("treshold", ("threshold",)) == "did you mean 'threshold'?"
+    assert did_you_mean_hint("zzzzzz", ("threshold",), otherwise="known: threshold") == "known: threshold"
+
+
+def test_check_int_without_an_upper_bound():
+    from mlplc2._validation import INT_MAX, check_int
+
+    assert check_int(10**12, "n", maximum=None) == 10**12
+    with pytest.raises(InputValueError, match=rf"^n must be an integer in \[0, {INT_MAX}\], got 1000000000000$"):
+        check_int(10**12, "n")
+    with pytest.raises(InputValueError, match=r"^n must be an integer >= 1, got 0$"):
+        check_int(0, "n", minimum=1, maximum=None)

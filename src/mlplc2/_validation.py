@@ -1,19 +1,23 @@
 """One place for checking user input (frames, fps, sizes).
 
-Every check raises a subclass of :class:`InputError` with a one-line message.
+Every check raises a subclass of :class:`InputError` with a one-line message. A mistyped
+name gets the closest known one (:func:`did_you_mean`, :func:`did_you_mean_hint`).
 """
 
 from __future__ import annotations
 
 import dataclasses
+import difflib
 import math
 import numbers
+from collections.abc import Iterable
 from dataclasses import dataclass
 
 import numpy as np
 
 __all__ = ["InputError", "InputValueError", "InputTypeError", "InputWarning", "as_gray", "check_unit_scale",
            "check_fps", "check_real", "check_reals", "check_int", "check_bool", "Valid", "check_fields",
+           "did_you_mean", "did_you_mean_hint",
            "FLOAT32_MAX", "FLOAT32_TINY", "INT_MAX"]
 
 #: Largest finite float32 (3.4028235e+38). A parameter that enters the models' float32 maths
@@ -157,6 +161,24 @@ def as_gray(frame, *, min_size: int = 1, name: str = "frame") -> np.ndarray:
 
 
 # ---------------------------------------------------------------------------
+# Mistyped names
+# ---------------------------------------------------------------------------
+def did_you_mean(word: str, names: Iterable[str], *, cutoff: float = 0.6) -> str | None:
+    """The name of ``names`` closest to the mistyped ``word``, or None when none is close enough
+    (:func:`difflib.get_close_matches`: similarity ratio at least ``cutoff``). The comparison is
+    exact (case and dashes count): a caller that ignores them lower-cases or strips ``word`` first."""
+    close = difflib.get_close_matches(word, list(names), n=1, cutoff=cutoff)
+    return close[0] if close else None
+
+
+def did_you_mean_hint(word: str, names: Iterable[str], *, cutoff: float = 0.6, otherwise: str = "") -> str:
+    """``"did you mean 'X'?"`` for the name ``X`` of ``names`` closest to ``word``
+    (:func:`did_you_mean`), else ``otherwise``: the one wording of every such hint."""
+    close = did_you_mean(word, names, cutoff=cutoff)
+    return otherwise if close is None else f"did you mean {close!r}?"
+
+
+# ---------------------------------------------------------------------------
 # Parameters (Params, TargetParams, LGMD2Params, LGMD1Params)
 # ---------------------------------------------------------------------------
 def _show(value) -> str:
@@ -224,17 +246,19 @@ def check_reals(value, name: str, count: int, what: str = "", **bounds) -> tuple
     return tuple(check_real(x, f"{name}[{i}]", **bounds) for i, x in enumerate(items))
 
 
-def check_int(value, name: str, *, minimum: int = 0, maximum: int = INT_MAX) -> int:
+def check_int(value, name: str, *, minimum: int = 0, maximum: int | None = INT_MAX) -> int:
     """Return ``value`` as a Python int, or raise with a one-line message.
 
-    Accepted: a Python or NumPy integer (not a bool) in ``[minimum, maximum]``. Strings,
-    None, arrays and other non-numbers raise :class:`InputTypeError`; bools, floats (even
-    integral ones) and integers out of range :class:`InputValueError`.
+    Accepted: a Python or NumPy integer (not a bool) in ``[minimum, maximum]`` (``maximum=None``:
+    no upper bound, for a count that only bounds itself, such as a stimulus phase longer than
+    its video). Strings, None, arrays and other non-numbers raise :class:`InputTypeError`;
+    bools, floats (even integral ones) and integers out of range :class:`InputValueError`.
     """
     if not _is_bool(value) and not isinstance(value, numbers.Number):
         raise InputTypeError(f"{name} must be an integer >= {minimum}, got {_show(value)}")
-    if _is_bool(value) or not isinstance(value, numbers.Integral) or not minimum <= value <= maximum:
-        too_big = not _is_bool(value) and isinstance(value, numbers.Real) and value > maximum
+    top = math.inf if maximum is None else maximum
+    if _is_bool(value) or not isinstance(value, numbers.Integral) or not minimum <= value <= top:
+        too_big = not _is_bool(value) and isinstance(value, numbers.Real) and value > top
         bound = f"in [{minimum}, {maximum}]" if too_big else f">= {minimum}"
         raise InputValueError(f"{name} must be an integer {bound}, got {_show(value)}")
     return int(value)

@@ -12,14 +12,13 @@ set serves every input: nothing here is tuned per video.
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import inspect
 import textwrap
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Literal
 
-from ._validation import InputTypeError, InputValueError, Valid, check_fields
+from ._validation import InputTypeError, InputValueError, Valid, check_fields, did_you_mean_hint
 
 __all__ = ["Params", "ParameterSet", "GAMMA_MIN", "LM_SCALE_MAX", "param", "param_of", "parameter_table",
            "document_parameters"]
@@ -75,8 +74,7 @@ class ParameterSet:
 
 def _did_you_mean(word: str, names: list[str]) -> str:
     """``"; did you mean 'X'?"`` for the field name closest to a mistyped ``word`` (case aside), else the names."""
-    close = difflib.get_close_matches(str(word).lower(), names, n=1, cutoff=0.6)
-    return f"; did you mean {close[0]!r}?" if close else f"; known: {', '.join(names)}"
+    return "; " + did_you_mean_hint(str(word).lower(), names, otherwise=f"known: {', '.join(names)}")
 
 
 def param(default, doc: str, *, valid: Valid, symbol: str = "", unit: str = "", table: str | None = None):

@@ -7,7 +7,6 @@ sweeps (``NAME=V1,V2,...``: their Cartesian product), the overrides that apply t
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import functools
 import hashlib
 import itertools
@@ -15,7 +14,7 @@ import json
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
-from .._validation import InputTypeError, InputValueError
+from .._validation import InputTypeError, InputValueError, did_you_mean_hint
 
 __all__ = ["param_sets", "model_params", "parse_sweep", "param_set_id", "param_label", "restrict",
            "model_overrides"]
@@ -75,9 +74,8 @@ def _replaced(cls, over: Mapping):
     names = {f.name for f in dataclasses.fields(cls)}
     unknown = [k for k in over if k not in names]
     if unknown:
-        close = difflib.get_close_matches(str(unknown[0]), sorted(names), n=1)
-        raise TypeError(f"{cls.__name__} has no parameter {unknown[0]!r}"
-                        + (f" (did you mean {close[0]!r}?)" if close else ""))
+        hint = did_you_mean_hint(str(unknown[0]), sorted(names))
+        raise TypeError(f"{cls.__name__} has no parameter {unknown[0]!r}" + (f" ({hint})" if hint else ""))
     return dataclasses.replace(cls(), **over)
 
 
@@ -294,9 +292,9 @@ def param_sets(params=None, sweep=None, models: Sequence[str] = ("mlplc2",)) -> 
             elif k not in pnames and k in _target_fields():
                 raise InputValueError(_target_layer(k))
             elif k not in pnames:
-                close = difflib.get_close_matches(str(k).lower(), sorted(pnames), n=1)
+                hint = did_you_mean_hint(str(k).lower(), sorted(pnames))
                 raise InputValueError(f"parameters: unknown parameter {k!r}"
-                                      + (f" (did you mean {close[0]!r}?)" if close else "")
+                                      + (f" ({hint})" if hint else "")
                                       + "; Params fields: 'mlplc2 params' or help(mlplc2.Params); other models' "
                                       "parameters go in a section {\"lgmd2\": {...}}"
                                       + (" or --sweep lgmd2.NAME=..." if sweeping else ""))

@@ -13,7 +13,7 @@ from pathlib import Path
 
 from .._validation import InputError
 from . import run, stimulus, studies, tools
-from .common import (EXIT_INPUT, EXIT_INTERRUPTED, PROG, Parser, QuietStderr, Subcommand, UsageError, did_you_mean,
+from .common import (EXIT_INPUT, EXIT_INTERRUPTED, PROG, Parser, QuietStderr, Subcommand, UsageError, choice_hint,
                      flush_stdout, one_line, warn)
 from .stimulus import STIMULUS_OWN_OPTIONS
 
@@ -125,7 +125,7 @@ def _main(argv: list[str] | None) -> int:
         args, extra = parser.parse_known_args(_signed_values(sys.argv[1:] if argv is None else list(argv)))
         if extra:  # pointing at the subcommand's help, not the top level's
             options = [o for a in args._parser._actions for o in a.option_strings]
-            hint = did_you_mean(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""
+            hint = choice_hint(extra[0].split("=")[0], options) if extra[0].startswith("--") else ""
             raise UsageError(f"unrecognized arguments: {' '.join(extra)}{hint} (see '{PROG} {args.command} --help')")
     except UsageError as exc:
         print(f"{PROG}: error: {exc}", file=sys.stderr)

@@ -7,7 +7,6 @@ options with the run options they give.
 from __future__ import annotations
 
 import argparse
-import difflib
 import importlib.util
 import inspect
 import math
@@ -19,7 +18,7 @@ from collections.abc import Callable, Iterator
 from contextlib import contextmanager
 from dataclasses import dataclass
 
-from .._validation import InputValueError
+from .._validation import InputValueError, did_you_mean
 from ..io import parse_resize
 from ..models.base import REGISTRY, REPEAT_THRESHOLD
 from . import EXIT_INPUT, EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG  # noqa: F401 - the subcommands' import
@@ -32,16 +31,17 @@ class UsageError(Exception):
 class Parser(argparse.ArgumentParser):
     def error(self, message):  # noqa: D102 - one line instead of usage + message
         bad = re.search(r"invalid choice: '([^']*)' \(choose from (.*)\)", message)
-        hint = did_you_mean(bad.group(1), re.findall(r"'([^']*)'", bad.group(2))) if bad else ""
+        hint = choice_hint(bad.group(1), re.findall(r"'([^']*)'", bad.group(2))) if bad else ""
         raise UsageError(f"{message}{hint} (see '{self.prog} --help')")
 
 
-def did_you_mean(word: str, choices) -> str:
+def choice_hint(word: str, choices) -> str:
     """``"; did you mean 'X'?"`` for the choice closest to a mistyped ``word``, else ``""``.
-    Options are compared without their dashes (``--colour`` is not ``--scroll``)."""
+    Options are compared without their dashes (``--colour`` is not ``--scroll``) and need a closer match
+    (:func:`~mlplc2._validation.did_you_mean` with cutoff 0.7, commands and choices 0.6)."""
     bare = {c.lstrip("-"): c for c in choices}
-    close = difflib.get_close_matches(word.lstrip("-"), list(bare), n=1, cutoff=0.6 if word[:1] != "-" else 0.7)
-    return f"; did you mean '{bare[close[0]]}'?" if close else ""
+    close = did_you_mean(word.lstrip("-"), bare, cutoff=0.6 if word[:1] != "-" else 0.7)
+    return f"; did you mean '{bare[close]}'?" if close else ""
 
 
 @dataclass(frozen=True)

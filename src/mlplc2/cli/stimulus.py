@@ -10,7 +10,7 @@ import warnings
 from collections.abc import Callable
 from dataclasses import dataclass
 
-from .._validation import InputValueError
+from .._validation import InputTypeError, InputValueError
 from .common import EXIT_OK, Subcommand, one_line, say, warn
 
 
@@ -247,14 +247,14 @@ def _cmd_stimulus(args) -> int:
         with warnings.catch_warnings(record=True) as caught:
             warnings.simplefilter("always")
             video, gt = stimuli.write(args.name, args.out, gt=args.gt, **options)
-    except InputValueError as exc:
+    except (InputValueError, InputTypeError) as exc:
         # the generator names its parameters in Python: name the options given as written here
         msg = new = str(exc)
         for pname in options:
             new = re.sub(rf"(?<![\w\-/.]){re.escape(pname)}(?![\w\-/.])", _flag(pname), new)
         if new == msg:
             raise
-        raise InputValueError(f"{new} (see 'mlplc2 stimulus --help')") from None
+        raise type(exc)(f"{new} (see 'mlplc2 stimulus --help')") from None
     for w in caught:  # the generator's own warnings (an object never visible, ...) as one line each
         if issubclass(w.category, UserWarning):
             warn(one_line(str(w.message)))

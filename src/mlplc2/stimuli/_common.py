@@ -3,10 +3,13 @@ result types (:class:`Stimulus`, :class:`ApproachStimulus`), the argument checks
 procedural backgrounds (1/f noise, blobs, optics blur) and the size limit. Both families import
 it; neither imports the other (import-linter: ``paper | world``).
 
-The checks here are the stimuli's own on purpose: :func:`check_count` takes an integral float
-(``frames=50.0``) and :func:`check_number` anything ``float()`` reads, where
-:func:`mlplc2._validation.check_int` and :func:`~mlplc2._validation.check_real` refuse them (the
-3-D world uses those). :func:`check_choice` names the options in its message."""
+The checks here are thin wrappers over :mod:`mlplc2._validation`'s, so that a stimulus refuses what
+every other argument check refuses (a string such as ``'5'``, a bool, None: an
+:class:`~mlplc2._validation.InputTypeError`) with the same one-line message: :func:`check_number`
+is :func:`~mlplc2._validation.check_real`; :func:`check_count` is
+:func:`~mlplc2._validation.check_int` that also takes an integral float (``frames=50.0``) and has
+no upper bound.
+:func:`check_choice` names the options in its message."""
 
 from __future__ import annotations
 
@@ -17,7 +20,7 @@ from typing import Any, Sequence
 
 import numpy as np
 
-from .._validation import InputValueError
+from .._validation import InputTypeError, InputValueError, check_int, check_real
 from ..evaluation.truth import ObjectTruth, VideoTruth
 
 __all__ = ["Stimulus", "ApproachStimulus", "MAX_STIMULUS_BYTES", "OPTICS_BLUR_PX", "check_choice", "check_count",
@@ -114,28 +117,18 @@ def check_choice(value, name: str, options: Sequence[str]) -> str:
 
 
 def check_count(value, name: str, minimum: int = 0) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)):
-        if isinstance(value, (float, np.floating)) and float(value).is_integer():
-            value = int(value)
-        else:
-            raise InputValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    if value < minimum:
-        raise InputValueError(f"{name} must be an integer >= {minimum}, got {value!r}")
-    return int(value)
+    """``value`` as an int >= ``minimum`` (:func:`~mlplc2._validation.check_int`, no upper bound:
+    an approach may outlast the video; the size limit bounds the frames); an integral float
+    (``50.0``, ``np.float64(50.0)``) counts as its integer."""
+    if isinstance(value, (float, np.floating)) and float(value).is_integer():
+        value = int(value)
+    return check_int(value, name, minimum=minimum, maximum=None)
 
 
 def check_number(value, name: str, *, positive: bool = False, nonneg: bool = False) -> float:
-    try:
-        out = float(value)
-    except (TypeError, ValueError):
-        raise InputValueError(f"{name} must be a number, got {value!r}") from None
-    if not math.isfinite(out):
-        raise InputValueError(f"{name} must be finite, got {value!r}")
-    if positive and out <= 0:
-        raise InputValueError(f"{name} must be > 0, got {value!r}")
-    if nonneg and out < 0:
-        raise InputValueError(f"{name} must be >= 0, got {value!r}")
-    return out
+    """``value`` as a finite float (:func:`~mlplc2._validation.check_real`): > 0 if ``positive``,
+    >= 0 if ``nonneg``."""
+    return check_real(value, name, positive=positive, minimum=0.0 if nonneg else None)
 
 
 def check_size(size) -> tuple[int, int]:
@@ -145,8 +138,8 @@ def check_size(size) -> tuple[int, int]:
         raise InputValueError(f"size must be (width, height), got {size!r}") from None
     try:
         return check_count(w, "width", 1), check_count(h, "height", 1)
-    except InputValueError as exc:   # named, so that `mlplc2 stimulus` can say --size
-        raise InputValueError(f"size: {exc}") from None
+    except (InputValueError, InputTypeError) as exc:   # named, so that `mlplc2 stimulus` can say --size
+        raise type(exc)(f"size: {exc}") from None
 
 
 def plain_level(appearances: Sequence[str]) -> float:
