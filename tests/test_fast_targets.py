@@ -16,7 +16,7 @@ import mlplc2
 from mlplc2 import stimuli
 from mlplc2 import targets as T
 from mlplc2.targets import _fast_align
-from mlplc2.targets.alignment import _sample
+from mlplc2.targets.alignment import sample_patch
 from mlplc2.backend import resolve
 
 W, H = 200, 150
@@ -65,7 +65,7 @@ def test_sampling_and_inside_mask_match_opencv(n):
         level = int(rng.integers(0, len(levels)))
         cx, cy = rng.uniform(-40, W + 40), rng.uniform(-40, H + 40)     # some patches cross the border
         sx, sy = rng.uniform(0.3, 4.0, 2)
-        ref, inside = _sample(levels, level, cx, cy, sx, sy, n)
+        ref, inside = sample_patch(levels, level, cx, cy, sx, sy, n)
         everywhere = _fast_align._sample(levels[level], level, cx, cy, sx, sy, n, out, in_x, in_y,
                                          _fast_align.EXACT_COORDINATES)
         np.testing.assert_array_equal(in_y[:, None] & in_x[None, :], inside)
@@ -115,7 +115,7 @@ def test_kernel_matches_reference_at_the_frame_border(cx, cy):
     prev = texture(3)
     cur = zoomed(prev, cx, cy, 1.04, 1.04, 0.4, -0.3)
     levels = T.pyramid(prev)
-    _, inside = _sample(levels, 0, cx, cy, 30.0 / 16, 30.0 / 16, 32)
+    _, inside = sample_patch(levels, 0, cx, cy, 30.0 / 16, 30.0 / 16, 32)
     assert 0 < inside.sum() < inside.size
     ref, fast = both(prev, cur, cx, cy, 30.0, (20.0, 20.0))
     assert ref is not None and fast is not None

@@ -351,11 +351,6 @@ class Model(abc.ABC):
         self.clock: float = 0              # this frame's time in frame intervals since frame 0
         self._clock_done: float = 0        # clock of the last processed (not held) frame
         self.interval: float = 1           # frame intervals since the last processed frame
-        self._turned: np.ndarray | None = np.zeros(3)   # gyro rotation (rad) since the last processed frame
-        self._rate: np.ndarray | None = None            # the gyro's rate (rad/s) at the last frame
-        self.rotation_given: tuple[float, float, float] | None = None
-        """The camera's rotation (rad, its axes) since the last processed frame from the gyro given
-        to :meth:`step` (held frames' included), or None: estimated from the images."""
 
     def _advance(self, t) -> tuple[float, float]:
         """(clock, time_s) of the next frame taken at ``t`` seconds (None: one frame interval after
@@ -389,7 +384,8 @@ class Model(abc.ABC):
         return self._frame
 
     def gyro_refusal(self) -> str | None:
-        """Why this model takes no gyro (None: it takes one); models that stabilise override it."""
+        """Why this model takes no gyro (None: it takes one); the models that stabilise take one
+        (:class:`mlplc2.models.gaze.GazeStabilisation`)."""
         return f"model {self.name!r} does not compensate the camera's motion: it takes no gyro"
 
     def _check_gyro(self, gyro) -> np.ndarray | None:
@@ -409,14 +405,11 @@ class Model(abc.ABC):
                                   f"got {gyro!r}")
         return g
 
-    def _integrate_gyro(self, rate: np.ndarray | None, dt: float | None) -> None:
-        """Add the gyro's turn since the last frame (trapezoid over ``dt`` seconds; None: the first frame)
-        to the rotation since the last processed frame; a frame without a gyro leaves it unknown."""
-        if rate is None:
-            self._turned = None
-        elif dt is not None and self._turned is not None:
-            self._turned = self._turned + (rate if self._rate is None else 0.5 * (rate + self._rate)) * dt
-        self._rate = rate
+    def _see_gyro(self, rate: np.ndarray | None, dt: float | None, processed: bool) -> None:
+        """The gyro's rate at this frame (:meth:`_check_gyro`; None: none given), ``dt`` seconds after the
+        last frame (None: the first), and whether the model steps on this frame (else it holds it): what
+        the models that stabilise integrate (:class:`mlplc2.models.gaze.GazeStabilisation`). Nothing
+        here: a model that does not stabilise takes no gyro (:meth:`gyro_refusal`)."""
 
     def step(self, frame: np.ndarray, t: float | None = None, *, gyro=None) -> Output:
         """Process one frame: (H, W) grey, (H, W, 1), (H, W, 3) RGB or (H, W, 4) RGBA, 0-255.
@@ -472,7 +465,7 @@ class Model(abc.ABC):
         elif not self._scale_warned:
             self._scale_warned = check_unit_scale(frame, gray)
         first = self._t_last is None
-        self._integrate_gyro(rate, None if first else time_s - self._t_last)
+        dt = None if first else time_s - self._t_last
         self.clock, self._t_last = clock, time_s
         if first:
             self._t0 = time_s
@@ -481,6 +474,7 @@ class Model(abc.ABC):
         if self._is_repeat(gray):
             self._repeats += 1
             if self._repeats <= MAX_REPEATS:
+                self._see_gyro(rate, dt, processed=False)
                 out = self._held_output(time_s)
                 self._frame += 1
                 return out
@@ -494,8 +488,7 @@ class Model(abc.ABC):
                     np.copyto(self._last_gray, gray)
         self.interval = 1 if first else clock - self._clock_done
         self._clock_done = clock
-        self.rotation_given = None if self._turned is None or rate is None else tuple(float(v) for v in self._turned)
-        self._turned = np.zeros(3)
+        self._see_gyro(rate, dt, processed=True)
         out = dataclasses.replace(self._step(gray, self._frame), time_s=time_s)
         if self._work is not None:
             out = _to_frame(out, self._shape[1] / self._work[0], self._shape[0] / self._work[1])
@@ -511,19 +504,6 @@ class Model(abc.ABC):
         given in the input's pixels as every output is, means the same point whatever size the
         frames reach the model at. :meth:`reset` forgets it."""
         self._input_map = to_frames
-
-    def _turn(self, image: np.ndarray, shape: tuple[int, int]):
-        """Gaze stabilisation's first step, one for every model that stabilises (docs/model.md, "Camera
-        motion"): this frame's camera motion (``self.camera_motion``) from ``image`` by the model's
-        ``_camera`` (:class:`mlplc2.camera.MotionEstimator`; the gyro's rotation where given), whose heading
-        the target layer (``_layer``, where the model has one) takes for the course; returns the homography
-        that carries the last frame's pixels into this one's, None where the camera did not turn."""
-        self.camera_motion, hom = self._camera.turn(image, shape, hfov_deg=self.hfov_deg,
-                                                    heading=self._work_heading(), omega=self.rotation_given)
-        layer = getattr(self, "_layer", None)
-        if layer is not None:                              # the course's heading (docs/targets.md, step 7)
-            layer.see_heading(self.camera_motion.heading, self.camera_motion.heading_confidence)
-        return hom
 
     def _work_heading(self) -> tuple[float, float] | None:
         """``TargetParams.heading`` (the input's pixels; None stays None) in the working frame's

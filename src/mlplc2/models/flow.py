@@ -36,11 +36,13 @@ from .._validation import Valid, check_fields
 from ..backend import resolve
 from ..camera import CameraMotion, MotionEstimator, check_hfov, focal_length, warp
 from ..params import ParameterSet, document_parameters, param, param_of
+from ..targets.alignment import sample_patch
 from ..targets.change import change_box
 from ..targets.layer import TargetLayer
 from ..targets.warning import count_down
 from ..targets.params import TargetParams
 from .base import WORK_WIDTH, Model, Output, register
+from .gaze import GazeStabilisation
 
 __all__ = ["FlowTTC", "FlowParams", "Region", "ObjectFlow", "object_flow", "divergence", "regions"]
 
@@ -138,22 +140,17 @@ class ObjectFlow:
     box: tuple[float, float, float, float] | None = None
 
 
-def _sample(levels: list[np.ndarray], cx: float, cy: float, half: float, n: int) -> tuple[np.ndarray, float, int]:
-    """The ``n + 2 PAD`` square of samples centred on (cx, cy), spacing ``s = 2 half / n`` px,
-    bilinear from the pyramid level whose pixel is at most 1.5 samples; returns it, ``s`` and
-    the level."""
+def _patch(levels: list[np.ndarray], cx: float, cy: float, half: float, n: int) -> tuple[np.ndarray, float]:
+    """The ``n + 2 PAD`` square of samples centred on (cx, cy), spacing ``s = 2 half / n`` px, bilinear
+    (:func:`mlplc2.targets.alignment.sample_patch`, the image alignment's sampler) from the pyramid level whose
+    pixel is at most 1.5 samples (the coarsest such: :func:`~mlplc2.targets.align` takes the finest level whose
+    samples are at most 1.5 px); returns it and ``s``."""
     s = 2.0 * half / n
     level = 0
     while level + 1 < len(levels) and 2 ** (level + 1) <= 1.5 * s:
         level += 1
-    k = 2.0 ** level
-    m = n + 2 * PAD
-    x0 = cx - half - PAD * s + 0.5 * s               # centre of sample 0 (px of the frame)
-    y0 = cy - half - PAD * s + 0.5 * s
-    warp = np.array([[s / k, 0.0, (x0 + 0.5) / k - 0.5], [0.0, s / k, (y0 + 0.5) / k - 0.5]], np.float32)
-    out = cv2.warpAffine(levels[level], warp, (m, m), flags=cv2.INTER_LINEAR | cv2.WARP_INVERSE_MAP,
-                         borderMode=cv2.BORDER_REPLICATE)
-    return out, s, level
+    out, _ = sample_patch(levels, level, cx, cy, s, s, n + 2 * PAD)
+    return out, s
 
 
 def object_flow(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, half: float, *,
@@ -165,8 +162,8 @@ def object_flow(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: fl
     structure, lies outside the frame, or the fit exceeds ``max_expansion``.
     """
     h, w = cur[0].shape
-    a, s, _ = _sample(prev, cx, cy, half, n)
-    b, _, _ = _sample(cur, cx, cy, half, n)
+    a, s = _patch(prev, cx, cy, half, n)
+    b, _ = _patch(cur, cx, cy, half, n)
     m = n + 2 * PAD
     # sample coordinates: centred on the patch (samples), and in the frame (px)
     j = np.arange(m, dtype=np.float64) - (m - 1) / 2.0
@@ -289,7 +286,7 @@ def regions(div: np.ndarray, params: FlowParams, first_id: int = 1) -> list[Regi
 
 
 @register("flow")
-class FlowTTC(Model):
+class FlowTTC(GazeStabilisation, Model):
     """Optical-flow time to contact (a classical baseline, not the paper's): see the module docstring.
 
     Parameters
@@ -327,11 +324,6 @@ class FlowTTC(Model):
         self._change_kernel = impl.change_kernel
         self._camera = MotionEstimator(hfov_deg=hfov_deg)
         self._reset()
-
-    def gyro_refusal(self) -> str | None:
-        if self.hfov_deg is None:
-            return "a gyro needs the camera's field of view (hfov_deg) to turn its rotation into pixels"
-        return None
 
     def _hold(self, last: Output, elapsed: float) -> Output:
         """A repeated frame: the targets' times to contact count down (:func:`~mlplc2.targets.count_down`)."""

@@ -15,11 +15,12 @@ from ..neuropils.lobula_plate import LocalMotion
 from ..params import Params
 from ..targets import TargetLayer, TargetParams, check_hfov, count_down, focal_length
 from .base import WORK_WIDTH, Model, Output, register
+from .gaze import GazeStabilisation
 
 __all__ = ["MLPLC2", "SLPLC2", "LPLC2"]
 
 
-class _LPLC2Family(Model):
+class _LPLC2Family(GazeStabilisation, Model):
     """Shared machinery: front end (Eq. 1-12) + attention-field bookkeeping + the target layer."""
 
     # min_size 3 (the base's): a field needs a centre row and column plus one pixel per quadrant.
@@ -73,13 +74,6 @@ class _LPLC2Family(Model):
             self._layer.carry_ahead(self.clock)
         self.maps = lm
         return lm
-
-    def gyro_refusal(self) -> str | None:
-        if not self.stabilise:
-            return f"model {self.name!r} does not stabilise its gaze (stabilise=False): it takes no gyro"
-        if self.hfov_deg is None:
-            return "a gyro needs the camera's field of view (hfov_deg) to turn its rotation into pixels"
-        return None
 
     def _stabilise(self, gray: np.ndarray) -> None:
         """Carry the state into this frame's pixels when the camera turned (:attr:`stabilise`)."""

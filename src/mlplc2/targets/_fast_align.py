@@ -86,7 +86,7 @@ def _reflect101(i, n):
 
 @jit()
 def _sample(img, level, cx, cy, step_x, step_y, n, out, in_x, in_y, exact):
-    """:func:`mlplc2.targets.alignment._sample` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
+    """:func:`mlplc2.targets.alignment.sample_patch` into ``out`` (n, n) float32; ``in_x`` / ``in_y``: the
     inside mask per column / row (the mask is their outer product). True when all inside.
 
     ``cv2.warpAffine(INTER_LINEAR | WARP_INVERSE_MAP, BORDER_REPLICATE)`` with the float32

@@ -13,7 +13,7 @@ from dataclasses import dataclass
 import cv2
 import numpy as np
 
-__all__ = ["Alignment", "pyramid", "align"]
+__all__ = ["Alignment", "pyramid", "align", "sample_patch"]
 
 
 @dataclass(frozen=True)
@@ -64,7 +64,7 @@ def _grid(n: int):
     return _GRIDS[n]
 
 
-def _sample(levels, level: int, cx: float, cy: float, step_x: float, step_y: float, n: int):
+def sample_patch(levels, level: int, cx: float, cy: float, step_x: float, step_y: float, n: int):
     """``n`` x ``n`` bilinear samples of pyramid ``level`` around (cx, cy) (level-0 px) every
     ``step_x`` / ``step_y`` level-0 px, and the mask of the samples that fall inside the frame."""
     img = levels[level]
@@ -108,7 +108,7 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
                           float(box[1]), int(n), int(iterations))
         return Alignment(*out) if ok else None
     uu, vv, _ = _grid(n)
-    a, inside = _sample(prev, level, cx, cy, step, step, n)
+    a, inside = sample_patch(prev, level, cx, cy, step, step, n)
     a = cv2.GaussianBlur(a, (0, 0), 0.8)
     gx = cv2.Sobel(a, cv2.CV_32F, 1, 0, ksize=3) * np.float32(0.125)
     gy = cv2.Sobel(a, cv2.CV_32F, 0, 1, ksize=3) * np.float32(0.125)
@@ -130,7 +130,7 @@ def align(prev: list[np.ndarray], cur: list[np.ndarray], cx: float, cy: float, h
     r = None
     for _ in range(max(iterations, 1)):
         kx, ky = math.exp(px), math.exp(py)
-        b, inside_b = _sample(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n)
+        b, inside_b = sample_patch(cur, level, cx + tx * step, cy + ty * step, step * kx, step * ky, n)
         b = cv2.GaussianBlur(b, (0, 0), 0.8)
         r = (b - a).ravel()
         w_it = jw if inside_b.all() else jw * inside_b.ravel()[:, None]
