@@ -15,6 +15,7 @@ import pytest
 
 import mlplc2.benchmark as benchmark_module
 import mlplc2.runner as runner_module
+import mlplc2.runner.prepare as prepare_module
 from mlplc2.benchmark import COLUMNS, MODELS, BenchmarkWarning, benchmark, suite
 from mlplc2 import stimuli
 from mlplc2.cli import main
@@ -223,13 +224,13 @@ def test_bad_real_folder_is_one_line_error(tmp_path, capsys):
 def built(monkeypatch):
     """The target parameters every model built by mlplc2.run gets (None: the defaults)."""
     seen = []
-    real = runner_module._build_models
+    real = prepare_module._build_models
 
     def spy(models, fps, options):
         seen.append(options.target_params)
         return real(models, fps, options)
 
-    monkeypatch.setattr(runner_module, "_build_models", spy)
+    monkeypatch.setattr(prepare_module, "_build_models", spy)
     return seen
 
 
@@ -256,7 +257,7 @@ def test_warning_options_reach_the_target_layer(clip, built, tmp_path):
     done = json.loads(next((tmp_path / "b").rglob("done.json")).read_text())
     assert done["run_options"] == {"stabilise": True, "target_params": {"horizon_s": 3.0}}   # the default, recorded
     # and mlplc2.run makes them the models' TargetParams
-    model = runner_module._build_models(["mlplc2"], 30.0, runner_module.RunOptions(target_params=built[0]))[0]
+    model = prepare_module._build_models(["mlplc2"], 30.0, runner_module.RunOptions(target_params=built[0]))[0]
     assert model.target_params == TargetParams(horizon_s=2.5, max_miss=0.5)
 
 

@@ -508,6 +508,7 @@ def test_demo_runs_the_papers_model_unless_told_to_stabilise(tmp_path, monkeypat
     the objects keep their places in the image: stabilised, the scroll is taken for a pan. So `mlplc2 demo`
     runs the paper's model and says so; `--stabilise` runs the models as `mlplc2 run` builds them."""
     import mlplc2.runner as runner
+    import mlplc2.runner.demonstration as demonstration
 
     real_run, seen = runner.run, []
 
@@ -515,7 +516,7 @@ def test_demo_runs_the_papers_model_unless_told_to_stabilise(tmp_path, monkeypat
         seen.append(kw.get("stabilise", runner.RunOptions.stabilise))
         return real_run(source, models, **{**kw, "max_frames": 3, "video": False})
 
-    monkeypatch.setattr(runner, "run", spy)
+    monkeypatch.setattr(demonstration, "run", spy)       # the run demo() calls
     for extra in ([], ["--stabilise"]):
         assert main(["demo", "--out", str(tmp_path / "demo"), "--scene", "six_objects", *extra]) == 0
     err = capsys.readouterr().err
@@ -1120,7 +1121,7 @@ def test_a_file_read_live_is_prescanned_frame_by_frame(tmp_path, capsys, monkeyp
     frames reads every one of them (a live reader hands over a sample, whose duplicates depend
     on the machine's speed: the loom clip of the README once said "repeats its frames", on
     0 of 1 frames held)."""
-    import mlplc2.runner
+    import mlplc2.runner.prepare
 
     frames, _ = duplicated(noise_frames(20, w=320, h=240, seed=4))
     clip = _png_folder(tmp_path / "dup", frames)
@@ -1130,7 +1131,7 @@ def test_a_file_read_live_is_prescanned_frame_by_frame(tmp_path, capsys, monkeyp
         opened.append(keywords.get("live"))
         return open_source(*args, **keywords)
 
-    monkeypatch.setattr(mlplc2.runner, "open_source", recording)
+    monkeypatch.setattr(mlplc2.runner.prepare, "open_source", recording)   # the run's and the pre-scan's
     assert cli.main(["run", str(clip), "--live", "-q", "--out", str(tmp_path / "o")]) == 0
     summary = json.loads((tmp_path / "o" / "fields.json").read_text())
     assert summary["duplicated"] is True
