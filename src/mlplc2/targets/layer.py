@@ -26,7 +26,7 @@ from .change import (SUPPORT_PAD, Support, affine_change_box, change_box, ground
 from .extent import measure_extent
 from .params import TargetParams
 from .track import EPS as _EPS, Carried, Observation, Target, Track, Turn, carry_ahead
-from .warning import blind_until, confirmed, drift, estimate, heading_grows, holds, keeps_bearing, spans_view, young
+from .warning import blind_until, drift, estimate, heading_grows, holds, keeps_bearing, layer_vetoes, spans_view, young
 
 __all__ = ["Target", "Observation", "Track", "TargetLayer", "Carried"]
 
@@ -185,13 +185,12 @@ class TargetLayer:
         self._ground, self._levels = {}, levels
         self._keep_past(clock)
         last, oldest = self._prev, (self._past[0] if self._past else None)
-        if self._prev is not None:
-            self._follow(levels, clock, clock - self._clock, w, h, lm, gray)
         interval = None if self._prev is None else clock - self._clock
+        if interval is not None:                 # follow: every track into this frame
+            self._follow(levels, clock, interval, w, h, lm, gray)
         far = interval is not None and self._far(interval)
         self._before = None if self._prev is None else self._clock
-        self._clock = clock
-        now = clock                  # the stamps and spans below are clocks (TargetParams.nominal_fps)
+        self._clock = now = clock    # the stamps and spans below are clocks (TargetParams.nominal_fps)
         if p.support_reseat > 0:
             for t in self._tracks:
                 self._reseat_support(t)
@@ -199,9 +198,30 @@ class TargetLayer:
             for t in self._tracks:
                 self._reseat_affine(t, gray)
         self._merge(now)
-        seeds, extra = [], set()     # extra: lm_seeds' extra seeds (seed_focus tests them)
-        split: dict = {}             # alarm_split: field id -> the owner its seed may replace
-        passed = set()               # split_passed: the fields of split whose owner's contact has passed
+        seeds, split, passed = self._field_seeds(fields, now)            # seeds: the fields no track owns,
+        extra = self._motion_seeds(lm, levels, fields, interval, now, seeds)  # ... then LM and change
+        self._start(seeds, extra, split, passed, lm, gray, levels, index, now, far)   # ... each a new track
+        self._prev = Carried(levels)
+        self._past.append(self._prev)
+        self._past_t.append(clock)
+        out, early = self._targets(fields, gray, index, now, interval, far)  # course and warning, per track
+        self._blind_until = blind_until(out, p, self.fps, now, (h, w), self._blind_until)
+        self._absorb(out, now)
+        self._drop_idle(now)
+        self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
+        for c in self._past:
+            c.read.clear()
+        self._settle()
+        keep = {t.id for t in self._tracks if not t.shadow}
+        out = [o if o.id not in early else replace(o, ttc_s=early[o.id][0], ttc_sigma_s=early[o.id][1], ttc_age_s=0.0)
+               for o in out if o.id in keep]
+        return tuple(sorted(out, key=Target.urgency))
+
+    def _field_seeds(self, fields, now: float) -> tuple[list, dict, set]:
+        """Each field owned by the smallest track that holds it (:meth:`_own`), else a seed: ``(seeds, split,
+        passed)``, the seeds ``(x, y, field)``; ``split`` (``alarm_split``): field id -> the owner its seed may
+        replace; ``passed`` (``split_passed``): the fields of ``split`` whose owner's contact has passed."""
+        seeds, split, passed = [], {}, set()
         for f in fields:
             owners = [t for t in self._tracks if t.contains(f.x, f.y, self._own_margin(t, f)) and not t.shadow]
             if owners:
@@ -216,6 +236,15 @@ class TargetLayer:
                     self._own(owner, f, now)
             else:
                 seeds.append((int(f.x), int(f.y), f))
+        return seeds, split, passed
+
+    def _motion_seeds(self, lm: LocalMotion | None, levels, fields, interval: float | None, now: float,
+                      seeds: list) -> set:
+        """The seeds of the strongest LM outside every track and field (``seed_lm``), else of grey-level change,
+        added to ``seeds`` as ``(x, y, None)`` while there is room (``max_targets``); returns the extra ones
+        (``lm_seeds``; ``seed_focus``, ``seed_shadow`` test them)."""
+        p = self.params
+        extra = set()
         if lm is not None and p.seed_lm > 0 and self._count() + len(seeds) < p.max_targets:
             # a track claims its box and the blur of the front end around it (the lamina's
             # inhibitory window, r_Di = 11 px): LM there is the tracked object's own
@@ -245,6 +274,15 @@ class TargetLayer:
                 zones.append((int(cand[0]), int(cand[1]), int(p.claim)))
                 if i >= n // p.lm_seeds:         # an extra seed: TargetParams.seed_focus tests it
                     extra.add((cand[0], cand[1]))
+        return extra
+
+    def _start(self, seeds, extra: set, split: dict, passed: set, lm: LocalMotion | None, gray: np.ndarray, levels,
+               index: int, now: float, far: bool) -> None:
+        """A new track on each seed (:meth:`_field_seeds`, :meth:`_motion_seeds`) outside every track, on the first
+        of its boxes (:meth:`_boxes`) that is a part of a track (its field then owned by that track) or grows
+        (:meth:`_grows`), while there is room (``max_targets``); a split field's (``alarm_split``) replaces its owner."""
+        p = self.params
+        h, w = gray.shape
         for x, y, f in seeds:
             if self._count() >= p.max_targets:
                 break
@@ -285,7 +323,7 @@ class TargetLayer:
                 self._tracks = [o for o in self._tracks if o is not owner]
             t.grown = not alarm and p.min_growth > 0   # the growth test made it a target (confirm_birth)
             t.behind = any(self._opened(o, now) and o.contains(t.cx, t.cy) for o in self._tracks)
-            t.history = deque([Observation(clock, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
+            t.history = deque([Observation(now, 0.0, t.cx, t.cy, t.w, 0.0, height=t.h)])
             t.inside = deque(t.history)
             t.shadow = hide
             if hide or not self._refind(t, now):
@@ -293,9 +331,15 @@ class TargetLayer:
             if f is not None:
                 self._own(t, f, now)
             self._tracks.append(t)
-        self._prev = Carried(levels)
-        self._past.append(self._prev)
-        self._past_t.append(clock)
+
+    def _targets(self, fields, gray: np.ndarray, index: int, now: float, interval: float | None,
+                 far: bool) -> tuple[list[Target], dict]:
+        """Every track's :class:`Target` this frame: its time to contact, course and warning (:func:`estimate`), the
+        layer's vetoes on it (:func:`layer_vetoes`); ``seed_shadow``: a shadow shown on its first time to contact
+        (:meth:`_show`). Returns them and ``young_ttc``'s times to contact by target id, shown once every decision
+        is taken (:func:`young`)."""
+        p = self.params
+        h, w = gray.shape
         alive = {f.id for f in fields}
         out, shown, early = [], [], {}
         for t in self._tracks:
@@ -311,48 +355,28 @@ class TargetLayer:
                 if self._refind(t, now):
                     t.held = held
                     o = replace(o, id=t.id, born=t.born)
-            # the view filled by an object about to hit: no other warning begins (contact_blind)
-            if o.warning and not warned and now <= self._blind_until + _EPS:
-                o, t.warned, t.last_warned = replace(o, warning=False, held_by="contact_blind"), warned, False
-            # ... nor on a box over the heading where what lies at the heading does not grow (heading_growth), nor on
-            # one whose course, counted in the extent of what moved with it, misses (onset_support)
-            if o.warning and not warned:
-                rule = "heading_growth" if not self._heading_grows(t, o) else \
-                    "onset_support" if not self._supported(t, o) else None
-                if rule is not None:
-                    o, t.warned, t.last_warned = replace(o, warning=False, held_by=rule), warned, False
-            if o.warning:
-                t.last_warning = now
-            # a warning decided on one frame alone is not shown, unless a field of it alarms (onset_confirm)
-            decided = o.warning
-            if decided and not confirmed(t, p, now, far):
-                o = replace(o, warning=False, held_by="onset_confirm")
-            t.decided = decided
+            o = layer_vetoes(o, t, p, warned, now, far, self._blind_until, self._heading_grows, self._supported)
             if o.ttc_s is None and (guess := young(t, p, self.fps, now, (h, w))) is not None:
                 early[o.id] = guess              # young_ttc: shown once every decision is taken
             out.append(o)
-        if shown:                                # seed_shadow: a target born this frame over a shown shadow is its
-            ids = {id(t) for t in shown}
-            gone = {id(o) for o in self._tracks if not o.shadow and id(o) not in ids and abs(o.birth - now) <= _EPS
-                    and any(t.overlap(o) >= 0.5 for t in shown)}
-            for t in shown:
-                for o in self._tracks:
-                    if id(o) in gone and t.overlap(o) >= 0.5:
-                        t.fields |= o.fields
-                        t.last_answer = max(t.last_answer, o.last_answer)
-            out = [o for t, o in zip(self._tracks, out) if id(t) not in gone]
-            self._tracks = [t for t in self._tracks if id(t) not in gone]
-        self._blind_until = blind_until(out, p, self.fps, now, (h, w), self._blind_until)
-        self._absorb(out, now)
-        self._drop_idle(now)
-        self._hot = (sorted(last.read) if last else [], sorted(oldest.read) if oldest else [])
-        for c in self._past:
-            c.read.clear()
-        self._settle()
-        keep = {t.id for t in self._tracks if not t.shadow}
-        out = [o if o.id not in early else replace(o, ttc_s=early[o.id][0], ttc_sigma_s=early[o.id][1], ttc_age_s=0.0)
-               for o in out if o.id in keep]
-        return tuple(sorted(out, key=Target.urgency))
+        return self._show(out, shown, now), early
+
+    def _show(self, out: list[Target], shown: list[Track], now: float) -> list[Target]:
+        """``seed_shadow``: a target born this frame over a ``shown`` shadow (half its box or more) is its: dropped,
+        its fields and answer the shadow's; ``out`` without it."""
+        if not shown:
+            return out
+        ids = {id(t) for t in shown}
+        gone = {id(o) for o in self._tracks if not o.shadow and id(o) not in ids and abs(o.birth - now) <= _EPS
+                and any(t.overlap(o) >= 0.5 for t in shown)}
+        for t in shown:
+            for o in self._tracks:
+                if id(o) in gone and t.overlap(o) >= 0.5:
+                    t.fields |= o.fields
+                    t.last_answer = max(t.last_answer, o.last_answer)
+        out = [o for t, o in zip(self._tracks, out) if id(t) not in gone]
+        self._tracks = [t for t in self._tracks if id(t) not in gone]
+        return out
 
     def _keep_past(self, clock: float) -> None:
         """Forget the kept frames older than needed: the newest frame at least ``change_frames``

@@ -2,7 +2,8 @@
 contact (:func:`~mlplc2.targets.contact.fit_contact`), its course against the heading
 (:func:`course`), the warning (:func:`estimate`), the field alarm as evidence (:func:`alarm_warns`,
 :func:`on_path`, :func:`keeps_bearing`) and the times to contact held or counted down
-(:func:`held`, :func:`count_down`). Shared by every model with targets (the LPLC2 family and the
+(:func:`held`, :func:`count_down`), and the vetoes the target layer applies after :func:`estimate`
+(:func:`layer_vetoes`). Shared by every model with targets (the LPLC2 family and the
 optical-flow baseline) through :class:`~mlplc2.targets.layer.TargetLayer`, which forms and follows
 the tracks."""
 
@@ -20,7 +21,7 @@ from .params import TargetParams
 from .track import EPS as _EPS, MIN_POINTS, Target, Track
 
 __all__ = ["estimate", "course", "alarm_warns", "fresh", "on_path", "keeps_bearing", "grew_alike", "drift", "cut_keeps_bearing", "cut_course", "holds", "off_path", "wide", "rises", "fleeting", "seed_course",
-           "slow", "rising", "count_down", "confirmed", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny", "young", "alarm_holds",
+           "slow", "rising", "count_down", "confirmed", "anisotropic", "passed_by", "held", "spans_view", "fits", "exits", "flat", "relapse", "blind_until", "heading_grows", "tiny", "young", "alarm_holds", "layer_vetoes",
            "MIN_POINTS"]
 
 def course(t: Track, heading: tuple[float, float], ttc: float, span: float,
@@ -500,6 +501,32 @@ def confirmed(t: Track, p: TargetParams, now: float, far: bool) -> bool:
     paper's alarm is evidence at once: issue 22 item 4), the frame lies ``far`` from the one before (more than a
     nominal frame interval: :meth:`~mlplc2.targets.layer.TargetLayer._far`), or the rule is off."""
     return not p.onset_confirm or t.decided or t.last_alarm == now or far
+
+
+def layer_vetoes(o: Target, t: Track, p: TargetParams, warned: bool, now: float, far: bool, blind: float,
+                 grows, supported) -> Target:
+    """The target layer's own vetoes on target ``o`` of track ``t`` (its :func:`estimate` at clock ``now``; ``warned``:
+    ``Track.warned`` before it), applied in this order after every rule of :func:`estimate`. A warning that would begin
+    does not: ``contact_blind`` while ``now`` lies within ``blind`` (:func:`blind_until`: the view filled by an object
+    about to hit), ``heading_growth`` on a box over the heading where what lies at the heading does not grow
+    (``grows(t, o)`` False: :func:`heading_grows`), ``onset_support`` on one whose course, counted in the extent of
+    what moved with it, misses (``supported(t, o)`` False); each held back so leaves the track as before
+    (``Track.warned``, and not warning on its last frame) with the rule in ``Target.held_by``. ``grows`` and
+    ``supported`` (the layer's, which read its kept frames) are asked only for such a warning, in turn. A warning
+    so decided (``Track.last_warning``, ``Track.decided``) is shown only when :func:`confirmed` (``onset_confirm``;
+    ``far``: the frame lies far from the one before)."""
+    if o.warning and not warned:
+        rule = "contact_blind" if now <= blind + _EPS else "heading_growth" if not grows(t, o) else \
+            "onset_support" if not supported(t, o) else None
+        if rule is not None:
+            o, t.warned, t.last_warned = replace(o, warning=False, held_by=rule), warned, False
+    if o.warning:
+        t.last_warning = now
+    decided = o.warning
+    if decided and not confirmed(t, p, now, far):
+        o = replace(o, warning=False, held_by="onset_confirm")
+    t.decided = decided
+    return o
 
 
 def tiny(t: Track, p: TargetParams) -> bool:
