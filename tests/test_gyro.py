@@ -132,6 +132,19 @@ def test_the_gyro_file_is_interpolated_at_each_time(tmp_path):
         Gyro.load(np.array([[1, 0, 0, 0], [2, 0, 0, 0]])).check_covers(0.0, None, FPS)
 
 
+def test_a_gyro_whose_times_look_like_milliseconds_is_warned_of_once():
+    """A 100 Hz gyro logged in milliseconds covers a short clip's frames (0-9990 against 0-1 s), so the span
+    check passes and the wrong rates would be used without a word; its samples 300 frame intervals apart say it."""
+    t = np.arange(1000) * 10.0                                   # 100 Hz in ms
+    g = Gyro.load(np.column_stack([t, np.zeros((1000, 3))]))
+    with pytest.warns(mlplc2.InputWarning, match=r"10 s apart at the median, 300 frame intervals: is t in seconds"):
+        g.check_covers(0.0, 1.0, 30.0)
+    g.at(0.5, 30.0)                                              # once: no second warning (warnings are errors here)
+    seconds = Gyro.load(np.column_stack([t / 1000.0, np.zeros((1000, 3))]))
+    seconds.check_covers(0.0, 1.0, 30.0)                         # the same gyro in seconds: silent
+    Gyro.load(np.array([[0, 1, 2, 3], [60, 1, 2, 3]])).check_covers(0.0, 1.0, 30.0)  # two samples: a constant rate
+
+
 @pytest.mark.parametrize("text, match", [("t,wx,wy\n0,0,0\n1,0,0\n", "missing: wz"),
                                          ("t,wx,wy,wz\n0,0,0,0\n0.5,0,x,0\n", "line 3"),
                                          ("t,wx,wy,wz\n0,0,0,0\n0,1,0,0\n", "t must increase"),

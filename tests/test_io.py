@@ -286,6 +286,37 @@ def test_truncated_mp4_we_wrote_still_decodes(tmp_path):
     assert src.truncated and f"frame {len(got)}" in src.message
 
 
+def test_a_matroska_file_with_dropped_frames_is_whole_and_a_cut_one_is_not(tmp_path):
+    """A camera that drops frames and keeps their timestamps (a variable frame rate): OpenCV states its
+    count as its duration times its rate, 59 for the 40 frames kept here; the run read all 40 and
+    ended at the stated length, so it is whole (until session 54: "decoding stopped at frame 40 of 59
+    (file truncated or damaged)", exit 2). The same file cut short is still truncated."""
+    av = pytest.importorskip("av")
+    from fractions import Fraction
+
+    kept = [k for k in range(60) if k % 3 != 2]
+    p = tmp_path / "vfr.mkv"
+    with av.open(str(p), "w") as out:
+        stream = out.add_stream("ffv1", rate=30)
+        stream.width, stream.height, stream.pix_fmt = 64, 48, "yuv420p"
+        stream.time_base = Fraction(1, 1000)
+        for k, f in zip(kept, _frames(60)):
+            frame = av.VideoFrame.from_ndarray(np.ascontiguousarray(f[:48, :64]), format="rgb24")
+            frame.pts, frame.time_base = round(k * 1000 / 30), Fraction(1, 1000)
+            out.mux(stream.encode(frame))
+        out.mux(stream.encode(None))
+    src = open_source(p, decoder="opencv")
+    assert src.frame_count == 59      # the estimate this test is about: the last frame kept is 58
+    times = [src.time_s for _ in src]
+    assert len(times) == 40 and not src.truncated, src.message
+    assert times[:3] == pytest.approx([0.0, 1 / 30, 3 / 30], abs=2e-3)     # the camera's clock, frame 2 dropped
+    cut = tmp_path / "cut.mkv"
+    cut.write_bytes(p.read_bytes()[: int(p.stat().st_size * 0.6)])
+    src = open_source(cut, decoder="opencv")
+    got = [i for i, _ in src]
+    assert 0 < len(got) < 40 and src.truncated, (len(got), src.message)
+
+
 def _damaged_video(tmp_path):
     """40 frames (FFV1) whose frame 20 is damaged (bytes of its packet changed: its slice CRC fails),
     and the index of the next key frame."""

@@ -208,6 +208,80 @@ def test_jsonl_lines_arrive_while_the_run_goes_on(data, tmp_path):
     assert "60 frames of stdin" in err  # the summary went to stderr, naming the source as the progress bar does
 
 
+def _camera_stream(path, n=60, size=(160, 120)) -> bytes:
+    """A camera tool's stream, as ``ffmpeg -f v4l2 ... -f matroska -`` sends it: MJPEG in Matroska,
+    a few KB a frame (a square that grows on noise)."""
+    av = pytest.importorskip("av")
+    w, h = size
+    bg = np.random.default_rng(0).integers(60, 200, (h, w), dtype=np.uint8)
+    with av.open(str(path), "w") as out:
+        stream = out.add_stream("mjpeg", rate=30)
+        stream.width, stream.height, stream.pix_fmt = w, h, "yuvj420p"
+        for k in range(n):
+            f = bg.copy()
+            f[h // 2 - 2 - k // 2:h // 2 + 2 + k // 2, w // 2 - 2 - k // 2:w // 2 + 2 + k // 2] = 0
+            out.mux(stream.encode(av.VideoFrame.from_ndarray(np.repeat(f[:, :, None], 3, axis=2), format="rgb24")))
+        out.mux(stream.encode(None))
+    return path.read_bytes()
+
+
+def test_frames_piped_in_reach_the_models_as_they_arrive(tmp_path):
+    """The first frames of a camera's stream give their lines while the camera goes on: the run does not
+    wait for 32 KB of stdin (FFmpeg's read size, 5-8 such frames) before it decodes the first. Until session
+    54 stdin was read through ``sys.stdin.buffer``, whose ``read(n)`` waits for all ``n`` bytes: lines came in
+    bursts, and the frames sent just before a camera stalled only after the stall."""
+    clip = _camera_stream(tmp_path / "cam.mkv")
+    split = 20000              # the header and the first few frames, less than one of FFmpeg's reads
+    assert split < 32768 < len(clip)
+    first, rest, err = _piped_in_two(clip, split, tmp_path / "o")
+    assert first["frame"] == 0 and len(rest) == 59, err
+
+
+def test_ctrl_c_while_a_piped_camera_stalls_keeps_the_outputs_and_exits(tmp_path):
+    """SIGINT while stdin is open but nothing comes (a stalled camera): the one-line message, exit 130 and
+    the outputs of the frames so far, at once; until session 54 the run waited for the next bytes, then
+    died at exit on the lock of ``sys.stdin`` its decoding thread held."""
+    import select
+    import signal
+
+    clip = _camera_stream(tmp_path / "cam.mkv")
+    with subprocess.Popen([sys.executable, "-m", "mlplc2", "run", "-", "--jsonl", "-", "-o", str(tmp_path / "o")],
+                          stdin=subprocess.PIPE, stdout=subprocess.PIPE, stderr=subprocess.PIPE) as proc:
+        try:
+            proc.stdin.write(clip[:40000])
+            proc.stdin.flush()
+            assert select.select([proc.stdout], [], [], 90)[0], "no line before the stall"
+            time.sleep(1.0)            # the frames sent are processed; then nothing more comes
+            proc.send_signal(signal.SIGINT)
+            code = proc.wait(timeout=60)
+            err = proc.stderr.read().decode()
+            lines = proc.stdout.read().decode().splitlines()
+        finally:
+            proc.kill()
+    assert code == 130, err
+    assert err.startswith("mlplc2: interrupted after ") and err.count("\n") == 1, err
+    summary = json.loads((tmp_path / "o" / "fields.json").read_text())
+    assert summary["interrupted"] and summary["n_frames"] >= len(lines) >= 1
+
+
+@pytest.mark.skipif(not hasattr(__import__("os"), "mkfifo"), reason="named pipes are POSIX")
+def test_a_named_pipe_is_read_as_a_stream(tmp_path):
+    """``mlplc2 run cam.fifo``, a named pipe a camera tool writes into, is read as stdin is (until session 54:
+    "no such file or directory", as if it were not there)."""
+    import os
+
+    clip = _camera_stream(tmp_path / "cam.mkv")
+    fifo = tmp_path / "cam.fifo"
+    os.mkfifo(fifo)
+    writer = threading.Thread(target=fifo.write_bytes, args=(clip,), daemon=True)
+    writer.start()
+    proc = subprocess.run([sys.executable, "-m", "mlplc2", "run", str(fifo), "--jsonl", "-", "-o", str(tmp_path / "o")],
+                          capture_output=True, text=True, timeout=300)
+    writer.join(timeout=10)
+    assert proc.returncode == 0, proc.stderr
+    assert [json.loads(line)["frame"] for line in proc.stdout.splitlines()] == list(range(60))
+
+
 class _Clock(Decoder):
     """A live camera stand-in: frame k is ready at ``t0 + k * period`` (read waits for it; a source
     that lags its schedule reads on without waiting); a square on noise that grows. ``produced``

@@ -10,6 +10,7 @@ import logging
 import math
 import os
 import re
+import stat
 import sys
 import time
 from pathlib import Path
@@ -41,6 +42,8 @@ class Decoder:
 
     #: The container's timestamp (s) of the frame :meth:`read` returned last, None without one.
     time_s: float | None = None
+    #: The container's timestamp (s) of its first frame (read or skipped), None where not known.
+    start_s: float | None = None
     #: Frames skipped just before the frame :meth:`read` returned last: damaged ones (a packet
     #: that could not be decoded) and those predicted from them, up to the next key frame (PyAV).
     gap: int = 0
@@ -98,7 +101,15 @@ class _OpenCVDecoder(Decoder):
         self.size = (int(self.cap.get(cv2.CAP_PROP_FRAME_WIDTH)), int(self.cap.get(cv2.CAP_PROP_FRAME_HEIGHT)))
 
     def grab(self) -> bool:
-        return self.cap.grab()
+        if not self.cap.grab():
+            return False
+        self._started()
+        return True
+
+    def _started(self) -> None:
+        if self.start_s is None and not self._camera:
+            ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
+            self.start_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
 
     def read(self):
         # A damaged frame ends the file here: OpenCV's reads after one give earlier frames' pictures
@@ -110,6 +121,7 @@ class _OpenCVDecoder(Decoder):
             elif self.goes_on is None:   # a damaged frame, or the end (of the file, or of what is left of it)?
                 self.goes_on = any(self.cap.grab() for _ in range(3))
             return None
+        self._started()
         ms = self.cap.get(self._cv2.CAP_PROP_POS_MSEC)
         self.time_s = ms / 1000.0 if ms is not None and math.isfinite(ms) and ms >= 0 else None
         if frame.ndim == 2:
@@ -165,6 +177,7 @@ class _PyAVDecoder(Decoder):
             raise InputError("decoder 'pyav' needs PyAV, which is not installed: pip install av") from None
         self.name = name
         self._av = av
+        self._source = path
         #: Why decoding of a stream stopped early (an FFmpeg error), None at a clean end.
         self.error: str | None = None
         # A real-time stream (RTSP, ...: a camera) has no end of its own: its end is the stream
@@ -249,6 +262,37 @@ class _PyAVDecoder(Decoder):
 
     def close(self):
         self.container.close()
+        if isinstance(self._source, _Pipe):
+            self._source.close()
+
+
+class _Pipe:
+    """Standard input as FFmpeg reads it: each ``read(n)`` returns what has arrived (up to ``n`` bytes),
+    waiting only when nothing has. ``sys.stdin.buffer.read(n)`` waits for all ``n`` bytes (FFmpeg asks for
+    32 KB, several frames of a camera's stream), so frames came in bursts, and those sent before the
+    camera stalled came only after it. Reads go to a raw duplicate of the descriptor, so that a read
+    left waiting at exit (the decoding thread, on a stalled pipe) holds no lock of ``sys.stdin``'s."""
+
+    def __init__(self, buffer):
+        peek = getattr(buffer, "peek", None)
+        # peek waits for the first bytes; read1 takes only those already buffered
+        self._head = buffer.read1(len(peek(1))) if peek is not None else b""
+        self.empty = peek is not None and not self._head
+        try:
+            self._raw, self._own = open(os.dup(buffer.fileno()), "rb", buffering=0), True
+        except (AttributeError, OSError, ValueError):   # not a descriptor (a test's BytesIO): read it as it is
+            self._raw, self._own = buffer, False
+
+    def read(self, n: int = -1) -> bytes:
+        if self._head:
+            n = len(self._head) if n is None or n < 0 else n
+            out, self._head = self._head[:n], self._head[n:]
+            return out
+        return self._raw.read(n)
+
+    def close(self) -> None:
+        if self._own:
+            self._raw.close()
 
 
 class _ImageDecoder(Decoder):
@@ -350,6 +394,13 @@ def _image_files(source: str) -> tuple[list[str], str]:
     return sorted(images, key=_natural_key), source
 
 
+def _is_fifo(path: str) -> bool:
+    try:
+        return stat.S_ISFIFO(os.stat(path).st_mode)
+    except (OSError, ValueError):
+        return False
+
+
 def _one_line(text: str) -> str:
     return " ".join(str(text).split()) or "unknown error"
 
@@ -368,10 +419,10 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         if sys.stdin.isatty():  # nothing piped in: FFmpeg would wait for the keyboard
             raise InputValueError("stdin: standard input is a terminal, not a video: pipe one in "
                                   "(cat clip.mkv | mlplc2 run -)")
-        peek = getattr(sys.stdin.buffer, "peek", None)     # waits for the first bytes, reads none of them
-        if peek is not None and not peek(1):   # FFmpeg would say "Invalid data found when processing input"
+        pipe = _Pipe(sys.stdin.buffer)
+        if pipe.empty:   # FFmpeg would say "Invalid data found when processing input"
             raise InputValueError("stdin: standard input is empty: no video was piped in")
-        return _PyAVDecoder(sys.stdin.buffer, "stdin", stream=True), "stream"
+        return _PyAVDecoder(pipe, "stdin", stream=True), "stream"
     if is_url(source):
         return _PyAVDecoder(source, without_password(source), stream=True), "stream"
     if isinstance(source, os.PathLike):
@@ -393,6 +444,8 @@ def open_decoder(source, decoder: str) -> tuple[Decoder, str]:
         if decoder == "pyav":
             return _PyAVDecoder(source, source), "video"
         return _OpenCVDecoder(source, source), "video"
+    if _is_fifo(source):   # a named pipe (mkfifo) a camera tool writes into: read as stdin is
+        return _PyAVDecoder(_Pipe(open(source, "rb")), source, stream=True), "stream"
     if any(ch in source for ch in "*?["):
         files, name = _image_files(source)
         return _ImageDecoder(files, name), "images"

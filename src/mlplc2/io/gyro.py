@@ -12,16 +12,20 @@ end sample's rate is held).
 from __future__ import annotations
 
 import csv
+import warnings
 from pathlib import Path
 
 import numpy as np
 
-from .._validation import InputTypeError, InputValueError
+from .._validation import InputTypeError, InputValueError, InputWarning
 
 __all__ = ["Gyro", "LiveGyro", "SLACK"]
 
 #: How far (in frame intervals) beyond its first or last sample a gyro's rate is held.
 SLACK = 1.0
+#: A gyro (ten samples or more) whose samples lie further apart than this many frame intervals at the median
+#: is warned of (:meth:`Gyro.check_covers`).
+SPARSE = 10.0
 _COLUMNS = ("t", "wx", "wy", "wz")
 
 
@@ -32,6 +36,7 @@ class Gyro:
         self.t = np.asarray(t, dtype=np.float64)
         self.rates = np.asarray(rates, dtype=np.float64)
         self.name = name
+        self._spacing_checked = False
         if len(self.t) < 2:
             raise InputValueError(f"{name}: needs at least 2 samples (t, wx, wy, wz), got {len(self.t)}")
         if not (np.all(np.isfinite(self.t)) and np.all(np.isfinite(self.rates))):
@@ -88,7 +93,17 @@ class Gyro:
         return cls(values[:, 0], values[:, 1:], str(path))
 
     def check_covers(self, first_s: float, last_s: float | None, fps: float) -> None:
-        """Raise :class:`~mlplc2.InputError` unless the samples span ``first_s`` to ``last_s`` (None: unknown)."""
+        """Raise :class:`~mlplc2.InputError` unless the samples span ``first_s`` to ``last_s`` (None: unknown).
+        The first time, warn (:class:`~mlplc2.InputWarning`) when many samples lie further apart than
+        :data:`SPARSE` frame intervals at the median: a gyro samples faster than a camera, so its times are
+        probably not in seconds (milliseconds: its span then covers the frames, with the wrong rates)."""
+        if not self._spacing_checked:
+            self._spacing_checked = True
+            gap = float(np.median(np.diff(self.t)))
+            if len(self.t) >= 10 and gap > SPARSE / fps:
+                warnings.warn(f"{self.name}: its samples are {gap:g} s apart at the median, {gap * fps:.0f} frame "
+                              f"intervals: is t in seconds? (milliseconds: divide it by 1000)", InputWarning,
+                              stacklevel=2)
         slack = SLACK / fps
         if first_s < self.t[0] - slack or (last_s is not None and last_s > self.t[-1] + slack):
             frames = (f"a frame is at {_s(first_s)} s" if last_s == first_s else

@@ -5,6 +5,7 @@ length) and resizes the frames; :func:`read_video` decodes a short clip into mem
 
 from __future__ import annotations
 
+import math
 import queue
 import threading
 import time
@@ -77,6 +78,10 @@ class FrameSource:
         The frames that could not be decoded (a damaged packet of a file or a stream), skipped;
         the frames after them are yielded with their own indices.
     """
+
+    #: Seconds :meth:`close` waits for a stream's or a camera's decoding thread (waiting on a read
+    #: nothing answers: a stalled stdin) before it leaves the thread to end on its own.
+    CLOSE_WAIT_S = 1.0
 
     def __init__(self, decoder: Decoder, kind: str, *, fps=None, start: int = 0, end: int | None = None,
                  resize=None, scale=None, keep_original: bool = False, queue_size: int = _QUEUE_SIZE,
@@ -345,7 +350,8 @@ class FrameSource:
             self.truncated, self.truncated_at = True, index
             self.message = f"{self.name}: {failed_image} (frame {index}); stopped there"
         elif (self.kind == "video" or (self.kind == "stream" and not self.live)) and expected is not None \
-                and index < expected:  # a file, or one read whole from a pipe or HTTP that states its count
+                and index < expected and not self._reached_length():
+            # a file, or one read whole from a pipe or HTTP that states its count
             self.truncated, self.truncated_at = True, index
             # the hint only where frames decode after the stop (OpenCV's probe): for a cut file it cannot help
             self.message = (f"{self.name}: decoding stopped at frame {index} of {expected} "
@@ -356,12 +362,24 @@ class FrameSource:
             warnings.warn(f"{self.name} has {index} frames: end frame {self.end} is past its end; "
                           f"the run went to its last frame", InputWarning, stacklevel=2)
 
+    def _reached_length(self) -> bool:
+        """Whether the last frame decoded lies at the end of the length the container states: the count
+        was then an estimate, not frames lost. OpenCV counts a Matroska file's frames as its duration
+        times its frame rate, too many where frames were dropped (a variable frame rate) and the
+        timestamps kept."""
+        fps, first, last = self._dec.fps, self._dec.start_s, self._dec.time_s
+        return (self.frame_count is not None and fps is not None and first is not None and last is not None
+                and last - first + 1.5 / fps >= self.frame_count / fps)
+
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""
         self._stop.set()
         self._stop_draining()
         if self._thread is not None and self._thread is not threading.current_thread():
-            while self._thread.is_alive():
+            # A stream's decoding thread may wait on a read that nothing answers (stdin or a camera that
+            # stalled): after a while it is left to end on its own (a daemon: it does not hold the exit).
+            deadline = time.monotonic() + (self.CLOSE_WAIT_S if self.kind in ("stream", "camera") else math.inf)
+            while self._thread.is_alive() and time.monotonic() < deadline:
                 try:
                     while True:
                         self._queue.get_nowait()

@@ -3,12 +3,11 @@
 
 from __future__ import annotations
 
-import difflib
 from collections.abc import Mapping
 from dataclasses import dataclass, fields, replace
 from typing import Any
 
-from .._validation import InputTypeError
+from .._validation import InputTypeError, did_you_mean_hint
 from ..io.gyro import Gyro
 
 
@@ -141,8 +140,8 @@ def run_options(options: RunOptions | None, keywords: Mapping[str, Any], caller:
     """``options`` with the fields given as keywords changed (no ``options``: the defaults)."""
     unknown = [k for k in keywords if k not in _OPTION_NAMES]
     if unknown:
-        close = difflib.get_close_matches(unknown[0], _OPTION_NAMES + ("models",), n=1)
-        hint = f"did you mean {close[0]!r}?" if close else "the keywords are mlplc2.runner.RunOptions' fields"
+        hint = did_you_mean_hint(unknown[0], _OPTION_NAMES + ("models",),
+                                 otherwise="the keywords are mlplc2.runner.RunOptions' fields")
         raise TypeError(f"{caller}() got an unexpected keyword argument {unknown[0]!r} ({hint})")
     if options is not None and not isinstance(options, RunOptions):
         raise InputTypeError(f"options must be a RunOptions, got {type(options).__name__}")
