@@ -200,9 +200,9 @@ class FrameSource:
             self._first, self._first_time, self._first_decoded = frame, self._dec.time_s, time.perf_counter()
             self._drained += 1
 
-    def _stop_draining(self) -> None:
+    def _stop_draining(self, timeout: float | None = None) -> None:
         if self._drainer is not None:
-            self._drainer.join()
+            self._drainer.join(timeout)
             self._drainer = None
 
     def _prepare(self, frame: np.ndarray):
@@ -374,7 +374,10 @@ class FrameSource:
     def close(self) -> None:
         """Stop the decoding thread and release the input (idempotent)."""
         self._stop.set()
-        self._stop_draining()
+        drainer = self._drainer
+        self._stop_draining(self.CLOSE_WAIT_S)     # waiting on a read too, perhaps
+        if drainer is not None and drainer.is_alive():
+            return                                 # it still reads: the decoder is left to the exit
         if self._thread is not None and self._thread is not threading.current_thread():
             # A stream's decoding thread may wait on a read that nothing answers (stdin or a camera that
             # stalled): after a while it is left to end on its own (a daemon: it does not hold the exit).
