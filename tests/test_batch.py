@@ -289,6 +289,41 @@ def test_cli_batch_on_scheduler(videos, client, tmp_path, capsys):
     assert "mlplc2: error:" in err and "no such file" in err
 
 
+def test_relative_inputs_run_on_workers_that_work_in_another_folder(videos, client, tmp_path, monkeypatch):
+    """A cluster's workers run in folders of their own (other machines): a relative input, checked here,
+    reached them as given and was "no such file or directory" there (and the benchmark's scenes under a
+    relative ``--out`` with it). It goes as an absolute path; the row keeps it as given."""
+    before = client.run(os.getcwd)
+    client.run(os.chdir, str(tmp_path))                 # the workers elsewhere: no clip there
+    try:
+        monkeypatch.chdir(Path(videos["paths"][0]).parent)
+        res = batch(["clip0.avi"], tmp_path / "o", models=["lgmd2"], client=client, progress=False)
+    finally:
+        for worker, cwd in before.items():
+            client.run(os.chdir, cwd, workers=[worker])
+    assert [(r["video"], r["status"]) for r in res.rows] == [("clip0.avi", "ok")], res.rows
+
+
+def test_a_scheduler_without_a_worker_or_with_one_without_mlplc2_is_one_line(videos, tmp_path, monkeypatch):
+    """The tasks waited without a word on a scheduler with no worker, or on a worker that cannot import
+    mlplc2 (it cannot unpickle a task: the task is neither run nor failed)."""
+    distributed = pytest.importorskip("distributed")
+    import mlplc2.batch as batch_module
+
+    monkeypatch.setattr(batch_module, "WAIT_FOR_WORKERS_S", 1.0)
+    with distributed.LocalCluster(n_workers=0, processes=True, dashboard_address=None) as cluster:
+        address = cluster.scheduler_address
+        with pytest.raises(InputValueError, match=r"has no worker \(waited 1 s\): start some there"):
+            batch(videos["paths"][0], tmp_path / "o", models=["lgmd2"], scheduler=address, progress=False)
+        cluster.scale(1)
+        with distributed.Client(address) as c:
+            c.wait_for_workers(1, timeout=60)
+            c.run(exec, "import sys; sys.modules['mlplc2.batch'] = None")   # as if mlplc2 were not installed there
+        with pytest.raises(InputValueError, match="cannot import mlplc2 .*install it there"):
+            batch(videos["paths"][0], tmp_path / "o", models=["lgmd2"], scheduler=address, progress=False)
+    assert not (tmp_path / "o").exists()
+
+
 def test_cli_batch_failure_exit_code(videos, tmp_path, capsys):
     bad = tmp_path / "bad.avi"
     bad.write_bytes(b"not a video")

@@ -24,6 +24,7 @@ The parameter sets (overrides, sweeps, ids and labels) are made by :mod:`mlplc2.
 
 from __future__ import annotations
 
+import asyncio
 import contextlib
 import dataclasses
 import hashlib
@@ -86,7 +87,7 @@ def run_task(task: dict) -> dict:
         (out / DONE_MARKER).unlink(missing_ok=True)  # the outputs are about to change
         with warnings.catch_warnings():
             warnings.simplefilter("ignore", TruncatedInputWarning)
-            res = run(task["video"], [task["model"]], out=out, quiet=True, progress=False, params=params,
+            res = run(task.get("source", task["video"]), [task["model"]], out=out, quiet=True, progress=False, params=params,
                       plot=False, keep_rows=False, **task.get("run_options", {}))
         if task.get("plot") and res.n_frames:
             _plot(task, f" (input truncated after {res.n_frames} frames)" if res.truncated else "")
@@ -315,6 +316,7 @@ def _client(scheduler: str | None, workers: int | None, client) -> Iterator[tupl
         except ValueError as exc:  # not an address (unknown scheme, no port, ...)
             raise _bad_address(scheduler, exc) from None
         with own:
+            _check_workers(own, scheduler)
             yield own, scheduler
     else:
         n = workers or min(4, os.cpu_count() or 1)
@@ -323,16 +325,42 @@ def _client(scheduler: str | None, workers: int | None, client) -> Iterator[tupl
             yield own, f"LocalCluster({n} workers)"
 
 
-def _completed(jobs: list[tuple[int, dict]], client) -> Iterator[tuple[int, dict]]:
+#: Seconds a batch waits for a running scheduler (``scheduler=``) to have a worker before it gives up.
+WAIT_FOR_WORKERS_S = 30.0
+
+
+def _check_workers(client, address: str) -> None:
+    """A one-line error, before any task is sent, for a running scheduler without workers (waited for
+    :data:`WAIT_FOR_WORKERS_S`) or with a worker that cannot import mlplc2: the tasks would wait on
+    it without a word (a task a worker cannot unpickle is neither run nor failed)."""
+    try:
+        client.wait_for_workers(1, timeout=WAIT_FOR_WORKERS_S)
+    except (TimeoutError, asyncio.TimeoutError):
+        raise InputValueError(f"the scheduler at {address} has no worker (waited {WAIT_FOR_WORKERS_S:g} s): start "
+                              f"some there with `dask worker {address}`") from None
+    # a builtin with a fixed statement: nothing of mlplc2's needs unpickling on the worker for this test
+    answers = client.run(exec, "import mlplc2.batch", on_error="return")
+    for worker, answer in sorted(answers.items()):
+        if isinstance(answer, BaseException):
+            raise InputValueError(f"worker {worker} of {address} cannot import mlplc2 "
+                                  f"({type(answer).__name__}: {_one_line(str(answer))}): install it there, the "
+                                  f"same version as here") from None
+
+
+def _completed(jobs: list[tuple[int, dict]], client, remote: bool = False) -> Iterator[tuple[int, dict]]:
     """``(index, row)`` of each job as it finishes: run here one after the other (``client`` None),
-    or on ``client``'s cluster."""
+    or on ``client``'s cluster (``remote``: one not started here, whose workers' working directories are
+    their own)."""
     if client is None:
         for i, t in jobs:
             yield i, run_task(t)
         return
     from distributed import as_completed
 
-    futures = {client.submit(run_task, t, pure=False): (i, t) for i, t in jobs}
+    # a remote worker's working directory is its own (another machine's): each input goes as an absolute
+    # path; the rows keep the path as given
+    futures = {client.submit(run_task, {**t, "source": _absolute(t["video"])} if remote else t, pure=False): (i, t)
+               for i, t in jobs}
     for fut in as_completed(futures):
         i, t = futures[fut]
         try:
@@ -340,6 +368,11 @@ def _completed(jobs: list[tuple[int, dict]], client) -> Iterator[tuple[int, dict
         except Exception as exc:  # noqa: BLE001 - a worker died, ...
             row = _error_row(t, _one_line(f"{type(exc).__name__}: {exc}"))
         yield i, row
+
+
+def _absolute(video: str) -> str:
+    """``video`` as an absolute path where it is a path here (a file, a folder); else as it is."""
+    return os.path.abspath(video) if os.path.exists(video) else video
 
 
 def _model_run_options(options: Mapping[str, Any], model: str) -> dict:
@@ -553,7 +586,7 @@ def _run_jobs(state: _BatchState, scheduler, workers, client, sequential: bool, 
             for pid, pset in state.plan.ids.items():  # what each parameter set id stands for
                 write_json(out / f"param_set_{pid}.json", pset)
             prepared = True
-            for i, row in _completed(jobs, c):
+            for i, row in _completed(jobs, c, remote=bool(scheduler) and scheduler != "sync" or client is not None):
                 rows[i] = row
                 state.finished.add(i)
                 if bar.n + 1 < bar.total:
