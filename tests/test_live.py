@@ -282,6 +282,13 @@ def test_a_named_pipe_is_read_as_a_stream(tmp_path):
     assert [json.loads(line)["frame"] for line in proc.stdout.splitlines()] == list(range(60))
 
 
+def test_jsonl_given_twice_is_one_line_not_the_last_silently(tmp_path, capsys):
+    """``--jsonl - --jsonl FILE`` kept the last and said nothing: no line came on stdout."""
+    assert main(["run", "whatever.avi", "--jsonl", "-", "--jsonl", str(tmp_path / "x.jsonl")]) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--jsonl: given twice" in err and "tee" in err, err
+
+
 class _Clock(Decoder):
     """A live camera stand-in: frame k is ready at ``t0 + k * period`` (read waits for it; a source
     that lags its schedule reads on without waiting); a square on noise that grows. ``produced``

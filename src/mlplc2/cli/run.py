@@ -21,6 +21,18 @@ from .common import (EXIT_INTERRUPTED, EXIT_OK, EXIT_TRUNCATED, PROG, Subcommand
                      target_options, warn)
 
 
+
+class _Once(argparse.Action):
+    """An option that takes one value: given twice, an error (``--jsonl - --jsonl FILE`` kept the last
+    silently, and nothing came on stdout)."""
+
+    def __call__(self, parser, namespace, values, option_string=None):
+        if getattr(namespace, self.dest, None) is not None:
+            raise argparse.ArgumentError(self, "given twice: it writes one stream (for a file and stdout: "
+                                               "--jsonl - | tee FILE)")
+        setattr(namespace, self.dest, values)
+
+
 def _add_run(p: argparse.ArgumentParser) -> None:
     p.add_argument("source", help="video file (AVI, MP4, ...), folder of images, glob pattern "
                                   "('frames/*.png', quoted), camera index (0, 1, ...), stream URL "
@@ -82,7 +94,7 @@ def _add_run(p: argparse.ArgumentParser) -> None:
                           f"last processed one, at most {MAX_REPEATS} in a row; for videos whose frames were "
                           f"repeated to raise the frame rate (docs/model.md)")
     add_warning_options(p)
-    p.add_argument("--jsonl", metavar="PATH|-",
+    p.add_argument("--jsonl", metavar="PATH|-", action=_Once,
                    help="also write one JSON line per frame (targets, warning, skipped frames; docs/robot.md) "
                         "to PATH or, with -, to standard output (everything else then goes to stderr), "
                         "flushed as each frame is done")
